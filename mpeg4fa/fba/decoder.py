@@ -1,0 +1,179 @@
+"""fba_object() decoding: start codes, planes, and the face and body data of each plane."""
+from __future__ import annotations
+
+import os
+from contextlib import contextmanager
+from pathlib import Path
+from typing import BinaryIO, Iterator
+
+import numpy as np
+
+from . import syntax
+from .arith import decode_segment
+from .bits import BitReader
+from .errors import FbaError
+from .params import BODY, FACE, FieldCoder, ValueCoder
+from .stream import (BODY as BODY_BIT, DEFAULT_FPS, END_CODE, FACE as FACE_BIT, N_BAPS, N_FAPS,
+                     OBJECT_START_CODE, OBJECT_START_CODE_OLD, PLANE_START_CODE, PLANE_START_CODE_OLD,
+                     CodingParams, FapStream, Frame, PartParams)
+
+Source = bytes | bytearray | memoryview | str | os.PathLike | BinaryIO
+
+
+@contextmanager
+def _opened(source: Source) -> Iterator[bytes | BinaryIO]:
+    if isinstance(source, (str, os.PathLike)):
+        try:
+            with open(source, "rb") as fh:
+                yield fh
+        except FileNotFoundError:
+            raise FbaError(f"no such stream file: {Path(source)}") from None
+    else:
+        yield source
+
+
+class _Decoder:
+    """The state a decoder carries from plane to plane."""
+
+    def __init__(self, reader: BitReader) -> None:
+        self.bits = reader
+        self.io = syntax.Reading(reader)
+        self.faps = ValueCoder(FACE)
+        self.baps = ValueCoder(BODY)
+        self.viseme = FieldCoder(1)
+        self.expression = FieldCoder(2)
+        self.face: PartParams | None = None
+        self.body: PartParams | None = None
+        self.fps = DEFAULT_FPS
+        self.next_pts = 0.0
+        self.object_start_code = OBJECT_START_CODE
+
+    def frames(self) -> Iterator[Frame]:
+        r = self.bits
+        if not r.available(32):
+            raise FbaError("stream is shorter than a start code: not an FBA stream", 0)
+        code = r.read(32)
+        if code not in (OBJECT_START_CODE, OBJECT_START_CODE_OLD):
+            raise FbaError(f"not an FBA stream: starts with 0x{code:08X}, expected the "
+                           f"fba_object_start_code 0x{OBJECT_START_CODE:08X}", 0)
+        self.object_start_code = code
+        k = 0
+        while True:
+            found = r.peek_start_code()
+            plane_code = 0
+            if found is not None:
+                code, stuffing = found
+                if code not in (END_CODE, PLANE_START_CODE, PLANE_START_CODE_OLD):
+                    raise FbaError(f"unexpected start code 0x{code:08X} between planes", r.pos + stuffing, k)
+                r.skip_stuffing(stuffing)
+                r.read(32)
+                if code == END_CODE:
+                    return
+                plane_code = code
+            elif not r.available(8):
+                raise FbaError("stream ends without the end code 0x000001B1 (truncated?)", r.pos, k)
+            start = r.pos
+            try:
+                frame = self.plane(k, plane_code)
+            except FbaError as exc:
+                exc.frame = k if exc.frame is None else exc.frame
+                raise
+            frame.bits = r.pos - start
+            yield frame
+            k += 1
+
+    def plane(self, k: int, plane_code: int) -> Frame:
+        io, r = self.io, self.bits
+        pos = r.pos
+        is_intra = io.flag(False, "is_intra")
+        mask = io.u(2, 0, "fba_object_mask")
+        if mask == 0:
+            raise FbaError("fba_object_mask is 0: the plane carries neither face nor body data", pos + 1)
+        fr, tc, skip = syntax.temporal_header(io, is_intra, None, None, 0)
+        params = CodingParams(frame_rate=fr, time_code=tc) if is_intra else None
+        if fr is not None:
+            if fr.fps <= 0:
+                raise FbaError("frame rate 0 in the intra header", pos)
+            self.fps = fr.fps
+        frame = Frame(index=k, timestamp=0.0, object_mask=mask,
+                      fap_mask=np.zeros(N_FAPS, dtype=bool), fap_values=np.zeros(N_FAPS, dtype=np.int32),
+                      viseme=np.zeros(4, dtype=np.int32), expression=np.zeros(6, dtype=np.int32),
+                      bap_mask=np.zeros(N_BAPS, dtype=bool), bap_values=np.zeros(N_BAPS, dtype=np.int32),
+                      skip=skip, start_code=plane_code, params=params)
+        if mask & FACE_BIT:
+            self.face_data(frame, is_intra)
+        if mask & BODY_BIT:
+            self.body_data(frame, is_intra)
+        frame.timestamp = float(tc.total_seconds) if tc is not None else self.next_pts
+        self.next_pts = frame.timestamp + (skip + 1) / self.fps
+        return frame
+
+    def face_data(self, frame: Frame, intra: bool) -> None:
+        io, r = self.io, self.bits
+        if intra:
+            self.face = syntax.part_intra_header(io, None, FACE.mask_groups, FACE.range_groups, N_FAPS)
+            frame.params.face = self.face
+            self.faps.start_intra(self.face)
+            self.viseme.start_intra(self.face.quant)
+            self.expression.start_intra(self.face.quant)
+        elif self.face is None:
+            raise FbaError("a predicted plane carries face data but no intra plane has set up the face", r.pos)
+        mask = self.face.mask
+        if mask[0]:
+            pos = r.pos
+            values = self.viseme.decode(decode_segment(r, self.viseme.models(intra), not intra), intra)
+            self.viseme.check_selects(values, pos, frame.index)
+            frame.viseme[:3] = values
+            frame.viseme[3] = io.u(1, 0, "viseme_def")
+        if mask[1]:
+            pos = r.pos
+            values = self.expression.decode(decode_segment(r, self.expression.models(intra), not intra), intra)
+            self.expression.check_selects(values, pos, frame.index)
+            frame.expression[:4] = values
+            frame.expression[4] = io.u(1, 0, "init_face")
+            frame.expression[5] = io.u(1, 0, "expression_def")
+        values = self.faps.decode(decode_segment(r, self.faps.models(intra), not intra), intra)
+        frame.fap_values[self.faps.idx] = values
+        frame.fap_mask[:] = mask
+
+    def body_data(self, frame: Frame, intra: bool) -> None:
+        r = self.bits
+        if intra:
+            self.body = syntax.part_intra_header(self.io, None, BODY.mask_groups, BODY.range_groups, N_BAPS)
+            frame.params.body = self.body
+            self.baps.start_intra(self.body)
+        elif self.body is None:
+            raise FbaError("a predicted plane carries body data but no intra plane has set up the body", r.pos)
+        values = self.baps.decode(decode_segment(r, self.baps.models(intra), not intra), intra)
+        frame.bap_values[self.baps.idx] = values
+        frame.bap_mask[:] = self.body.mask
+
+
+def iter_decode(source: Source) -> Iterator[Frame]:
+    """Decode frame by frame without holding the whole stream; raises :class:`FbaError` at a fault."""
+    with _opened(source) as src:
+        reader = BitReader(src)
+        decoder = _Decoder(reader)
+        try:
+            yield from decoder.frames()
+        except FbaError:
+            raise
+        except (IndexError, ValueError, OverflowError, MemoryError) as exc:  # a guard, not a path
+            raise FbaError(f"malformed stream ({type(exc).__name__}: {exc})", reader.pos) from exc
+
+
+def decode(source: Source) -> FapStream:
+    """Decode a whole FBA stream (bytes, a path or a binary file) into a :class:`FapStream`.
+
+    On a fault the :class:`FbaError` carries the frames decoded before it in ``.partial``.
+    """
+    frames: list[Frame] = []
+    object_code = OBJECT_START_CODE
+    try:
+        for frame in iter_decode(source):
+            frames.append(frame)
+    except FbaError as exc:
+        exc.partial = FapStream.from_frames(frames, object_code)
+        raise
+    stream = FapStream.from_frames(frames, object_code)
+    return stream

@@ -1,0 +1,266 @@
+"""The codec's data model: coding parameters plus frames held in numpy arrays.
+
+A :class:`FapStream` is what a decoder returns and what an encoder takes. Its
+arrays are indexed ``[frame, parameter]``: column ``i`` of ``fap_values`` is FAP
+``i + 1`` (so FAP 3 is column 2). FAP 1 (viseme) and FAP 2 (expression) have no
+single value; their fields live in ``viseme`` and ``expression`` and their
+presence in columns 0 and 1 of ``fap_mask``.
+
+``intra`` maps the index of every intra frame to the :class:`CodingParams` its
+header carried; everything the bitstream says about a frame is kept, so that a
+stream re-encodes to the same bytes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Iterable, Iterator
+
+import numpy as np
+
+N_FAPS = 68
+N_BAPS = 296
+N_FAP_GROUPS = 10
+N_BAP_GROUPS = 24
+
+FACE = 1
+BODY = 2
+
+OBJECT_START_CODE = 0x1BA
+OBJECT_START_CODE_OLD = 0x101
+PLANE_START_CODE = 0x1BB
+PLANE_START_CODE_OLD = 0x103
+END_CODE = 0x1B1
+
+DEFAULT_FPS = 30.0
+"""Frame rate assumed when no intra header sends one (visage ``DEF_FRAME_RATE``)."""
+
+VISEME_FIELDS = ("select1", "select2", "blend", "viseme_def")
+EXPRESSION_FIELDS = ("select1", "intensity1", "select2", "intensity2", "init_face", "expression_def")
+
+
+@dataclass(frozen=True)
+class FrameRate:
+    """The three fields of the intra header's frame rate."""
+
+    frame_rate: int
+    seconds: int = 0
+    frequency_offset: int = 0
+
+    @property
+    def fps(self) -> float:
+        """Frames per second, computed in floating point (never 0 for 29.97-type rates)."""
+        fps = self.frame_rate + self.seconds / 16.0
+        return fps * 1000.0 / 1001.0 if self.frequency_offset else fps
+
+    @classmethod
+    def from_fps(cls, fps: float) -> "FrameRate":
+        """The closest representable rate: integer + sixteenths, with the 1000/1001 flag if it fits better."""
+        if not 0 < fps < 256:
+            raise ValueError(f"frame rate {fps} is outside 0 < fps < 256")
+        candidates = []
+        for offset in (0, 1):
+            nominal = fps * 1001.0 / 1000.0 if offset else fps
+            sixteenths = int(round(nominal * 16))
+            rate, seconds = divmod(sixteenths, 16)
+            if 0 <= rate <= 255:
+                candidate = cls(rate, seconds, offset)
+                candidates.append((abs(candidate.fps - fps), offset, candidate))
+        return min(candidates, key=lambda c: (c[0], c[1]))[2]
+
+
+@dataclass(frozen=True)
+class TimeCode:
+    hours: int
+    minutes: int
+    seconds: int
+
+    @property
+    def total_seconds(self) -> int:
+        return 3600 * self.hours + 60 * self.minutes + self.seconds
+
+    @classmethod
+    def from_seconds(cls, t: float) -> "TimeCode":
+        s = int(t)
+        return cls(s // 3600 % 32, s // 60 % 60, s % 60)
+
+
+@dataclass
+class RangeSet:
+    """new_minmax(): which of the four range sets an intra header sends, and their 5-bit codes.
+
+    ``codes[k, i]`` is the code sent for parameter ``i`` in set ``k`` (0 = I max,
+    1 = I min, 2 = P max, 3 = P min); it only means something where ``flags[k]`` is
+    set and parameter ``i`` is masked. A code ``c`` stands for a range magnitude of
+    ``c * 60`` before division by the quantiser.
+    """
+
+    flags: tuple[bool, bool, bool, bool]
+    codes: np.ndarray
+
+    @classmethod
+    def none(cls, n: int) -> "RangeSet":
+        return cls((False, False, False, False), np.zeros((4, n), dtype=np.int16))
+
+    def same_as(self, other: "RangeSet", mask: np.ndarray) -> bool:
+        if self.flags != other.flags:
+            return False
+        rows = [k for k in range(4) if self.flags[k]]
+        return bool(np.array_equal(self.codes[rows][:, mask], other.codes[rows][:, mask]))
+
+
+@dataclass
+class PartParams:
+    """The face (FAP) or body (BAP) part of an intra header.
+
+    ``quant`` is fap_quant or bap_quant (0..31, 0 = no quantisation); ``mask`` has
+    one entry per parameter (68 FAPs or 296 BAPs, parameter 1 in column 0).
+    """
+
+    quant: int
+    mask_types: tuple[int, ...]
+    mask: np.ndarray
+    gender: int = 0
+    coding_type: int = 0
+    ranges: RangeSet = field(default_factory=lambda: RangeSet.none(N_FAPS))
+
+
+@dataclass
+class CodingParams:
+    """Everything an intra plane header sends besides the frame's values."""
+
+    frame_rate: FrameRate | None = None
+    time_code: TimeCode | None = None
+    face: PartParams | None = None
+    body: PartParams | None = None
+
+
+@dataclass
+class Frame:
+    """One decoded plane: what the streaming iterator yields."""
+
+    index: int
+    timestamp: float
+    object_mask: int
+    fap_mask: np.ndarray
+    fap_values: np.ndarray
+    viseme: np.ndarray
+    expression: np.ndarray
+    bap_mask: np.ndarray
+    bap_values: np.ndarray
+    skip: int = 0
+    start_code: int = 0
+    bits: int = 0
+    params: CodingParams | None = None
+
+    @property
+    def is_intra(self) -> bool:
+        return self.params is not None
+
+
+@dataclass
+class FapStream:
+    """Coding parameters plus frames: see the module docstring for the layout."""
+
+    fap_mask: np.ndarray        # (n, 68) bool
+    fap_values: np.ndarray      # (n, 68) int32, FAPU integers (AU for rotations)
+    viseme: np.ndarray          # (n, 4) int32: select1, select2, blend, viseme_def
+    expression: np.ndarray      # (n, 6) int32: select1, intensity1, select2, intensity2, init_face, def
+    bap_mask: np.ndarray        # (n, 296) bool
+    bap_values: np.ndarray      # (n, 296) int32
+    timestamps: np.ndarray      # (n,) float64 seconds
+    object_mask: np.ndarray     # (n,) uint8: 1 face, 2 body, 3 both
+    skip: np.ndarray            # (n,) int32: frames skipped after this one
+    start_code: np.ndarray      # (n,) uint32: plane start code sent before the frame, 0 if none
+    bits: np.ndarray            # (n,) int32: bits the frame took in its stream (0 if not decoded)
+    intra: dict[int, CodingParams] = field(default_factory=dict)
+    object_start_code: int = OBJECT_START_CODE
+    source_fps: float | None = None
+    """Frame rate of a stream that has no intra header yet (e.g. read from a .fap file)."""
+
+    # ---- construction -------------------------------------------------------------
+    @classmethod
+    def empty(cls, n: int, object_mask: int = FACE) -> "FapStream":
+        """A stream of ``n`` frames with nothing masked and every value zero."""
+        return cls(
+            fap_mask=np.zeros((n, N_FAPS), dtype=bool),
+            fap_values=np.zeros((n, N_FAPS), dtype=np.int32),
+            viseme=np.zeros((n, 4), dtype=np.int32),
+            expression=np.zeros((n, 6), dtype=np.int32),
+            bap_mask=np.zeros((n, N_BAPS), dtype=bool),
+            bap_values=np.zeros((n, N_BAPS), dtype=np.int32),
+            timestamps=np.zeros(n, dtype=np.float64),
+            object_mask=np.full(n, object_mask, dtype=np.uint8),
+            skip=np.zeros(n, dtype=np.int32),
+            start_code=np.zeros(n, dtype=np.uint32),
+            bits=np.zeros(n, dtype=np.int32),
+        )
+
+    @classmethod
+    def from_frames(cls, frames: Iterable[Frame], object_start_code: int = OBJECT_START_CODE) -> "FapStream":
+        """Stack frames (e.g. from :func:`mpeg4fa.fba.iter_decode`) into one stream."""
+        frames = list(frames)
+        s = cls.empty(len(frames))
+        s.object_start_code = object_start_code
+        for k, f in enumerate(frames):
+            s.fap_mask[k] = f.fap_mask
+            s.fap_values[k] = f.fap_values
+            s.viseme[k] = f.viseme
+            s.expression[k] = f.expression
+            s.bap_mask[k] = f.bap_mask
+            s.bap_values[k] = f.bap_values
+            s.timestamps[k] = f.timestamp
+            s.object_mask[k] = f.object_mask
+            s.skip[k] = f.skip
+            s.start_code[k] = f.start_code
+            s.bits[k] = f.bits
+            if f.params is not None:
+                s.intra[k] = f.params
+        return s
+
+    # ---- views ---------------------------------------------------------------------
+    def __len__(self) -> int:
+        return int(self.fap_values.shape[0])
+
+    @property
+    def n_frames(self) -> int:
+        return len(self)
+
+    def frame(self, k: int) -> Frame:
+        """Frame ``k`` as a :class:`Frame` (views into the stream's arrays)."""
+        return Frame(
+            index=k, timestamp=float(self.timestamps[k]), object_mask=int(self.object_mask[k]),
+            fap_mask=self.fap_mask[k], fap_values=self.fap_values[k], viseme=self.viseme[k],
+            expression=self.expression[k], bap_mask=self.bap_mask[k], bap_values=self.bap_values[k],
+            skip=int(self.skip[k]), start_code=int(self.start_code[k]), bits=int(self.bits[k]),
+            params=self.intra.get(k),
+        )
+
+    def __iter__(self) -> Iterator[Frame]:
+        return (self.frame(k) for k in range(len(self)))
+
+    @property
+    def first_params(self) -> CodingParams | None:
+        return self.intra[min(self.intra)] if self.intra else None
+
+    @property
+    def fps(self) -> float:
+        """Frame rate of the first intra header that sends one, else :data:`DEFAULT_FPS`."""
+        for k in sorted(self.intra):
+            if self.intra[k].frame_rate is not None:
+                return self.intra[k].frame_rate.fps
+        return self.source_fps if self.source_fps else DEFAULT_FPS
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first frame to the end of the last (including its skipped frames)."""
+        if not len(self):
+            return 0.0
+        return float(self.timestamps[-1] - self.timestamps[0] + (self.skip[-1] + 1) / self.fps)
+
+    def copy(self) -> "FapStream":
+        arrays = {name: getattr(self, name).copy() for name in ARRAY_FIELDS}
+        return replace(self, intra=dict(self.intra), **arrays)
+
+
+ARRAY_FIELDS = ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values",
+                "timestamps", "object_mask", "skip", "start_code", "bits")

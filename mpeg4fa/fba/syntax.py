@@ -1,0 +1,155 @@
+"""Fixed-length header syntax, written once and run both ways.
+
+Each function below describes a piece of the bitstream syntax over an ``io``
+object: :class:`Reading` returns the fields it reads (ignoring the values passed
+in), :class:`Writing` writes the values passed in and returns them. The decoder
+and the encoder call the same functions, so they cannot disagree about the
+order or width of a field (the idea of FFmpeg's coded-bitstream templates).
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from .bits import BitReader, BitWriter
+from .errors import FbaError
+from .stream import FrameRate, PartParams, RangeSet, TimeCode
+
+MASK_NONE, MASK_HOLD, MASK_INTERPOLATE, MASK_ALL = 0, 1, 2, 3
+RANGE_SET_NAMES = ("i_max", "i_min", "p_max", "p_min")
+
+
+class Reading:
+    writing = False
+
+    def __init__(self, reader: BitReader) -> None:
+        self.bits = reader
+
+    def u(self, n: int, value: int, what: str) -> int:
+        return self.bits.read(n, what)
+
+    def flag(self, value: bool, what: str) -> bool:
+        return bool(self.bits.read(1, what))
+
+    def marker(self, what: str) -> None:
+        pos = self.bits.pos
+        if self.bits.read(1, what) != 1:
+            raise FbaError(f"marker bit of {what} is 0", pos)
+
+
+class Writing:
+    writing = True
+
+    def __init__(self, writer: BitWriter) -> None:
+        self.bits = writer
+
+    def u(self, n: int, value: int, what: str) -> int:
+        if not 0 <= int(value) < (1 << n):
+            raise FbaError(f"{what} = {value} does not fit in {n} bits", self.bits.pos)
+        self.bits.write(n, int(value))
+        return int(value)
+
+    def flag(self, value: bool, what: str) -> bool:
+        self.bits.write(1, int(bool(value)))
+        return bool(value)
+
+    def marker(self, what: str) -> None:
+        self.bits.write(1, 1)
+
+
+def frame_rate(io, fr: FrameRate | None) -> FrameRate | None:
+    if not io.flag(fr is not None, "is_frame_rate"):
+        return None
+    fr = fr or FrameRate(0)
+    return FrameRate(io.u(8, fr.frame_rate, "frame_rate"), io.u(4, fr.seconds, "seconds"),
+                     io.u(1, fr.frequency_offset, "frequency_offset"))
+
+
+def time_code(io, tc: TimeCode | None) -> TimeCode | None:
+    if not io.flag(tc is not None, "is_time_code"):
+        return None
+    tc = tc or TimeCode(0, 0, 0)
+    hours = io.u(5, tc.hours, "time_code_hours")
+    minutes = io.u(6, tc.minutes, "time_code_minutes")
+    io.marker("time_code")
+    return TimeCode(hours, minutes, io.u(6, tc.seconds, "time_code_seconds"))
+
+
+def skip_frames(io, skip: int, pad: bool = False) -> int:
+    """number_of_frames_to_skip in 4-bit chunks, continued while a chunk is 15.
+
+    ``pad`` sends the flag with a count of 0 (5 bits that change nothing), which
+    the encoder uses to keep a tiny frame from hiding inside start-code stuffing.
+    """
+    if not io.flag(skip > 0 or pad, "skip_frames"):
+        return 0
+    total, remaining = 0, skip
+    while True:
+        chunk = io.u(4, min(remaining, 15), "number_of_frames_to_skip")
+        total += chunk
+        remaining -= chunk
+        if chunk != 15:
+            return total
+
+
+def temporal_header(io, is_intra: bool, fr: FrameRate | None, tc: TimeCode | None, skip: int,
+                    pad: bool = False) -> tuple[FrameRate | None, TimeCode | None, int]:
+    """The temporal part of the plane header (sent once, by the face or else the body part)."""
+    if is_intra:
+        fr = frame_rate(io, fr)
+        tc = time_code(io, tc)
+    return fr, tc, skip_frames(io, skip, pad)
+
+
+def group_masks(io, groups: Sequence[Sequence[int]], mask_types: Sequence[int], mask: np.ndarray,
+                n: int, allowed_types: Sequence[int] = (0, 1, 2, 3)) -> tuple[tuple[int, ...], np.ndarray]:
+    """A marker, a 2-bit mask type and (types 1 and 2) a per-parameter mask, per group."""
+    types, out = [], np.zeros(n, dtype=bool)
+    for g, members in enumerate(groups):
+        io.marker(f"group {g + 1} mask")
+        pos = io.bits.pos
+        t = io.u(2, mask_types[g] if io.writing else 0, f"mask type of group {g + 1}")
+        if t not in allowed_types:
+            raise FbaError(f"mask type {t} of group {g + 1} is not allowed here", pos)
+        types.append(t)
+        if t in (MASK_HOLD, MASK_INTERPOLATE):
+            for i in members:
+                out[i] = io.flag(bool(mask[i]) if io.writing else False, f"mask bit of parameter {i + 1}")
+        elif t == MASK_ALL:
+            out[list(members)] = True
+    return tuple(types), out
+
+
+def new_minmax(io, groups: Sequence[Sequence[int]], mask: np.ndarray, ranges: RangeSet) -> RangeSet:
+    """The four new-range sets: a marker every 4 parameters of a group, 5 bits per masked one."""
+    flags = tuple(io.flag(ranges.flags[k], f"is_{name}_new") for k, name in enumerate(RANGE_SET_NAMES))
+    codes = np.zeros_like(ranges.codes)
+    for k, name in enumerate(RANGE_SET_NAMES):
+        if not flags[k]:
+            continue
+        for members in groups:
+            for j, i in enumerate(members):
+                if j % 4 == 0:
+                    io.marker(f"new {name} ranges")
+                if mask[i]:
+                    codes[k, i] = io.u(5, ranges.codes[k, i], f"new {name} of parameter {i + 1}")
+    return RangeSet(flags, codes)
+
+
+def part_intra_header(io, params: PartParams | None, mask_groups: Sequence[Sequence[int]],
+                      range_groups: Sequence[Sequence[int]], n: int,
+                      allowed_types: Sequence[int] = (0, 1, 2, 3)) -> PartParams:
+    """quant, group masks, gender, coding type and (predictive mode) new ranges of one part."""
+    w = params if io.writing else None
+    quant = io.u(5, w.quant if w else 0, "quant")
+    types, mask = group_masks(io, mask_groups, w.mask_types if w else (), w.mask if w else None, n, allowed_types)
+    gender = io.u(1, w.gender if w else 0, "suggested_gender")
+    pos = io.bits.pos
+    coding_type = io.u(1, w.coding_type if w else 0, "coding_type")
+    if coding_type == 1:
+        from .errors import UnsupportedFeature
+        raise UnsupportedFeature("DCT segment mode (coding_type 1) is not supported: its syntax is not "
+                                 "published in any source available to this project", pos)
+    ranges = new_minmax(io, range_groups, mask, w.ranges if w else RangeSet.none(n))
+    return PartParams(quant, types, mask, gender, coding_type, ranges)

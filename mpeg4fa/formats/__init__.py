@@ -1,0 +1,14 @@
+"""File formats around the codec: readers and writers that turn files into
+:class:`~mpeg4fa.fba.stream.FapStream` objects and back.
+
+Every reader reports bad input as a :class:`FormatError` carrying the path, line
+and column to fix; nothing else (no bare ``ValueError``/``IndexError``) escapes
+for malformed content.
+
+* :func:`read_fap`, :func:`iter_fap`, :func:`write_fap`: plain-text ``.fap`` files
+  (Xface, Greta, VREng, visage).
+"""
+from mpeg4fa.formats.errors import FormatError
+from mpeg4fa.formats.fap_text import iter_fap, read_fap, write_fap
+
+__all__ = ["FormatError", "iter_fap", "read_fap", "write_fap"]

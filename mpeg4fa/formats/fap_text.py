@@ -1,0 +1,381 @@
+"""Plain-text ``.fap`` files: the exchange format of Xface, Greta, VREng and visage.
+
+Layout (facts file §6.1)::
+
+    # comment lines, anywhere
+    <version> <name> <fps> <number_of_frames>
+    <mask line: 68 entries 0/1, FAP 1..68>        } repeated
+    <frame line: frame number, masked values>     } per frame
+
+FAP 1 (viseme) takes 4 integers on a frame line (select1 select2 blend def),
+FAP 2 (expression) takes 6 (select1 intensity1 select2 intensity2 init_face
+expression_def), every other masked FAP one integer in FAPU units (§4.3).
+
+Files come from several programs with their own quirks (CRLF and trailing spaces
+from Xface, 69-entry masks from Greta, a leading comment from VREng, names with
+spaces), so the reader is lenient about layout and strict about numbers: every
+problem is a :class:`FormatError` pointing at the line and column to fix.
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+from typing import IO, Iterable, Iterator, NamedTuple, Union, cast
+
+import numpy as np
+
+from mpeg4fa.fba.stream import N_FAPS, FapStream
+from mpeg4fa.formats.errors import FormatError
+
+SUPPORTED_VERSIONS = ("1.1", "2.0", "2.1", "2.2")
+"""Header versions read (all with the same layout) and accepted by :func:`write_fap`."""
+
+VISEME_WIDTH = 4
+EXPRESSION_WIDTH = 6
+INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
+
+Source = Union[str, "os.PathLike[str]", IO[str]]
+Target = Union[str, "os.PathLike[str]", IO[str]]
+
+_TOKEN = re.compile(r"\S+")
+_INT = re.compile(r"[+-]?[0-9]+\Z")
+_FLOAT = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")
+_MAX_INT_DIGITS = 12  # longer than any int32, short enough for int() to stay cheap and safe
+
+
+class FapHeader(NamedTuple):
+    """The header line. ``n_frames`` is what the writer claimed; readers do not rely on it."""
+
+    version: str
+    name: str
+    fps: float
+    n_frames: int
+
+
+class FapRecord(NamedTuple):
+    """One frame as :func:`iter_fap` yields it; arrays use the :class:`FapStream` layouts."""
+
+    frame_number: int
+    mask: np.ndarray        # (68,) bool, FAP 1 in column 0
+    values: np.ndarray      # (68,) int32, columns 0 and 1 zero
+    viseme: np.ndarray      # (4,) int32
+    expression: np.ndarray  # (6,) int32
+
+
+# ---- reading: lines -----------------------------------------------------------------
+
+
+class _Line:
+    """A content line with its 1-based number; columns are computed only for errors."""
+
+    __slots__ = ("number", "text", "tokens")
+
+    def __init__(self, number: int, text: str) -> None:
+        self.number = number
+        self.text = text
+        self.tokens: list[str] = _TOKEN.findall(text)
+
+    def column(self, index: int) -> int:
+        """Column of token ``index``, or just past the last token when there is none."""
+        spans = [m.span() for m in _TOKEN.finditer(self.text)]
+        if index < len(spans):
+            return spans[index][0] + 1
+        return (spans[-1][1] if spans else 0) + 1
+
+    def span_text(self, first: int, last: int) -> str:
+        """The raw text from token ``first`` to token ``last`` inclusive (keeps inner spaces)."""
+        spans = [m.span() for m in _TOKEN.finditer(self.text)]
+        return self.text[spans[first][0]:spans[last][1]]
+
+
+class _LineReader:
+    """Skips blank and ``#`` lines, and counts lines so that end-of-file errors can say where."""
+
+    def __init__(self, handle: Iterable[str | bytes], path: str) -> None:
+        self._lines = iter(handle)
+        self.path = path
+        self.count = 0
+
+    def next(self) -> _Line | None:
+        while True:
+            try:
+                raw = next(self._lines)
+            except StopIteration:
+                return None
+            except UnicodeDecodeError as exc:
+                raise FormatError(self.path, self.count + 1, None, f"the line is not valid text ({exc.reason})",
+                                  "save the file as ASCII or UTF-8") from None
+            self.count += 1
+            text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else raw
+            if self.count == 1:
+                text = text.lstrip("\ufeff")  # a byte-order mark is not part of the header
+            stripped = text.strip()
+            if stripped and not stripped.startswith("#"):
+                return _Line(self.count, text.rstrip("\r\n"))
+
+    def error_at_end(self, problem: str, hint: str) -> FormatError:
+        return FormatError(self.path, self.count + 1, None, problem, hint)
+
+
+@contextmanager
+def _open_source(source: Source, name: str | None) -> Iterator[tuple[Iterable[str], str]]:
+    """Yield (lines, label for messages); close the file only if we opened it."""
+    if isinstance(source, (str, bytes, os.PathLike)):
+        label = name if name is not None else os.fsdecode(source)
+        # errors="replace": a stray byte in the free-text name must not stop the read
+        with open(source, encoding="utf-8-sig", errors="replace") as handle:
+            yield handle, label
+    else:
+        stream_name = getattr(source, "name", None)
+        label = name if name is not None else (stream_name if isinstance(stream_name, str) else "<stream>")
+        yield source, label
+
+
+# ---- reading: numbers ---------------------------------------------------------------
+
+
+def _integer(line: _Line, index: int, path: str, what: str, low: int, high: int, hint: str) -> int:
+    token = line.tokens[index]
+    if not _INT.match(token):
+        raise FormatError(path, line.number, line.column(index), f"{what} {token!r} is not an integer", hint)
+    if len(token.lstrip("+-").lstrip("0")) > _MAX_INT_DIGITS or not low <= int(token) <= high:
+        raise FormatError(path, line.number, line.column(index),
+                          f"{what} {token} is out of range {low}..{high}", hint)
+    return int(token)
+
+
+def _fps(line: _Line, index: int, path: str) -> float:
+    token = line.tokens[index]
+    value = float(token) if _FLOAT.match(token) else math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise FormatError(path, line.number, line.column(index),
+                          f"frame rate {token!r} is not a positive number",
+                          "the third header field is frames per second, e.g. 25 or 29.97")
+    return value
+
+
+# ---- reading: records ---------------------------------------------------------------
+
+
+def _parse_header(line: _Line, path: str) -> FapHeader:
+    tokens = line.tokens
+    if tokens[0] not in SUPPORTED_VERSIONS:
+        raise FormatError(path, line.number, line.column(0),
+                          f"unsupported .fap version {tokens[0]!r}",
+                          f"the first line must be the header '<version> <name> <fps> <number_of_frames>' "
+                          f"with version one of {', '.join(SUPPORTED_VERSIONS)}")
+    if len(tokens) < 4:
+        raise FormatError(path, line.number, line.column(len(tokens)),
+                          f"the header has {len(tokens)} fields, expected 4",
+                          "write '<version> <name> <fps> <number_of_frames>', e.g. '2.1 joy.fap 25 108'")
+    # Version 2.0: VREng divides its values by 20 (FAPV20_DIV); what that means was never checked,
+    # so 2.0 files are read exactly like 2.1 (values as written, in FAPU).
+    fps = _fps(line, len(tokens) - 2, path)
+    n_frames = _integer(line, len(tokens) - 1, path, "frame count", 0, INT32_MAX,
+                        "the last header field is the number of frames, a whole number")
+    # the name may contain spaces (Greta: 'AU Interpolation_1111.fap'): it is all between version and fps
+    name = line.span_text(1, len(tokens) - 3)
+    return FapHeader(tokens[0], name, fps, n_frames)
+
+
+def _parse_mask(line: _Line, path: str) -> np.ndarray:
+    tokens = line.tokens
+    for i, token in enumerate(tokens):
+        if token != "0" and token != "1":
+            raise FormatError(path, line.number, line.column(i),
+                              f"mask entry {i + 1} is {token!r}, expected 0 or 1",
+                              "a mask line has one 0/1 per FAP 1..68; check that mask and frame lines alternate")
+    if len(tokens) < N_FAPS:
+        raise FormatError(path, line.number, line.column(len(tokens)),
+                          f"the mask line has {len(tokens)} entries, expected {N_FAPS}",
+                          "give one 0/1 entry for each of FAPs 1..68")
+    # Greta writes 69 entries: anything after the 68th is ignored
+    return np.array([t == "1" for t in tokens[:N_FAPS]], dtype=bool)
+
+
+def _value_count(mask: np.ndarray) -> int:
+    """Integers a frame line carries after its frame number, for this mask."""
+    return VISEME_WIDTH * int(mask[0]) + EXPRESSION_WIDTH * int(mask[1]) + int(mask[2:].sum())
+
+
+def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int, path: str) -> FapRecord:
+    number = _integer(line, 0, path, "frame number", 0, INT32_MAX,
+                      "a frame line starts with its frame number, a whole number >= 0")
+    if number <= previous:
+        raise FormatError(path, line.number, line.column(0),
+                          f"frame number {number} does not increase (the previous frame is {previous})",
+                          "frame numbers must increase; renumber the frames or remove the duplicate")
+    expected = _value_count(mask)
+    got = len(line.tokens) - 1
+    if got != expected:
+        raise FormatError(path, line.number, line.column(min(got, expected) + 1),
+                          f"frame {number} has {got} values, expected {expected} for the mask at line "
+                          f"{mask_line.number}",
+                          "give one value per masked FAP, 4 for FAP 1 and 6 for FAP 2, in FAP order")
+    ints = [_integer(line, i, path, "value", INT32_MIN, INT32_MAX, "FAP values are whole numbers in FAPU")
+            for i in range(1, got + 1)]
+    return _record(number, mask, np.array(ints, dtype=np.int32))
+
+
+def _record(number: int, mask: np.ndarray, flat: np.ndarray) -> FapRecord:
+    """Split a frame line's values into the FAP 1, FAP 2 and FAP 3..68 arrays."""
+    viseme = np.zeros(VISEME_WIDTH, dtype=np.int32)
+    expression = np.zeros(EXPRESSION_WIDTH, dtype=np.int32)
+    values = np.zeros(N_FAPS, dtype=np.int32)
+    pos = 0
+    if mask[0]:
+        viseme[:] = flat[pos:pos + VISEME_WIDTH]
+        pos += VISEME_WIDTH
+    if mask[1]:
+        expression[:] = flat[pos:pos + EXPRESSION_WIDTH]
+        pos += EXPRESSION_WIDTH
+    values[2:][mask[2:]] = flat[pos:]
+    return FapRecord(number, mask, values, viseme, expression)
+
+
+def _parse(source: Source, name: str | None) -> Iterator[FapHeader | FapRecord]:
+    """The one parser: yields the header, then one record per frame, reading line by line."""
+    with _open_source(source, name) as (handle, path):
+        lines = _LineReader(handle, path)
+        header_line = lines.next()
+        if header_line is None:
+            raise lines.error_at_end("the file has no header",
+                                     "start with '<version> <name> <fps> <number_of_frames>', e.g. '2.1 a.fap 25 0'")
+        yield _parse_header(header_line, path)
+        previous = -1
+        while (mask_line := lines.next()) is not None:
+            mask = _parse_mask(mask_line, path)
+            frame_line = lines.next()
+            if frame_line is None:
+                raise lines.error_at_end(f"the file ends after the mask line at line {mask_line.number}",
+                                         "add its frame line (frame number, then the masked values) "
+                                         "or delete the mask line")
+            record = _parse_frame(frame_line, mask, mask_line, previous, path)
+            previous = record.frame_number
+            yield record
+
+
+def iter_fap(source: Source, *, name: str | None = None) -> Iterator[FapRecord]:
+    """Yield ``(frame_number, mask, values, viseme, expression)`` per frame, reading lazily.
+
+    Nothing is opened until the first frame is asked for, and only one line is held
+    at a time, so long files stream. The header is still checked. ``name`` replaces
+    the path in error messages (useful for streams).
+    """
+    records = _parse(source, name)
+    next(records)  # the header
+    yield from records  # type: ignore[misc]
+
+
+def read_fap(source: Source, *, name: str | None = None) -> FapStream:
+    """Read a ``.fap`` file (path or text stream) into a :class:`FapStream`.
+
+    Gaps in the frame numbers become ``skip`` on the frame before the gap;
+    timestamps are ``frame_number / fps``. The header's frame count is not
+    trusted: the frames found are what is returned.
+    """
+    records = _parse(source, name)
+    header = cast(FapHeader, next(records))
+    return _stack(header, cast("list[FapRecord]", list(records)))
+
+
+def _stack(header: FapHeader, records: list[FapRecord]) -> FapStream:
+    stream = FapStream.empty(len(records))
+    stream.source_fps = header.fps
+    if not records:
+        return stream
+    numbers = np.array([r.frame_number for r in records], dtype=np.int64)
+    stream.fap_mask[:] = np.stack([r.mask for r in records])
+    stream.fap_values[:] = np.stack([r.values for r in records])
+    stream.viseme[:] = np.stack([r.viseme for r in records])
+    stream.expression[:] = np.stack([r.expression for r in records])
+    stream.timestamps[:] = numbers / header.fps
+    stream.skip[:-1] = np.diff(numbers) - 1
+    return stream
+
+
+# ---- writing ------------------------------------------------------------------------
+
+
+def write_fap(stream: FapStream, target: Target, *, name: str | None = None, version: str = "2.1") -> None:
+    """Write ``stream`` as a ``.fap`` file in the common 2.1 layout.
+
+    Frame numbers start at 0 and grow by ``skip + 1``, so skipped frames show as
+    gaps; timestamps are not written (readers rebuild them from fps). BAPs have
+    no place in the format: they are dropped with a warning. Everything is
+    checked before the first byte is written, so a bad stream leaves no partial file.
+    """
+    label = os.fsdecode(target) if isinstance(target, (str, bytes, os.PathLike)) else _stream_label(target)
+    numbers = _frame_numbers(stream, label)
+    n_frames = int(numbers[-1]) + 1 if len(numbers) else 0
+    header = _format_header(stream, label, _header_name(name, label), version, n_frames)
+    if stream.bap_mask.any():
+        warnings.warn(f"{int(stream.bap_mask.any(axis=1).sum())} frames carry BAPs (body animation); "
+                      ".fap holds face parameters only, so the BAPs are dropped", UserWarning, stacklevel=2)
+    lines = _format_lines(stream, header, numbers)
+    if isinstance(target, (str, bytes, os.PathLike)):
+        with open(target, "w", encoding="utf-8", newline="") as handle:
+            handle.writelines(lines)
+    else:
+        target.writelines(lines)
+
+
+def _stream_label(target: IO[str]) -> str:
+    stream_name = getattr(target, "name", None)
+    return stream_name if isinstance(stream_name, str) else "<stream>"
+
+
+def _header_name(name: str | None, label: str) -> str:
+    """The header's name field: as given, else the target's file name."""
+    if name is not None:
+        return name
+    return (Path(label).name if label != "<stream>" else "") or "stream.fap"
+
+
+def _format_header(stream: FapStream, label: str, name: str, version: str, n_frames: int) -> str:
+    if version not in SUPPORTED_VERSIONS:
+        raise FormatError(label, 1, 1, f"cannot write .fap version {version!r}",
+                          f"use one of {', '.join(SUPPORTED_VERSIONS)}")
+    clean = name.strip()
+    if not clean or "\n" in clean or "\r" in clean:
+        raise FormatError(label, 1, None, f"header name {name!r} is empty or spans lines",
+                          "pass a one-line name, e.g. name='joy.fap'")
+    fps = float(stream.fps)
+    if not (math.isfinite(fps) and fps > 0):
+        raise FormatError(label, 1, None, f"frame rate {fps} is not a positive number",
+                          "set stream.source_fps (or an intra frame rate) to the real rate")
+    fps_text = str(int(fps)) if fps.is_integer() else f"{fps:g}"
+    return f"{version} {clean} {fps_text} {n_frames}"
+
+
+def _frame_numbers(stream: FapStream, label: str) -> np.ndarray:
+    """0, then previous + skip[previous] + 1: skipped frames become gaps."""
+    skip = np.asarray(stream.skip, dtype=np.int64)
+    if len(skip) and skip.min() < 0:
+        k = int(np.argmax(skip < 0))
+        raise FormatError(label, 2 * k + 3, 1, f"frame {k} has skip {int(skip[k])} < 0",
+                          "skip counts frames left out after a frame and cannot be negative")
+    numbers = np.concatenate([[0], np.cumsum(skip[:-1] + 1)]) if len(skip) else skip
+    if len(numbers) and numbers[-1] > INT32_MAX:
+        raise FormatError(label, 2 * len(numbers) + 1, 1, f"frame number {int(numbers[-1])} is too large",
+                          "reduce the skip counts")
+    return numbers.astype(np.int64)
+
+
+def _format_lines(stream: FapStream, header: str, numbers: np.ndarray) -> Iterator[str]:
+    yield header + "\n"
+    masks = np.asarray(stream.fap_mask, dtype=bool)
+    for k in range(len(numbers)):
+        mask = masks[k]
+        yield " ".join("1" if m else "0" for m in mask.tolist()) + "\n"
+        parts = [str(int(numbers[k]))]
+        if mask[0]:
+            parts += map(str, stream.viseme[k].tolist())
+        if mask[1]:
+            parts += map(str, stream.expression[k].tolist())
+        parts += map(str, stream.fap_values[k, 2:][mask[2:]].tolist())
+        yield " ".join(parts) + "\n"

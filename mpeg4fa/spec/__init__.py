@@ -1,0 +1,147 @@
+"""The MPEG-4 face and body animation tables, loaded once from ``spec/*.csv``.
+
+The numbers live only in the data files of the top-level ``spec/`` folder (see
+its README for sources and confidence); this module turns them into records
+and numpy arrays at import so the codec never retypes a table. Arrays are
+read-only because every module shares them. Array index ``i`` is FAP ``i + 1``
+and BAP ``i + 1``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from mpeg4fa.spec._load import check, opt_float, opt_int, opt_str, read_table, split_list
+from mpeg4fa.spec._records import Expression, Fap, Fapu, FeaturePoint, HighLevelField, Viseme
+
+__all__ = [
+    "Fap", "FeaturePoint", "Fapu", "Viseme", "Expression", "HighLevelField",
+    "N_FAPS", "N_BAPS", "FAPS", "FAP_BY_NAME", "QUANT_STEP", "I_MAX_DEFAULT", "P_MAX_DEFAULT",
+    "FAP_GROUP", "FAP_GROUP_SLICES", "HIGH_LEVEL_FIELDS", "FEATURE_POINTS", "FAPU",
+    "VISEMES", "EXPRESSIONS", "BAP_GROUPS", "BAP_QUANT_STEP", "BAP_QUANT_STEP_ALT",
+    "BAP_PRED_SCALE",
+]
+
+N_FAPS = 68
+N_BAPS = 296
+
+
+def _frozen(values: list[int]) -> np.ndarray:
+    arr = np.array(values, dtype=np.int32)
+    arr.flags.writeable = False
+    return arr
+
+
+FAPS: tuple[Fap, ...] = tuple(
+    Fap(
+        number=int(r["fap"]), name=r["name"], description=r["description"],
+        fapu=opt_str(r["fapu"]), direction=opt_str(r["direction"]),
+        unidirectional=None if not r["unidirectional"] else r["unidirectional"] == "1",
+        group=int(r["group"]), feature_point=split_list(r["feature_point"]),
+        quant_step=int(r["quant_step"]), i_max=opt_int(r["i_max"]), p_max=opt_int(r["p_max"]),
+        notes=r["notes"],
+    )
+    for r in read_table(
+        "faps.csv",
+        "fap,name,description,fapu,direction,unidirectional,group,feature_point,"
+        "quant_step,i_max,p_max,notes",
+    )
+)
+"""All 68 FAPs; ``FAPS[k]`` is FAP ``k + 1``."""
+check([f.number for f in FAPS] == list(range(1, N_FAPS + 1)), "faps.csv must list FAP 1..68 in order")
+
+FAP_BY_NAME: dict[str, Fap] = {f.name: f for f in FAPS}
+"""FAPs by their name, e.g. ``"open_jaw"``."""
+
+QUANT_STEP = _frozen([f.quant_step for f in FAPS])
+"""Per-FAP quantiser step (QP); the coded step is ``QUANT_STEP * fap_quant``."""
+I_MAX_DEFAULT = _frozen([f.i_max or 0 for f in FAPS])
+"""Default intra range magnitudes in quantised units (0 for FAP 1, 2)."""
+P_MAX_DEFAULT = _frozen([f.p_max or 0 for f in FAPS])
+"""Default P range magnitudes in quantised units (0 for FAP 1, 2)."""
+FAP_GROUP = _frozen([f.group for f in FAPS])
+"""FAP group number (1..10) of each FAP."""
+
+
+def _group_slices() -> tuple[tuple[int, int], ...]:
+    rows = read_table("fap_groups.csv", "group,first_fap,last_fap,name")
+    check([int(r["group"]) for r in rows] == list(range(1, len(rows) + 1)), "groups out of order")
+    slices = tuple((int(r["first_fap"]) - 1, int(r["last_fap"])) for r in rows)
+    ends = [0] + [stop for _, stop in slices]
+    check([start for start, _ in slices] + [N_FAPS] == ends, "FAP groups must tile FAP 1..68")
+    return slices
+
+
+FAP_GROUP_SLICES = _group_slices()
+"""Half-open 0-based column range of each FAP group; the mask is sent per group."""
+
+HIGH_LEVEL_FIELDS: tuple[HighLevelField, ...] = tuple(
+    HighLevelField(
+        fap=int(r["fap"]), field=r["field"], i_min=int(r["i_min"]), i_max=int(r["i_max"]),
+        p_min=int(r["p_min"]), p_max=int(r["p_max"]), quantised=r["quantised"] == "1",
+    )
+    for r in read_table("high_level_fields.csv", "fap,field,i_min,i_max,p_min,p_max,quantised")
+)
+"""The arithmetic-coded fields of FAP 1 then FAP 2, in bitstream order, with their fixed ranges."""
+
+FEATURE_POINTS: tuple[FeaturePoint, ...] = tuple(
+    FeaturePoint(
+        label=r["fp"], group=int(r["group"]), description=r["description"],
+        moved_by_faps=tuple(int(x) for x in split_list(r["moved_by_faps"])),
+        fapu_role=split_list(r["fapu_role"]),
+    )
+    for r in read_table("feature_points.csv", "fp,group,description,moved_by_faps,fapu_role")
+)
+"""The 84 feature points of groups 2..11, in label order."""
+
+FAPU: dict[str, Fapu] = {
+    r["fapu"]: Fapu(
+        symbol=r["fapu"], name=r["name"], definition=r["definition"],
+        point_a=opt_str(r["point_a"]), axis=opt_str(r["axis"]), point_b=opt_str(r["point_b"]),
+        divisor=opt_int(r["divisor"]), unit=r["unit"], radians=opt_float(r["radians"]),
+    )
+    for r in read_table("fapu.csv", "fapu,name,definition,point_a,axis,point_b,divisor,unit,radians")
+}
+"""The six FAPU by symbol (IRISD, ES, ENS, MNS, MW, AU)."""
+
+VISEMES: tuple[Viseme, ...] = tuple(
+    Viseme(number=int(r["viseme"]), name=r["name"], phonemes=r["phonemes"], examples=r["examples"])
+    for r in read_table("visemes.csv", "viseme,name,phonemes,examples")
+)
+"""Visemes 0..14; ``VISEMES[k]`` is viseme ``k`` (0 = none)."""
+check([v.number for v in VISEMES] == list(range(len(VISEMES))), "visemes out of order")
+
+EXPRESSIONS: tuple[Expression, ...] = tuple(
+    Expression(number=int(r["expression"]), name=r["name"], description=r["description"])
+    for r in read_table("expressions.csv", "expression,name,description")
+)
+"""Expressions 0..6; ``EXPRESSIONS[k]`` is expression ``k`` (0 = neutral)."""
+check([e.number for e in EXPRESSIONS] == list(range(len(EXPRESSIONS))), "expressions out of order")
+
+
+def _bap_groups() -> tuple[tuple[int, ...], ...]:
+    groups: dict[int, list[tuple[int, int]]] = {}
+    for r in read_table("bap_groups.csv", "group,position,bap"):
+        groups.setdefault(int(r["group"]), []).append((int(r["position"]), int(r["bap"]) - 1))
+    check(sorted(groups) == list(range(1, len(groups) + 1)), "BAP groups must be numbered 1..n")
+    result = []
+    for g in sorted(groups):
+        members = sorted(groups[g])
+        check([p for p, _ in members] == list(range(1, len(members) + 1)), f"BAP group {g} positions")
+        result.append(tuple(b for _, b in members))
+    check(sorted(b for grp in result for b in grp) == list(range(N_BAPS)), "each BAP once")
+    return tuple(result)
+
+
+BAP_GROUPS = _bap_groups()
+"""The 24 BAP groups as 0-based BAP indices in bitstream order (19 ISO + 5 visage)."""
+
+_BAP_QUANT = read_table("bap_quant.csv", "bap,bqp,bqp_alt")
+check([int(r["bap"]) for r in _BAP_QUANT] == list(range(1, N_BAPS + 1)), "bap_quant.csv BAP 1..296")
+BAP_QUANT_STEP = _frozen([int(r["bqp"]) for r in _BAP_QUANT])
+"""Per-BAP quantiser step (BQP) that real streams decode with (visage "experiment")."""
+BAP_QUANT_STEP_ALT = _frozen([int(r["bqp_alt"]) for r in _BAP_QUANT])
+"""The BQP table visage labels "standard" but leaves unused; which one ISO specifies is unverified."""
+del _BAP_QUANT
+
+BAP_PRED_SCALE = _frozen([int(r["scale"]) for r in read_table("bap_pred_scale.csv", "bap_quant,scale")])
+"""Scale by bap_quant 0..31: the BAP step is ``BAP_QUANT_STEP * BAP_PRED_SCALE[bap_quant]``."""
