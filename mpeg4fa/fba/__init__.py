@@ -11,3 +11,6 @@ from .stream import CodingParams, FapStream, Frame, FrameRate, PartParams, Range
 
 __all__ = ["decode", "iter_decode", "FbaError", "UnsupportedFeature", "CodingParams", "FapStream",
            "Frame", "FrameRate", "PartParams", "RangeSet", "TimeCode"]
+from .encoder import EncodeOptions, encode, plan, write  # noqa: E402
+
+__all__ += ["EncodeOptions", "encode", "plan", "write"]

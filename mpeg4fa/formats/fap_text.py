@@ -138,13 +138,18 @@ def _open_source(source: Source, name: str | None) -> Iterator[tuple[Iterable[st
 # ---- reading: numbers ---------------------------------------------------------------
 
 
+def _short(token: str) -> str:
+    """A token as messages quote it: a runaway token must not flood the message."""
+    return token if len(token) <= 24 else token[:20] + "..."
+
+
 def _integer(line: _Line, index: int, path: str, what: str, low: int, high: int, hint: str) -> int:
     token = line.tokens[index]
     if not _INT.match(token):
-        raise FormatError(path, line.number, line.column(index), f"{what} {token!r} is not an integer", hint)
+        raise FormatError(path, line.number, line.column(index), f"{what} {_short(token)!r} is not an integer", hint)
     if len(token.lstrip("+-").lstrip("0")) > _MAX_INT_DIGITS or not low <= int(token) <= high:
         raise FormatError(path, line.number, line.column(index),
-                          f"{what} {token} is out of range {low}..{high}", hint)
+                          f"{what} {_short(token)} is out of range {low}..{high}", hint)
     return int(token)
 
 
@@ -153,7 +158,7 @@ def _fps(line: _Line, index: int, path: str) -> float:
     value = float(token) if _FLOAT.match(token) else math.nan
     if not (math.isfinite(value) and value > 0):
         raise FormatError(path, line.number, line.column(index),
-                          f"frame rate {token!r} is not a positive number",
+                          f"frame rate {_short(token)!r} is not a positive number",
                           "the third header field is frames per second, e.g. 25 or 29.97")
     return value
 
@@ -165,7 +170,7 @@ def _parse_header(line: _Line, path: str) -> FapHeader:
     tokens = line.tokens
     if tokens[0] not in SUPPORTED_VERSIONS:
         raise FormatError(path, line.number, line.column(0),
-                          f"unsupported .fap version {tokens[0]!r}",
+                          f"unsupported .fap version {_short(tokens[0])!r}",
                           f"the first line must be the header '<version> <name> <fps> <number_of_frames>' "
                           f"with version one of {', '.join(SUPPORTED_VERSIONS)}")
     if len(tokens) < 4:
@@ -187,7 +192,7 @@ def _parse_mask(line: _Line, path: str) -> np.ndarray:
     for i, token in enumerate(tokens):
         if token != "0" and token != "1":
             raise FormatError(path, line.number, line.column(i),
-                              f"mask entry {i + 1} is {token!r}, expected 0 or 1",
+                              f"mask entry {i + 1} is {_short(token)!r}, expected 0 or 1",
                               "a mask line has one 0/1 per FAP 1..68; check that mask and frame lines alternate")
     if len(tokens) < N_FAPS:
         raise FormatError(path, line.number, line.column(len(tokens)),

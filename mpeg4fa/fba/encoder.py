@@ -1,0 +1,316 @@
+"""fba_object() encoding.
+
+Encoding is two steps. :func:`plan` decides the coding parameters (which frames
+are intra and what their headers say, skip counts, plane start codes) from the
+data and :class:`EncodeOptions`; :func:`write` turns a fully planned
+:class:`FapStream` into bits, exactly as planned. A decoded stream is already
+fully planned, which is why re-encoding it gives the same bytes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Sequence
+
+import numpy as np
+
+from . import syntax
+from .arith import SegmentEnd, encode_segment, lookahead_desyncs
+from .bits import BitWriter
+from .errors import FbaError
+from .params import BODY, FACE, RANGE_DELTA, FieldCoder, PartSpec, ValueCoder, dequantise, quantise
+from .stream import (BODY as BODY_BIT, END_CODE, FACE as FACE_BIT, N_BAPS, N_FAPS, PLANE_START_CODE,
+                     CodingParams, FapStream, FrameRate, PartParams, RangeSet, TimeCode)
+
+MAX_REPAIRS = 32
+
+
+@dataclass
+class EncodeOptions:
+    """Coding choices; ``None`` keeps what the stream carries (or a sensible default)."""
+
+    fap_quant: int | None = None
+    bap_quant: int | None = None
+    intra_period: int | None = None
+    """Frames from one intra frame to the next; 0 = only the first frame (and mask changes)."""
+    mask_types: Sequence[int] | None = None
+    """Per FAP group (10): 0 none, 1 hold unsent FAPs, 2 interpolate them, 3 all. Types 0 and 3 must match the data."""
+    fps: float | None = None
+    start_codes: bool | None = None
+    """Send a plane start code before every intra plane."""
+    skip_repeats: bool = False
+    """Fold frames equal to their predecessor into the predecessor's skip count."""
+    time_codes: bool = False
+    """Send a time code (whole seconds of the frame's time) in every intra header."""
+    optimize: bool = False
+    """Smallest stream with the same decoded values: tight ranges per intra period, repeats folded."""
+
+
+def encode(stream: FapStream, options: EncodeOptions | None = None) -> bytes:
+    """Encode a stream; with no options a decoded stream re-encodes with its own parameters."""
+    if options is None and 0 in stream.intra:
+        return write(stream)
+    return write(plan(stream, options or EncodeOptions()))
+
+
+# ---- planning -----------------------------------------------------------------------------
+def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
+    """Fill in intra headers, skips and start codes for ``stream`` according to ``options``."""
+    if not len(stream):
+        raise FbaError("cannot encode a stream with no frames")
+    first = stream.first_params
+    out = stream.copy()
+    out.intra = {}
+    out.object_mask = np.where(out.object_mask == 0, FACE_BIT, out.object_mask).astype(np.uint8)
+    if options.skip_repeats or options.optimize:
+        out = _fold_repeats(out)
+    fps = options.fps or stream.fps
+    frame_rate = FrameRate.from_fps(fps)
+    face_quant = _pick(options.fap_quant, first.face.quant if first and first.face else None, 1)
+    body_quant = _pick(options.bap_quant, first.body.quant if first and first.body else None, 1)
+    period = options.intra_period or 0
+    use_start_codes = _pick(options.start_codes, bool(stream.start_code.any()), False)
+
+    intra_frames = [0]
+    for k in range(1, len(out)):
+        changed = (out.object_mask[k] != out.object_mask[k - 1]
+                   or not np.array_equal(out.fap_mask[k], out.fap_mask[k - 1])
+                   or not np.array_equal(out.bap_mask[k], out.bap_mask[k - 1]))
+        if changed or (period and k - intra_frames[-1] >= period):
+            intra_frames.append(k)
+    bounds = intra_frames[1:] + [len(out)]
+
+    wide = {}
+    if not options.optimize:  # one set of ranges, wide enough for the whole stream
+        wide["face"] = _range_codes(out, FACE, face_quant, intra_frames, bounds)
+        wide["body"] = _range_codes(out, BODY, body_quant, intra_frames, bounds)
+    for g, (k, stop) in enumerate(zip(intra_frames, bounds)):
+        params = CodingParams(frame_rate=frame_rate)
+        if options.time_codes:
+            params.time_code = TimeCode.from_seconds(out.timestamps[k])
+        if out.object_mask[k] & FACE_BIT:
+            codes = wide["face"] if wide else _range_codes(out, FACE, face_quant, [k], [stop])
+            params.face = PartParams(face_quant, _mask_types(out.fap_mask[k], FACE, options.mask_types, first),
+                                     out.fap_mask[k].copy(), ranges=RangeSet((True,) * 4, codes))
+        if out.object_mask[k] & BODY_BIT:
+            codes = wide["body"] if wide else _range_codes(out, BODY, body_quant, [k], [stop])
+            params.body = PartParams(body_quant, _mask_types(out.bap_mask[k], BODY, None, None),
+                                     out.bap_mask[k].copy(), ranges=RangeSet((True,) * 4, codes))
+        out.intra[k] = params
+    out.start_code[:] = 0
+    if use_start_codes:
+        out.start_code[intra_frames] = PLANE_START_CODE
+    out.timestamps = _grid_times(out, fps)
+    return out
+
+
+def _pick(option, carried, default):
+    return option if option is not None else (carried if carried is not None else default)
+
+
+def _fold_repeats(s: FapStream) -> FapStream:
+    """Drop frames whose content equals the frame before, adding them to its skip count."""
+    same = np.ones(len(s), dtype=bool)
+    same[0] = False
+    for name in ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values", "object_mask"):
+        a = getattr(s, name)
+        eq = a[1:] == a[:-1]
+        same[1:] &= eq.reshape(len(s) - 1, -1).all(axis=1)
+    keep: list[int] = []
+    skip: list[int] = []
+    for k in range(len(s)):
+        if same[k]:
+            skip[-1] += 1 + int(s.skip[k])
+        else:
+            keep.append(k)
+            skip.append(int(s.skip[k]))
+    out = FapStream.empty(len(keep))
+    for name in ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values",
+                 "timestamps", "object_mask", "start_code"):
+        setattr(out, name, getattr(s, name)[keep].copy())
+    out.skip = np.array(skip, dtype=np.int32)
+    out.object_start_code = s.object_start_code
+    out.source_fps = s.source_fps
+    return out
+
+
+def _grid_times(s: FapStream, fps: float) -> np.ndarray:
+    slots = np.concatenate([[0], np.cumsum(s.skip[:-1] + 1)])
+    return s.timestamps[0] + slots / fps
+
+
+def _mask_types(mask: np.ndarray, part: PartSpec, requested, first: CodingParams | None) -> tuple[int, ...]:
+    types = []
+    carried = first.face.mask_types if (first and first.face and part is FACE) else None
+    for g, members in enumerate(part.mask_groups):
+        sent = mask[list(members)]
+        if requested is not None:
+            t = int(requested[g])
+            if (t == syntax.MASK_NONE and sent.any()) or (t == syntax.MASK_ALL and not sent.all()):
+                raise FbaError(f"mask type {t} for FAP group {g + 1} does not match the FAPs present")
+        elif not sent.any():
+            t = syntax.MASK_NONE
+        elif sent.all():
+            t = syntax.MASK_ALL
+        elif carried is not None and carried[g] in (syntax.MASK_HOLD, syntax.MASK_INTERPOLATE):
+            t = carried[g]
+        else:
+            t = syntax.MASK_HOLD
+        types.append(t)
+    return tuple(types)
+
+
+def _range_codes(s: FapStream, part: PartSpec, quant: int, starts: Sequence[int], stops: Sequence[int]) -> np.ndarray:
+    """The smallest 5-bit range codes that cover every level coded in frames starts[i]..stops[i]."""
+    values, masks = (s.fap_values, s.fap_mask) if part is FACE else (s.bap_values, s.bap_mask)
+    step = part.step_multiplier(quant)
+    qstep = part.quant_step * step
+    scaler = step or 1
+    extremes = np.zeros((4, part.n), dtype=np.int64)  # max I, -min I, max P, -min P (all >= 0)
+    for a, b in zip(starts, stops):
+        level = quantise(values[a], qstep)
+        recon = dequantise(level, qstep)
+        extremes[0] = np.maximum(extremes[0], level)
+        extremes[1] = np.maximum(extremes[1], -level)
+        for k in range(a + 1, b):
+            level = quantise(values[k] - recon, qstep)
+            recon = recon + dequantise(level, qstep)
+            extremes[2] = np.maximum(extremes[2], level)
+            extremes[3] = np.maximum(extremes[3], -level)
+    extremes *= masks[starts[0]][None, :]
+    codes = -(-extremes * scaler // RANGE_DELTA)         # first guess, then fix C rounding below
+    codes = np.minimum(codes, 31)
+    while True:
+        short = (codes * RANGE_DELTA // scaler < extremes) & (codes < 31)
+        if not short.any():
+            break
+        codes[short] += 1
+    too_big = codes * RANGE_DELTA // scaler < extremes
+    if too_big.any():
+        k, i = (int(x[0]) for x in np.nonzero(too_big))
+        label = "FAP" if part is FACE else "BAP"
+        raise FbaError(f"{label} {i + 1}: level {int(extremes[k, i])} exceeds the largest range 31*60/{scaler}; "
+                       f"use a coarser quantiser (a larger {'fap' if part is FACE else 'bap'}_quant)")
+    return codes.astype(np.int16)
+
+
+# ---- writing ------------------------------------------------------------------------------
+class _Writer:
+    def __init__(self, stream: FapStream, pads: set[int]) -> None:
+        self.s = stream
+        self.pads = pads
+        self.w = BitWriter()
+        self.io = syntax.Writing(self.w)
+        self.faps, self.baps = ValueCoder(FACE), ValueCoder(BODY)
+        self.viseme, self.expression = FieldCoder(1), FieldCoder(2)
+        self.face: PartParams | None = None
+        self.body: PartParams | None = None
+        self.spans: list[tuple[int, int]] = []
+        self.ends: list[tuple[int, SegmentEnd, bool]] = []  # (frame, end, last segment of the frame)
+
+    def run(self) -> None:
+        s, w = self.s, self.w
+        w.start_code(s.object_start_code)
+        for k in range(len(s)):
+            if s.start_code[k]:
+                w.next_start_code()
+                w.start_code(int(s.start_code[k]))
+            start = w.pos
+            try:
+                self.plane(k)
+            except FbaError as exc:
+                exc.frame = k if exc.frame is None else exc.frame
+                exc.bit_offset = w.pos if exc.bit_offset is None else exc.bit_offset
+                raise
+            self.spans.append((start, w.pos))
+            if self.ends and self.ends[-1][0] == k:
+                f, end, _ = self.ends[-1]
+                self.ends[-1] = (f, end, True)
+        w.next_start_code()
+        w.start_code(END_CODE)
+
+    def segment(self, k: int, coder, values, intra: bool) -> None:
+        symbols = coder.encode(values, intra, k)
+        self.ends.append((k, encode_segment(self.w, symbols, coder.models(intra), not intra), False))
+
+    def plane(self, k: int) -> None:
+        s, io = self.s, self.io
+        params = s.intra.get(k)
+        intra = params is not None
+        mask = int(s.object_mask[k])
+        io.flag(intra, "is_intra")
+        io.u(2, mask, "fba_object_mask")
+        syntax.temporal_header(io, intra, params.frame_rate if intra else None,
+                               params.time_code if intra else None, int(s.skip[k]), k in self.pads)
+        if mask & FACE_BIT:
+            if intra:
+                if params.face is None:
+                    raise FbaError("intra frame with face data has no face parameters")
+                self.face = syntax.part_intra_header(io, params.face, FACE.mask_groups, FACE.range_groups, N_FAPS)
+                self.faps.start_intra(self.face)
+                self.viseme.start_intra(self.face.quant)
+                self.expression.start_intra(self.face.quant)
+            elif self.face is None:
+                raise FbaError("face data in a predicted frame before any face intra frame")
+            if self.face.mask[0]:
+                self.segment(k, self.viseme, s.viseme[k, :3], intra)
+                io.u(1, s.viseme[k, 3], "viseme_def")
+            if self.face.mask[1]:
+                self.segment(k, self.expression, s.expression[k, :4], intra)
+                io.u(1, s.expression[k, 4], "init_face")
+                io.u(1, s.expression[k, 5], "expression_def")
+            self.segment(k, self.faps, s.fap_values[k], intra)
+        if mask & BODY_BIT:
+            if intra:
+                if params.body is None:
+                    raise FbaError("intra frame with body data has no body parameters")
+                self.body = syntax.part_intra_header(io, params.body, BODY.mask_groups, BODY.range_groups, N_BAPS)
+                self.baps.start_intra(self.body)
+            elif self.body is None:
+                raise FbaError("body data in a predicted frame before any body intra frame")
+            self.segment(k, self.baps, s.bap_values[k], intra)
+
+    def hazards(self) -> tuple[set[int], set[int]]:
+        """Frames a decoder would miss or misread: (frames to pad, frames to make intra)."""
+        s, buf = self.s, self.w.buf
+        pad, intra = set(), set()
+        for k, (a, b) in enumerate(self.spans):
+            followed_by_code = k == len(s) - 1 or s.start_code[k + 1] != 0
+            if followed_by_code and a // 8 == b // 8:  # the next start code sits where the decoder looks first
+                pad.add(k)
+        for k, end, last in self.ends:
+            if end.zeros >= 8 and lookahead_desyncs(buf, end):
+                if last and k + 1 < len(s) and k + 1 not in s.intra:
+                    intra.add(k + 1)
+                elif last:
+                    pad.add(k)
+                elif k not in s.intra:
+                    intra.add(k)
+                else:
+                    raise FbaError("the arithmetic coder's flush would desynchronise a decoder's look-ahead "
+                                   "and no repair applies; try another quantiser", end.pos, k)
+        return pad, intra
+
+
+def write(stream: FapStream) -> bytes:
+    """Encode a fully planned stream (every intra frame has its :class:`CodingParams`)."""
+    if 0 not in stream.intra:
+        raise FbaError("the first frame must be an intra frame with coding parameters", frame=0)
+    pads: set[int] = set()
+    for _ in range(MAX_REPAIRS):
+        writer = _Writer(stream, pads)
+        writer.run()
+        new_pads, new_intra = writer.hazards()
+        if not (new_pads - pads) and not new_intra:
+            return writer.w.getvalue()
+        pads |= new_pads
+        if new_intra:
+            stream = stream.copy()
+            for k in sorted(new_intra):
+                stream.intra[k] = _repeat_params(stream, k)
+    raise FbaError("could not place frames so that every decoder reads them; please report this stream")
+
+
+def _repeat_params(s: FapStream, k: int) -> CodingParams:
+    """Parameters for an extra intra frame at k: those of the intra frame before it, ranges re-sent."""
+    prev = s.intra[max(j for j in s.intra if j < k)]
+    return replace(prev, time_code=None)
