@@ -12,5 +12,7 @@ from .stream import CodingParams, FapStream, Frame, FrameRate, PartParams, Range
 __all__ = ["decode", "iter_decode", "FbaError", "UnsupportedFeature", "CodingParams", "FapStream",
            "Frame", "FrameRate", "PartParams", "RangeSet", "TimeCode"]
 from .encoder import EncodeOptions, encode, plan, write  # noqa: E402
+from .summary import describe  # noqa: E402
+from .samples import demo_stream  # noqa: E402
 
-__all__ += ["EncodeOptions", "encode", "plan", "write"]
+__all__ += ["EncodeOptions", "encode", "plan", "write", "describe", "demo_stream"]

@@ -111,7 +111,7 @@ class _Decoder:
     def face_data(self, frame: Frame, intra: bool) -> None:
         io, r = self.io, self.bits
         if intra:
-            self.face = syntax.part_intra_header(io, None, FACE.mask_groups, FACE.range_groups, N_FAPS)
+            self.face = syntax.part_intra_header(io, None, FACE)
             frame.params.face = self.face
             self.faps.start_intra(self.face)
             self.viseme.start_intra(self.face.quant)
@@ -139,7 +139,7 @@ class _Decoder:
     def body_data(self, frame: Frame, intra: bool) -> None:
         r = self.bits
         if intra:
-            self.body = syntax.part_intra_header(self.io, None, BODY.mask_groups, BODY.range_groups, N_BAPS)
+            self.body = syntax.part_intra_header(self.io, None, BODY)
             frame.params.body = self.body
             self.baps.start_intra(self.body)
         elif self.body is None:

@@ -245,7 +245,7 @@ class _Writer:
             if intra:
                 if params.face is None:
                     raise FbaError("intra frame with face data has no face parameters")
-                self.face = syntax.part_intra_header(io, params.face, FACE.mask_groups, FACE.range_groups, N_FAPS)
+                self.face = syntax.part_intra_header(io, params.face, FACE)
                 self.faps.start_intra(self.face)
                 self.viseme.start_intra(self.face.quant)
                 self.expression.start_intra(self.face.quant)
@@ -263,7 +263,7 @@ class _Writer:
             if intra:
                 if params.body is None:
                     raise FbaError("intra frame with body data has no body parameters")
-                self.body = syntax.part_intra_header(io, params.body, BODY.mask_groups, BODY.range_groups, N_BAPS)
+                self.body = syntax.part_intra_header(io, params.body, BODY)
                 self.baps.start_intra(self.body)
             elif self.body is None:
                 raise FbaError("body data in a predicted frame before any body intra frame")

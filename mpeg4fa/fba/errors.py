@@ -22,7 +22,10 @@ class FbaError(ValueError):
         self.bit_offset = bit_offset
         self.frame = frame
         self.partial = partial
-        super().__init__(self._describe())
+        super().__init__(message)
+
+    def __str__(self) -> str:
+        return self._describe()
 
     def _describe(self) -> str:
         where = []

@@ -40,6 +40,7 @@ class PartSpec:
     """What differs between the face and the body part: sizes, groups, steps, default ranges."""
 
     name: str
+    label: str
     n: int
     mask_groups: tuple[tuple[int, ...], ...]
     range_groups: tuple[tuple[int, ...], ...]
@@ -55,7 +56,7 @@ class PartSpec:
 
 
 FACE = PartSpec(
-    name="face", n=N_FAPS,
+    name="face", label="FAP", n=N_FAPS,
     mask_groups=tuple(tuple(range(a, b)) for a, b in spec.FAP_GROUP_SLICES),
     range_groups=tuple(tuple(range(a, b)) for a, b in spec.FAP_GROUP_SLICES[1:]),
     quant_step=spec.QUANT_STEP.astype(np.int64),
@@ -65,7 +66,7 @@ FACE = PartSpec(
 )
 
 BODY = PartSpec(
-    name="body", n=N_BAPS,
+    name="body", label="BAP", n=N_BAPS,
     mask_groups=spec.BAP_GROUPS, range_groups=spec.BAP_GROUPS,
     quant_step=spec.BAP_QUANT_STEP.astype(np.int64),
     step_multiplier=lambda q: int(spec.BAP_PRED_SCALE[q]),
@@ -127,7 +128,7 @@ class ValueCoder(_Coder):
         self.defaults_applied = False
         self.prev = np.zeros(part.n, dtype=np.int64)
         self.params: PartParams | None = None
-        self.label = (lambda i: f"FAP {i + 1}") if part is FACE else (lambda i: f"BAP {i + 1}")
+        self.label = lambda i: f"{part.label} {i + 1}"
 
     def start_intra(self, params: PartParams) -> None:
         """Apply an intra header: default ranges (first time only), new ranges, new models."""

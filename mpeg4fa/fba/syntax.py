@@ -14,6 +14,7 @@ import numpy as np
 
 from .bits import BitReader, BitWriter
 from .errors import FbaError
+from .params import PartSpec
 from .stream import FrameRate, PartParams, RangeSet, TimeCode
 
 MASK_NONE, MASK_HOLD, MASK_INTERPOLATE, MASK_ALL = 0, 1, 2, 3
@@ -103,25 +104,24 @@ def temporal_header(io, is_intra: bool, fr: FrameRate | None, tc: TimeCode | Non
 
 
 def group_masks(io, groups: Sequence[Sequence[int]], mask_types: Sequence[int], mask: np.ndarray,
-                n: int, allowed_types: Sequence[int] = (0, 1, 2, 3)) -> tuple[tuple[int, ...], np.ndarray]:
+                n: int, label: str = "parameter") -> tuple[tuple[int, ...], np.ndarray]:
     """A marker, a 2-bit mask type and (types 1 and 2) a per-parameter mask, per group."""
     types, out = [], np.zeros(n, dtype=bool)
     for g, members in enumerate(groups):
         io.marker(f"group {g + 1} mask")
         pos = io.bits.pos
-        t = io.u(2, mask_types[g] if io.writing else 0, f"mask type of group {g + 1}")
-        if t not in allowed_types:
-            raise FbaError(f"mask type {t} of group {g + 1} is not allowed here", pos)
+        t = io.u(2, mask_types[g] if io.writing else 0, f"mask type of {label} group {g + 1}")
         types.append(t)
         if t in (MASK_HOLD, MASK_INTERPOLATE):
             for i in members:
-                out[i] = io.flag(bool(mask[i]) if io.writing else False, f"mask bit of parameter {i + 1}")
+                out[i] = io.flag(bool(mask[i]) if io.writing else False, f"mask bit of {label} {i + 1}")
         elif t == MASK_ALL:
             out[list(members)] = True
     return tuple(types), out
 
 
-def new_minmax(io, groups: Sequence[Sequence[int]], mask: np.ndarray, ranges: RangeSet) -> RangeSet:
+def new_minmax(io, groups: Sequence[Sequence[int]], mask: np.ndarray, ranges: RangeSet,
+               label: str = "parameter") -> RangeSet:
     """The four new-range sets: a marker every 4 parameters of a group, 5 bits per masked one."""
     flags = tuple(io.flag(ranges.flags[k], f"is_{name}_new") for k, name in enumerate(RANGE_SET_NAMES))
     codes = np.zeros_like(ranges.codes)
@@ -133,17 +133,16 @@ def new_minmax(io, groups: Sequence[Sequence[int]], mask: np.ndarray, ranges: Ra
                 if j % 4 == 0:
                     io.marker(f"new {name} ranges")
                 if mask[i]:
-                    codes[k, i] = io.u(5, ranges.codes[k, i], f"new {name} of parameter {i + 1}")
+                    codes[k, i] = io.u(5, ranges.codes[k, i], f"new {name} of {label} {i + 1}")
     return RangeSet(flags, codes)
 
 
-def part_intra_header(io, params: PartParams | None, mask_groups: Sequence[Sequence[int]],
-                      range_groups: Sequence[Sequence[int]], n: int,
-                      allowed_types: Sequence[int] = (0, 1, 2, 3)) -> PartParams:
+def part_intra_header(io, params: PartParams | None, part: PartSpec) -> PartParams:
     """quant, group masks, gender, coding type and (predictive mode) new ranges of one part."""
+    label, n = part.label, part.n
     w = params if io.writing else None
-    quant = io.u(5, w.quant if w else 0, "quant")
-    types, mask = group_masks(io, mask_groups, w.mask_types if w else (), w.mask if w else None, n, allowed_types)
+    quant = io.u(5, w.quant if w else 0, f"{label.lower()}_quant")
+    types, mask = group_masks(io, part.mask_groups, w.mask_types if w else (), w.mask if w else None, n, label)
     gender = io.u(1, w.gender if w else 0, "suggested_gender")
     pos = io.bits.pos
     coding_type = io.u(1, w.coding_type if w else 0, "coding_type")
@@ -151,5 +150,5 @@ def part_intra_header(io, params: PartParams | None, mask_groups: Sequence[Seque
         from .errors import UnsupportedFeature
         raise UnsupportedFeature("DCT segment mode (coding_type 1) is not supported: its syntax is not "
                                  "published in any source available to this project", pos)
-    ranges = new_minmax(io, range_groups, mask, w.ranges if w else RangeSet.none(n))
+    ranges = new_minmax(io, part.range_groups, mask, w.ranges if w else RangeSet.none(n), label)
     return PartParams(quant, types, mask, gender, coding_type, ranges)

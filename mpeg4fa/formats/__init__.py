@@ -7,8 +7,10 @@ for malformed content.
 
 * :func:`read_fap`, :func:`iter_fap`, :func:`write_fap`: plain-text ``.fap`` files
   (Xface, Greta, VREng, visage).
+* :func:`read_stream`, :func:`sniff`: open a ``.fba`` or ``.fap`` file by its content.
 """
 from mpeg4fa.formats.errors import FormatError
 from mpeg4fa.formats.fap_text import iter_fap, read_fap, write_fap
+from mpeg4fa.formats.sniff import read_stream, sniff
 
-__all__ = ["FormatError", "iter_fap", "read_fap", "write_fap"]
+__all__ = ["FormatError", "iter_fap", "read_fap", "write_fap", "read_stream", "sniff"]

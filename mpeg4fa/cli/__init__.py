@@ -1,0 +1,46 @@
+"""The ``mpeg4fa`` command: a thin shell over the Python API.
+
+Each group of subcommands lives in its own module and registers itself on the
+parser; errors of any layer become one line on stderr and exit status 1.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .. import __version__
+from ..fba import FbaError
+from ..formats import FormatError
+from . import codec
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mpeg4fa",
+        description="MPEG-4 Face Animation: encode, decode, inspect and validate FBA streams and .fap files.",
+        epilog="Run 'mpeg4fa COMMAND --help' for the options of a command.",
+    )
+    parser.add_argument("--version", action="version", version=f"mpeg4fa {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    codec.register(commands)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.run(args) or 0)
+    except (FbaError, FormatError) as exc:
+        print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+    except OSError as exc:
+        print(f"mpeg4fa {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
+              file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
