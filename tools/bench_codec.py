@@ -1,0 +1,464 @@
+#!/usr/bin/env python
+"""Benchmark of the FBA bitstream codec (mpeg4fa.fba): speed, size and memory.
+
+A script run on demand, not a test::
+
+    .venv/bin/python tools/bench_codec.py [--vectors DIR] [--json OUT] [--frames N] [--repeat R]
+
+It measures, in one process pinned to one core where the platform allows it:
+
+1. a synthetic full-mask stream (FAP 1, FAP 2 and all 66 low-level FAPs on every
+   frame, 25 fps, fap_quant 1, one intra frame per 10 s): encode and decode wall
+   time (best of R), frames/s, arithmetic-coded symbols/s, x real time, bits per
+   frame and kbit/s;
+2. every real stream under ``--vectors`` (default ``../shared/vectors/fba`` beside
+   the repository; skipped with a note when absent): size and rate, decode and
+   re-encode speed (the re-encode must give the same bytes), and the size of an
+   optimized re-encode (which must decode to the same values on the frame grid);
+3. peak Python allocation (tracemalloc) while decoding a 1500- and a 15000-frame
+   synthetic stream from a file, streaming (``iter_decode``, frames dropped) and
+   whole (``decode``).
+
+It prints plain-text tables, marks the targets PASS/FAIL, and writes the same
+figures as JSON (``bench_codec.json`` in the current directory unless ``--json``).
+The exit status is 0 when every correctness check held (whatever the targets say),
+1 when one failed.
+"""
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import os
+import platform
+import sys
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+import numpy as np  # noqa: E402
+
+from mpeg4fa import __version__ as MPEG4FA_VERSION  # noqa: E402
+from mpeg4fa import spec  # noqa: E402
+from mpeg4fa.fba import EncodeOptions, FapStream, decode, encode, iter_decode  # noqa: E402
+
+FPS = 25.0
+INTRA_SECONDS = 10
+MEMORY_FRAMES = (1500, 15000)
+TARGET_X_REALTIME = 100.0
+FLAT_RATIO = 1.5
+"""Streaming decode counts as flat when the 10x longer stream peaks at most this much higher."""
+
+GRID_FIELDS = ("object_mask", "fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values")
+
+
+class CheckFailed(Exception):
+    """A correctness check of the benchmark failed (not a missed performance target)."""
+
+
+def check(condition: bool, message: str) -> None:
+    if not condition:
+        raise CheckFailed(message)
+
+
+# ---- synthetic stream ---------------------------------------------------------------------
+def _smooth(rng: np.random.Generator, t: np.ndarray, amplitude: float, n_sines: int = 3) -> np.ndarray:
+    """A sum of sines with random frequencies (0.1..1.5 Hz) and phases, peaking near +-amplitude."""
+    out = np.zeros_like(t)
+    weights = rng.uniform(0.3, 1.0, n_sines)
+    weights /= weights.sum()
+    for w in weights:
+        out += w * np.sin(2 * np.pi * rng.uniform(0.1, 1.5) * t + rng.uniform(0, 2 * np.pi))
+    return amplitude * out
+
+
+def _held_runs(rng: np.random.Generator, n: int, shortest: int, longest: int) -> np.ndarray:
+    """Index of the run each frame belongs to, runs lasting shortest..longest frames."""
+    lengths = rng.integers(shortest, longest + 1, n // shortest + 1)
+    return np.repeat(np.arange(lengths.size), lengths)[:n]
+
+
+def synthetic_stream(n: int, fps: float = FPS, seed: int = 2024) -> FapStream:
+    """A face stream with every FAP on every frame, in plausible ranges.
+
+    Low-level FAPs move by sums of sines within a few hundred FAPU; FAPs whose
+    quantiser step is large (eyeball and head rotations 23-26, 48-50, tongue roll 47,
+    in AU) are scaled by that step so that they move by a few hundred levels too.
+    Values are multiples of their step, so fap_quant 1 codes them without loss.
+    Visemes change every 2..6 frames, expressions every 5..15, with moving blend and
+    intensities.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / fps
+    s = FapStream.empty(n)
+    s.source_fps = fps
+    s.timestamps[:] = t
+    s.fap_mask[:] = True
+    step = spec.QUANT_STEP.astype(np.int64)
+    for col in range(2, spec.N_FAPS):
+        levels = np.rint(_smooth(rng, t, rng.uniform(60, 300)))  # in quantiser levels
+        if step[col] <= 4:  # FAPU-valued FAPs: a few hundred FAPU, whatever the step
+            levels = np.rint(levels / step[col])
+        s.fap_values[:, col] = (levels * step[col]).astype(np.int32)
+
+    runs = _held_runs(rng, n, 2, 6)
+    s.viseme[:, 0] = rng.integers(0, 15, runs[-1] + 1)[runs]
+    s.viseme[:, 1] = rng.integers(0, 15, runs[-1] + 1)[runs]
+    s.viseme[:, 2] = np.clip(np.rint(32 + _smooth(rng, t, 31)), 0, 63)
+    runs = _held_runs(rng, n, 5, 15)
+    s.expression[:, 0] = rng.integers(0, 7, runs[-1] + 1)[runs]
+    s.expression[:, 1] = np.clip(np.rint(32 + _smooth(rng, t, 31)), 0, 63)
+    s.expression[:, 2] = rng.integers(0, 7, runs[-1] + 1)[runs]
+    s.expression[:, 3] = np.clip(np.rint(32 + _smooth(rng, t, 31)), 0, 63)
+    return s
+
+
+def synthetic_options(fps: float = FPS) -> EncodeOptions:
+    return EncodeOptions(fap_quant=1, intra_period=int(round(INTRA_SECONDS * fps)))
+
+
+# ---- helpers ------------------------------------------------------------------------------
+def symbol_count(s: FapStream) -> int:
+    """Arithmetic-coded symbols: 3 for FAP 1, 4 for FAP 2, one per masked FAP 3..68 and per masked BAP."""
+    face = (s.object_mask & 1) != 0
+    body = (s.object_mask & 2) != 0
+    per_frame = (3 * s.fap_mask[:, 0].astype(np.int64) + 4 * s.fap_mask[:, 1]
+                 + s.fap_mask[:, 2:].sum(axis=1))
+    return int((per_frame * face).sum() + (s.bap_mask.sum(axis=1) * body).sum())
+
+
+def grid_frames(s: FapStream) -> int:
+    return int((s.skip.astype(np.int64) + 1).sum())
+
+
+def on_grid(s: FapStream) -> dict[str, np.ndarray]:
+    """The stream's values on the frame grid: every frame repeated for the frames it holds."""
+    counts = s.skip.astype(np.int64) + 1
+    return {name: np.repeat(getattr(s, name), counts, axis=0) for name in GRID_FIELDS}
+
+
+def same_on_grid(a: FapStream, b: FapStream) -> bool:
+    ga, gb = on_grid(a), on_grid(b)
+    return all(ga[k].shape == gb[k].shape and np.array_equal(ga[k], gb[k]) for k in GRID_FIELDS)
+
+
+def best_time(fn, repeat: int):
+    """(best wall time in seconds, result of the last call)."""
+    best, result = float("inf"), None
+    for _ in range(max(1, repeat)):
+        gc.collect()
+        t0 = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, result
+
+
+def pin_one_core() -> str:
+    if hasattr(os, "sched_setaffinity") and hasattr(os, "sched_getaffinity"):
+        try:
+            cpu = min(os.sched_getaffinity(0))
+            os.sched_setaffinity(0, {cpu})
+            return f"pinned to CPU {cpu}"
+        except OSError as exc:
+            return f"not pinned ({exc})"
+    return "not pinned (no sched_setaffinity)"
+
+
+def machine_info(pinning: str) -> dict:
+    return {
+        "python": platform.python_version(),
+        "python_implementation": platform.python_implementation(),
+        "numpy": np.__version__,
+        "mpeg4fa": MPEG4FA_VERSION,
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "processor": platform.processor(),
+        "cpu_count": os.cpu_count(),
+        "process": f"single process, {pinning}",
+    }
+
+
+def table(title: str, headers: list[str], rows: list[list], note: str | None = None) -> str:
+    cells = [[_fmt(c) for c in row] for row in rows]
+    widths = [max(len(h), *(len(r[i]) for r in cells)) if cells else len(h) for i, h in enumerate(headers)]
+
+    def line(values):
+        return "  ".join(v.ljust(w) if i == 0 else v.rjust(w) for i, (v, w) in enumerate(zip(values, widths)))
+
+    out = [title, "=" * len(title), line(headers), line(["-" * w for w in widths])]
+    out += [line(r) for r in cells]
+    if note:
+        out.append(note)
+    return "\n".join(out) + "\n"
+
+
+def _fmt(v) -> str:
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        if v == 0 or abs(v) >= 100:
+            return f"{v:,.0f}"
+        if abs(v) >= 1:
+            return f"{v:.2f}"
+        return f"{v:.4f}"
+    if isinstance(v, int):
+        return f"{v:,}"
+    return str(v)
+
+
+def verdict(ok: bool) -> str:
+    return "PASS" if ok else "FAIL"
+
+
+# ---- 1. synthetic full-mask stream --------------------------------------------------------
+def bench_synthetic(frames: int, repeat: int) -> dict:
+    stream = synthetic_stream(frames)
+    options = synthetic_options()
+    enc_s, data = best_time(lambda: encode(stream, options), repeat)
+    dec_s, decoded = best_time(lambda: decode(data), repeat)
+    check(len(decoded) == frames and grid_frames(decoded) == frames, "synthetic stream: frame count changed")
+    for name in ("fap_mask", "fap_values", "viseme", "expression"):
+        check(np.array_equal(getattr(decoded, name), getattr(stream, name)),
+              f"synthetic stream: decoded {name} differs from the input")
+    check(sorted(decoded.intra) == list(range(0, frames, options.intra_period)),
+          "synthetic stream: intra frames are not one per 10 s")
+    check(encode(decoded) == data, "synthetic stream: re-encoding with its own parameters changed the bytes")
+    symbols = symbol_count(decoded)
+    seconds = frames / FPS
+    bits = 8 * len(data)
+    common = {"bits_per_frame": bits / frames, "kbit_per_s": bits / seconds / 1000.0}
+    result = {"frames": frames, "fps": FPS, "duration_s": seconds, "bytes": len(data),
+              "symbols": symbols, "symbols_per_frame": symbols / frames,
+              "intra_frames": len(decoded.intra), "fap_quant": 1}
+    for op, t in (("encode", enc_s), ("decode", dec_s)):
+        x_rt = seconds / t
+        result[op] = {"seconds": t, "frames_per_s": frames / t, "symbols_per_s": symbols / t,
+                      "x_realtime": x_rt, **common,
+                      "target_x_realtime": TARGET_X_REALTIME, "target_pass": x_rt >= TARGET_X_REALTIME}
+    return result
+
+
+def print_synthetic(r: dict, repeat: int) -> None:
+    rows = []
+    for op in ("encode", "decode"):
+        m = r[op]
+        rows.append([op, m["seconds"], m["frames_per_s"], m["symbols_per_s"], m["x_realtime"],
+                     m["bits_per_frame"], m["kbit_per_s"], f">= {TARGET_X_REALTIME:.0f}x",
+                     verdict(m["target_pass"])])
+    note = (f"{r['frames']} frames at {r['fps']:g} fps ({r['duration_s']:g} s), FAP 1 + FAP 2 + 66 FAPs on every "
+            f"frame, fap_quant {r['fap_quant']}, {r['intra_frames']} intra frames; {r['symbols']:,} symbols "
+            f"({r['symbols_per_frame']:g}/frame), {r['bytes']:,} bytes; best of {repeat}")
+    print(table("1. Synthetic full-mask stream",
+                ["op", "seconds", "frames/s", "symbols/s", "x realtime", "bits/frame", "kbit/s", "target", ""],
+                rows, note))
+
+
+# ---- 2. real vectors ----------------------------------------------------------------------
+def find_vectors(root: Path) -> list[Path]:
+    return sorted((p for p in root.rglob("*") if p.is_file() and p.suffix.lower() == ".fba"),
+                  key=lambda p: p.relative_to(root).as_posix().lower())
+
+
+def bench_vectors(root: Path, repeat: int) -> dict:
+    rows = []
+    for path in find_vectors(root):
+        data = path.read_bytes()
+        dec_s, stream = best_time(lambda: decode(data), repeat)
+        enc_s, again = best_time(lambda: encode(stream), repeat)
+        name = path.relative_to(root).as_posix()
+        check(again == data, f"{name}: re-encoding with its own parameters is not byte-identical")
+        optimized = encode(stream, EncodeOptions(optimize=True))
+        check(same_on_grid(decode(optimized), stream),
+              f"{name}: the optimized stream decodes to different values on the frame grid")
+        frames = grid_frames(stream)
+        seconds = stream.duration
+        rows.append({"name": name, "frames": frames, "coded_frames": len(stream), "fps": stream.fps,
+                     "duration_s": seconds, "bytes": len(data), "bits_per_frame": 8 * len(data) / frames,
+                     "kbit_per_s": 8 * len(data) / seconds / 1000.0, "symbols": symbol_count(stream),
+                     "decode_s": dec_s, "decode_x_realtime": seconds / dec_s,
+                     "encode_s": enc_s, "encode_x_realtime": seconds / enc_s,
+                     "reencode_identical": True, "optimized_bytes": len(optimized),
+                     "optimized_ratio": len(optimized) / len(data),
+                     "optimized_smaller": len(optimized) < len(data)})
+    total = None
+    if rows:
+        frames = sum(r["frames"] for r in rows)
+        seconds = sum(r["duration_s"] for r in rows)
+        size = sum(r["bytes"] for r in rows)
+        opt = sum(r["optimized_bytes"] for r in rows)
+        dec = sum(r["decode_s"] for r in rows)
+        enc = sum(r["encode_s"] for r in rows)
+        total = {"name": f"total ({len(rows)} streams)", "frames": frames, "duration_s": seconds, "bytes": size,
+                 "bits_per_frame": 8 * size / frames, "kbit_per_s": 8 * size / seconds / 1000.0,
+                 "symbols": sum(r["symbols"] for r in rows),
+                 "decode_s": dec, "decode_x_realtime": seconds / dec,
+                 "encode_s": enc, "encode_x_realtime": seconds / enc,
+                 "optimized_bytes": opt, "optimized_ratio": opt / size,
+                 "optimized_smaller_count": sum(r["optimized_smaller"] for r in rows)}
+    return {"root": str(root), "streams": rows, "total": total,
+            "target_pass": bool(rows) and all(r["optimized_smaller"] for r in rows)}
+
+
+def print_vectors(v: dict, repeat: int) -> None:
+    def row(r, fps, smaller):
+        return [r["name"], r["frames"], fps, r["bytes"], r["bits_per_frame"], r["kbit_per_s"],
+                r["decode_x_realtime"], r["encode_x_realtime"], r["optimized_bytes"], r["optimized_ratio"], smaller]
+
+    rows = [row(r, f"{r['fps']:g}", verdict(r["optimized_smaller"])) for r in v["streams"]]
+    t = v["total"]
+    if t:
+        rows.append(row(t, "", f"{t['optimized_smaller_count']}/{len(v['streams'])} {verdict(v['target_pass'])}"))
+    note = (f"from {v['root']}; re-encode with the stream's own parameters byte-identical for every stream; "
+            f"optimized streams decode to the same values on the frame grid; times best of {repeat}")
+    print(table("2. Real vectors",
+                ["stream", "frames", "fps", "bytes", "bits/frame", "kbit/s", "dec xRT", "enc xRT",
+                 "optimized", "ratio", "smaller"], rows, note))
+
+
+# ---- 3. peak memory -----------------------------------------------------------------------
+def _traced_peak(fn) -> tuple[int, object]:
+    gc.collect()
+    tracemalloc.start()
+    tracemalloc.reset_peak()
+    base = tracemalloc.get_traced_memory()[0]
+    try:
+        result = fn()
+        peak = tracemalloc.get_traced_memory()[1] - base
+    finally:
+        tracemalloc.stop()
+    return peak, result
+
+
+def _stream_frames(path: Path) -> int:
+    count = 0
+    with open(path, "rb") as fh:
+        for _frame in iter_decode(fh):
+            count += 1
+    return count
+
+
+def _whole(path: Path) -> int:
+    with open(path, "rb") as fh:
+        stream = decode(fh)
+    n = len(stream)
+    del stream
+    return n
+
+
+def bench_memory() -> dict:
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench_codec_") as tmp:
+        for n in MEMORY_FRAMES:
+            path = Path(tmp) / f"synthetic_{n}.fba"
+            path.write_bytes(encode(synthetic_stream(n), synthetic_options()))
+            size = path.stat().st_size
+            peak_iter, count_iter = _traced_peak(lambda: _stream_frames(path))
+            peak_whole, count_whole = _traced_peak(lambda: _whole(path))
+            check(count_iter == n and count_whole == n, f"memory: decoding the {n}-frame stream lost frames")
+            rows.append({"frames": n, "bytes": size, "iter_decode_peak_bytes": peak_iter,
+                         "decode_peak_bytes": peak_whole})
+            path.unlink()
+    short, long_ = rows[0], rows[-1]
+    ratio = long_["iter_decode_peak_bytes"] / short["iter_decode_peak_bytes"]
+    growth = (long_["iter_decode_peak_bytes"] - short["iter_decode_peak_bytes"]) / (long_["frames"] - short["frames"])
+    whole_growth = (long_["decode_peak_bytes"] - short["decode_peak_bytes"]) / (long_["frames"] - short["frames"])
+    return {"streams": rows, "iter_decode_peak_ratio": ratio, "iter_decode_bytes_per_extra_frame": growth,
+            "decode_bytes_per_extra_frame": whole_growth,
+            "target": f"iter_decode peak at {long_['frames']} frames <= {FLAT_RATIO}x the peak at {short['frames']}",
+            "target_pass": ratio <= FLAT_RATIO}
+
+
+def print_memory(m: dict) -> None:
+    mib = 1 << 20
+    rows = [[r["frames"], r["bytes"], r["iter_decode_peak_bytes"] / mib, r["decode_peak_bytes"] / mib]
+            for r in m["streams"]]
+    rows.append(["growth, bytes per extra frame", "", m["iter_decode_bytes_per_extra_frame"],
+                 m["decode_bytes_per_extra_frame"]])
+    note = (f"tracemalloc peak of Python allocations while decoding from an open file; iter_decode keeps no "
+            f"frames, decode holds the stream.\nstreaming peak ratio {m['iter_decode_peak_ratio']:.2f} "
+            f"(target {m['target']}): {verdict(m['target_pass'])}")
+    print(table("3. Peak memory (synthetic full-mask streams)",
+                ["frames", "file bytes", "iter_decode MiB", "decode MiB"], rows, note))
+
+
+# ---- main ---------------------------------------------------------------------------------
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--vectors", type=Path, default=REPO.parent / "shared" / "vectors" / "fba",
+                    help="folder of real .fba streams (searched recursively); default ../shared/vectors/fba")
+    ap.add_argument("--json", type=Path, default=Path("bench_codec.json"),
+                    help="where to write the figures as JSON (default ./bench_codec.json)")
+    ap.add_argument("--frames", type=int, default=1500, help="frames of the synthetic stream (default 1500 = 60 s)")
+    ap.add_argument("--repeat", type=int, default=3, help="timed runs per measurement; the best counts (default 3)")
+    args = ap.parse_args(argv)
+    if args.frames < 1 or args.repeat < 1:
+        ap.error("--frames and --repeat must be at least 1")
+
+    started = time.perf_counter()
+    info = machine_info(pin_one_core())
+    print(f"mpeg4fa {info['mpeg4fa']} codec benchmark: Python {info['python']}, numpy {info['numpy']}, "
+          f"{info['platform']}, {info['cpu_count']} CPUs ({info['process']})\n")
+    report: dict = {"machine": info, "args": {"vectors": str(args.vectors), "frames": args.frames,
+                                              "repeat": args.repeat}}
+    ok = True
+    try:
+        report["synthetic"] = syn = bench_synthetic(args.frames, args.repeat)
+        print_synthetic(syn, args.repeat)
+
+        if args.vectors.is_dir() and find_vectors(args.vectors):
+            report["vectors"] = vec = bench_vectors(args.vectors, args.repeat)
+            print_vectors(vec, args.repeat)
+        else:
+            report["vectors"] = vec = None
+            print(f"2. Real vectors: skipped, no .fba streams at {args.vectors}\n")
+
+        report["memory"] = mem = bench_memory()
+        print_memory(mem)
+    except CheckFailed as exc:
+        ok = False
+        report["check_failed"] = str(exc)
+        print(f"CHECK FAILED: {exc}\n")
+
+    targets = []
+    if "synthetic" in report:
+        for op in ("decode", "encode"):
+            m = report["synthetic"][op]
+            targets.append([f"{op} >= {TARGET_X_REALTIME:.0f}x real time (full mask, {FPS:g} fps)",
+                            f"{m['x_realtime']:.0f}x", verdict(m["target_pass"])])
+    if report.get("vectors"):
+        v = report["vectors"]
+        targets.append(["optimized re-encodes smaller than originals",
+                        f"{v['total']['optimized_smaller_count']}/{len(v['streams'])} smaller, "
+                        f"total ratio {v['total']['optimized_ratio']:.3f}", verdict(v["target_pass"])])
+    elif "synthetic" in report:
+        targets.append(["optimized re-encodes smaller than originals", "no vectors", "SKIP"])
+    if "memory" in report:
+        m = report["memory"]
+        targets.append(["streaming decode memory flat in length",
+                        f"peak x{m['iter_decode_peak_ratio']:.2f} for 10x frames", verdict(m["target_pass"])])
+    report["targets"] = [{"target": t, "value": v, "result": r} for t, v, r in targets]
+    report["elapsed_s"] = time.perf_counter() - started
+    print(table("Targets", ["target", "measured", "result"], targets))
+    print(f"elapsed {report['elapsed_s']:.1f} s")
+
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(report, indent=2, default=_json_default) + "\n")
+    print(f"figures written to {args.json}")
+    return 0 if ok else 1
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"{type(o).__name__} is not JSON serialisable")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Set-up and the two everyday jobs, for a fresh Debian 12 machine or a developer's checkout.
+#   tools/dev.sh demo   install what is missing, then run the main job (encode + decode + show a stream)
+#   tools/dev.sh test   install what is missing, then run the test suite
+# Installing is idempotent: Debian packages only when python3/venv are missing, the virtual
+# environment in .venv, the project and its pinned dependencies (pyproject.toml) into it.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+as_root() { if [ "$(id -u)" = 0 ]; then "$@"; else sudo "$@"; fi; }
+
+ensure_python() {
+    if ! command -v python3 >/dev/null || ! python3 -c 'import venv, ensurepip' 2>/dev/null; then
+        echo "installing python3 and python3-venv (Debian packages)..." >&2
+        as_root apt-get update -qq
+        as_root apt-get install -y -qq --no-install-recommends python3 python3-venv ca-certificates >/dev/null
+    fi
+    python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
+        || { echo "mpeg4fa needs Python >= 3.11 (found $(python3 --version))" >&2; exit 1; }
+}
+
+ensure_venv() {
+    local stamp=.venv/.mpeg4fa-installed
+    if [ ! -x .venv/bin/python ]; then
+        python3 -m venv .venv
+    fi
+    if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+        echo "installing mpeg4fa and its pinned dependencies into .venv..." >&2
+        .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test]'
+        touch "$stamp"
+    fi
+}
+
+job=${1:-}
+case "$job" in
+    demo)
+        ensure_python; ensure_venv
+        mkdir -p out
+        .venv/bin/mpeg4fa demo -o out/demo.fba
+        ;;
+    test)
+        ensure_python; ensure_venv
+        shift
+        .venv/bin/python -m pytest "$@"
+        ;;
+    *)
+        echo "usage: tools/dev.sh demo|test [pytest arguments]" >&2
+        exit 2
+        ;;
+esac
