@@ -60,29 +60,27 @@ def decode_segment(reader: BitReader, models: Sequence[Model], adapt: bool) -> l
     buf, p, nbuf = reader.buf, reader.p, len(reader.buf)
     zerorun = 0
 
-    def fetch() -> None:
-        nonlocal buf, p, nbuf
-        reader.p = p
-        if not reader.available(1):
-            raise FbaError("stream ends inside an arithmetic-coded segment", reader.pos)
-        buf, p, nbuf = reader.buf, reader.p, len(reader.buf)
-
-    code = 0
-    for _ in range(16):
+    def next_bit() -> int:
+        """One bit, dropping the stuffed '1' that follows 22 zeros."""
+        nonlocal buf, p, nbuf, zerorun
         if p >= nbuf:
-            fetch()
+            reader.p = p
+            if not reader.available(1):
+                raise FbaError("stream ends inside an arithmetic-coded segment", reader.pos)
+            buf, p, nbuf = reader.buf, reader.p, len(reader.buf)
         bit = buf[p]
         p += 1
         if zerorun == MAX_ZERO_RUN:
             if not bit:
                 raise FbaError("stuffing '1' expected after 22 zero bits", reader.base + p - 1)
-            if p >= nbuf:
-                fetch()
-            bit = buf[p]
-            p += 1
             zerorun = 0
+            return next_bit()
         zerorun = zerorun + 1 if bit == 0 else 0
-        code = (code << 1) | bit
+        return bit
+
+    code = 0
+    for _ in range(16):
+        code = (code << 1) | next_bit()
 
     low, high = 0, TOP
     symbols = []
@@ -116,20 +114,7 @@ def decode_segment(reader: BitReader, models: Sequence[Model], adapt: bool) -> l
                 break
             low <<= 1
             high = (high << 1) | 1
-            if p >= nbuf:
-                fetch()
-            bit = buf[p]
-            p += 1
-            if zerorun == MAX_ZERO_RUN:
-                if not bit:
-                    raise FbaError("stuffing '1' expected after 22 zero bits", reader.base + p - 1)
-                if p >= nbuf:
-                    fetch()
-                bit = buf[p]
-                p += 1
-                zerorun = 0
-            zerorun = zerorun + 1 if bit == 0 else 0
-            code = (code << 1) | bit
+            code = (code << 1) | next_bit()
         symbol = i - 1
         if adapt and not isinstance(model, int):
             model.update(symbol)

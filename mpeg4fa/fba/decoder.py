@@ -119,19 +119,15 @@ class _Decoder:
         elif self.face is None:
             raise FbaError("a predicted plane carries face data but no intra plane has set up the face", r.pos)
         mask = self.face.mask
-        if mask[0]:
-            pos = r.pos
-            values = self.viseme.decode(decode_segment(r, self.viseme.models(intra), not intra), intra)
-            self.viseme.check_selects(values, pos, frame.index)
-            frame.viseme[:3] = values
-            frame.viseme[3] = io.u(1, 0, "viseme_def")
-        if mask[1]:
-            pos = r.pos
-            values = self.expression.decode(decode_segment(r, self.expression.models(intra), not intra), intra)
-            self.expression.check_selects(values, pos, frame.index)
-            frame.expression[:4] = values
-            frame.expression[4] = io.u(1, 0, "init_face")
-            frame.expression[5] = io.u(1, 0, "expression_def")
+        for fap, coder, out, raw_bits in ((0, self.viseme, frame.viseme, ("viseme_def",)),
+                                          (1, self.expression, frame.expression, ("init_face", "expression_def"))):
+            if mask[fap]:
+                pos = r.pos
+                values = coder.decode(decode_segment(r, coder.models(intra), not intra), intra)
+                coder.check_selects(values, pos, frame.index)
+                out[:len(values)] = values
+                for j, name in enumerate(raw_bits):
+                    out[len(values) + j] = io.u(1, 0, name)
         values = self.faps.decode(decode_segment(r, self.faps.models(intra), not intra), intra)
         frame.fap_values[self.faps.idx] = values
         frame.fap_mask[:] = mask

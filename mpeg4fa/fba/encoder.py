@@ -251,13 +251,13 @@ class _Writer:
                 self.expression.start_intra(self.face.quant)
             elif self.face is None:
                 raise FbaError("face data in a predicted frame before any face intra frame")
-            if self.face.mask[0]:
-                self.segment(k, self.viseme, s.viseme[k, :3], intra)
-                io.u(1, s.viseme[k, 3], "viseme_def")
-            if self.face.mask[1]:
-                self.segment(k, self.expression, s.expression[k, :4], intra)
-                io.u(1, s.expression[k, 4], "init_face")
-                io.u(1, s.expression[k, 5], "expression_def")
+            for fap, coder, fields, raw_bits in ((0, self.viseme, s.viseme[k], ("viseme_def",)),
+                                                 (1, self.expression, s.expression[k], ("init_face", "expression_def"))):
+                if self.face.mask[fap]:
+                    n = len(coder.fields)
+                    self.segment(k, coder, fields[:n], intra)
+                    for j, name in enumerate(raw_bits):
+                        io.u(1, fields[n + j], name)
             self.segment(k, self.faps, s.fap_values[k], intra)
         if mask & BODY_BIT:
             if intra:

@@ -138,21 +138,12 @@ def test_checkout_fallback_finds_spec_folder():
     assert (_load.data_dir() / "faps.csv").is_file()
 
 
-def test_installed_data_package_is_preferred(tmp_path, monkeypatch):
-    import importlib
-    import sys
+def test_tables_come_from_the_spec_folder():
+    """Installed or not, the loader reads the top-level spec/ files (shipped as mpeg4fa.spec_data)."""
+    from pathlib import Path
 
-    import mpeg4fa
     from mpeg4fa.spec import _load
 
-    package = tmp_path / "spec_data"
-    package.mkdir()
-    (package / "__init__.py").write_text('"""Stand-in for the installed data package."""\n')
-    (package / "visemes.csv").write_text("viseme,name,phonemes,examples\n0,none,,\n")
-    monkeypatch.setattr(mpeg4fa, "__path__", [*mpeg4fa.__path__, str(tmp_path)])
-    importlib.invalidate_caches()
-    try:
-        rows = _load.read_table("visemes.csv", "viseme,name,phonemes,examples")
-    finally:
-        sys.modules.pop("mpeg4fa.spec_data", None)
-    assert rows == [{"viseme": "0", "name": "none", "phonemes": "", "examples": ""}]
+    checkout = Path(__file__).resolve().parents[2] / "spec"
+    for csv_file in sorted(checkout.glob("*.csv")):
+        assert (_load.data_dir() / csv_file.name).read_text() == csv_file.read_text()
