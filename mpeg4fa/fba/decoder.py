@@ -148,14 +148,17 @@ class _Decoder:
 def iter_decode(source: Source) -> Iterator[Frame]:
     """Decode frame by frame without holding the whole stream; raises :class:`FbaError` at a fault."""
     with _opened(source) as src:
-        reader = BitReader(src)
-        decoder = _Decoder(reader)
-        try:
-            yield from decoder.frames()
-        except FbaError:
-            raise
-        except (IndexError, ValueError, OverflowError, MemoryError) as exc:  # a guard, not a path
-            raise FbaError(f"malformed stream ({type(exc).__name__}: {exc})", reader.pos) from exc
+        yield from _guarded(_Decoder(BitReader(src)))
+
+
+def _guarded(decoder: _Decoder) -> Iterator[Frame]:
+    """The decoder's frames, with any stray low-level exception turned into an FbaError."""
+    try:
+        yield from decoder.frames()
+    except FbaError:
+        raise
+    except (IndexError, ValueError, OverflowError, MemoryError) as exc:  # a guard, not an expected path
+        raise FbaError(f"malformed stream ({type(exc).__name__}: {exc})", decoder.bits.pos) from exc
 
 
 def decode(source: Source) -> FapStream:
@@ -164,12 +167,12 @@ def decode(source: Source) -> FapStream:
     On a fault the :class:`FbaError` carries the frames decoded before it in ``.partial``.
     """
     frames: list[Frame] = []
-    object_code = OBJECT_START_CODE
-    try:
-        for frame in iter_decode(source):
-            frames.append(frame)
-    except FbaError as exc:
-        exc.partial = FapStream.from_frames(frames, object_code)
-        raise
-    stream = FapStream.from_frames(frames, object_code)
-    return stream
+    with _opened(source) as src:
+        decoder = _Decoder(BitReader(src))
+        try:
+            for frame in _guarded(decoder):
+                frames.append(frame)
+        except FbaError as exc:
+            exc.partial = FapStream.from_frames(frames, decoder.object_start_code)
+            raise
+    return FapStream.from_frames(frames, decoder.object_start_code)

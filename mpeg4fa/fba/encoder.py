@@ -40,7 +40,7 @@ class EncodeOptions:
     skip_repeats: bool = False
     """Fold frames equal to their predecessor into the predecessor's skip count."""
     time_codes: bool = False
-    """Send a time code (whole seconds of the frame's time) in every intra header."""
+    """Send a time code in every intra header that falls on a whole second (time codes hold whole seconds)."""
     optimize: bool = False
     """Smallest stream with the same decoded values: tight ranges per intra period, repeats folded."""
 
@@ -85,7 +85,7 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
         wide["body"] = _range_codes(out, BODY, body_quant, intra_frames, bounds)
     for g, (k, stop) in enumerate(zip(intra_frames, bounds)):
         params = CodingParams(frame_rate=frame_rate)
-        if options.time_codes:
+        if options.time_codes and float(out.timestamps[k]).is_integer():
             params.time_code = TimeCode.from_seconds(out.timestamps[k])
         if out.object_mask[k] & FACE_BIT:
             codes = wide["face"] if wide else _range_codes(out, FACE, face_quant, [k], [stop])
@@ -269,43 +269,66 @@ class _Writer:
                 raise FbaError("body data in a predicted frame before any body intra frame")
             self.segment(k, self.baps, s.bap_values[k], intra)
 
-    def hazards(self) -> tuple[set[int], set[int]]:
-        """Frames a decoder would miss or misread: (frames to pad, frames to make intra)."""
+    def hazards(self) -> list[tuple[int, str]]:
+        """Places where a decoder would miss or misread a frame, as (frame, kind).
+
+        ``hidden``: a frame inside one byte right before a start code, which the
+        decoder's start-code look-ahead jumps over; ``emulation``: a frame whose
+        first bits after a byte boundary read as a start code prefix; ``lookahead``:
+        a segment whose trailing zeros run into the decoder's 14-bit look-ahead
+        (``next`` when the look-ahead reaches the following frame or start code).
+        """
         s, buf = self.s, self.w.buf
-        pad, intra = set(), set()
+        found = []
         for k, (a, b) in enumerate(self.spans):
             followed_by_code = k == len(s) - 1 or s.start_code[k + 1] != 0
-            if followed_by_code and a // 8 == b // 8:  # the next start code sits where the decoder looks first
-                pad.add(k)
+            if followed_by_code and a // 8 == b // 8:
+                found.append((k, "hidden"))
+            if not s.start_code[k] and _start_code_at(buf, a):
+                found.append((k, "emulation"))
         for k, end, last in self.ends:
             if end.zeros >= 8 and lookahead_desyncs(buf, end):
-                if last and k + 1 < len(s) and k + 1 not in s.intra:
-                    intra.add(k + 1)
-                elif last:
-                    pad.add(k)
-                elif k not in s.intra:
-                    intra.add(k)
-                else:
-                    raise FbaError("the arithmetic coder's flush would desynchronise a decoder's look-ahead "
-                                   "and no repair applies; try another quantiser", end.pos, k)
-        return pad, intra
+                found.append((k, "lookahead-next" if last else "lookahead"))
+        return found
+
+
+def _start_code_at(buf: bytearray, pos: int) -> bool:
+    """Would a decoder peeking for a start code before the plane at ``pos`` find a prefix 0x000001?"""
+    skips = ([0] if pos % 8 == 0 else []) + [8 - pos % 8]
+    return any(pos + skip + 24 <= len(buf) and not any(buf[pos + skip: pos + skip + 23]) and buf[pos + skip + 23]
+               for skip in skips)
 
 
 def write(stream: FapStream) -> bytes:
-    """Encode a fully planned stream (every intra frame has its :class:`CodingParams`)."""
+    """Encode a fully planned stream (every intra frame has its :class:`CodingParams`).
+
+    A stream that some decoder would misread (see :meth:`_Writer.hazards`) is
+    repaired and written again: a pad (skip_frames sent with a count of 0) moves a
+    frame's bits, an extra intra frame changes them. Decoded values never change.
+    """
     if 0 not in stream.intra:
         raise FbaError("the first frame must be an intra frame with coding parameters", frame=0)
     pads: set[int] = set()
     for _ in range(MAX_REPAIRS):
         writer = _Writer(stream, pads)
         writer.run()
-        new_pads, new_intra = writer.hazards()
-        if not (new_pads - pads) and not new_intra:
+        found = writer.hazards()
+        if not found:
             return writer.w.getvalue()
-        pads |= new_pads
-        if new_intra:
+        extra_intra: set[int] = set()
+        for k, kind in found:
+            if kind == "lookahead-next" and k + 1 < len(stream) and k + 1 not in stream.intra:
+                extra_intra.add(k + 1)
+            elif kind in ("hidden", "lookahead-next") and k not in pads:
+                pads.add(k)
+            elif k not in stream.intra:
+                extra_intra.add(k)
+            else:
+                raise FbaError(f"frame {k} cannot be placed so that every decoder reads it ({kind}); "
+                               f"try another quantiser or intra period", frame=k)
+        if extra_intra:
             stream = stream.copy()
-            for k in sorted(new_intra):
+            for k in sorted(extra_intra):
                 stream.intra[k] = _repeat_params(stream, k)
     raise FbaError("could not place frames so that every decoder reads them; please report this stream")
 

@@ -1,6 +1,7 @@
 """Shared helpers for the FBA codec tests: real vectors, stream generators, comparisons, a hang guard."""
 from __future__ import annotations
 
+import os
 import signal
 from contextlib import contextmanager
 from functools import lru_cache
@@ -165,6 +166,14 @@ def mask_from_types(rng: np.random.Generator, types) -> np.ndarray:
 
 
 # hypothesis strategies ------------------------------------------------------------------
+EXAMPLES_SCALE = float(os.environ.get("FBA_TEST_EXAMPLES_SCALE", "1"))
+"""Multiplies every max_examples of these tests (e.g. 20 for a long bug hunt); 1 keeps the suite fast."""
+
+
+def examples(n: int) -> int:
+    return max(1, int(n * EXAMPLES_SCALE))
+
+
 seeds = st.integers(0, 2**32 - 1)
 mask_types_st = st.lists(st.integers(0, 3), min_size=10, max_size=10)
 
