@@ -61,8 +61,6 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
     out = stream.copy()
     out.intra = {}
     out.object_mask = np.where(out.object_mask == 0, FACE_BIT, out.object_mask).astype(np.uint8)
-    if options.skip_repeats or options.optimize:
-        out = _fold_repeats(out)
     fps = options.fps or stream.fps
     frame_rate = FrameRate.from_fps(fps)
     face_quant = _pick(options.fap_quant, first.face.quant if first and first.face else None, 1)
@@ -77,6 +75,9 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
                    or not np.array_equal(out.bap_mask[k], out.bap_mask[k - 1]))
         if changed or (period and k - intra_frames[-1] >= period):
             intra_frames.append(k)
+    if options.skip_repeats or options.optimize:  # after choosing intra frames, so they stay where they were
+        out, kept = _fold_repeats(out, protect=intra_frames)
+        intra_frames = [kept.index(k) for k in intra_frames]
     bounds = intra_frames[1:] + [len(out)]
 
     wide = {}
@@ -107,14 +108,18 @@ def _pick(option, carried, default):
     return option if option is not None else (carried if carried is not None else default)
 
 
-def _fold_repeats(s: FapStream) -> FapStream:
-    """Drop frames whose content equals the frame before, adding them to its skip count."""
+def _fold_repeats(s: FapStream, protect: Sequence[int]) -> tuple[FapStream, list[int]]:
+    """Drop frames equal to the frame before (except ``protect``ed ones), adding them to its skip count.
+
+    Returns the folded stream and the indices of the frames it kept.
+    """
     same = np.ones(len(s), dtype=bool)
     same[0] = False
     for name in ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values", "object_mask"):
         a = getattr(s, name)
         eq = a[1:] == a[:-1]
-        same[1:] &= eq.reshape(len(s) - 1, -1).all(axis=1)
+        same[1:] &= eq.all(axis=tuple(range(1, eq.ndim))) if eq.ndim > 1 else eq
+    same[list(protect)] = False
     keep: list[int] = []
     skip: list[int] = []
     for k in range(len(s)):
@@ -130,7 +135,7 @@ def _fold_repeats(s: FapStream) -> FapStream:
     out.skip = np.array(skip, dtype=np.int32)
     out.object_start_code = s.object_start_code
     out.source_fps = s.source_fps
-    return out
+    return out, keep
 
 
 def _grid_times(s: FapStream, fps: float) -> np.ndarray:
@@ -167,16 +172,16 @@ def _range_codes(s: FapStream, part: PartSpec, quant: int, starts: Sequence[int]
     scaler = step or 1
     extremes = np.zeros((4, part.n), dtype=np.int64)  # max I, -min I, max P, -min P (all >= 0)
     for a, b in zip(starts, stops):
+        gop = np.zeros_like(extremes)
         level = quantise(values[a], qstep)
         recon = dequantise(level, qstep)
-        extremes[0] = np.maximum(extremes[0], level)
-        extremes[1] = np.maximum(extremes[1], -level)
+        gop[0], gop[1] = level, -level
         for k in range(a + 1, b):
             level = quantise(values[k] - recon, qstep)
             recon = recon + dequantise(level, qstep)
-            extremes[2] = np.maximum(extremes[2], level)
-            extremes[3] = np.maximum(extremes[3], -level)
-    extremes *= masks[starts[0]][None, :]
+            gop[2] = np.maximum(gop[2], level)
+            gop[3] = np.maximum(gop[3], -level)
+        extremes = np.maximum(extremes, gop * masks[a][None, :])  # only what this intra period sends
     codes = -(-extremes * scaler // RANGE_DELTA)         # first guess, then fix C rounding below
     codes = np.minimum(codes, 31)
     while True:
@@ -316,20 +321,26 @@ def write(stream: FapStream) -> bytes:
         if not found:
             return writer.w.getvalue()
         extra_intra: set[int] = set()
+        new_pads: set[int] = set()
         for k, kind in found:
             if kind == "lookahead-next" and k + 1 < len(stream) and k + 1 not in stream.intra:
                 extra_intra.add(k + 1)
             elif kind in ("hidden", "lookahead-next") and k not in pads:
-                pads.add(k)
+                new_pads.add(k)
             elif k not in stream.intra:
                 extra_intra.add(k)
             else:
                 raise FbaError(f"frame {k} cannot be placed so that every decoder reads it ({kind}); "
                                f"try another quantiser or intra period", frame=k)
         if extra_intra:
+            # Intra frames are kept in the decoded stream, pads are not: decide the pads again from
+            # scratch, as a re-encoding of the decoded stream will, so that it gives the same bytes.
+            pads = set()
             stream = stream.copy()
             for k in sorted(extra_intra):
                 stream.intra[k] = _repeat_params(stream, k)
+        else:
+            pads |= new_pads
     raise FbaError("could not place frames so that every decoder reads them; please report this stream")
 
 

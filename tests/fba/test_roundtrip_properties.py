@@ -132,11 +132,9 @@ def test_parts(kind, seed, n, fap_quant, bap_quant):
 def test_mask_and_object_changes_start_intra_frames(seed, n, change, body_joins, optimize):
     """A FAP mask change (and the body joining the face) starts an intra frame.
 
-    The default encoding only gets masks that lose FAPs and no joining body (see the xfail tests
-    below for FAPs/BAPs that first appear after frame 0); ``optimize`` gets any change.
+    Both the default encoding and ``optimize`` get any mask change (FAPs lost or gained, a body joining).
     """
     change = min(change, n - 1)
-    body_joins = body_joins and optimize
     s = make_stream(seed, n, fap_mask=random_face_mask(seed), bap_mask=random_body_mask(seed), hold=0.0)
     other = random_face_mask(seed + 1)
     if not optimize:
@@ -156,14 +154,7 @@ def test_mask_and_object_changes_start_intra_frames(seed, n, change, body_joins,
     assert_close_to_input(d, s, 1, 1)
 
 
-NEW_IN_LATER_INTRA = (
-    "encoder bug: without optimize, plan() computes one set of range codes for the whole stream "
-    "but _range_codes() keeps only the parameters masked in the FIRST intra frame "
-    "(extremes *= masks[starts[0]]), so a FAP/BAP first masked at a later intra frame (mask change, "
-    "body joining) is sent range code 0 and any non-zero value raises FbaError")
 
-
-@pytest.mark.xfail(strict=True, raises=FbaError, reason=NEW_IN_LATER_INTRA)
 def test_fap_first_masked_after_a_mask_change():
     s = FapStream.empty(2)
     s.fap_mask[0, 2] = True  # FAP 3 in frame 0
@@ -174,7 +165,6 @@ def test_fap_first_masked_after_a_mask_change():
     assert d.fap_values[:, 2:4].tolist() == [[40, 0], [0, 100]]
 
 
-@pytest.mark.xfail(strict=True, raises=FbaError, reason=NEW_IN_LATER_INTRA)
 def test_body_joining_a_face_stream():
     s = FapStream.empty(2)
     s.fap_mask[:, 2] = True
@@ -263,17 +253,13 @@ def test_skip_repeats_folds_equal_frames(seed, n, fap_quant):
     assert_same_on_grid(folded, plain)
 
 
-@pytest.mark.xfail(strict=True, raises=ValueError, reason=(
-    "encoder bug: _fold_repeats() reshapes an empty (0, ...) comparison with -1, so skip_repeats=True or "
-    "optimize=True on a one-frame stream raises a plain ValueError ('cannot reshape array of size 0 into "
-    "shape (0,newaxis)') instead of encoding the frame"))
 @pytest.mark.parametrize("option", ["skip_repeats", "optimize"])
 def test_fold_repeats_on_a_single_frame(option):
     s = FapStream.empty(1)
     s.fap_mask[0, 2] = True
     s.fap_values[0, 2] = 10
     _, d = roundtrip(s, EncodeOptions(**{option: True}))
-    assert d.fap_values[0, 2] == 10 and d.skip.tolist() == [0]
+    assert abs(int(d.fap_values[0, 2]) - 10) <= 4 // 2 and d.skip.tolist() == [0]  # FAP 3: qstep 4 at quant 1
 
 
 # ---- optimize ------------------------------------------------------------------------------
@@ -302,9 +288,6 @@ def test_optimize_with_intra_period_stays_within_half_a_step(seed, n, period):
     assert_close_to_input(d_opt, s, 1, 1)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "optimize=True counts intra_period in coded frames after folding repeats, so intra frames move "
-    "to other grid frames and quantiser ties decode differently from the default encoding"))
 def test_optimize_with_intra_period_keeps_default_values():
     """FAP 4 (step 2 at fap_quant 1), values 2, 2, 1, intra_period 2.
 
