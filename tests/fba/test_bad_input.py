@@ -118,7 +118,7 @@ def test_truncated_file_streams_frames_then_raises(tmp_path):
 
 
 # ---- corruption ----------------------------------------------------------------------------
-def _check_corrupt(data: bytes, original: FapStream) -> None:
+def _check_corrupt(data: bytes) -> None:
     result = decode_or_error(data)
     if isinstance(result, FbaError):
         check_error(result, data)
@@ -134,16 +134,14 @@ def _check_corrupt(data: bytes, original: FapStream) -> None:
 
 @pytest.mark.parametrize("data", streams_under_test())
 def test_every_single_bit_flip(data):
-    original = decode(data)
     outcomes = {"error": 0, "decoded": 0}
-    with time_limit(60):
-        for bit in range(8 * len(data)):
-            bad = bytearray(data)
-            bad[bit // 8] ^= 0x80 >> (bit % 8)
-            result = decode_or_error(bytes(bad))
-            outcomes["error" if isinstance(result, FbaError) else "decoded"] += 1
-            if isinstance(result, FbaError):
-                check_error(result, bytes(bad))
+    for bit in range(8 * len(data)):  # each decode runs under decode_or_error's time limit
+        bad = bytearray(data)
+        bad[bit // 8] ^= 0x80 >> (bit % 8)
+        result = decode_or_error(bytes(bad))
+        outcomes["error" if isinstance(result, FbaError) else "decoded"] += 1
+        if isinstance(result, FbaError):
+            check_error(result, bytes(bad))
     assert outcomes["error"] > 0  # flips in start codes and markers at least are caught
 
 
@@ -154,7 +152,7 @@ def test_random_multi_bit_corruption(data, flips):
     for f in flips:
         bit = f % (8 * len(data))
         bad[bit // 8] ^= 0x80 >> (bit % 8)
-    _check_corrupt(bytes(bad), decode(data))
+    _check_corrupt(bytes(bad))
 
 
 @HYP
@@ -162,7 +160,7 @@ def test_random_multi_bit_corruption(data, flips):
 def test_overwritten_bytes(data, at, junk):
     at %= len(data)
     bad = data[:at] + junk + data[at + len(junk):]
-    _check_corrupt(bad, decode(data))
+    _check_corrupt(bad)
 
 
 @HYP
