@@ -249,8 +249,8 @@ def bench_synthetic(frames: int, repeat: int) -> dict:
     for name in ("fap_mask", "fap_values", "viseme", "expression"):
         check(np.array_equal(getattr(decoded, name), getattr(stream, name)),
               f"synthetic stream: decoded {name} differs from the input")
-    check(sorted(decoded.intra) == list(range(0, frames, options.intra_period)),
-          "synthetic stream: intra frames are not one per 10 s")
+    check(set(range(0, frames, options.intra_period)) <= set(decoded.intra),
+          "synthetic stream: an intra frame is missing at a 10 s mark")
     check(encode(decoded) == data, "synthetic stream: re-encoding with its own parameters changed the bytes")
     symbols = symbol_count(decoded)
     seconds = frames / FPS
@@ -278,7 +278,7 @@ def print_synthetic(r: dict, repeat: int) -> None:
             f"frame, fap_quant {r['fap_quant']}, {r['intra_frames']} intra frames; {r['symbols']:,} symbols "
             f"({r['symbols_per_frame']:g}/frame), {r['bytes']:,} bytes; best of {repeat}")
     print(table("1. Synthetic full-mask stream",
-                ["op", "seconds", "frames/s", "symbols/s", "x realtime", "bits/frame", "kbit/s", "target", ""],
+                ["op", "seconds", "frames/s", "symbols/s", "x realtime", "bits/frame", "kbit/s", "target", "result"],
                 rows, note))
 
 
@@ -362,8 +362,9 @@ class _Traced:
         tracemalloc.stop()
 
 
-def _stream_frames(path: Path, checkpoints: list[int]) -> tuple[int, int, list[int]]:
-    """Frames, peak, and the peak so far at each checkpoint, for a streaming decode that keeps no frame."""
+def _stream_frames(path: Path, checkpoints: list[int]) -> tuple[int, int, list[int], int]:
+    """For a streaming decode that keeps no frame: frames, peak, the peak so far at each checkpoint,
+    and the bytes still allocated after the run that only the cycle collector frees."""
     marks, count = [], 0
     todo = iter(checkpoints)
     mark = next(todo, None)
@@ -375,7 +376,10 @@ def _stream_frames(path: Path, checkpoints: list[int]) -> tuple[int, int, list[i
                     marks.append(traced.peak())
                     mark = next(todo, None)
         peak = traced.peak()
-    return count, peak, marks
+        left = tracemalloc.get_traced_memory()[0]
+        gc.collect()
+        garbage = left - tracemalloc.get_traced_memory()[0]
+    return count, peak, marks, garbage
 
 
 def _whole(path: Path) -> tuple[int, int]:
@@ -395,11 +399,11 @@ def bench_memory() -> dict:
             path = Path(tmp) / f"synthetic_{n}.fba"
             path.write_bytes(encode(memory_stream(n), synthetic_options()))
             checkpoints = [n * (k + 1) // CHECKPOINTS for k in range(CHECKPOINTS)]
-            count_iter, peak_iter, marks = _stream_frames(path, checkpoints)
+            count_iter, peak_iter, marks, garbage = _stream_frames(path, checkpoints)
             count_whole, peak_whole = _whole(path)
             check(count_iter == n and count_whole == n, f"memory: decoding the {n}-frame stream lost frames")
             rows.append({"frames": n, "bytes": path.stat().st_size, "iter_decode_peak_bytes": peak_iter,
-                         "decode_peak_bytes": peak_whole,
+                         "decode_peak_bytes": peak_whole, "iter_decode_cyclic_garbage_bytes": garbage,
                          "iter_decode_peak_so_far": dict(zip(checkpoints, marks))})
             path.unlink()
     short, long_ = rows[0], rows[-1]
@@ -421,22 +425,24 @@ def bench_memory() -> dict:
 
 def print_memory(m: dict) -> None:
     mib = 1 << 20
-    rows = [[r["frames"], r["bytes"], r["iter_decode_peak_bytes"] / mib, r["decode_peak_bytes"] / mib]
-            for r in m["streams"]]
+    rows = [[r["frames"], r["bytes"], r["iter_decode_peak_bytes"] / mib, r["iter_decode_cyclic_garbage_bytes"] / mib,
+             r["decode_peak_bytes"] / mib] for r in m["streams"]]
     rows.append([f"ratio {m['streams'][-1]['frames']}/{m['streams'][0]['frames']}", "",
-                 f"x{m['iter_decode_peak_ratio_files']:.2f}", f"x{m['decode_peak_ratio_files']:.2f}"])
-    rows.append(["bytes per extra frame", "", m["iter_decode_bytes_per_extra_frame"],
+                 f"x{m['iter_decode_peak_ratio_files']:.2f}", "", f"x{m['decode_peak_ratio_files']:.2f}"])
+    rows.append(["bytes per extra frame", "", m["iter_decode_bytes_per_extra_frame"], "",
                  m["decode_bytes_per_extra_frame"]])
     long_ = m["streams"][-1]
     so_far = "  ".join(f"{k}: {v / mib:.2f}" for k, v in long_["iter_decode_peak_so_far"].items())
     note = (f"tracemalloc peak of Python allocations (numpy included) while decoding from an open file: "
-            f"iter_decode keeps no frame, decode holds the stream.\nStreams: FAPs {', '.join(map(str, m['faps']))} "
+            f"iter_decode keeps no frame, decode holds the stream;\n'left to gc' is what a finished iter_decode "
+            f"run still held that only gc.collect() freed (reference cycles).\nStreams: FAPs {', '.join(map(str, m['faps']))} "
             f"on every frame (see memory_stream), 25 fps.\n"
             f"iter_decode peak so far (MiB) by frame of the {long_['frames']}-frame stream:\n  {so_far}\n"
-            f"The reader keeps a window of 64 KiB chunks, so the peak grows until the window is full, then stays:\n"
+            f"Expected: the reader keeps a window of 64 KiB chunks (512 KiB unpacked), so the peak should stop "
+            f"growing once the window is full.\n"
             f"{m['target']}: x{m['iter_decode_plateau_ratio']:.3f} {verdict(m['target_pass'])}")
     print(table("3. Peak memory (synthetic streams)",
-                ["frames", "file bytes", "iter_decode MiB", "decode MiB"], rows, note))
+                ["frames", "file bytes", "iter_decode MiB", "left to gc MiB", "decode MiB"], rows, note))
 
 
 # ---- main ---------------------------------------------------------------------------------

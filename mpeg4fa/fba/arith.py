@@ -61,22 +61,27 @@ def decode_segment(reader: BitReader, models: Sequence[Model], adapt: bool) -> l
     zerorun = 0
 
     def next_bit() -> int:
-        """One bit, dropping the stuffed '1' that follows 22 zeros."""
+        """One bit, dropping the stuffed '1' that follows 22 zeros.
+
+        It must not call itself: a closure that refers to itself is a reference cycle,
+        which would keep every old reader window alive until the cycle collector runs.
+        """
         nonlocal buf, p, nbuf, zerorun
-        if p >= nbuf:
-            reader.p = p
-            if not reader.available(1):
-                raise FbaError("stream ends inside an arithmetic-coded segment", reader.pos)
-            buf, p, nbuf = reader.buf, reader.p, len(reader.buf)
-        bit = buf[p]
-        p += 1
-        if zerorun == MAX_ZERO_RUN:
-            if not bit:
-                raise FbaError("stuffing '1' expected after 22 zero bits", reader.base + p - 1)
-            zerorun = 0
-            return next_bit()
-        zerorun = zerorun + 1 if bit == 0 else 0
-        return bit
+        while True:
+            if p >= nbuf:
+                reader.p = p
+                if not reader.available(1):
+                    raise FbaError("stream ends inside an arithmetic-coded segment", reader.pos)
+                buf, p, nbuf = reader.buf, reader.p, len(reader.buf)
+            bit = buf[p]
+            p += 1
+            if zerorun == MAX_ZERO_RUN:
+                if not bit:
+                    raise FbaError("stuffing '1' expected after 22 zero bits", reader.base + p - 1)
+                zerorun = 0
+                continue  # the stuffed '1' carries no information
+            zerorun = zerorun + 1 if bit == 0 else 0
+            return bit
 
     code = 0
     for _ in range(16):

@@ -10,6 +10,7 @@ from typing import Iterator
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
 from mpeg4fa import spec
@@ -170,8 +171,18 @@ EXAMPLES_SCALE = float(os.environ.get("FBA_TEST_EXAMPLES_SCALE", "1"))
 """Multiplies every max_examples of these tests (e.g. 20 for a long bug hunt); 1 keeps the suite fast."""
 
 
+RANDOM = EXAMPLES_SCALE != 1 or bool(os.environ.get("FBA_TEST_RANDOM"))
+"""By default every run draws the same examples (a deterministic suite); a bug hunt draws new ones."""
+
+
 def examples(n: int) -> int:
     return max(1, int(n * EXAMPLES_SCALE))
+
+
+def hyp_settings(n: int) -> settings:
+    """Hypothesis settings for ``n`` examples (times FBA_TEST_EXAMPLES_SCALE), no deadline."""
+    return settings(max_examples=examples(n), deadline=None, derandomize=not RANDOM,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 
 seeds = st.integers(0, 2**32 - 1)
@@ -192,7 +203,8 @@ def assert_close_to_input(decoded: FapStream, source: FapStream, fap_quant: int,
     assert (db <= bq // 2).all(), f"BAP values off by up to {db.max()}"
     fm = source.fap_mask[src_idx]
     q = fap_quant
-    for col, src, dec, fields in ((0, source.viseme, g["viseme"], (2,)), (1, source.expression, g["expression"], (1, 3))):
+    high_level = ((0, source.viseme, g["viseme"], (2,)), (1, source.expression, g["expression"], (1, 3)))
+    for col, src, dec, fields in high_level:  # FAP 1 / FAP 2: selects and flags exact, blend/intensities quantised
         rows = fm[:, col]
         exact = [k for k in range(src.shape[1]) if k not in fields]
         np.testing.assert_array_equal(dec[rows][:, exact], src[src_idx][rows][:, exact])

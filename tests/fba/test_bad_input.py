@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from mpeg4fa import spec
@@ -14,10 +14,10 @@ from mpeg4fa.fba import EncodeOptions, FapStream, FbaError, UnsupportedFeature, 
 from mpeg4fa.fba.stream import (END_CODE, OBJECT_START_CODE, OBJECT_START_CODE_OLD, PLANE_START_CODE,
                                 PLANE_START_CODE_OLD)
 
-from .conftest import (FBA_VECTORS, FRAME_FIELDS, GROUP_SIZES, GROUP_SLICES, SKIP_REASON, VALUE_FIELDS, assert_same_on_grid,
-                       assert_streams_equal, examples, make_stream, time_limit)
+from .conftest import (FBA_VECTORS, FRAME_FIELDS, GROUP_SIZES, GROUP_SLICES, SKIP_REASON, VALUE_FIELDS,
+                       assert_same_on_grid, assert_streams_equal, hyp_settings, make_stream, time_limit)
 
-HYP = settings(max_examples=examples(40), deadline=None, suppress_health_check=[HealthCheck.too_slow])
+HYP = hyp_settings(40)
 PER_DECODE_LIMIT = 5  # seconds: a decode of a few hundred bytes takes milliseconds
 
 SMALL_MASK = np.zeros(68, dtype=bool)

@@ -5,7 +5,7 @@ import io
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from mpeg4fa.fba import EncodeOptions, FapStream, FbaError, decode, encode
@@ -14,9 +14,9 @@ from mpeg4fa.fba.arith import (MAX_FREQUENCY, MAX_ZERO_RUN, AdaptiveModel, decod
 from mpeg4fa.fba.bits import BitReader, BitWriter
 from mpeg4fa.fba.decoder import _Decoder
 
-from .conftest import FRAME_FIELDS, assert_streams_equal, examples, make_stream
+from .conftest import FRAME_FIELDS, assert_streams_equal, hyp_settings, make_stream
 
-HYP = settings(max_examples=examples(40), deadline=None, suppress_health_check=[HealthCheck.too_slow])
+HYP = hyp_settings(40)
 
 fields_st = st.lists(st.integers(1, 40).flatmap(lambda n: st.tuples(st.just(n), st.integers(0, (1 << n) - 1))),
                      max_size=60)
@@ -170,7 +170,8 @@ def segments_st(draw):
         idx = draw(st.lists(st.integers(0, len(specs) - 1), max_size=30))
         syms = [draw(st.integers(0, specs[i][1] - 1)) for i in idx]
         # skew towards the extremes of the alphabet sometimes: long runs of 0s/1s in the output
-        syms = [s if draw(st.booleans()) else (specs[i][1] - 1 if draw(st.booleans()) else 0) for s, i in zip(syms, idx)]
+        syms = [s if draw(st.booleans()) else (specs[i][1] - 1 if draw(st.booleans()) else 0)
+                for s, i in zip(syms, idx)]
         raw = draw(st.lists(st.booleans(), max_size=3))
         segments.append((idx, syms, raw))
     return specs, segments
