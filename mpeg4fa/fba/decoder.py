@@ -28,6 +28,8 @@ def _opened(source: Source) -> Iterator[bytes | BinaryIO]:
                 yield fh
         except FileNotFoundError:
             raise FbaError(f"no such stream file: {Path(source)}") from None
+        except OSError as exc:  # a directory, no permission, ...
+            raise FbaError(f"cannot read stream file {Path(source)}: {exc.strerror or exc}") from None
     else:
         yield source
 
@@ -59,21 +61,11 @@ class _Decoder:
         self.object_start_code = code
         k = 0
         while True:
-            found = r.peek_start_code()
-            plane_code = 0
-            if found is not None:
-                code, stuffing = found
-                if code not in (END_CODE, PLANE_START_CODE, PLANE_START_CODE_OLD):
-                    raise FbaError(f"unexpected start code 0x{code:08X} between planes", r.pos + stuffing, k)
-                r.skip_stuffing(stuffing)
-                r.read(32)
-                if code == END_CODE:
-                    return
-                plane_code = code
-            elif not r.available(8):
-                raise FbaError("stream ends without the end code 0x000001B1 (truncated?)", r.pos, k)
-            start = r.pos
             try:
+                plane_code = self.between_planes()
+                if plane_code is None:
+                    return
+                start = r.pos
                 frame = self.plane(k, plane_code)
             except FbaError as exc:
                 exc.frame = k if exc.frame is None else exc.frame
@@ -81,6 +73,21 @@ class _Decoder:
             frame.bits = r.pos - start
             yield frame
             k += 1
+
+    def between_planes(self) -> int | None:
+        """Consume a plane start code (returned, 0 if none) or the end code (None)."""
+        r = self.bits
+        found = r.peek_start_code()
+        if found is None:
+            if not r.available(8):
+                raise FbaError("stream ends without the end code 0x000001B1 (truncated?)", r.pos)
+            return 0
+        code, stuffing = found
+        if code not in (END_CODE, PLANE_START_CODE, PLANE_START_CODE_OLD):
+            raise FbaError(f"unexpected start code 0x{code:08X} between planes", r.pos + stuffing)
+        r.skip_stuffing(stuffing)
+        r.read(32)
+        return None if code == END_CODE else code
 
     def plane(self, k: int, plane_code: int) -> Frame:
         io, r = self.io, self.bits

@@ -345,6 +345,14 @@ def write(stream: FapStream) -> bytes:
 
 
 def _repeat_params(s: FapStream, k: int) -> CodingParams:
-    """Parameters for an extra intra frame at k: those of the intra frame before it, ranges re-sent."""
+    """Parameters for an extra intra frame at k: those of the intra frame before it, with ranges
+    recomputed for the frames it now governs (up to the next intra frame)."""
     prev = s.intra[max(j for j in s.intra if j < k)]
-    return replace(prev, time_code=None)
+    stop = min([j for j in s.intra if j > k], default=len(s))
+    parts = {}
+    for name, part in (("face", FACE), ("body", BODY)):
+        old = getattr(prev, name)
+        if old is not None:
+            codes = _range_codes(s, part, old.quant, [k], [stop])
+            parts[name] = replace(old, mask=old.mask.copy(), ranges=RangeSet((True,) * 4, codes))
+    return replace(prev, time_code=None, **parts)

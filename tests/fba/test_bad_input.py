@@ -297,10 +297,6 @@ def test_replaced_stuffing_byte(byte):
     assert "stuffing" in str(exc) and exc.bit_offset == 8 * (len(data) - 5)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "decoder: a stuffing violation before a start code raises FbaError with frame=None (skip_stuffing() "
-    "runs outside the per-frame error handling), while every other fault between planes (unexpected "
-    "start code, missing end code) carries the index of the frame that was about to start"))
 def test_stuffing_violation_names_the_frame():
     data = _stream_with_whole_stuffing_byte()
     n = len(decode(data))
