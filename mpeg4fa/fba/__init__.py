@@ -6,13 +6,12 @@ prediction) -> ``decoder`` / ``encoder`` (planes and frames) -> ``stream`` (the
 data model). ``spec/SYNTAX.md`` describes the bitstream as implemented.
 """
 from .decoder import decode, iter_decode
+from .encoder import EncodeOptions, encode, plan, write
 from .errors import FbaError, UnsupportedFeature
+from .samples import demo_stream
 from .stream import CodingParams, FapStream, Frame, FrameRate, PartParams, RangeSet, TimeCode
+from .summary import describe
 
-__all__ = ["decode", "iter_decode", "FbaError", "UnsupportedFeature", "CodingParams", "FapStream",
-           "Frame", "FrameRate", "PartParams", "RangeSet", "TimeCode"]
-from .encoder import EncodeOptions, encode, plan, write  # noqa: E402
-from .summary import describe  # noqa: E402
-from .samples import demo_stream  # noqa: E402
-
-__all__ += ["EncodeOptions", "encode", "plan", "write", "describe", "demo_stream"]
+__all__ = ["decode", "iter_decode", "encode", "EncodeOptions", "plan", "write", "describe", "demo_stream",
+           "FbaError", "UnsupportedFeature", "CodingParams", "FapStream", "Frame", "FrameRate", "PartParams",
+           "RangeSet", "TimeCode"]

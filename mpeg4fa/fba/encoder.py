@@ -18,7 +18,7 @@ from .arith import SegmentEnd, encode_segment, lookahead_desyncs
 from .bits import BitWriter
 from .errors import FbaError
 from .params import BODY, FACE, RANGE_DELTA, FieldCoder, PartSpec, ValueCoder, dequantise, quantise
-from .stream import (BODY as BODY_BIT, END_CODE, FACE as FACE_BIT, N_BAPS, N_FAPS, PLANE_START_CODE,
+from .stream import (BODY as BODY_BIT, CONTENT_FIELDS, END_CODE, FACE as FACE_BIT, PLANE_START_CODE,
                      CodingParams, FapStream, FrameRate, PartParams, RangeSet, TimeCode)
 
 MAX_REPAIRS = 32
@@ -115,9 +115,8 @@ def _fold_repeats(s: FapStream, protect: Sequence[int]) -> tuple[FapStream, list
     """
     same = np.ones(len(s), dtype=bool)
     same[0] = False
-    for name in ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values", "object_mask"):
-        a = getattr(s, name)
-        eq = a[1:] == a[:-1]
+    for name in CONTENT_FIELDS:
+        eq = getattr(s, name)[1:] == getattr(s, name)[:-1]
         same[1:] &= eq.all(axis=tuple(range(1, eq.ndim))) if eq.ndim > 1 else eq
     same[list(protect)] = False
     keep: list[int] = []
@@ -128,13 +127,8 @@ def _fold_repeats(s: FapStream, protect: Sequence[int]) -> tuple[FapStream, list
         else:
             keep.append(k)
             skip.append(int(s.skip[k]))
-    out = FapStream.empty(len(keep))
-    for name in ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values",
-                 "timestamps", "object_mask", "start_code"):
-        setattr(out, name, getattr(s, name)[keep].copy())
+    out = s.take(keep)
     out.skip = np.array(skip, dtype=np.int32)
-    out.object_start_code = s.object_start_code
-    out.source_fps = s.source_fps
     return out, keep
 
 

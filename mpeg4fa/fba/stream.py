@@ -34,9 +34,6 @@ END_CODE = 0x1B1
 DEFAULT_FPS = 30.0
 """Frame rate assumed when no intra header sends one (visage ``DEF_FRAME_RATE``)."""
 
-VISEME_FIELDS = ("select1", "select2", "blend", "viseme_def")
-EXPRESSION_FIELDS = ("select1", "intensity1", "select2", "intensity2", "init_face", "expression_def")
-
 
 @dataclass(frozen=True)
 class FrameRate:
@@ -100,12 +97,6 @@ class RangeSet:
     @classmethod
     def none(cls, n: int) -> "RangeSet":
         return cls((False, False, False, False), np.zeros((4, n), dtype=np.int16))
-
-    def same_as(self, other: "RangeSet", mask: np.ndarray) -> bool:
-        if self.flags != other.flags:
-            return False
-        rows = [k for k in range(4) if self.flags[k]]
-        return bool(np.array_equal(self.codes[rows][:, mask], other.codes[rows][:, mask]))
 
 
 @dataclass
@@ -257,10 +248,18 @@ class FapStream:
             return 0.0
         return float(self.timestamps[-1] - self.timestamps[0] + (self.skip[-1] + 1) / self.fps)
 
+    def take(self, frames: list[int]) -> "FapStream":
+        """The given frames as a new stream (intra parameters are not carried: re-plan them)."""
+        arrays = {name: getattr(self, name)[frames].copy() for name in ARRAY_FIELDS}
+        return replace(self, intra={}, **arrays)
+
     def copy(self) -> "FapStream":
         arrays = {name: getattr(self, name).copy() for name in ARRAY_FIELDS}
         return replace(self, intra=dict(self.intra), **arrays)
 
+
+CONTENT_FIELDS = ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values", "object_mask")
+"""The per-frame arrays that say what a frame shows (not when, nor how it was coded)."""
 
 ARRAY_FIELDS = ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values",
                 "timestamps", "object_mask", "skip", "start_code", "bits")

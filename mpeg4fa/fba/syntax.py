@@ -13,7 +13,7 @@ from typing import Sequence
 import numpy as np
 
 from .bits import BitReader, BitWriter
-from .errors import FbaError
+from .errors import FbaError, UnsupportedFeature
 from .params import PartSpec
 from .stream import FrameRate, PartParams, RangeSet, TimeCode
 
@@ -109,7 +109,6 @@ def group_masks(io, groups: Sequence[Sequence[int]], mask_types: Sequence[int], 
     types, out = [], np.zeros(n, dtype=bool)
     for g, members in enumerate(groups):
         io.marker(f"group {g + 1} mask")
-        pos = io.bits.pos
         t = io.u(2, mask_types[g] if io.writing else 0, f"mask type of {label} group {g + 1}")
         types.append(t)
         if t in (MASK_HOLD, MASK_INTERPOLATE):
@@ -147,7 +146,6 @@ def part_intra_header(io, params: PartParams | None, part: PartSpec) -> PartPara
     pos = io.bits.pos
     coding_type = io.u(1, w.coding_type if w else 0, "coding_type")
     if coding_type == 1:
-        from .errors import UnsupportedFeature
         raise UnsupportedFeature("DCT segment mode (coding_type 1) is not supported: its syntax is not "
                                  "published in any source available to this project", pos)
     ranges = new_minmax(io, part.range_groups, mask, w.ranges if w else RangeSet.none(n), label)
