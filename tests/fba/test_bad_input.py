@@ -15,7 +15,8 @@ from mpeg4fa.fba.stream import (END_CODE, OBJECT_START_CODE, OBJECT_START_CODE_O
                                 PLANE_START_CODE_OLD)
 
 from .conftest import (FBA_VECTORS, FRAME_FIELDS, GROUP_SIZES, GROUP_SLICES, SKIP_REASON, VALUE_FIELDS,
-                       assert_same_on_grid, assert_streams_equal, hyp_settings, make_stream, time_limit)
+                       assert_same_on_grid, assert_streams_equal, hyp_settings, make_stream, mask_from_types,
+                       time_limit)
 
 HYP = hyp_settings(40)
 PER_DECODE_LIMIT = 5  # seconds: a decode of a few hundred bytes takes milliseconds
@@ -355,13 +356,10 @@ def _flip(data: bytes, bit: int) -> bytes:
 @pytest.mark.parametrize("types", [(3,) * 10, (2, 1, 0, 3, 2, 0, 1, 3, 0, 2), (1, 0, 0, 0, 0, 0, 0, 0, 0, 0)])
 def test_dct_coding_type_is_unsupported(types):
     rng = np.random.default_rng(7)
-    mask = np.zeros(68, dtype=bool)
-    for (a, b), t in zip(GROUP_SLICES, types):
-        if t == 3:
-            mask[a:b] = True
-        elif t in (1, 2):
-            mask[a:b] = rng.random(b - a) < 0.5
-            mask[a] = True
+    mask = mask_from_types(rng, types)
+    for (a, _), t in zip(GROUP_SLICES, types):
+        if t in (1, 2):
+            mask[a] = True  # at least one FAP in each per-FAP-masked group
     data = encode(make_stream(1, 3, fap_mask=mask), EncodeOptions(mask_types=types))
     assert decode(data).intra[0].face.mask_types == types
     offset = _coding_type_offset(types)
