@@ -1,0 +1,1 @@
+"""The decoder face engine (built up in this package; see its modules)."""

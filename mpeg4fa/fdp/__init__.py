@@ -1,0 +1,1 @@
+"""Face definition parameters (FDP): the data model and its file forms."""
