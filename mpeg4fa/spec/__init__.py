@@ -145,3 +145,13 @@ del _BAP_QUANT
 
 BAP_PRED_SCALE = _frozen([int(r["scale"]) for r in read_table("bap_pred_scale.csv", "bap_quant,scale")])
 """Scale by bap_quant 0..31: the BAP step is ``BAP_QUANT_STEP * BAP_PRED_SCALE[bap_quant]``."""
+
+from mpeg4fa.spec.profiles import (  # noqa: E402  (needs the tables above)
+    CHINESE_VISEME_BY_PINYIN, CHINESE_VISEMES, EXPRESSION_PROFILES, VISEME_PROFILES, ChineseViseme,
+    expand_high_level, expression_blend, viseme_blend,
+)
+
+__all__ += [
+    "ChineseViseme", "CHINESE_VISEMES", "CHINESE_VISEME_BY_PINYIN", "VISEME_PROFILES",
+    "EXPRESSION_PROFILES", "viseme_blend", "expression_blend", "expand_high_level",
+]
