@@ -1,0 +1,108 @@
+"""Layers 2-4 at play time: FAP values -> feature point motion -> mesh vertices.
+
+One call per frame, vectorised: a sparse product for the translational FAPs
+(only the rows of vertices some feature point reaches), then the rotations
+(eyelids, tongue roll, jaw, eyeballs, head), each over its own vertices. Order
+matters and is fixed: lips and brows move in the jaw's frame, the jaw and eyes
+move in the head's frame, the head moves last.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mpeg4fa.face import motion
+from mpeg4fa.face.rig import Rig
+
+_EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A deformed face: all vertices, plus what is not geometry (pupil sizes)."""
+
+    vertices: np.ndarray  # (V, 3)
+    parts: dict[str, slice]
+    pupil_diameter: dict[str, float]  # mm, per eye part
+    fp_vertex: np.ndarray
+
+    def part(self, name: str) -> np.ndarray:
+        return self.vertices[self.parts[name]]
+
+    def by_part(self) -> dict[str, np.ndarray]:
+        """Vertex positions per part (views, no copy)."""
+        return {name: self.vertices[s] for name, s in self.parts.items()}
+
+    @property
+    def feature_points(self) -> np.ndarray:
+        """``(84, 3)`` feature point positions in this pose."""
+        return self.vertices[self.fp_vertex]
+
+
+def _rotate_rows(points: np.ndarray, rows: np.ndarray, weights: np.ndarray, centre: np.ndarray,
+                 rotation: np.ndarray, shift: np.ndarray | None = None) -> None:
+    """Blend each row toward its rotated position by its weight (in place)."""
+    step = (points[rows] - centre) @ (rotation - np.eye(3)).T
+    if shift is not None:
+        step += shift
+    points[rows] += weights[:, None] * step
+
+
+def deform(rig: Rig, values: np.ndarray) -> Pose:
+    """Pose the face for one frame of low-level FAP values (68, FAP 1/2 columns ignored)."""
+    v = np.asarray(values, dtype=np.float64)
+    rest = rig.rest
+    p = rest.copy()
+    fapu = rig.fapu
+
+    fp_motion = (rig.translate @ v).reshape(-1, 3)
+    if fp_motion.any():
+        p[rig.moving] += rig.weights_moving @ fp_motion
+
+    for fap, fp in rig.lid_fp.items():
+        if v[fap - 1]:
+            eye = motion.LIDS[fap]
+            centre = rest[rig.joints[_EYE_JOINT[eye]]]
+            drop = -motion.direction(fap)[1] * v[fap - 1] * fapu.unit("IRISD")
+            angle = motion.arc_angle((rest[rig.fp_vertex[fp]] - centre)[1:], drop)
+            rows, w = rig.lid_rows[fap]
+            _rotate_rows(p, rows, w, centre, motion.rotation_matrix(0, angle))
+
+    roll = v[motion.TONGUE_ROLL - 1]
+    if roll:
+        axis_point = rest[rig.fp_vertex[next(iter(rig.roll_rows))]].copy()
+        for rows, w, side in rig.roll_rows.values():
+            centre = np.array([0.0, axis_point[1], 0.0])
+            _rotate_rows(p, rows, w, centre, motion.rotation_matrix(2, side * roll * motion.ANGLE_UNIT_RAD))
+
+    jaw_open, thrust, shift = (v[f - 1] for f in (3, 14, 15))
+    if jaw_open or thrust or shift:
+        pivot = rest[rig.joints["mouth"]]
+        chin = rest[rig.fp_vertex[rig.chin_fp]]
+        angle = motion.arc_angle((chin - pivot)[1:], jaw_open * fapu.unit("MNS"))
+        offset = (thrust * fapu.unit("MNS") * motion.direction(14) + shift * fapu.unit("MW") * motion.direction(15))
+        rows, w = rig.jaw_rows
+        _rotate_rows(p, rows, w, pivot, motion.rotation_matrix(0, angle), offset)
+
+    pupils = {}
+    for eye, joint in _EYE_JOINT.items():
+        faps = {kind: f for f, (e, kind) in motion.EYE_ROTATION.items() if e == eye}
+        yaw, pitch = v[faps["yaw"] - 1] * motion.ANGLE_UNIT_RAD, v[faps["pitch"] - 1] * motion.ANGLE_UNIT_RAD
+        push = v[next(f for f, e in motion.EYE_THRUST.items() if e == eye) - 1] * fapu.unit("ES")
+        if yaw or pitch or push:
+            s = rig.parts[eye]
+            centre = rest[rig.joints[joint]]
+            turn = motion.rotation_matrix(1, yaw) @ motion.rotation_matrix(0, pitch)
+            p[s] = centre + (p[s] - centre) @ turn.T + push * motion.direction(27)
+            p[rig.joints[joint]] = centre + push * motion.direction(27)
+        dilate = v[next(f for f, e in motion.PUPIL.items() if e == eye) - 1]
+        pupils[eye] = fapu.IRISD0 / 3.0 + dilate * fapu.unit("IRISD")
+
+    pitch, yaw, roll_h = (v[f - 1] * motion.ANGLE_UNIT_RAD for f in (48, 49, 50))
+    if pitch or yaw or roll_h:
+        rows, w = rig.head_rows
+        centre = rest[rig.fp_vertex[rig.head_fp]]
+        _rotate_rows(p, rows, w, centre, motion.head_rotation(pitch, yaw, roll_h))
+
+    return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)

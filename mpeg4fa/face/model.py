@@ -1,0 +1,115 @@
+"""The face a decoder owns: a head mesh, its FAPU, and the four-layer animation.
+
+>>> face = FaceModel.default()                      # the generic head (built on first use)
+>>> face = face.calibrate(fdp, method="dffd")        # fitted to a sender's feature points
+>>> pose = face.deform({3: 400, 51: -100})           # FAP number -> value
+>>> pose.part("skin"), pose.feature_points
+
+``deform`` takes one frame of low-level FAPs (an array of 68 values, a
+``{fap: value}`` mapping, or a decoded :class:`~mpeg4fa.fba.stream.Frame`);
+``animate`` plays a whole :class:`~mpeg4fa.fba.stream.FapStream`, resolving
+unsent FAPs and the high-level visemes and expressions first.
+"""
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Iterator, Mapping
+
+import numpy as np
+
+from mpeg4fa.face.asset import load_head
+from mpeg4fa.face.calibrate import CalibrationReport, calibrate_mesh
+from mpeg4fa.face.deform import Pose, deform
+from mpeg4fa.face.errors import FaceError
+from mpeg4fa.face.fapu import Fapu, measure_fapu
+from mpeg4fa.face.frames import resolve
+from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.motion import check_values
+from mpeg4fa.face.rig import Rig, build_rig
+from mpeg4fa.fba.stream import FapStream, Frame
+from mpeg4fa.spec import N_FAPS, expand_high_level
+
+_DEFAULT: "FaceModel | None" = None
+
+
+class FaceModel:
+    """A neutral head plus everything needed to pose it from FAPs."""
+
+    def __init__(self, mesh: HeadMesh, calibration: CalibrationReport | None = None) -> None:
+        self.mesh = mesh
+        self.calibration = calibration
+
+    @classmethod
+    def default(cls, *, auto_install: bool = True) -> "FaceModel":
+        """The generic CC0 head (built into the cache on first use); shared, so its rig is built once."""
+        global _DEFAULT
+        if _DEFAULT is None:
+            _DEFAULT = cls(load_head(auto_install=auto_install))
+        return _DEFAULT
+
+    # -- what the face is -----------------------------------------------------------------
+
+    def feature_points(self) -> dict[str, np.ndarray]:
+        """Neutral feature point positions, label -> xyz."""
+        fps = self.mesh.feature_points()
+        return {label: fps[i] for i, label in enumerate(self.mesh.fp_labels)}
+
+    @cached_property
+    def fapu(self) -> Fapu:
+        """FAPU measured on this neutral face."""
+        return measure_fapu(self.feature_points())
+
+    @cached_property
+    def rig(self) -> Rig:
+        """Precomputed weights (built on first use: Sibson coordinates, regions, jaw and neck)."""
+        return build_rig(self.mesh, self.fapu)
+
+    # -- calibration ----------------------------------------------------------------------
+
+    def calibrate(self, fdp, *, method: str = "dffd", alignment: str = "similarity") -> "FaceModel":
+        """A new face fitted to an FDP's feature points (any subset of the 84)."""
+        labels, points = tuple(fdp.labels), np.asarray(fdp.points, dtype=np.float64)
+        unknown = [label for label in labels if label not in self.mesh.fp_labels]
+        if unknown:
+            raise FaceError(f"the FDP names unknown feature points {', '.join(unknown)}")
+        mesh, report = calibrate_mesh(self.mesh, labels, points, method=method, alignment=alignment)
+        return FaceModel(mesh, report)
+
+    # -- animation ------------------------------------------------------------------------
+
+    def frame_values(self, frame: "np.ndarray | Mapping[int, float] | Frame") -> np.ndarray:
+        """68 low-level values from any accepted frame form (high-level fields expanded)."""
+        if isinstance(frame, Frame):
+            values = frame.fap_values.astype(np.float64) * frame.fap_mask
+            if frame.fap_mask[0] or frame.fap_mask[1]:
+                vis = frame.viseme[None] if frame.fap_mask[0] else np.zeros((1, 4), int)
+                exp = frame.expression[None] if frame.fap_mask[1] else np.zeros((1, 6), int)
+                high = expand_high_level(vis, exp)[0]
+                values = np.where(frame.fap_mask.astype(bool), values, high)
+        elif isinstance(frame, Mapping):
+            values = np.zeros(N_FAPS)
+            for fap, value in frame.items():
+                if not 3 <= int(fap) <= N_FAPS:
+                    raise FaceError(f"FAP {fap} is not a low-level FAP", where=f"FAP {fap}",
+                                    hint="low-level FAPs are 3..68; use viseme/expression for 1 and 2")
+                values[int(fap) - 1] = value
+        else:
+            values = np.asarray(frame, dtype=np.float64)
+        values = np.array(values, dtype=np.float64)
+        values[:2] = 0.0
+        check_values(values)
+        return values
+
+    def deform(self, frame: "np.ndarray | Mapping[int, float] | Frame") -> Pose:
+        """The face posed by one frame of FAPs."""
+        return deform(self.rig, self.frame_values(frame))
+
+    def neutral(self) -> Pose:
+        return deform(self.rig, np.zeros(N_FAPS))
+
+    def animate(self, stream: FapStream) -> Iterator[Pose]:
+        """One pose per stream frame, with unsent FAPs held or interpolated (see :mod:`.frames`)."""
+        values = resolve(stream)
+        for k in range(len(values)):
+            check_values(values[k])
+            yield deform(self.rig, values[k])

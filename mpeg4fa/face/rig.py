@@ -1,0 +1,212 @@
+"""Layer 3 set-up: how feature point motion spreads to the mesh, computed once per face.
+
+* **Skin**: every skin vertex gets Sibson (natural-neighbour) coordinates with
+  respect to the skin feature points plus a zero-motion cage (so weights exist
+  everywhere and far skin stays put), cut to each FAP-driven point's region by a
+  breadth-first search along mesh edges with a raised-cosine falloff. A feature
+  point's own vertex has weight 1 for itself and 0 for every other point, so each
+  point moves exactly as its FAPs say and no other feature point moves.
+* **Tongue**: the same with the tongue's own points 6.1-6.4 plus fixed root points.
+* **Jaw**: a weight per vertex read off the CC0 ``jawOpen`` face unit (the fraction
+  of a rigid jaw rotation each vertex follows), 1 on the lower teeth and at 2.1.
+* **Head**: 1 on the whole head, fading to 0 down the neck.
+* **Eyes, upper teeth**: rigid.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from mpeg4fa.face import motion
+from mpeg4fa.face.errors import FaceError
+from mpeg4fa.face.fapu import Fapu
+from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.regions import adjacency, edge_hops, falloff
+from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
+from mpeg4fa.spec import FAPS, N_FAPS
+
+JAW_WEIGHT_FLOOR = 0.03  # jaw weights below this are noise of the face unit: dropped
+NECK_FADE_MM = 45.0  # the head rotation fades out over this height above the neck cut
+TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
+
+
+@dataclass(frozen=True)
+class Rig:
+    """Everything a frame needs, precomputed for one neutral face."""
+
+    rest: np.ndarray  # (V, 3)
+    fapu: Fapu
+    translate: np.ndarray  # (84*3, 68): FAP values -> feature point displacement
+    weights: sp.csr_matrix  # (V, 84): feature point displacement -> vertex displacement
+    moving: np.ndarray  # vertex indices with any feature point weight
+    weights_moving: sp.csr_matrix  # weights restricted to the moving rows
+    lid_fp: dict[int, int]  # lid FAP -> feature point index
+    lid_rows: dict[int, tuple[np.ndarray, np.ndarray]]  # lid FAP -> (vertices, weights)
+    jaw_rows: tuple[np.ndarray, np.ndarray]
+    head_rows: tuple[np.ndarray, np.ndarray]
+    roll_rows: dict[int, tuple[np.ndarray, np.ndarray, float]]  # fp index -> (vertices, weights, side)
+    parts: dict[str, slice]
+    joints: dict[str, int]
+    fp_vertex: np.ndarray
+    chin_fp: int  # 2.1, the point FAP 3 drops
+    head_fp: int  # 7.1, the head's rotation centre
+
+
+def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
+    """Precompute the weights of ``mesh`` (its current vertices are the neutral face)."""
+    rest = mesh.vertices
+    n = mesh.n_vertices
+    labels = mesh.fp_labels
+    fp_vertex = mesh.fp_vertex
+    index = {label: i for i, label in enumerate(labels)}
+
+    translate = np.zeros((len(labels) * 3, N_FAPS))
+    lid_fp: dict[int, int] = {}
+    for record in FAPS[2:]:
+        k = motion.kind(record.number)
+        if k == "translate":
+            for label in record.feature_point:
+                i = index[label]
+                translate[3 * i:3 * i + 3, record.number - 1] = fapu.unit(record.fapu) * motion.direction(record.number)
+        elif k == "lid":
+            lid_fp[record.number] = index[record.feature_point[0]]
+
+    driven = sorted({index[l] for r in FAPS[2:] if motion.kind(r.number) in ("translate", "lid", "tongue_roll")
+                     for l in r.feature_point})
+    skin = mesh.part("skin")
+    tongue = mesh.part("tongue")
+    columns = []
+    columns.append(_part_weights(mesh, skin, [i for i in range(len(labels)) if _in(fp_vertex[i], skin)], driven,
+                                 extra_controls=None))
+    root = _tongue_root(rest, tongue)
+    columns.append(_part_weights(mesh, tongue, [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)],
+                                 driven, extra_controls=root))
+    weights = (columns[0] + columns[1]).tocsr()
+    weights.eliminate_zeros()
+    moving = np.unique(weights.nonzero()[0])
+
+    lid_rows = {}
+    for fap, i in lid_fp.items():
+        col = weights[:, i].tocoo()
+        lid_rows[fap] = (col.row, col.data)
+    roll_rows = {}
+    for label, side in (("6.3", 1.0), ("6.4", -1.0)):
+        col = weights[:, index[label]].tocoo()
+        roll_rows[index[label]] = (col.row, col.data, side)
+    # lid points and tongue borders move by rotation, not by the translation table
+    for i in list(lid_fp.values()):
+        translate[3 * i:3 * i + 3] = 0.0
+
+    return Rig(
+        rest=rest, fapu=fapu, translate=translate, weights=weights, moving=moving,
+        weights_moving=weights[moving], lid_fp=lid_fp, lid_rows=lid_rows,
+        jaw_rows=_jaw_weights(mesh), head_rows=_head_weights(mesh), roll_rows=roll_rows,
+        parts={p: mesh.part(p) for p in mesh.part_ranges}, joints=dict(mesh.joints), fp_vertex=fp_vertex,
+        chin_fp=index["2.1"], head_fp=index["7.1"],
+    )
+
+
+def _in(v: int, s: slice) -> bool:
+    return s.start <= v < s.stop
+
+
+def _part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
+                  extra_controls: np.ndarray | None) -> sp.csr_matrix:
+    """Sibson weights of a part's vertices on its feature points, cut to their BFS regions."""
+    rest = mesh.vertices
+    n = mesh.n_vertices
+    fp_v = mesh.fp_vertex
+    # one control per distinct vertex (11.5 shares 11.4's vertex)
+    controls, seen = [], set()
+    for i in fps:
+        if fp_v[i] not in seen:
+            seen.add(fp_v[i])
+            controls.append(i)
+    sites = [rest[fp_v[controls]]]
+    if extra_controls is not None:
+        sites.append(extra_controls)
+    queries = rest[part]
+    cloud = np.concatenate(sites + [queries])
+    sites.append(cage_points(cloud))
+    sites = np.concatenate(sites)
+    w = natural_neighbour_weights(sites, queries)[:, :len(controls)].tocsc()
+
+    keep = [c for c, i in enumerate(controls) if i in driven]
+    if not keep:
+        return sp.csr_matrix((n, len(mesh.fp_labels)))
+    reach = np.array([max(int(mesh.fp_reach[controls[c]]), 1) for c in keep])
+    local_tris = mesh.triangles[_part_name(mesh, part)] - part.start
+    graph = adjacency(local_tris, part.stop - part.start)
+    hops = edge_hops(graph, fp_v[[controls[c] for c in keep]] - part.start, int(reach.max()))
+    fade = falloff(hops, reach)  # (k, part vertices)
+    rows, cols, vals = [], [], []
+    for j, c in enumerate(keep):
+        col = w[:, c].toarray().ravel() * fade[j]
+        nz = np.flatnonzero(col > 1e-9)
+        rows.append(nz + part.start)
+        cols.append(np.full(len(nz), controls[c]))
+        vals.append(col[nz])
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(n, len(mesh.fp_labels)))
+
+
+def _part_name(mesh: HeadMesh, part: slice) -> str:
+    return next(p for p, (a, b) in mesh.part_ranges.items() if a == part.start and b == part.stop)
+
+
+def _tongue_root(rest: np.ndarray, tongue: slice) -> np.ndarray:
+    """Fixed controls at the back of the tongue, so that tip motion does not drag its root."""
+    v = rest[tongue]
+    back = v[v[:, 2] < v[:, 2].min() + TONGUE_ROOT_MM]
+    lo, hi = back.min(axis=0), back.max(axis=0)
+    mid = (lo + hi) / 2
+    return np.array([[lo[0], mid[1], mid[2]], [hi[0], mid[1], mid[2]], [mid[0], lo[1], mid[2]],
+                     [mid[0], hi[1], mid[2]]])
+
+
+def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Fraction of the jaw rotation each vertex follows, from the jawOpen face unit."""
+    rest = mesh.vertices
+    pivot = mesh.joint("mouth")
+    chin = mesh.fp("2.1")
+    if mesh.face_units is not None and "jawOpen" in mesh.face_units.names:
+        delta = mesh.face_units.dense("jawOpen", mesh.n_vertices)
+        d_chin = delta[mesh.fp_vertex[mesh.fp_index("2.1")]]
+        a = (chin - pivot)[1:]
+        b = a + d_chin[1:]
+        angle = np.arctan2(b[1], b[0]) - np.arctan2(a[1], a[0])
+        step = (motion.rotation_matrix(0, angle) - np.eye(3))
+        r = (rest - pivot) @ step.T
+        with np.errstate(invalid="ignore", divide="ignore"):
+            w = np.einsum("ij,ij->i", delta, r) / np.einsum("ij,ij->i", r, r)
+        w = np.nan_to_num(w)
+    else:  # a face without face units (a test head): everything below the lip line
+        w = (rest[:, 1] < (mesh.fp("2.2")[1] + mesh.fp("2.3")[1]) / 2).astype(float)
+    w = np.clip(w, 0.0, 1.0)
+    w[w < JAW_WEIGHT_FLOOR] = 0.0
+    for part in ("eye_l", "eye_r", "teeth_upper", "joints"):
+        w[mesh.part(part)] = 0.0
+    w[mesh.part("teeth_lower")] = 1.0
+    w[mesh.fp_vertex[mesh.fp_index("2.1")]] = 1.0
+    idx = np.flatnonzero(w)
+    return idx, w[idx]
+
+
+def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
+    """1 on the head; down the neck a smooth fade to 0 at the cut."""
+    y = mesh.vertices[:, 1]
+    skin = mesh.part("skin")
+    bottom = y[skin].min()
+    t = np.clip((y - bottom) / NECK_FADE_MM, 0.0, 1.0)
+    w = t * t * (3 - 2 * t)
+    w[skin.stop:] = 1.0
+    idx = np.flatnonzero(w)
+    return idx, w[idx]
+
+
+def require_fp(mesh: HeadMesh, label: str) -> int:
+    if label not in mesh.fp_labels:
+        raise FaceError(f"the face has no feature point {label}")
+    return mesh.fp_index(label)
