@@ -1,1 +1,32 @@
-"""Face definition parameters (FDP): the data model and its file forms."""
+"""Face definition parameters (FDP): what a sender transmits so a decoder can fit its own head.
+
+An :class:`Fdp` carries coordinates of any subset of the 84 MPEG-4 feature
+points, optionally their texture coordinates, texture images, a whole face mesh
+and per-FAP deformation tables (the BIFS FaceDefTables / FaceDefMesh /
+FaceDefTransform nodes). The face engine calibrates its generic head to these
+points; FAP streams then animate the calibrated head.
+
+Three file forms, all read by :func:`load_fdp` by content:
+
+* binary stream (``save_fdp(fdp, "x.fdp")``): compact, versioned, CRC-checked
+  chunks, specified in ``spec/FDP_STREAM.md``;
+* JSON (``save_fdp(fdp, "x.json")``): readable and hand-editable;
+* Xface ``.fdp`` XML (read only): :func:`read_xface_fdp` then
+  :meth:`XfaceFdp.to_fdp` with the mesh's vertices.
+
+Every reader reports malformed content as an :class:`FdpError` that says where:
+``path:line:column`` for the text forms, ``path: byte N`` for the binary one.
+"""
+from mpeg4fa.fdp.binary import fdp_from_bytes, fdp_to_bytes
+from mpeg4fa.fdp.errors import FdpError
+from mpeg4fa.fdp.io import load_fdp, save_fdp, sniff_fdp
+from mpeg4fa.fdp.json_form import fdp_from_json, fdp_to_json
+from mpeg4fa.fdp.model import (FaceDefMesh, FaceDefTable, FaceDefTransform, Fdp, FdpMesh, FdpValueError,
+                               TextureImage)
+from mpeg4fa.fdp.xface import XfaceEntry, XfaceFdp, XfaceInfluence, read_xface_fdp, xface_from_xml
+
+__all__ = [
+    "Fdp", "FdpMesh", "TextureImage", "FaceDefTable", "FaceDefMesh", "FaceDefTransform", "FdpError",
+    "FdpValueError", "load_fdp", "save_fdp", "sniff_fdp", "fdp_to_json", "fdp_from_json", "fdp_to_bytes",
+    "fdp_from_bytes", "read_xface_fdp", "xface_from_xml", "XfaceFdp", "XfaceEntry", "XfaceInfluence",
+]

@@ -1,0 +1,78 @@
+"""Open and save FDP files, choosing the form by content (never trusting the file name when reading)."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Mapping
+
+from numpy.typing import ArrayLike
+
+from mpeg4fa.fdp.binary import MAGIC, fdp_from_bytes, fdp_to_bytes
+from mpeg4fa.fdp.errors import FdpError
+from mpeg4fa.fdp.json_form import fdp_from_json, fdp_to_json
+from mpeg4fa.fdp.model import Fdp
+from mpeg4fa.fdp.xface import xface_from_xml
+
+_BOM = b"\xef\xbb\xbf"
+
+
+def sniff_fdp(data: bytes) -> str | None:
+    """``"binary"``, ``"json"``, ``"xface"`` or None, from the first bytes.
+
+    The binary test looks at the first 4 magic bytes only, so a stream whose
+    line-ending magic bytes were mangled still reaches the binary reader, which
+    explains what happened.
+    """
+    if data[:4] == MAGIC[:4]:
+        return "binary"
+    head = data[len(_BOM):] if data.startswith(_BOM) else data
+    head = head[:4096].lstrip(b" \t\r\n")
+    if head.startswith(b"{"):
+        return "json"
+    if head.startswith(b"<"):
+        return "xface"
+    return None
+
+
+def load_fdp(path: str | os.PathLike[str], meshes: Mapping[str, ArrayLike] | None = None) -> Fdp:
+    """Read a binary, JSON or Xface ``.fdp`` file, recognised by content.
+
+    An Xface file names mesh vertices rather than coordinates, so it needs
+    ``meshes`` (``{submesh name: (V, 3) vertices}``); without it the error says
+    so. For the rest of an Xface file (influences, indices) use
+    :func:`~mpeg4fa.fdp.xface.read_xface_fdp`.
+    """
+    name = str(path)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise FdpError.from_os_error(name, exc) from None
+    kind = sniff_fdp(data)
+    if kind == "binary":
+        return fdp_from_bytes(data, name)
+    if kind == "json":
+        return fdp_from_json(data, name)
+    if kind == "xface":
+        xface = xface_from_xml(data, name)
+        if meshes is None:
+            raise FdpError.no_place(name, "an Xface .fdp names mesh vertices, not coordinates",
+                                    "pass meshes={submesh: vertices} to load_fdp, or use read_xface_fdp(path)"
+                                    ".to_fdp(vertices)")
+        return xface.to_fdp(meshes)
+    if not data:
+        raise FdpError.no_place(name, "the file is empty")
+    raise FdpError.at_byte(name, 0, "not an FDP file (neither the binary magic, JSON nor XML)",
+                           "FDP files are binary (.fdp from save_fdp), JSON or Xface XML")
+
+
+def save_fdp(fdp: Fdp, path: str | os.PathLike[str], *, float32: bool = False) -> None:
+    """Write ``fdp``: JSON when the name ends in ``.json``, else the binary stream."""
+    name = str(path)
+    if name.lower().endswith(".json"):
+        payload = fdp_to_json(fdp).encode("utf-8")
+    else:
+        payload = fdp_to_bytes(fdp, float32=float32)
+    try:
+        Path(path).write_bytes(payload)
+    except OSError as exc:
+        raise FdpError.from_os_error(name, exc) from None

