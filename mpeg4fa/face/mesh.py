@@ -8,6 +8,8 @@ the face (the MPEG-4 neutral-face axes).
 """
 from __future__ import annotations
 
+import zipfile
+import zlib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -144,7 +146,7 @@ class HeadMesh:
         try:
             with np.load(path, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}
-        except (OSError, ValueError, EOFError) as exc:
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise FaceError(f"cannot read the head asset: {exc}", where=str(path),
                             hint="rebuild it with `mpeg4fa model install --force`") from None
         try:

@@ -96,6 +96,9 @@ class FaceModel:
         else:
             values = np.asarray(frame, dtype=np.float64)
         values = np.array(values, dtype=np.float64)
+        if values.shape != (N_FAPS,):
+            raise FaceError(f"a frame has {N_FAPS} FAP values, got shape {values.shape}",
+                            hint="pass an array of 68 values or a {fap: value} mapping")
         values[:2] = 0.0
         check_values(values)
         return values

@@ -184,6 +184,7 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
         w = np.nan_to_num(w)
     else:  # a face without face units (a test head): everything below the lip line
         w = (rest[:, 1] < (mesh.fp("2.2")[1] + mesh.fp("2.3")[1]) / 2).astype(float)
+    w = 0.5 * (w + w[mesh.mirror])  # the face unit is slightly asymmetric; the jaw is not
     w = np.clip(w, 0.0, 1.0)
     w[w < JAW_WEIGHT_FLOOR] = 0.0
     for part in ("eye_l", "eye_r", "teeth_upper", "joints"):

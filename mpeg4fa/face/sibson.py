@@ -42,11 +42,12 @@ computed as flat numpy arrays and summed with ``bincount``:
   ``q_f`` is a point on the Voronoi edge dual to face ``f``: the midpoint of
   ``c_T`` and the neighbour's ``c_T'`` when the neighbour is in conflict too
   (both tetrahedra use the same bitwise point, so the split is exact); otherwise
-  (a cavity boundary face) the point ``g_f`` where the edge leaves ``H_i``,
-  found by linear interpolation of the power along ``c_T -> c_T'``
-  (``t = pow_T / (pow_T - pow_T')``, always in ``[0, 1]``, so ``g_f`` stays between
-  two Voronoi vertices and never blows up), or along the outward Voronoi ray of a
-  convex-hull face;
+  (a cavity boundary face) the point ``g_f`` where the edge leaves ``H_i``.  The
+  Voronoi edge leaves ``c_T`` along the outward unit normal ``n_f`` of ``f``
+  (Delaunay property) and ``|y - x|^2 - |y - p_i|^2`` is affine along it, so
+  ``g_f = c_T + t n_f`` with ``t = -pow_T / (2 n_f . (p_i - x))``, clamped to the
+  edge's length ``|c_T' - c_T|`` (infinite on the hull).  It uses neither the
+  possibly huge ``c_T'`` nor the circumcentre of ``x`` with ``f``;
 * the cut segment of ``P_ij`` along ``∂H_i`` joins the ``g_f`` of the two boundary
   faces ending the conflict arc around ``ij``; it is split at ``h_ij``, the
   circumcentre of the triangle ``(x, p_i, p_j)``, which lies on that segment's
@@ -64,39 +65,57 @@ makes the splits exact.
 
 Degeneracies
 ------------
+The triangulation is ``Delaunay(sites, qhull_options="Qbb Qc Qz Q12")`` (scipy's
+defaults; scipy adds ``Qt``, triangulated output).  No joggle: ``QJ`` would
+triangulate slightly moved sites, and its slivers are flat in the true
+coordinates anyway.
+
 * Co-spherical sites (a regular grid): several tetrahedra share one
-  circumcentre; their pieces are zero-length edges, which is harmless.  A query
-  *on* a circumsphere is a tie of the strict conflict test; either answer gives
-  the same volumes, because such a tetrahedron's pieces shrink to zero there, and
-  ``g_f`` interpolation keeps them bounded if rounding classifies two tetrahedra
-  sharing a centre differently.
-* Flat tetrahedra: qhull's triangulated output (option ``Qt``, which scipy
-  always adds) splits co-spherical cells and may emit zero-volume tetrahedra of
-  four co-circular coplanar sites (38 of 200 for a 4x4x4 grid).  A tetrahedron
-  with ``|det| <= 1e-10 * (longest edge)^3`` is treated as flat: its circumcentre
-  is the least-squares (pseudo-inverse) one, the circle centre, which lies on
-  the common axis that also holds its neighbours' circumcentres; any point of
-  that axis gives the same volumes since the pieces through it are collinear.
-  Its orientation cannot be read from its determinant, so it is taken from the
-  triangulation (a tetrahedron and its neighbour induce opposite orientations on
-  their shared face), propagated from non-flat neighbours.
-* Near-flat slivers keep their (possibly large) circumcentres; coordinates are
-  centred on the sites' bounding box and the power is evaluated as
-  ``|x - p0|^2 - 2 (x - p0) . (c - p0)`` so that large circumcentres lose little.
-* Sites that qhull leaves out of the triangulation (``coplanar`` points, e.g.
-  nearly coincident sites) make the triangulation be rebuilt with joggle
-  (``QJ``); coincident sites (within ``atol``) and fewer than 4 sites, or
-  sites that span no volume, raise :class:`FaceError`.
+  circumcentre; their pieces are zero-length, which is harmless.  A query *on*
+  a circumsphere is a tie of the strict conflict test; either answer gives the
+  same volumes since that tetrahedron's pieces shrink to nothing there.
+* Flat tetrahedra: ``Qt`` splits co-spherical cells and may emit zero-volume
+  tetrahedra of four co-circular coplanar sites (38 of the 200 tetrahedra of a
+  4x4x4 grid).  Circumcentres are computed as the least-squares intersection of
+  the six edges' bisector planes (unit normals, relative to the centroid, via
+  an SVD): well conditioned for any tetrahedron whose edge directions span
+  space, including one with a very short edge.  A tetrahedron whose edge
+  directions are coplanar (smallest singular value below ``1e-10``) is flat; if
+  its sites are co-circular the truncated solution is a point of the circle's
+  axis, which also holds its neighbours' circumcentres, and any point of that
+  axis gives the same volumes (the pieces through it are collinear).  Its
+  orientation cannot be read from its determinant, so it is taken from the
+  triangulation (a tetrahedron and its neighbour induce opposite orientations
+  on their shared face), propagated from non-flat neighbours.
+* Hull slivers: four nearly coplanar (not co-circular) or nearly collinear
+  sites on the hull give a huge circumsphere whose centre is also the least
+  accurate.  A tetrahedron that is flat but not co-circular, nearly collinear
+  (two small singular values), or whose circumradius or smallest face
+  circumradius exceeds ``1e8`` x the sites' bounding-box diagonal is never in
+  conflict: inside the hull its sphere is a half-space beyond the hull, except
+  within about ``1e-9`` of the diagonal of the hull.  Queries within about
+  ``1e-8`` x diagonal of a nearly planar, jittered stretch of hull can lose
+  accuracy (round-off makes such spheres ill-determined); a cage
+  (:func:`cage_points`) keeps every mesh vertex far from the hull.
+* Every computed row is checked (finite, weights ``>= -1e-8``, linear
+  precision within ``1e-8`` x diagonal); rows that fail raise
+  :class:`FaceError` rather than return wrong weights.
+* The power of a query for each sphere is ``|x|^2 - 2 x . c + K`` with
+  ``K = |p0|^2 + 2 p0 . (c - p0)``, in coordinates centred on the sites'
+  bounding box, so large circumcentres lose little.
+* Coincident sites (within ``atol``), sites qhull leaves out of the
+  triangulation (nearly coincident ones), fewer than 4 sites, and sites that
+  span no volume raise :class:`FaceError`.
 * A query within ``atol`` of a site gets that site's unit row (the formula
   degenerates there since ``∂H_i`` is undefined).  Other queries must lie inside
-  the hull by more than ``atol``; queries outside or on the hull raise
-  :class:`FaceError`.
-* Tiny weights (``|u| < 1e-14``, rounding residue of near-ties) are dropped and
-  the row renormalised.
+  the hull (``scipy.spatial.ConvexHull`` facets) by more than ``atol``; queries
+  outside or on the hull raise :class:`FaceError`.
+* Weights below ``1e-14`` (rounding residue of near-ties) are dropped and the
+  row renormalised.
 
-Speed: about 0.1-0.2 s for 5,000 queries against 100 sites on one core
-(see ``tools/bench_sibson.py``); queries are processed in chunks so that memory
-stays bounded.
+Speed: about 0.2 s for 5,000 queries against 114 sites (100 + a cage) on one
+core, 1 s for 20,000 (``tools/bench_sibson.py``); queries are processed in
+chunks of about 10^6 query x tetrahedron pairs so that memory stays bounded.
 """
 from __future__ import annotations
 
@@ -104,7 +123,7 @@ from itertools import permutations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import Delaunay, QhullError, cKDTree
+from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
 
 from .errors import FaceError
 
@@ -112,8 +131,12 @@ __all__ = ["NaturalNeighbours", "cage_points", "inside_hull", "natural_neighbour
 
 _WHERE = "natural_neighbour_weights"
 _CAGE_HINT = "add bounding control points (see cage_points)"
-_FLAT_TOL = 1e-10  # |det| <= _FLAT_TOL * (longest edge)^3: flat tetrahedron
+_FLAT_TOL = 1e-10  # flat tetrahedron: its edge directions span a volume below this
+_HUGE = 1e8  # circumradius above this x bbox diagonal: never in conflict
+_NEEDLE_TOL = 1e-6  # nearly collinear: two edge-direction singular values below this
+_COCIRCULAR_TOL = 1e-6  # flat and co-circular: residual <= this * (longest edge)^2
 _DROP_TOL = 1e-14  # weights below this are rounding residue
+_CHECK_TOL = 1e-8  # self-check of every row: linear precision (x diagonal), weights >= -this
 _CHUNK_ELEMENTS = 1_000_000  # queries x tetrahedra per chunk
 
 
@@ -129,25 +152,30 @@ def _parity(perm) -> int:
     return sign
 
 
-# The 12 even permutations (a, b, c, d) of a tetrahedron's vertex slots: for a
-# positively oriented T, (T[a], T[b], T[c], T[d]) = (i, j, k, l) is positive too.
-_EVEN = np.array([p for p in permutations(range(4)) if _parity(p) == 1], dtype=np.intp)
+# The 6 vertex-slot pairs a < b of a tetrahedron, each completed to an even
+# permutation (a, b, c, d): for a positively oriented T, (T[a], T[b], T[c], T[d])
+# = (i, j, k, l) is positive too, and so is (j, i, l, k).
+_PAIRS = np.array(
+    [next(p for p in permutations(range(4)) if p[:2] == (a, b) and _parity(p) == 1) for a in range(4) for b in range(a + 1, 4)],
+    dtype=np.intp,
+)
 # Slots of the face opposite slot m, ordered so that (f0, f1, f2, m) is even
 # (then (p_f1 - p_f0) x (p_f2 - p_f0) points to the side of vertex m).
 _FACE = np.array(
     [next(p for p in permutations(sorted(set(range(4)) - {m})) if _parity((*p, m)) == 1) for m in range(4)],
     dtype=np.intp,
 )
-# For the face opposite slot m: its 6 ordered slot pairs (a, b) and the sign of
-# the permutation (a, b, c, m), c the third slot of the face.
-_BPAIR_A = np.empty((4, 6), dtype=np.intp)
-_BPAIR_B = np.empty((4, 6), dtype=np.intp)
-_BPAIR_S = np.empty((4, 6))
+# For the face opposite slot m: its 3 slot pairs (a, b) and the sign of the
+# permutation (a, b, c, m), c the third slot of the face (the pair (b, a) has
+# the opposite sign).
+_FPAIR_A = np.empty((4, 3), dtype=np.intp)
+_FPAIR_B = np.empty((4, 3), dtype=np.intp)
+_FPAIR_S = np.empty((4, 3))
 for _m in range(4):
-    for _n, (_a, _b) in enumerate(permutations(_FACE[_m], 2)):
-        _c = (set(_FACE[_m]) - {_a, _b}).pop()
-        _BPAIR_A[_m, _n], _BPAIR_B[_m, _n] = _a, _b
-        _BPAIR_S[_m, _n] = _parity((_a, _b, _c, _m))
+    for _n, (_a, _b, _c) in enumerate([(0, 1, 2), (0, 2, 1), (1, 2, 0)]):
+        _a, _b, _c = _FACE[_m, _a], _FACE[_m, _b], _FACE[_m, _c]
+        _FPAIR_A[_m, _n], _FPAIR_B[_m, _n] = _a, _b
+        _FPAIR_S[_m, _n] = _parity((_a, _b, _c, _m))
 del _m, _n, _a, _b, _c
 
 
@@ -158,6 +186,11 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     out[..., 1] = u[..., 2] * v[..., 0] - u[..., 0] * v[..., 2]
     out[..., 2] = u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
     return out
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Dot product along the last axis (faster than a sum over an axis of 3)."""
+    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1] + u[..., 2] * v[..., 2]
 
 
 def _triple(e: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -206,8 +239,10 @@ class NaturalNeighbours:
         if not (np.isfinite(atol) and atol >= 0):
             raise FaceError(f"atol must be a finite number >= 0, got {atol}", where=_WHERE)
         self.atol = atol
+        self._diag = diag
         self.centre = (lo + hi) / 2
-        self.sites = sites
+        self.sites = sites.copy()
+        self.sites.flags.writeable = False
         P = sites - self.centre
         self._P = P
         self._tree = cKDTree(P)
@@ -220,25 +255,21 @@ class NaturalNeighbours:
                 where=_WHERE,
                 hint="merge or drop duplicate control points",
             )
-        tri = None
-        for options in ("Qbb Qc Qz Q12", "QJ Qbb Q12"):
-            try:
-                tri = Delaunay(P, qhull_options=options)
-            except (QhullError, ValueError) as exc:
-                first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-                raise FaceError(
-                    f"the {n} sites cannot be triangulated (coplanar or degenerate?): {first}",
-                    where=_WHERE,
-                    hint=_CAGE_HINT,
-                ) from None
-            if len(tri.coplanar) == 0:
-                break
-        else:
-            k = int(tri.coplanar[0, 0])
+        try:
+            tri = Delaunay(P, qhull_options="Qbb Qc Qz Q12")
+        except (QhullError, ValueError) as exc:
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise FaceError(
-                f"{len(tri.coplanar)} site(s) were left out of the Delaunay triangulation, first site {k}",
+                f"the {n} sites cannot be triangulated (coplanar or degenerate?): {first}",
                 where=_WHERE,
-                hint="sites nearly coincide; merge them",
+                hint=_CAGE_HINT,
+            ) from None
+        if len(tri.coplanar):
+            k, j = int(tri.coplanar[0, 0]), int(tri.coplanar[0, 2])
+            raise FaceError(
+                f"{len(tri.coplanar)} site(s) too close to others to be triangulated, first site {k} (near site {j})",
+                where=_WHERE,
+                hint="merge nearly coincident control points",
             )
         self._setup(tri)
 
@@ -248,11 +279,26 @@ class NaturalNeighbours:
         S = np.array(tri.simplices, dtype=np.intp)
         N = np.array(tri.neighbors, dtype=np.intp)
         nt = len(S)
-        E = P[S[:, 1:]] - P[S[:, :1]]
+        # Circumcentres as the least-squares intersection of the six edges'
+        # bisector planes, unit normals, relative to the centroid: well
+        # conditioned unless all six edges are nearly coplanar (a flat
+        # tetrahedron), also for a tetrahedron with one very short edge.
+        V = P[S]
+        o = V.mean(axis=1)
+        Vr = V - o[:, None, :]
+        a, b = np.array([0, 0, 0, 1, 1, 2]), np.array([1, 2, 3, 2, 3, 3])
+        Ed = Vr[:, b] - Vr[:, a]
+        length = np.sqrt((Ed**2).sum(axis=2))
+        U = Ed / length[..., None]
+        rhs = (U * (0.5 * (Vr[:, a] + Vr[:, b]))).sum(axis=2)
+        Lu, sig, Vt = np.linalg.svd(U, full_matrices=False)
+        flat = sig[:, 2] <= _FLAT_TOL * sig[:, 0]
+        inv = np.divide(1.0, sig, out=np.zeros_like(sig), where=sig > _FLAT_TOL * sig[:, :1])
+        cr = np.einsum("tji,tj->ti", Vt, inv * np.einsum("tkj,tk->tj", Lu, rhs))
+        C = o + cr
+        lmax = length.max(axis=1)
+        E = V[:, 1:] - V[:, :1]
         det = np.linalg.det(E)
-        edges = np.concatenate([E, (E[:, [1, 2, 0]] - E)], axis=1)
-        lmax = np.sqrt((edges**2).sum(axis=2).max(axis=1))
-        flat = np.abs(det) <= _FLAT_TOL * lmax**3
         # Orient the non-flat tetrahedra positively (swap slots 0 and 1).
         swap = (det < 0) & ~flat
         S[swap, 0], S[swap, 1] = S[swap, 1], S[swap, 0].copy()
@@ -278,33 +324,57 @@ class NaturalNeighbours:
                     todo.discard(t)
                     progress = True
                     break
-            if not progress:  # a component of flat tetrahedra only: cannot happen for a 3D hull
-                raise FaceError("the sites' triangulation is degenerate", where=_WHERE, hint=_CAGE_HINT)
-        E = P[S[:, 1:]] - P[S[:, :1]]
-        rhs = 0.5 * (E**2).sum(axis=2)
-        D = np.empty((nt, 3))
-        ok = ~flat
-        if ok.any():
-            D[ok] = np.linalg.solve(E[ok], rhs[ok][..., None])[..., 0]
+            if not progress:  # flat tetrahedra touching no oriented one: leave them
+                break
+        S_in = np.array(tri.simplices, dtype=np.intp)  # slot order C was computed in
+        finite = np.ones(nt, dtype=bool)
         if flat.any():
-            D[flat] = (np.linalg.pinv(E[flat], rcond=1e-8) @ rhs[flat][..., None])[..., 0]
+            # The least-squares centre of co-circular flat sites lies on their
+            # circle's axis.  Flat but not co-circular (a sliver on a nearly
+            # planar stretch of the hull): the circumsphere is a half-space
+            # beyond the hull, never in conflict with a query inside.
+            fi = np.flatnonzero(flat)
+            r2 = ((P[S_in[fi]] - C[fi, None, :]) ** 2).sum(axis=2)
+            cocircular = np.ptp(r2, axis=1) <= _COCIRCULAR_TOL * lmax[fi] ** 2
+            finite[fi[~cocircular]] = False
+        # A circumsphere far larger than the sites (a hull sliver: nearly
+        # coplanar or collinear sites on the hull) is, inside the hull, a
+        # half-space beyond it; its centre is also the least accurate.
+        # Nearly collinear sites (every face a needle) make the least-squares
+        # centre meaningless, so also test the smallest face circumradius, a
+        # lower bound of the circumradius (r = abc / 4 area).
+        ia, ib, ic = [3, 1, 0, 0], [4, 2, 2, 1], [5, 5, 4, 3]  # edges of the face opposite vertex 0..3
+        area2 = np.linalg.norm(_cross(Ed[:, ia], Ed[:, ib]), axis=2)
+        abc = length[:, ia] * length[:, ib] * length[:, ic]
+        rface = np.divide(abc, 2.0 * area2, out=np.full_like(area2, np.inf), where=area2 > 0)
+        huge = _HUGE * self._diag
+        needle = sig[:, 1] <= _NEEDLE_TOL * sig[:, 0]
+        finite &= (np.sqrt((cr**2).sum(axis=1)) <= huge) & (rface.min(axis=1) <= huge) & ~needle
+        C[~finite] = 0.0
         self._S, self._N = S, N
         self._P0 = P[S[:, 0]]
-        self._D = D  # circumcentre minus first vertex
-        self._C = self._P0 + D  # circumcentres (centred coordinates)
+        D = C - self._P0
         # power(x) = |x - p0|^2 - 2 (x - p0).D = |x|^2 - 2 x.C + K
-        self._K = (self._P0 * self._P0).sum(axis=1) + 2.0 * (self._P0 * D).sum(axis=1)
-        # Outward unit normals of convex-hull faces (zero elsewhere).
-        F = S[:, _FACE]  # (nt, 4, 3) face vertices, (f0, f1, f2, m) even
+        K = (self._P0 * self._P0).sum(axis=1) + 2.0 * (self._P0 * D).sum(axis=1)
+        K[~finite] = np.inf
+        self._C, self._K = C, K
+        # Outward unit normal of every face (slot m: the face opposite vertex m),
+        # a vertex of it, and the length of its Voronoi edge (inf if unbounded).
+        F = S[:, _FACE]  # (nt, 4, 3), (f0, f1, f2, m) even
         nrm = -_cross(P[F[..., 1]] - P[F[..., 0]], P[F[..., 2]] - P[F[..., 0]])
-        hull = N < 0
         length = np.linalg.norm(nrm, axis=2)
-        nrm = np.where(hull[..., None], nrm / np.where(length > 0, length, 1.0)[..., None], 0.0)
-        self._HN = nrm
-        self._FA = P[F[..., 0]]  # a vertex of each face
-        ht, hm = np.nonzero(hull)
-        self._hull_normal = nrm[ht, hm]
-        self._hull_offset = (self._hull_normal * self._FA[ht, hm]).sum(axis=1)
+        self._FN = nrm / np.where(length > 0, length, 1.0)[..., None]
+        self._FA = P[F[..., 0]]
+        nb = np.where(N < 0, 0, N)
+        seg = np.linalg.norm(C[nb] - C[:, None, :], axis=2)
+        self._SEG = np.where((N >= 0) & finite[nb] & finite[:, None], seg, np.inf)
+        # Convex hull facets (qhull merges coplanar ones) for the inside test.
+        try:
+            hull = ConvexHull(P)
+        except (QhullError, ValueError) as exc:  # pragma: no cover - Delaunay succeeded
+            raise FaceError(f"convex hull of the sites failed: {exc}", where=_WHERE, hint=_CAGE_HINT) from None
+        self._hull_normal = hull.equations[:, :3]
+        self._hull_offset = -hull.equations[:, 3]
 
     # -- queries -------------------------------------------------------------
     def _classify(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -343,13 +413,26 @@ class NaturalNeighbours:
         vals = [np.ones(int(snap.sum()))]
         active = np.flatnonzero(~snap)
         step = max(1, _CHUNK_ELEMENTS // len(self._S))
+        failed = []
         for s in range(0, len(active), step):
             idx = active[s : s + step]
             block = self._block(X[idx])
+            # Self-check: rows must be finite, non-negative and reproduce x.
+            err = np.abs(block @ self._P - X[idx]).max(axis=1)
+            bad = ~(err <= _CHECK_TOL * self._diag) | ~(block.min(axis=1) >= -_CHECK_TOL)
+            failed.append(idx[bad])
             r, c = np.nonzero(block)
             rows.append(idx[r])
             cols.append(c)
             vals.append(block[r, c])
+        failed = np.concatenate(failed) if failed else np.empty(0, dtype=np.intp)
+        if len(failed):
+            raise FaceError(
+                f"{len(failed)} of {m} queries lie too close to the hull (where its sites are nearly "
+                f"coplanar) for accurate weights; first is query {int(failed[0])}",
+                where=_WHERE,
+                hint=_CAGE_HINT,
+            )
         W = sp.coo_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, n)
         ).tocsr()
@@ -363,70 +446,69 @@ class NaturalNeighbours:
         # Power of every query with respect to every circumsphere.
         power = X @ (-2.0 * C.T)
         power += self._K
-        power += (X * X).sum(axis=1)[:, None]
+        power += _dot(X, X)[:, None]
         conflict = power < 0.0
         qi, ti = np.nonzero(conflict)
         x = X[qi]  # (np, 3)
         c = C[ti]
         pT = power[qi, ti]
         nb = N[ti]  # (np, 4)
-        hull = nb < 0
-        nbc = np.where(hull, 0, nb)
-        inner = conflict[qi[:, None], nbc] & ~hull
-        pN = power[qi[:, None], nbc]
+        nbc = np.where(nb < 0, 0, nb)
+        inner = conflict[qi[:, None], nbc] & (nb >= 0)
         cN = C[nbc]
-        # A point of the Voronoi edge dual to each face (see module docstring).
+        # A point of the Voronoi edge dual to each face (see module docstring):
+        # the midpoint of two conflict circumcentres, or where the edge leaves
+        # the region closer to x (the power is affine along it).
         Q = 0.5 * (c[:, None, :] + cN)
-        cut = ~inner & ~hull
-        if cut.any():
-            pq, mq = np.nonzero(cut)
-            p0, p1 = pT[pq], pN[pq, mq]
-            t = p0 / (p0 - p1)
-            Q[pq, mq] = c[pq] + t[:, None] * (cN[pq, mq] - c[pq])
-        if hull.any():
-            pq, mq = np.nonzero(hull)
-            nrm = self._HN[ti[pq], mq]
-            depth = 2.0 * (nrm * (self._FA[ti[pq], mq] - x[pq])).sum(axis=1)
-            t = -pT[pq] / depth
-            Q[pq, mq] = c[pq] + t[:, None] * nrm
-        St = S[ti]  # (np, 4) site indices of each conflict tetrahedron
-        # Voronoi-edge pieces: for (i, j, k, l) = T[a, b, c, d] positive, the facet
-        # P_ij runs q_ijk -> c_T -> q_ijl, q_ijk on the face opposite slot d.
-        i = St[:, _EVEN[:, 0]]
-        j = St[:, _EVEN[:, 1]]
-        Pi, Pj = P[i], P[j]
-        xx = x[:, None, :]
-        e = 0.5 * (Pj - xx)
-        A = 0.5 * (xx + Pi)
-        dq = Q[:, _EVEN[:, 3]] - Q[:, _EVEN[:, 2]]
-        vol = _triple(e, dq, c[:, None, :] - A)
-        key_rows = [np.repeat(qi, 12)]
-        key_cols = [i.ravel()]
-        key_vals = [vol.ravel()]
-        # Cut pieces along the plane between x and i, split at h_ij.
         bd = ~inner
-        if bd.any():
-            pb, mb = np.nonzero(bd)
+        pb, mb = np.nonzero(bd)
+        if len(pb):
+            tb = ti[pb]
+            nrm = self._FN[tb, mb]
+            den = 2.0 * _dot(nrm, self._FA[tb, mb] - x[pb])
+            t = np.divide(-pT[pb], den, out=np.zeros_like(den), where=den != 0.0)
+            seg = self._SEG[tb, mb]
+            np.clip(t, -seg, seg, out=t)
+            Q[pb, mb] = c[pb] + t[:, None] * nrm
+        St = S[ti]  # (np, 4) site indices of each conflict tetrahedron
+        U = P[St] - x[:, None, :]  # vertices relative to x
+        # Voronoi-edge pieces: for (i, j, k, l) = T[a, b, c, d] positive, the facet
+        # P_ij runs q_ijk -> c_T -> q_ijl (q_ijk on the face opposite slot d); its
+        # cone from A_i = x + u_i/2 with m_ij - A_i = u_j/2 is
+        # u_j/2 . ((q_ijk - q_ijl) x (c_T - x - u_i/2)).  The pair (j, i) runs
+        # the other way (q_jil = q_ijl), which shares the products below.
+        Ua = U[:, _PAIRS[:, 0]]
+        Ub = U[:, _PAIRS[:, 1]]
+        dq = Q[:, _PAIRS[:, 3]] - Q[:, _PAIRS[:, 2]]
+        w = _cross(dq, (c - x)[:, None, :])
+        t2 = 0.25 * _triple(Ub, dq, Ua)
+        vol_ab = 0.5 * _dot(Ub, w) - t2
+        vol_ba = -0.5 * _dot(Ua, w) - t2
+        key_rows = [np.repeat(qi, 12)]
+        key_cols = [np.concatenate([St[:, _PAIRS[:, 0]], St[:, _PAIRS[:, 1]]], axis=1).ravel()]
+        key_vals = [np.concatenate([vol_ab, vol_ba], axis=1).ravel()]
+        # Cut pieces along the plane between x and i, split at h_ij (the
+        # circumcentre of x, p_i, p_j; the same point for the pair (j, i)).
+        if len(pb):
+            rows3 = np.arange(len(pb))[:, None]
+            Ub_ = U[pb]
+            u = Ub_[rows3, _FPAIR_A[mb]]  # p_i - x
+            v = Ub_[rows3, _FPAIR_B[mb]]  # p_j - x
+            sign = _FPAIR_S[mb]
+            wn = _cross(u, v)
+            r = (_dot(u, u)[..., None] * _cross(v, wn) + _dot(v, v)[..., None] * _cross(wn, u)) / (
+                2.0 * _dot(wn, wn)[..., None]
+            )  # h - x
+            gx = (Q[pb, mb] - x[pb])[:, None, :]
+            # pair (i, j): s/2 v . ((r - u/2) x (g - x - u/2)); pair (j, i): -s/2 u . ((r - v/2) x (g - x - v/2))
+            rg = _cross(r, gx)
+            shared = 0.5 * (_triple(v, r, u) + _triple(v, u, gx))  # enters both with opposite signs
+            vol_ij = 0.5 * sign * (_dot(v, rg) - shared)
+            vol_ji = -0.5 * sign * (_dot(u, rg) + shared)
             Sb = St[pb]
-            rows6 = np.arange(len(pb))[:, None]
-            i = Sb[rows6, _BPAIR_A[mb]]
-            j = Sb[rows6, _BPAIR_B[mb]]
-            sign = _BPAIR_S[mb]
-            xb = x[pb][:, None, :]
-            u = P[i] - xb
-            v = P[j] - xb
-            w = _cross(u, v)
-            ww = (w * w).sum(axis=2)
-            h = xb + ((u * u).sum(axis=2)[..., None] * _cross(v, w) + (v * v).sum(axis=2)[..., None] * _cross(w, u)) / (
-                2.0 * ww[..., None]
-            )
-            A = xb + 0.5 * u
-            e = 0.5 * v
-            g = Q[pb, mb][:, None, :]
-            vol = sign * _triple(e, h - A, g - A)
             key_rows.append(np.repeat(qi[pb], 6))
-            key_cols.append(i.ravel())
-            key_vals.append(vol.ravel())
+            key_cols.append(np.concatenate([Sb[rows3, _FPAIR_A[mb]], Sb[rows3, _FPAIR_B[mb]]], axis=1).ravel())
+            key_vals.append(np.concatenate([vol_ij, vol_ji], axis=1).ravel())
         keys = np.concatenate(key_rows) * n + np.concatenate(key_cols)
         block = np.bincount(keys, weights=np.concatenate(key_vals), minlength=nq * n).reshape(nq, n)
         total = block.sum(axis=1, keepdims=True)

@@ -1,0 +1,48 @@
+"""Faces shared by the face-engine tests, built once per session.
+
+``procedural_face`` needs nothing but the code (see ``procedural_head.py``);
+``generic_face`` is the CC0 head from the user cache and skips when it has not
+been built: the tests never download it.
+"""
+from __future__ import annotations
+
+import pytest
+
+from mpeg4fa.face import asset
+from mpeg4fa.face.model import FaceModel
+from procedural_head import build_procedural_head
+
+GENERIC_MISSING = "generic head not built: run `mpeg4fa model install` (needs network once)"
+FACES = ("procedural", "generic")
+
+
+def require_generic() -> None:
+    if not asset.is_installed():
+        pytest.skip(GENERIC_MISSING)
+
+
+@pytest.fixture(scope="session")
+def procedural_head():
+    return build_procedural_head()
+
+
+@pytest.fixture(scope="session")
+def procedural_face(procedural_head):
+    return FaceModel(procedural_head)
+
+
+@pytest.fixture(scope="session")
+def generic_face():
+    require_generic()
+    return FaceModel.default(auto_install=False)
+
+
+@pytest.fixture(scope="session")
+def generic_head(generic_face):
+    return generic_face.mesh
+
+
+@pytest.fixture(scope="session", params=FACES)
+def face(request):
+    """Each of the two faces in turn (the generic one skips when it is not built)."""
+    return request.getfixturevalue(f"{request.param}_face")
