@@ -120,6 +120,17 @@ def main() -> int:
         rows.append((f"deform: {name}", f"{fps:,.0f} frames/s",
                      f"{'PASS' if fps >= 1000 else 'FAIL'} (>= 1000); {dt / len(data) * 1e6:.0f} us/frame"))
 
+    arkit = face.with_deformer("arkit")
+    t = best_of(lambda: arkit.arkit_rig, 1)
+    data = batch[: min(len(batch), 1000)]
+    t = time.perf_counter()
+    for k in range(len(data)):
+        arkit._pose(data[k])
+    fps = len(data) / (time.perf_counter() - t)
+    result["deform_fps_arkit"] = fps
+    rows.append(("deform (ARKit deformer): speech frames", f"{fps:,.0f} frames/s",
+                 f"{'PASS' if fps >= 1000 else 'FAIL'} (>= 1000)"))
+
     tracemalloc.start()
     m2 = load_head()
     r2 = build_rig(m2, fapu)

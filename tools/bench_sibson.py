@@ -57,15 +57,15 @@ def main(argv=None) -> int:
     for n in args.sites:
         pts = rng.random((n, 3))
         sites = np.vstack([pts, cage_points(pts)])
-        t_build, nn = best(lambda: NaturalNeighbours(sites), args.repeat)
+        t_build, nn = best(lambda sites=sites: NaturalNeighbours(sites), args.repeat)
         for m in args.queries:
             queries = rng.random((m, 3))
             nn.weights(queries[:10])  # warm up
-            t_w, W = best(lambda: nn.weights(queries), args.repeat)
+            t_w, W = best(lambda nn=nn, queries=queries: nn.weights(queries), args.repeat)
             lin = float(np.abs(W @ sites - queries).max())
             ok &= lin < 1e-9
             disp = rng.normal(size=(len(sites), 3))
-            t_r, _ = best(lambda: RbfField(sites, disp)(queries), args.repeat)
+            t_r, _ = best(lambda s=sites, d=disp, q=queries: RbfField(s, d)(q), args.repeat)
             print(f"{n:>6} {len(sites):>6} {len(nn._S):>5} {m:>8} {t_build:>8.4f} {t_w:>10.3f} "
                   f"{W.nnz / m:>9.2f} {lin:>9.1e} {t_r:>7.3f}")
     return 0 if ok else 1

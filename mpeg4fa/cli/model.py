@@ -44,6 +44,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--viseme", metavar="NAME", help="add a viseme at full weight (MPEG-4: PP, AA, ou ...; "
                                                     "Chinese: zh:a, zh:bpm ...)")
     p.add_argument("--expression", metavar="NAME[=I]", help="add an expression at intensity I of 63 (default 63)")
+    p.add_argument("--deformer", choices=("fap", "arkit"), default="fap",
+                   help="fap: feature points and smooth weights (default); arkit: the sculpted CC0 face units, "
+                        "feature points kept exact")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run_pose)
 
@@ -150,7 +153,7 @@ def _pose_values(args: argparse.Namespace) -> np.ndarray:
 
 
 def run_pose(args: argparse.Namespace) -> int:
-    face = _face(args)
+    face = _face(args).with_deformer(args.deformer)
     values = _pose_values(args)
     pose = face.deform(values)
     neutral, posed = _points(face), _points(face, pose.vertices)

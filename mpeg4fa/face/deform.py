@@ -49,9 +49,8 @@ def _rotate_rows(points: np.ndarray, rows: np.ndarray, weights: np.ndarray, cent
     points[rows] += weights[:, None] * step
 
 
-def deform(rig: Rig, values: np.ndarray) -> Pose:
-    """Pose the face for one frame of low-level FAP values (68, FAP 1/2 columns ignored)."""
-    v = np.asarray(values, dtype=np.float64)
+def pose_in_head_frame(rig: Rig, v: np.ndarray) -> tuple[np.ndarray, dict[str, float]]:
+    """Every layer but the head rotation: vertices in the head's own frame, and pupil sizes."""
     rest = rig.rest
     p = rest.copy()
     fapu = rig.fapu
@@ -98,11 +97,22 @@ def deform(rig: Rig, values: np.ndarray) -> Pose:
             p[rig.joints[joint]] = centre + push * motion.direction(27)
         dilate = v[next(f for f, e in motion.PUPIL.items() if e == eye) - 1]
         pupils[eye] = fapu.IRISD0 / 3.0 + dilate * fapu.unit("IRISD")
+    return p, pupils
 
+
+def apply_head_rotation(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
+    """FAPs 48-50: turn the head (and fade the turn down the neck), in place."""
+    rest = rig.rest
     pitch, yaw, roll_h = (v[f - 1] * motion.ANGLE_UNIT_RAD for f in (48, 49, 50))
     if pitch or yaw or roll_h:
         rows, w = rig.head_rows
         centre = rest[rig.fp_vertex[rig.head_fp]]
         _rotate_rows(p, rows, w, centre, motion.head_rotation(pitch, yaw, roll_h))
 
+
+def deform(rig: Rig, values: np.ndarray) -> Pose:
+    """Pose the face for one frame of low-level FAP values (68, FAP 1/2 columns ignored)."""
+    v = np.asarray(values, dtype=np.float64)
+    p, pupils = pose_in_head_frame(rig, v)
+    apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)

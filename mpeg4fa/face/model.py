@@ -17,6 +17,7 @@ from typing import Iterator, Mapping
 
 import numpy as np
 
+from mpeg4fa.face.arkit import ArkitRig, build_arkit_rig, deform_arkit
 from mpeg4fa.face.asset import load_head
 from mpeg4fa.face.calibrate import CalibrationReport, calibrate_mesh
 from mpeg4fa.face.deform import Pose, deform
@@ -35,9 +36,22 @@ _DEFAULT: "FaceModel | None" = None
 class FaceModel:
     """A neutral head plus everything needed to pose it from FAPs."""
 
-    def __init__(self, mesh: HeadMesh, calibration: CalibrationReport | None = None) -> None:
+    DEFORMERS = ("fap", "arkit")
+
+    def __init__(self, mesh: HeadMesh, calibration: CalibrationReport | None = None, *,
+                 deformer: str = "fap") -> None:
+        if deformer not in self.DEFORMERS:
+            raise FaceError(f"unknown deformer {deformer!r}", hint=f"one of {', '.join(self.DEFORMERS)}")
+        if deformer == "arkit" and mesh.face_units is None:
+            raise FaceError("the ARKit deformer needs a head with face units (the generic head has them)")
         self.mesh = mesh
         self.calibration = calibration
+        self.deformer = deformer
+
+    def with_deformer(self, deformer: str) -> "FaceModel":
+        """The same face posed by another deformer: ``fap`` (feature points and smooth weights) or
+        ``arkit`` (the sculpted CC0 face units, corrected so feature points stay exact)."""
+        return FaceModel(self.mesh, self.calibration, deformer=deformer)
 
     @classmethod
     def default(cls, *, auto_install: bool = True) -> "FaceModel":
@@ -64,6 +78,15 @@ class FaceModel:
         """Precomputed weights (built on first use: Sibson coordinates, regions, jaw and neck)."""
         return build_rig(self.mesh, self.fapu)
 
+    @cached_property
+    def arkit_rig(self) -> ArkitRig:
+        return build_arkit_rig(self.mesh, self.rig)
+
+    def _pose(self, values: np.ndarray) -> Pose:
+        if self.deformer == "arkit":
+            return deform_arkit(self.rig, self.arkit_rig, values)
+        return deform(self.rig, values)
+
     # -- calibration ----------------------------------------------------------------------
 
     def calibrate(self, fdp, *, method: str = "dffd", alignment: str = "similarity") -> "FaceModel":
@@ -73,7 +96,7 @@ class FaceModel:
         if unknown:
             raise FaceError(f"the FDP names unknown feature points {', '.join(unknown)}")
         mesh, report = calibrate_mesh(self.mesh, labels, points, method=method, alignment=alignment)
-        return FaceModel(mesh, report)
+        return FaceModel(mesh, report, deformer=self.deformer)
 
     # -- animation ------------------------------------------------------------------------
 
@@ -105,14 +128,14 @@ class FaceModel:
 
     def deform(self, frame: "np.ndarray | Mapping[int, float] | Frame") -> Pose:
         """The face posed by one frame of FAPs."""
-        return deform(self.rig, self.frame_values(frame))
+        return self._pose(self.frame_values(frame))
 
     def neutral(self) -> Pose:
-        return deform(self.rig, np.zeros(N_FAPS))
+        return self._pose(np.zeros(N_FAPS))
 
     def animate(self, stream: FapStream) -> Iterator[Pose]:
         """One pose per stream frame, with unsent FAPs held or interpolated (see :mod:`.frames`)."""
         values = resolve(stream)
         for k in range(len(values)):
             check_values(values[k])
-            yield deform(self.rig, values[k])
+            yield self._pose(values[k])

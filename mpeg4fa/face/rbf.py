@@ -113,7 +113,9 @@ class RbfField:
             )
         if not np.isfinite(values).all():
             bad = np.flatnonzero(~np.isfinite(values.reshape(n, -1)).all(axis=1))
-            raise FaceError(f"displacements of {len(bad)} control(s) are not finite, first control {bad[0]}", where=_WHERE)
+            raise FaceError(
+                f"displacements of {len(bad)} control(s) are not finite, first control {bad[0]}", where=_WHERE
+            )
         if kernel not in KERNELS:
             raise FaceError(
                 f"unknown kernel {kernel!r}", where=_WHERE, hint=f"use one of {', '.join(sorted(KERNELS))}"
@@ -130,7 +132,9 @@ class RbfField:
             )
         smooth = np.asarray(smoothing, dtype=float)
         if smooth.ndim not in (0, 1) or (smooth.ndim == 1 and len(smooth) != n):
-            raise FaceError(f"smoothing must be a number or one per control ({n}), not shape {smooth.shape}", where=_WHERE)
+            raise FaceError(
+                f"smoothing must be a number or one per control ({n}), not shape {smooth.shape}", where=_WHERE
+            )
         if not (np.isfinite(smooth).all() and (smooth >= 0).all()):
             raise FaceError(f"smoothing must be finite and >= 0, got {smoothing!r}", where=_WHERE)
         if n == 0:

@@ -78,10 +78,10 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     skin = mesh.part("skin")
     tongue = mesh.part("tongue")
     columns = []
-    columns.append(_part_weights(mesh, skin, [i for i in range(len(labels)) if _in(fp_vertex[i], skin)], driven,
+    columns.append(part_weights(mesh, skin, [i for i in range(len(labels)) if _in(fp_vertex[i], skin)], driven,
                                  extra_controls=None))
     root = _tongue_root(rest, tongue)
-    columns.append(_part_weights(mesh, tongue, [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)],
+    columns.append(part_weights(mesh, tongue, [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)],
                                  driven, extra_controls=root))
     weights = (columns[0] + columns[1]).tocsr()
     weights.eliminate_zeros()
@@ -112,8 +112,8 @@ def _in(v: int, s: slice) -> bool:
     return s.start <= v < s.stop
 
 
-def _part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
-                  extra_controls: np.ndarray | None) -> sp.csr_matrix:
+def part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
+                 extra_controls: np.ndarray | None, reach: np.ndarray | None = None) -> sp.csr_matrix:
     """Sibson weights of a part's vertices on its feature points, cut to their BFS regions."""
     rest = mesh.vertices
     n = mesh.n_vertices
@@ -136,7 +136,8 @@ def _part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int]
     keep = [c for c, i in enumerate(controls) if i in driven]
     if not keep:
         return sp.csr_matrix((n, len(mesh.fp_labels)))
-    reach = np.array([max(int(mesh.fp_reach[controls[c]]), 1) for c in keep])
+    rings = mesh.fp_reach if reach is None else reach
+    reach = np.array([max(int(rings[controls[c]]), 1) for c in keep])
     local_tris = mesh.triangles[_part_name(mesh, part)] - part.start
     graph = adjacency(local_tris, part.stop - part.start)
     hops = edge_hops(graph, fp_v[[controls[c] for c in keep]] - part.start, int(reach.max()))

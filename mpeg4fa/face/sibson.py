@@ -113,9 +113,10 @@ coordinates anyway.
 * Weights below ``1e-14`` (rounding residue of near-ties) are dropped and the
   row renormalised.
 
-Speed: about 0.2 s for 5,000 queries against 114 sites (100 + a cage) on one
-core, 1 s for 20,000 (``tools/bench_sibson.py``); queries are processed in
-chunks of about 10^6 query x tetrahedron pairs so that memory stays bounded.
+Speed: about 0.14 s for 5,000 queries against 114 sites (100 + a cage, about
+620 tetrahedra) on one core, 0.45 s for 20,000 (``tools/bench_sibson.py``);
+queries are processed in chunks of about 10^6 query x tetrahedron pairs so
+that memory stays bounded.
 """
 from __future__ import annotations
 
@@ -156,7 +157,11 @@ def _parity(perm) -> int:
 # permutation (a, b, c, d): for a positively oriented T, (T[a], T[b], T[c], T[d])
 # = (i, j, k, l) is positive too, and so is (j, i, l, k).
 _PAIRS = np.array(
-    [next(p for p in permutations(range(4)) if p[:2] == (a, b) and _parity(p) == 1) for a in range(4) for b in range(a + 1, 4)],
+    [
+        next(p for p in permutations(range(4)) if p[:2] == (a, b) and _parity(p) == 1)
+        for a in range(4)
+        for b in range(a + 1, 4)
+    ],
     dtype=np.intp,
 )
 # Slots of the face opposite slot m, ordered so that (f0, f1, f2, m) is even
@@ -326,7 +331,6 @@ class NaturalNeighbours:
                     break
             if not progress:  # flat tetrahedra touching no oriented one: leave them
                 break
-        S_in = np.array(tri.simplices, dtype=np.intp)  # slot order C was computed in
         finite = np.ones(nt, dtype=bool)
         if flat.any():
             # The least-squares centre of co-circular flat sites lies on their
@@ -334,7 +338,7 @@ class NaturalNeighbours:
             # planar stretch of the hull): the circumsphere is a half-space
             # beyond the hull, never in conflict with a query inside.
             fi = np.flatnonzero(flat)
-            r2 = ((P[S_in[fi]] - C[fi, None, :]) ** 2).sum(axis=2)
+            r2 = ((P[S[fi]] - C[fi, None, :]) ** 2).sum(axis=2)
             cocircular = np.ptp(r2, axis=1) <= _COCIRCULAR_TOL * lmax[fi] ** 2
             finite[fi[~cocircular]] = False
         # A circumsphere far larger than the sites (a hull sliver: nearly
@@ -572,7 +576,8 @@ def cage_points(points: np.ndarray, margin: float = 0.25) -> np.ndarray:
     pad = margin * extent
     lo, hi = lo - pad, hi + pad
     mid = (lo + hi) / 2
-    corners = np.array([[(lo, hi)[a][0], (lo, hi)[b][1], (lo, hi)[c][2]] for a in (0, 1) for b in (0, 1) for c in (0, 1)])
+    ends = (lo, hi)
+    corners = np.array([[ends[a][0], ends[b][1], ends[c][2]] for a in (0, 1) for b in (0, 1) for c in (0, 1)])
     faces = []
     for axis in range(3):
         for end in (lo, hi):

@@ -134,7 +134,7 @@ def test_matches_halfspace_reference_random():
     sites = random_sites(7, n=25)
     queries = np.random.default_rng(8).random((5, 3))
     W = natural_neighbour_weights(sites, queries).toarray()
-    for q, row in zip(queries, W):
+    for q, row in zip(queries, W, strict=True):
         np.testing.assert_allclose(row, reference_weights(sites, q), atol=1e-8)
 
 
@@ -142,7 +142,7 @@ def test_matches_halfspace_reference_grid():
     sites = grid_sites(4)
     queries = np.array([[1.5, 1.5, 1.0], [1.5, 1.0, 1.0], [1.6, 2.2, 1.0], [1.25, 1.7, 2.1]])
     W = natural_neighbour_weights(sites, queries).toarray()
-    for q, row in zip(queries, W):
+    for q, row in zip(queries, W, strict=True):
         np.testing.assert_allclose(row, reference_weights(sites, q), atol=1e-8)
 
 
@@ -151,7 +151,7 @@ def test_matches_halfspace_reference_jittered_grid():
     sites = grid_sites(4) + rng.normal(size=(64, 3)) * 1e-8
     queries = np.array([[1.5, 1.5, 1.0], [1.5, 1.0, 1.0], [1.2, 1.4, 1.6]])
     W = natural_neighbour_weights(sites, queries).toarray()
-    for q, row in zip(queries, W):
+    for q, row in zip(queries, W, strict=True):
         np.testing.assert_allclose(row, reference_weights(sites, q), atol=1e-8)
 
 

@@ -1,0 +1,118 @@
+"""The second deformer: the CC0 ARKit face units shape the face, feature points stay exact.
+
+The feature-point deformer moves skin by smooth weights around each point; the
+52 ARKit face units shipped with the generic head were sculpted by hand, so they
+give more natural shapes between the points (a jaw that opens with the cheeks,
+lips that funnel and pucker). This deformer:
+
+1. poses the face with the feature-point deformer to get every feature point's
+   target (so the FAPU semantics are the same by construction);
+2. drives the face units from the FAPs through ``data/arkit_faps.csv`` (each
+   unit's gain is read off the unit itself: the FAP value whose motion equals the
+   unit's full motion at that FAP's feature point, along the FAP's direction);
+3. corrects the sculpted skin so that every skin feature point lands exactly on
+   its target: the residuals spread by the same Sibson weights cut to edge
+   regions that the feature-point deformer uses.
+
+Eyes, teeth and tongue come from the feature-point deformer; the head turns last.
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from importlib import resources
+
+import numpy as np
+import scipy.sparse as sp
+
+from mpeg4fa.face import motion
+from mpeg4fa.face.deform import Pose, apply_head_rotation, pose_in_head_frame
+from mpeg4fa.face.errors import FaceError
+from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.rig import Rig, part_weights
+from mpeg4fa.spec import FAPS, N_FAPS
+
+ANCHOR_REACH = 4  # edge rings over which a fixed feature point pulls sculpted skin back
+MIN_FULL_SCALE = 1.0  # a unit that moves a FAP's point by less than one FAPU unit does not serve it
+
+
+@dataclass(frozen=True)
+class ArkitRig:
+    gains: np.ndarray  # (U, 68): FAP values -> unit weights (before clipping to 0..1)
+    deltas: sp.csr_matrix  # (skin vertices * 3, U)
+    correction: sp.csr_matrix  # (skin vertices, n skin feature points)
+    fp_local: np.ndarray  # skin feature point vertices, local to the skin part
+    fp_global: np.ndarray
+    unit_names: tuple[str, ...]
+
+
+def _mapping() -> list[dict]:
+    with (resources.files("mpeg4fa.face") / "data" / "arkit_faps.csv").open(encoding="utf-8") as f:
+        return list(csv.DictReader(f))
+
+
+def build_arkit_rig(mesh: HeadMesh, rig: Rig) -> ArkitRig:
+    """Gains, sculpted deltas and the correction weights for one neutral face."""
+    units = mesh.face_units
+    if units is None:
+        raise FaceError("this head has no ARKit face units", hint="use the feature-point deformer (deformer='fap')")
+    skin = mesh.part("skin")
+    n_skin = skin.stop - skin.start
+    rows = _mapping()
+    names = tuple(dict.fromkeys(r["unit"] for r in rows))
+    gains = np.zeros((len(names), N_FAPS))
+    count = np.zeros(len(names))
+    for r in rows:
+        u, fap, sign = names.index(r["unit"]), int(r["fap"]), float(r["sign"])
+        record = FAPS[fap - 1]
+        idx, d = units.unit(r["unit"])
+        dense = np.zeros((mesh.n_vertices, 3))
+        dense[idx] = d
+        point = mesh.fp_vertex[mesh.fp_index(record.feature_point[0])]
+        full = float(dense[point] @ motion.direction(fap)) / rig.fapu.unit(record.fapu)
+        if full * sign > MIN_FULL_SCALE:  # the unit moves the point the way this sign of the FAP does
+            gains[u, fap - 1] += 1.0 / full
+            count[u] += 1
+    gains /= np.maximum(count, 1)[:, None]
+
+    cols, rws, vals = [], [], []
+    flip = np.array([-1.0, 1.0, 1.0])
+    for u, name in enumerate(names):
+        dense = units.dense(name, mesh.n_vertices)
+        if not name.endswith(("Left", "Right")):  # sculpted by hand, a few mm asymmetric: the average
+            dense = 0.5 * (dense + dense[mesh.mirror] * flip)
+        local = np.flatnonzero(np.abs(dense[skin]).sum(axis=1))
+        for axis in range(3):
+            rws.append(3 * local + axis)
+            cols.append(np.full(len(local), u))
+            vals.append(dense[skin][local, axis])
+    deltas = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rws), np.concatenate(cols))),
+                           shape=(3 * n_skin, len(names)))
+
+    on_skin = [i for i in range(len(mesh.fp_labels)) if skin.start <= mesh.fp_vertex[i] < skin.stop]
+    reach = np.maximum(mesh.fp_reach, ANCHOR_REACH)
+    weights = part_weights(mesh, skin, on_skin, on_skin, None, reach=reach)[:, on_skin]
+    fp_global = mesh.fp_vertex[on_skin]
+    # one column per distinct vertex (11.5 shares 11.4's): keep the first
+    _, first = np.unique(fp_global, return_index=True)
+    first = np.sort(first)
+    correction = weights[skin][:, first].tocsr()
+    return ArkitRig(gains=gains, deltas=deltas, correction=correction, fp_local=fp_global[first] - skin.start,
+                    fp_global=fp_global[first], unit_names=names)
+
+
+def unit_weights(arkit: ArkitRig, values: np.ndarray) -> np.ndarray:
+    """Face unit weights in 0..1 for one frame of FAPs."""
+    return np.clip(arkit.gains @ values, 0.0, 1.0)
+
+
+def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray) -> Pose:
+    """Pose one frame with the sculpted face units, feature points exactly where the FAPs put them."""
+    v = np.asarray(values, dtype=np.float64)
+    p, pupils = pose_in_head_frame(rig, v)
+    skin = rig.parts["skin"]
+    sculpted = rig.rest[skin] + (arkit.deltas @ unit_weights(arkit, v)).reshape(-1, 3)
+    residual = p[arkit.fp_global] - sculpted[arkit.fp_local]
+    p[skin] = sculpted + arkit.correction @ residual
+    apply_head_rotation(rig, p, v)
+    return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)

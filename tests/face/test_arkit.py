@@ -1,0 +1,61 @@
+"""The ARKit deformer: sculpted face units shape the skin, the FAPU semantics stay exact."""
+import numpy as np
+import pytest
+
+from mpeg4fa.face import FaceError, FaceModel
+from mpeg4fa.face.arkit import unit_weights
+from mpeg4fa.spec import FAPS, N_FAPS, VISEME_PROFILES
+
+LOW_LEVEL = range(3, N_FAPS + 1)
+
+
+@pytest.fixture(scope="module")
+def arkit_face(generic_face):
+    return generic_face.with_deformer("arkit")
+
+
+def _frame(fap, value):
+    v = np.zeros(N_FAPS)
+    v[fap - 1] = value
+    return v
+
+
+@pytest.mark.parametrize("fap", LOW_LEVEL)
+def test_feature_points_match_the_feature_point_deformer(generic_face, arkit_face, fap):
+    """Same FAP -> the same feature point positions, whichever deformer shapes the skin."""
+    for value in ((200,) if FAPS[fap - 1].unidirectional else (200, -200)):
+        a = arkit_face.deform(_frame(fap, value)).feature_points
+        b = generic_face.deform(_frame(fap, value)).feature_points
+        assert np.abs(a - b).max() <= 1e-9 * generic_face.mesh.height()
+
+
+def test_units_follow_their_faps(arkit_face):
+    rig = arkit_face.arkit_rig
+    names = rig.unit_names
+    w = unit_weights(rig, _frame(3, 600))
+    assert w[names.index("jawOpen")] > 0.3
+    w = unit_weights(rig, _frame(59, 300) + _frame(60, 300))
+    assert w[names.index("mouthSmileLeft")] > 0.2 and w[names.index("mouthSmileRight")] > 0.2
+    w = unit_weights(rig, _frame(59, -300))
+    assert w[names.index("mouthFrownLeft")] > 0.2 and w[names.index("mouthSmileLeft")] == 0
+
+
+def test_sculpted_shape_differs_between_feature_points(generic_face, arkit_face):
+    values = VISEME_PROFILES["mpeg4"]["AA"].astype(float)
+    a = arkit_face.deform(values).part("skin")
+    b = generic_face.deform(values).part("skin")
+    assert np.abs(a - b).max() > 0.5  # the units add shape the feature-point weights do not
+
+
+def test_arkit_pose_is_mirror_symmetric(arkit_face):
+    mesh = arkit_face.mesh
+    values = VISEME_PROFILES["mpeg4"]["ou"].astype(float)
+    v = arkit_face.deform(values).vertices
+    assert np.abs(v[mesh.mirror] * [-1.0, 1.0, 1.0] - v).max() < 0.05
+
+
+def test_head_without_units_refuses_arkit(procedural_head):
+    with pytest.raises(FaceError, match="face units"):
+        FaceModel(procedural_head, deformer="arkit")
+    with pytest.raises(FaceError, match="unknown deformer"):
+        FaceModel(procedural_head, deformer="blend")
