@@ -98,6 +98,19 @@ class FaceModel:
         mesh, report = calibrate_mesh(self.mesh, labels, points, method=method, alignment=alignment)
         return FaceModel(mesh, report, deformer=self.deformer)
 
+    def to_fdp(self, *, with_mesh: bool = False, name: str = "mpeg4fa generic head"):
+        """This face's feature points (and optionally its skin mesh) as an FDP a sender can transmit."""
+        from mpeg4fa.fdp import Fdp, FdpMesh
+
+        mesh = None
+        if with_mesh:
+            skin = self.mesh.part("skin")
+            mesh = FdpMesh(vertices=self.mesh.vertices[skin], triangles=self.mesh.triangles["skin"] - skin.start,
+                           name="skin")
+        labels = [label for label in self.mesh.fp_labels if label != "11.5"]
+        points = {label: self.mesh.fp(label) for label in labels}
+        return Fdp.from_points(points, mesh=mesh, fapu=self.fapu.as_dict(), name=name)
+
     # -- animation ------------------------------------------------------------------------
 
     def frame_values(self, frame: "np.ndarray | Mapping[int, float] | Frame") -> np.ndarray:
