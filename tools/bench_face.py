@@ -10,7 +10,6 @@ import argparse
 import json
 import resource
 import sys
-import tempfile
 import time
 import tracemalloc
 import zipfile

@@ -51,6 +51,7 @@ from scipy.interpolate import RBFInterpolator
 from scipy.spatial import cKDTree
 
 from .errors import FaceError
+from .points import as_points
 
 __all__ = ["KERNELS", "RbfField"]
 
@@ -62,22 +63,6 @@ KERNELS: dict[str, int] = {"linear": 0, "thin_plate_spline": 1, "cubic": 1, "qui
 
 _DUPLICATE_TOL = 1e-9  # x bounding-box diagonal
 _RANK_TOL = 1e-10
-
-
-def _points(array, name: str) -> np.ndarray:
-    try:
-        pts = np.asarray(array, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise FaceError(f"{name} must be an array of 3D points: {exc}", where=_WHERE) from None
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise FaceError(f"{name} must have shape (n, 3), not {pts.shape}", where=_WHERE)
-    bad = ~np.isfinite(pts).all(axis=1)
-    if bad.any():
-        raise FaceError(
-            f"{name} has {int(bad.sum())} non-finite point(s), first at index {int(np.flatnonzero(bad)[0])}",
-            where=_WHERE,
-        )
-    return pts
 
 
 def _monomials(points: np.ndarray, degree: int) -> np.ndarray:
@@ -104,7 +89,7 @@ class RbfField:
         smoothing: float | np.ndarray = 0.0,
         degree: int = 1,
     ) -> None:
-        controls = _points(controls, "controls")
+        controls = as_points(controls, "controls", _WHERE)
         n = len(controls)
         values = np.asarray(displacements, dtype=float)
         if values.ndim not in (1, 2) or len(values) != n:
@@ -184,7 +169,7 @@ class RbfField:
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         """The field at ``points`` (m, 3)."""
-        pts = _points(points, "points")
+        pts = as_points(points, "points", _WHERE)
         if len(pts) == 0:
             return np.zeros((0,) + self.displacements.shape[1:])
         return self._interp(pts)

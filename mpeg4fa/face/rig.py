@@ -57,7 +57,6 @@ class Rig:
 def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     """Precompute the weights of ``mesh`` (its current vertices are the neutral face)."""
     rest = mesh.vertices
-    n = mesh.n_vertices
     labels = mesh.fp_labels
     fp_vertex = mesh.fp_vertex
     index = {label: i for i, label in enumerate(labels)}
@@ -73,8 +72,8 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
         elif k == "lid":
             lid_fp[record.number] = index[record.feature_point[0]]
 
-    driven = sorted({index[l] for r in FAPS[2:] if motion.kind(r.number) in ("translate", "lid", "tongue_roll")
-                     for l in r.feature_point})
+    driven = sorted({index[label] for r in FAPS[2:] if motion.kind(r.number) in ("translate", "lid", "tongue_roll")
+                     for label in r.feature_point})
     skin = mesh.part("skin")
     tongue = mesh.part("tongue")
     columns = []

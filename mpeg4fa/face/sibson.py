@@ -127,6 +127,7 @@ import scipy.sparse as sp
 from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
 
 from .errors import FaceError
+from .points import as_points
 
 __all__ = ["NaturalNeighbours", "cage_points", "inside_hull", "natural_neighbour_weights"]
 
@@ -207,22 +208,6 @@ def _triple(e: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     )
 
 
-def _as_points(array, name: str) -> np.ndarray:
-    try:
-        pts = np.asarray(array, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise FaceError(f"{name} must be an array of 3D points: {exc}", where=_WHERE) from None
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise FaceError(f"{name} must have shape (n, 3), not {pts.shape}", where=_WHERE)
-    bad = ~np.isfinite(pts).all(axis=1)
-    if bad.any():
-        raise FaceError(
-            f"{name} has {int(bad.sum())} non-finite point(s), first at index {int(np.flatnonzero(bad)[0])}",
-            where=_WHERE,
-        )
-    return pts
-
-
 class NaturalNeighbours:
     """Sibson coordinates with respect to fixed ``sites`` (triangulated once).
 
@@ -232,7 +217,7 @@ class NaturalNeighbours:
     """
 
     def __init__(self, sites, *, atol: float | None = None) -> None:
-        sites = _as_points(sites, "sites")
+        sites = as_points(sites, "sites", _WHERE)
         n = len(sites)
         if n < 4:
             raise FaceError(f"need at least 4 sites spanning a volume, got {n}", where=_WHERE, hint=_CAGE_HINT)
@@ -394,13 +379,13 @@ class NaturalNeighbours:
 
     def inside(self, queries) -> np.ndarray:
         """True where the weights are defined: inside the hull by more than ``atol``, or on a site."""
-        X = _as_points(queries, "queries") - self.centre
+        X = as_points(queries, "queries", _WHERE) - self.centre
         _, snap, inside = self._classify(X)
         return snap | inside
 
     def weights(self, queries) -> sp.csr_matrix:
         """Sibson coordinates of ``queries`` as a CSR matrix (queries x sites)."""
-        X = _as_points(queries, "queries") - self.centre
+        X = as_points(queries, "queries", _WHERE) - self.centre
         m, n = len(X), len(self._P)
         nearest, snap, inside = self._classify(X)
         bad = ~(snap | inside)
