@@ -27,7 +27,6 @@ import csv
 import hashlib
 import io
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -320,11 +319,3 @@ def _face_units(zf: zipfile.ZipFile, obj_to_new: np.ndarray) -> FaceUnits:
     return FaceUnits(tuple(Path(n).stem for n in names), np.array(offsets, np.int64),
                      np.concatenate(idx).astype(np.int64), np.concatenate(deltas))
 
-
-def remove() -> bool:
-    """Delete the built asset (``mpeg4fa model install --force`` rebuilds it)."""
-    folder = cache_dir()
-    if folder.is_dir():
-        shutil.rmtree(folder)
-        return True
-    return False

@@ -137,7 +137,7 @@ def calibrate_mesh(mesh: HeadMesh, labels: tuple[str, ...], points: np.ndarray, 
 
     residual = target - aligned[fp_v]
     rigid = np.zeros(mesh.n_vertices, bool)
-    for part in ("eye_l", "eye_r"):
+    for part, _ in _EYES.values():
         rigid[mesh.part(part)] = True
     free = np.flatnonzero(~rigid)
     warped = aligned.copy()

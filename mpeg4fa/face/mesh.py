@@ -21,8 +21,6 @@ PARTS = ("skin", "eye_l", "eye_r", "teeth_upper", "teeth_lower", "tongue", "join
 """Part names in vertex order. ``joints`` holds one invisible vertex per joint centre,
 so that joint centres follow a calibration like any other point."""
 
-RIGID_PARTS = ("eye_l", "eye_r")
-
 
 @dataclass(frozen=True)
 class FaceUnits:

@@ -20,7 +20,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import adjacency, edge_hops, falloff
@@ -206,8 +205,3 @@ def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
     idx = np.flatnonzero(w)
     return idx, w[idx]
 
-
-def require_fp(mesh: HeadMesh, label: str) -> int:
-    if label not in mesh.fp_labels:
-        raise FaceError(f"the face has no feature point {label}")
-    return mesh.fp_index(label)
