@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from mpeg4fa.face.errors import FaceError
 
@@ -21,3 +22,14 @@ def as_points(array, name: str, where: str) -> np.ndarray:
             where=where,
         )
     return pts
+
+
+def reject_duplicates(pts: np.ndarray, tol: float, name: str, where: str, hint: str) -> None:
+    """FaceError naming the first pairs of ``pts`` closer than ``tol`` (coincident controls make
+    interpolation ill-posed)."""
+    pairs = sorted(cKDTree(pts).query_pairs(tol))
+    if pairs:
+        shown = ", ".join(f"{a} and {b}" for a, b in pairs[:5])
+        more = f" (and {len(pairs) - 5} more pairs)" if len(pairs) > 5 else ""
+        raise FaceError(f"{len(pairs)} pair(s) of {name} coincide within {tol:g}: {shown}{more}",
+                        where=where, hint=hint)

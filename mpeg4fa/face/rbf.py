@@ -48,10 +48,9 @@ from math import comb
 
 import numpy as np
 from scipy.interpolate import RBFInterpolator
-from scipy.spatial import cKDTree
 
 from .errors import FaceError
-from .points import as_points
+from .points import as_points, reject_duplicates
 
 __all__ = ["KERNELS", "RbfField"]
 
@@ -127,15 +126,8 @@ class RbfField:
 
         lo, hi = controls.min(axis=0), controls.max(axis=0)
         diag = float(np.linalg.norm(hi - lo))
-        pairs = sorted(cKDTree(controls).query_pairs(_DUPLICATE_TOL * diag))
-        if pairs:
-            shown = ", ".join(f"{a} and {b}" for a, b in pairs[:5])
-            more = f" (and {len(pairs) - 5} more pairs)" if len(pairs) > 5 else ""
-            raise FaceError(
-                f"{len(pairs)} pair(s) of controls coincide: {shown}{more}",
-                where=_WHERE,
-                hint="merge duplicate control points (their displacements may conflict)",
-            )
+        reject_duplicates(controls, _DUPLICATE_TOL * diag, "controls", _WHERE,
+                          "merge duplicate control points (their displacements may conflict)")
         terms = comb(degree + 3, 3)
         if n < terms:
             raise FaceError(

@@ -127,7 +127,7 @@ import scipy.sparse as sp
 from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
 
 from .errors import FaceError
-from .points import as_points
+from .points import as_points, reject_duplicates
 
 __all__ = ["NaturalNeighbours", "cage_points", "inside_hull", "natural_neighbour_weights"]
 
@@ -236,15 +236,7 @@ class NaturalNeighbours:
         P = sites - self.centre
         self._P = P
         self._tree = cKDTree(P)
-        pairs = sorted(self._tree.query_pairs(atol))
-        if pairs:
-            shown = ", ".join(f"{a} and {b}" for a, b in pairs[:5])
-            more = f" (and {len(pairs) - 5} more pairs)" if len(pairs) > 5 else ""
-            raise FaceError(
-                f"{len(pairs)} pair(s) of sites coincide within {atol:g}: {shown}{more}",
-                where=_WHERE,
-                hint="merge or drop duplicate control points",
-            )
+        reject_duplicates(P, atol, "sites", _WHERE, "merge or drop duplicate control points")
         try:
             tri = Delaunay(P, qhull_options="Qbb Qc Qz Q12")
         except (QhullError, ValueError) as exc:
