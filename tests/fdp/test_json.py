@@ -9,6 +9,8 @@ import pytest
 from mpeg4fa.fdp import (FaceDefMesh, FaceDefTable, FaceDefTransform, Fdp, FdpError, FdpMesh, TextureImage,
                          fdp_from_json, fdp_to_json)
 
+from .textpos import place
+
 AWKWARD = [0.1, 1 / 3, -0.0, 5e-324, 1.7976931348623157e308, -1e-300, 123456789.123456789, 2.0**-1074 * 3]
 
 
@@ -37,15 +39,6 @@ def error(text: str | bytes) -> FdpError:
     with pytest.raises(FdpError) as info:
         fdp_from_json(text, "face.json")
     return info.value
-
-
-def place(text: str, needle: str, nth: int = 0) -> tuple[int, int]:
-    """1-based line and column of the ``nth`` occurrence of ``needle``."""
-    at = -1
-    for _ in range(nth + 1):
-        at = text.index(needle, at + 1)
-    line = text.count("\n", 0, at) + 1
-    return line, at - (text.rfind("\n", 0, at) + 1) + 1
 
 
 def assert_at(err: FdpError, text: str, needle: str, nth: int = 0, shift: int = 0) -> None:

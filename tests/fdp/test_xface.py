@@ -6,6 +6,8 @@ import pytest
 
 from mpeg4fa.fdp import Fdp, FdpError, XfaceFdp, read_xface_fdp, xface_from_xml
 
+from .textpos import place
+
 SAMPLE = """<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
 <xfdp>
   <!-- a made-up head in the layout of Xface's files -->
@@ -54,13 +56,6 @@ def error(text: str | bytes) -> FdpError:
     with pytest.raises(FdpError) as info:
         xface_from_xml(text, "alice.fdp")
     return info.value
-
-
-def place(text: str, needle: str, nth: int = 0) -> tuple[int, int]:
-    at = -1
-    for _ in range(nth + 1):
-        at = text.index(needle, at + 1)
-    return text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
 
 
 def assert_at(err: FdpError, text: str, needle: str, nth: int = 0) -> None:
