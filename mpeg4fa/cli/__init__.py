@@ -12,20 +12,22 @@ from .. import __version__
 from ..face import FaceError
 from ..fba import FbaError
 from ..formats import FormatError
-from . import codec, model
+from ..render.errors import RenderError
+from . import codec, model, play
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mpeg4fa",
         description="MPEG-4 Face Animation: encode, decode, inspect and validate FBA streams and .fap files; "
-                    "build, calibrate and pose the decoder's 3D face.",
+                    "build, calibrate and pose the decoder's 3D face; render streams to video.",
         epilog="Run 'mpeg4fa COMMAND --help' for the options of a command.",
     )
     parser.add_argument("--version", action="version", version=f"mpeg4fa {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     codec.register(commands)
     model.register(commands)
+    play.register(commands)
     return parser
 
 
@@ -34,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.run(args) or 0)
-    except (FbaError, FormatError, FaceError) as exc:
+    except (FbaError, FormatError, FaceError, RenderError) as exc:
         print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
         return 1
     except BrokenPipeError:  # output piped into head, less...: not an error

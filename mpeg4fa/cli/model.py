@@ -29,7 +29,7 @@ def register(commands: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("info", help="parts, vertex and triangle counts, FAPU and the 84 feature points",
                        description="Describe the generic head, or the head calibrated to an FDP.")
-    _face_options(p)
+    face_options(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run_info)
 
@@ -38,7 +38,7 @@ def register(commands: argparse._SubParsersAction) -> None:
                                    "print the FAPU and the feature points before and after, in model units "
                                    "(x toward the face's left, y up, z out of the face).",
                        epilog="example: mpeg4fa model pose --fap 3=200 --fap 19=-100 --json")
-    _face_options(p)
+    face_options(p)
     p.add_argument("--fap", action="append", default=[], metavar="N=VALUE", type=_fap_value,
                    help="low-level FAP N (3..68) set to VALUE (in FAPU); repeat for more")
     p.add_argument("--viseme", metavar="NAME", help="add a viseme at full weight (MPEG-4: PP, AA, ou ...; "
@@ -51,7 +51,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run_pose)
 
 
-def _face_options(p: argparse.ArgumentParser) -> None:
+def face_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fdp", type=Path, help="calibrate the head to this FDP (.fdp binary or .json) first")
     p.add_argument("--method", choices=("dffd", "rbf"), default="dffd",
                    help="calibration warp: Dirichlet FFD with Sibson coordinates (default) or RBF")
@@ -68,7 +68,7 @@ def _fap_value(text: str) -> tuple[int, float]:
     return fap, v
 
 
-def _face(args: argparse.Namespace) -> FaceModel:
+def face_from_args(args: argparse.Namespace) -> FaceModel:
     face = FaceModel.default()
     if args.fdp is not None:
         from ..fdp import load_fdp
@@ -93,7 +93,7 @@ def _fapu(face: FaceModel) -> dict[str, float]:
 
 
 def run_info(args: argparse.Namespace) -> int:
-    face = _face(args)
+    face = face_from_args(args)
     mesh = face.mesh
     parts = {name: {"vertices": b - a, "triangles": int(len(mesh.triangles.get(name, ())))}
              for name, (a, b) in mesh.part_ranges.items()}
@@ -153,7 +153,7 @@ def _pose_values(args: argparse.Namespace) -> np.ndarray:
 
 
 def run_pose(args: argparse.Namespace) -> int:
-    face = _face(args).with_deformer(args.deformer)
+    face = face_from_args(args).with_deformer(args.deformer)
     values = _pose_values(args)
     pose = face.deform(values)
     neutral, posed = _points(face), _points(face, pose.vertices)

@@ -12,12 +12,19 @@ A decoded :class:`~mpeg4fa.fba.stream.FapStream` says which FAPs each frame
   the others and expand through the shared profiles in ``spec/``
   (:func:`mpeg4fa.spec.expand_high_level`); a low-level FAP that the stream has
   sent overrides the high-level value of that FAP.
+
+Every rule looks only at the current and earlier frames, so a stream can be
+resolved in pieces: :func:`resolve` takes and returns a :class:`ResolveState`,
+and :class:`FrameResolver` uses that for live sources, one frame at a time.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from typing import Iterable, Iterator
+
 import numpy as np
 
-from mpeg4fa.fba.stream import FapStream
+from mpeg4fa.fba.stream import FapStream, Frame
 from mpeg4fa.spec import FAP_BY_NAME, FAP_GROUP, FAPS, N_FAPS, expand_high_level
 
 
@@ -46,10 +53,21 @@ def _last_sent(mask: np.ndarray) -> np.ndarray:
     return np.maximum.accumulate(idx, axis=0)
 
 
-def _mask_types(stream: FapStream) -> np.ndarray:
+@dataclass
+class ResolveState:
+    """What the frames so far leave behind for the next ones: mask types and held values."""
+
+    mask_types: np.ndarray = field(default_factory=lambda: np.ones(N_FAPS, dtype=np.int8))
+    held: np.ndarray = field(default_factory=lambda: np.zeros(N_FAPS))
+    known: np.ndarray = field(default_factory=lambda: np.zeros(N_FAPS, dtype=bool))
+    viseme: np.ndarray = field(default_factory=lambda: np.zeros(4, dtype=np.int32))
+    expression: np.ndarray = field(default_factory=lambda: np.zeros(6, dtype=np.int32))
+
+
+def _mask_types(stream: FapStream, initial: np.ndarray) -> np.ndarray:
     """``(n, 68)`` mask type governing each FAP at each frame (from the latest intra header)."""
     n = stream.n_frames
-    per_frame = np.ones((n, N_FAPS), dtype=np.int8)
+    per_frame = np.repeat(initial[None, :], n, axis=0)
     group_of = np.asarray(FAP_GROUP) - 1
     for start in sorted(stream.intra):
         face = stream.intra[start].face
@@ -58,14 +76,25 @@ def _mask_types(stream: FapStream) -> np.ndarray:
     return per_frame
 
 
-def resolve(stream: FapStream) -> np.ndarray:
-    """``(n, 68)`` float FAP values to show at each frame (columns 0/1 stay 0)."""
+def _held(last: np.ndarray, table: np.ndarray, before: np.ndarray, known_before: np.ndarray) -> np.ndarray:
+    """Rows of ``table`` at ``last``; where nothing was sent in this piece, the value carried in."""
+    carried = np.where(known_before, before, 0)
+    return np.where(last >= 0, table[np.maximum(last, 0), np.arange(table.shape[1])[None, :]], carried)
+
+
+def resolve(stream: FapStream, state: ResolveState | None = None) -> np.ndarray:
+    """``(n, 68)`` float FAP values to show at each frame (columns 0/1 stay 0).
+
+    ``state`` carries the earlier frames' effect into this piece of a stream and is
+    updated in place to this piece's end (pass a fresh one, or none, for a whole stream).
+    """
+    state = ResolveState() if state is None else state
     n = stream.n_frames
     mask = stream.fap_mask.astype(bool)
     values = stream.fap_values.astype(np.float64)
     if n == 0:
         return np.zeros((0, N_FAPS))
-    types = _mask_types(stream)
+    types = _mask_types(stream, state.mask_types)
     copied = values.copy()
     copy = np.zeros_like(mask)
     for k in (1, 0):  # the left/right partner wins over the inner/outer one
@@ -76,17 +105,36 @@ def resolve(stream: FapStream) -> np.ndarray:
         copy |= take
     # an interpolated value counts as sent: it holds like one
     last = _last_sent(mask | copy)
-    cols = np.arange(N_FAPS)[None, :]
-    out = np.where(last >= 0, copied[np.maximum(last, 0), cols], 0.0)
-
-    low_level_known = last >= 0
+    out = _held(last, copied, state.held, state.known)
+    low_level_known = (last >= 0) | state.known
     low_level_known[:, :2] = False
-    if mask[:, :2].any():
-        vis_last = _last_sent(mask[:, :1])[:, 0]
-        exp_last = _last_sent(mask[:, 1:2])[:, 0]
-        viseme = np.where((vis_last >= 0)[:, None], stream.viseme[np.maximum(vis_last, 0)], 0)
-        expression = np.where((exp_last >= 0)[:, None], stream.expression[np.maximum(exp_last, 0)], 0)
+
+    vis_last = np.repeat(_last_sent(mask[:, :1]), 4, axis=1)
+    exp_last = np.repeat(_last_sent(mask[:, 1:2]), 6, axis=1)
+    viseme = _held(vis_last, stream.viseme, state.viseme, np.ones(4, bool)).astype(np.int64)
+    expression = _held(exp_last, stream.expression, state.expression, np.ones(6, bool)).astype(np.int64)
+    if viseme.any() or expression.any():
         high = expand_high_level(viseme, expression)
         out = np.where(low_level_known, out, high)
     out[:, :2] = 0.0
+
+    state.mask_types = types[-1].copy()
+    state.held = out[-1].copy()
+    state.known = low_level_known[-1].copy()
+    state.held[:2], state.known[:2] = 0.0, False
+    state.viseme, state.expression = viseme[-1].copy(), expression[-1].copy()
     return out
+
+
+class FrameResolver:
+    """:func:`resolve` for a live source: one decoded :class:`Frame` in, its 68 values out."""
+
+    def __init__(self) -> None:
+        self.state = ResolveState()
+
+    def push(self, frame: Frame) -> np.ndarray:
+        return resolve(FapStream.from_frames([frame]), self.state)[0]
+
+    def resolve_all(self, frames: Iterable[Frame]) -> Iterator[np.ndarray]:
+        for frame in frames:
+            yield self.push(frame)

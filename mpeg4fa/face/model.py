@@ -13,7 +13,7 @@ unsent FAPs and the high-level visemes and expressions first.
 from __future__ import annotations
 
 from functools import cached_property
-from typing import Iterator, Mapping
+from typing import Iterable, Iterator, Mapping
 
 import numpy as np
 
@@ -23,7 +23,7 @@ from mpeg4fa.face.calibrate import CalibrationReport, calibrate_mesh
 from mpeg4fa.face.deform import Pose, deform
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.fapu import Fapu, measure_fapu
-from mpeg4fa.face.frames import resolve
+from mpeg4fa.face.frames import FrameResolver, resolve
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.motion import check_values
 from mpeg4fa.face.rig import Rig, build_rig
@@ -148,7 +148,16 @@ class FaceModel:
 
     def animate(self, stream: FapStream) -> Iterator[Pose]:
         """One pose per stream frame, with unsent FAPs held or interpolated (see :mod:`.frames`)."""
-        values = resolve(stream)
-        for k in range(len(values)):
-            check_values(values[k])
-            yield self._pose(values[k])
+        for values in resolve(stream):
+            yield self.pose_values(values)
+
+    def animate_frames(self, frames: Iterable[Frame]) -> Iterator[Pose]:
+        """:meth:`animate` for frames as they arrive (a live decoder): resolved one at a time."""
+        resolver = FrameResolver()
+        for frame in frames:
+            yield self.pose_values(resolver.push(frame))
+
+    def pose_values(self, values: np.ndarray) -> Pose:
+        """The pose for one row of resolved values (68, as :func:`.frames.resolve` gives)."""
+        check_values(values)
+        return self._pose(values)

@@ -202,3 +202,46 @@ def test_animate_uses_the_resolved_values(procedural_face):
     for pose, v in zip(poses, values):
         assert np.array_equal(pose.vertices, procedural_face.deform(v).vertices)
     assert not np.array_equal(poses[0].vertices, procedural_face.mesh.vertices)
+
+
+def _random_stream(seed: int, n: int = 120) -> FapStream:
+    """Sparse random sends of low- and high-level FAPs, with intra headers changing mask types."""
+    rng = np.random.default_rng(seed)
+    s = FapStream.empty(n)
+    for start in sorted({0, *rng.integers(1, n, 3).tolist()}):
+        s.intra[start] = _intra({g: int(rng.choice([HOLD, INTERPOLATE])) for g in range(1, 11)})
+    sent = rng.random((n, N_FAPS)) < 0.15
+    s.fap_mask[:] = sent
+    s.fap_values[:] = np.where(sent, rng.integers(-300, 300, (n, N_FAPS)), 0)
+    vis, exp = s.fap_mask[:, 0], s.fap_mask[:, 1]
+    s.viseme[vis] = np.c_[rng.integers(0, 15, (vis.sum(), 2)), rng.integers(0, 64, vis.sum()), np.zeros(vis.sum())]
+    s.expression[exp] = np.c_[rng.integers(0, 7, exp.sum()), rng.integers(0, 64, exp.sum()),
+                              rng.integers(0, 7, exp.sum()), rng.integers(0, 64, exp.sum()), np.zeros((exp.sum(), 2))]
+    return s
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_resolving_frame_by_frame_equals_the_whole_stream(seed):
+    """A live source is resolved one frame at a time (FrameResolver): same values as the batch."""
+    from mpeg4fa.face.frames import FrameResolver
+
+    s = _random_stream(seed)
+    whole = resolve(s)
+    resolver = FrameResolver()
+    live = np.array([resolver.push(frame) for frame in s])
+    np.testing.assert_array_equal(live, whole)
+    assert np.abs(whole).max() > 0
+
+
+def test_resolving_in_pieces_carries_the_state():
+    from mpeg4fa.face.frames import ResolveState
+
+    s = _random_stream(99, 200)
+    state = ResolveState()
+    pieces = [resolve(_piece(s, a, b), state)
+              for a, b in ((0, 7), (7, 90), (90, 200))]
+    np.testing.assert_array_equal(np.concatenate(pieces), resolve(s))
+
+
+def _piece(s: FapStream, a: int, b: int) -> FapStream:
+    return FapStream.from_frames([s.frame(k) for k in range(a, b)])

@@ -1,4 +1,4 @@
-"""Faces shared by the face-engine tests, built once per session.
+"""Faces shared by the face, render and CLI tests, built once per session.
 
 ``procedural_face`` needs nothing but the code (see ``procedural_head.py``);
 ``generic_face`` is the CC0 head from the user cache and skips when it has not

@@ -1,0 +1,162 @@
+"""``mpeg4fa play`` and ``mpeg4fa snapshot``: watch and hear a decoded stream."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..formats import read_stream
+from ..render import RenderError, RenderWarning
+from ..render.camera import VIEWS
+from .model import face_from_args, face_options
+from .progress import ProgressBar
+
+AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    p = commands.add_parser(
+        "play", help="render a .fba or .fap stream to MP4 (with its speech) or PNG frames",
+        description="Decode a stream, animate the face (the generic head, or one calibrated to an FDP) and "
+                    "render it headless: an MP4 (H.264 + AAC) when OUT ends in .mp4/.mov/.m4v, else a folder of "
+                    "PNG frames. Frames appear at the stream's presentation times; the audio starts with "
+                    "the first frame. A WAV with the stream's name beside it is used unless --audio or "
+                    "--no-audio says otherwise.",
+        epilog="examples:\n  mpeg4fa play talk.fba -o talk.mp4\n"
+               "  mpeg4fa play talk.fap --fdp face.fdp --audio talk.wav -o frames/ --size 256\n"
+               "  mpeg4fa play talk.fba --show",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) stream")
+    p.add_argument("-o", "--output", type=Path, help="OUT.mp4 (or .mov/.m4v) or a folder for PNG frames")
+    audio = p.add_mutually_exclusive_group()
+    audio.add_argument("--audio", type=Path, help="speech to mux (WAV, or any file FFmpeg reads)")
+    audio.add_argument("--no-audio", action="store_true", help="do not look for a WAV beside the stream")
+    p.add_argument("--fit", choices=("pad", "trim"), default="pad",
+                   help="when stream and audio lengths differ by more than a frame: pad the shorter (default: "
+                        "the video holds its last frame, the audio gets silence) or trim the longer")
+    p.add_argument("--fps", type=float, help="output frame rate (default: the stream's)")
+    p.add_argument("--crf", type=int, default=18, help="H.264 quality, 0 (lossless) to 51 (default 18)")
+    p.add_argument("--show", action="store_true",
+                   help="play in a window in real time (needs a display; late frames are dropped; no sound)")
+    p.add_argument("--json", action="store_true", help="print a JSON summary when done")
+    _render_options(p)
+    p.set_defaults(run=run_play)
+
+    p = commands.add_parser("snapshot", help="render one frame of a stream to a PNG",
+                            description="Render the face as it is at one frame (or time) of a stream.",
+                            epilog="example: mpeg4fa snapshot talk.fba --frame 40 -o f40.png")
+    p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) stream")
+    at = p.add_mutually_exclusive_group()
+    at.add_argument("--frame", type=int, help="frame index (0 = first, -1 = last; default 0)")
+    at.add_argument("--time", type=float, metavar="SECONDS", help="presentation time in seconds from the first frame")
+    p.add_argument("-o", "--output", type=Path, required=True, help="the PNG to write")
+    _render_options(p)
+    p.set_defaults(run=run_snapshot)
+
+
+def _render_options(p: argparse.ArgumentParser) -> None:
+    face_options(p)
+    p.add_argument("--deformer", choices=("fap", "arkit"), default="fap", help="how FAPs move the mesh (default fap)")
+    p.add_argument("--size", type=_size, default=(512, 512), metavar="W[xH]", help="image size (default 512)")
+    p.add_argument("--aa", type=int, default=0, metavar="N",
+                   help="anti-aliasing samples (4 or 8 for final output; default 0 = off, fastest)")
+    p.add_argument("--view", default="front", choices=tuple(VIEWS), help="camera position (default front)")
+    p.add_argument("--texture", type=Path, help="a UV texture image for the skin (e.g. from photos)")
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        parts = [int(v) for v in text.lower().split("x")]
+    except ValueError:
+        parts = []
+    if len(parts) == 1:
+        parts *= 2
+    if len(parts) != 2 or min(parts) < 16 or max(parts) > 8192:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected W or WxH, 16 to 8192, e.g. 512 or 640x480")
+    return parts[0], parts[1]
+
+
+def _renderer_options(args: argparse.Namespace) -> dict:
+    options = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
+    if args.texture is not None:
+        from PIL import Image, UnidentifiedImageError
+        try:
+            with Image.open(args.texture) as img:
+                options["texture"] = np.asarray(img.convert("RGB"))
+        except (OSError, UnidentifiedImageError) as exc:
+            raise RenderError(f"cannot read the texture image ({exc})", where=str(args.texture)) from None
+    return options
+
+
+def _audio_for(args: argparse.Namespace) -> Path | None:
+    if args.audio is not None or args.no_audio:
+        return args.audio
+    for suffix in AUDIO_SUFFIXES:
+        candidate = args.stream.with_suffix(suffix)
+        if candidate.is_file():
+            print(f"audio: {candidate} (found beside the stream; --no-audio to leave it out)", file=sys.stderr)
+            return candidate
+    return None
+
+
+def run_play(args: argparse.Namespace) -> int:
+    from ..render import Renderer, play, play_live
+
+    if args.output is None and not args.show:
+        raise RenderError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
+    stream, _ = read_stream(args.stream)
+    face = face_from_args(args).with_deformer(args.deformer)
+    options = _renderer_options(args)
+    if args.show:
+        from ..render.window import show
+        with Renderer(face, **options) as renderer:
+            show((f.image for f in play_live(iter(stream), renderer)), title=f"mpeg4fa: {args.stream.name}",
+                 fps_hint=stream.fps)
+        if args.output is None:
+            return 0
+    audio = _audio_for(args)
+    bar = ProgressBar(f"rendering {args.output.name}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RenderWarning)
+        try:
+            result = play(stream, args.output, face=face, audio=audio, fps=args.fps, fit=args.fit, progress=bar,
+                          writer_options={"crf": args.crf} if _is_video(args.output) else None, **options)
+        finally:
+            bar.close()
+    for w in caught:
+        print(f"mpeg4fa play: warning: {w.message}", file=sys.stderr)
+    summary = {"output": str(args.output), "frames": result.n_frames, "rendered": result.rendered,
+               "fps": result.fps, "duration": round(result.duration, 6),
+               "audio": str(audio) if audio else None, "audio_duration": result.audio_duration,
+               "adjustments": result.adjustments, "seconds": round(result.seconds, 3),
+               "speed_x_realtime": round(result.speed, 2)}
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s)"
+              f"{', with audio' if audio else ''}; rendered in {result.seconds:.1f} s ({result.speed:.1f}x real time)")
+    return 0
+
+
+def _is_video(path: Path) -> bool:
+    return path.suffix.lower() in (".mp4", ".mov", ".m4v")
+
+
+def run_snapshot(args: argparse.Namespace) -> int:
+    from PIL import Image
+
+    from ..render import snapshot
+
+    stream, _ = read_stream(args.stream)
+    face = face_from_args(args).with_deformer(args.deformer)
+    image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args))
+    try:
+        Image.fromarray(image).save(args.output)
+    except (OSError, ValueError) as exc:
+        raise RenderError(f"cannot write the PNG ({exc})", where=str(args.output)) from None
+    print(f"{args.output}: {image.shape[1]}x{image.shape[0]}")
+    return 0

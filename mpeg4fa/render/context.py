@@ -1,0 +1,41 @@
+"""The OpenGL context: one headless EGL context per process, created on first use.
+
+EGL needs no display, so the same code runs on a desktop, a server's GPU or the
+CPU (Mesa llvmpipe). Creating a context costs tens of milliseconds, so it is
+shared by every renderer in the process.
+"""
+from __future__ import annotations
+
+import threading
+
+from mpeg4fa.render.errors import RenderError
+
+_LOCK = threading.Lock()
+_CONTEXT = None
+
+APT_HINT = ("install Mesa's EGL and GL (Debian: apt-get install libegl1 libgl1 libegl-mesa0 "
+            "libgl1-mesa-dri), or run tools/dev.sh, which does")
+
+
+def gl_context():
+    """The process's shared moderngl context (OpenGL >= 3.3 core, headless EGL)."""
+    global _CONTEXT
+    with _LOCK:
+        if _CONTEXT is None:
+            try:
+                import moderngl
+            except ImportError as exc:  # pragma: no cover - a broken install
+                raise RenderError(f"moderngl is not importable ({exc})", where="GL context",
+                                  hint="reinstall mpeg4fa with its dependencies") from None
+            try:
+                _CONTEXT = moderngl.create_standalone_context(backend="egl", require=330)
+            except Exception as exc:  # moderngl/glcontext raise plain Exceptions on a missing library
+                raise RenderError(f"cannot create a headless OpenGL context ({exc})", where="GL context",
+                                  hint=APT_HINT) from None
+        return _CONTEXT
+
+
+def describe_context() -> dict[str, str]:
+    """Vendor, renderer and version strings: what is drawing (llvmpipe = CPU)."""
+    info = gl_context().info
+    return {key: str(info.get(key, "")) for key in ("GL_VENDOR", "GL_RENDERER", "GL_VERSION")}

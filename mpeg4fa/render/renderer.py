@@ -1,0 +1,191 @@
+"""Pixels from poses: an offscreen framebuffer, the face shaders, and readback into arrays.
+
+>>> renderer = Renderer(face, width=512, height=512)
+>>> image = renderer.render(face.deform({3: 400}))      # (512, 512, 3) uint8, top row first
+
+One renderer owns its framebuffer and GPU buffers; the GL context is shared
+(:mod:`.context`). ``samples`` > 0 draws into a multisampled framebuffer and
+resolves it (anti-aliasing for final output). Geometry is uploaded per frame:
+only positions and normals change, so the layout (:mod:`.scene`) is built once.
+"""
+from __future__ import annotations
+
+from importlib import resources
+
+import numpy as np
+
+from mpeg4fa.face.deform import Pose
+from mpeg4fa.face.model import FaceModel
+from mpeg4fa.render.camera import Camera, frame_points
+from mpeg4fa.render.context import gl_context
+from mpeg4fa.render.errors import RenderError
+from mpeg4fa.render.materials import Materials
+from mpeg4fa.render.scene import build_layout, vertex_data
+
+_EYES = (("eye_l", "l-eye"), ("eye_r", "r-eye"))
+MAX_SIZE = 8192
+
+KEY_LIGHT = ((-0.45, 0.45, 0.77), (0.78, 0.76, 0.72))
+FILL_LIGHT = ((0.65, 0.05, 0.75), (0.28, 0.30, 0.34))
+AMBIENT = (0.24, 0.24, 0.26)
+
+
+def _shader(name: str) -> str:
+    return resources.files("mpeg4fa.render").joinpath("shaders").joinpath(name).read_text(encoding="utf-8")
+
+
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
+class Renderer:
+    """Draws one face (its mesh layout, materials and framing) into an offscreen image."""
+
+    def __init__(self, face: FaceModel, *, width: int = 512, height: int = 512, samples: int = 0,
+                 camera: Camera | None = None, view: str | tuple[float, float] = "front",
+                 materials: Materials | None = None, texture: np.ndarray | None = None,
+                 lighting: bool = True) -> None:
+        if not (1 <= width <= MAX_SIZE and 1 <= height <= MAX_SIZE):
+            raise RenderError(f"image size {width}x{height} is out of range", where="renderer",
+                              hint=f"width and height from 1 to {MAX_SIZE}")
+        self.face = face
+        self.width, self.height = int(width), int(height)
+        self.materials = materials or Materials()
+        self.lighting = lighting
+        self.layout = build_layout(face.mesh)
+        self.camera = camera or frame_points(face.mesh.feature_points(), self.width, self.height, view=view)
+        self.ctx = gl_context()
+        self._setup_gl(samples)
+        self.set_texture(texture)
+        self._vertex_data = np.empty((self.layout.n_vertices, 6), np.float32)
+        self._pixels = np.empty((self.height, self.width, 3), np.uint8)
+
+    # -- set-up ----------------------------------------------------------------------------
+
+    def _setup_gl(self, samples: int) -> None:
+        ctx = self.ctx
+        max_samples = ctx.max_samples
+        if samples < 0 or samples > max_samples:
+            raise RenderError(f"{samples} samples for anti-aliasing is not supported here", where="renderer",
+                              hint=f"0 (off) to {max_samples}")
+        self.samples = int(samples)
+        try:
+            self.program = ctx.program(vertex_shader=_shader("face.vert.glsl"),
+                                       fragment_shader=_shader("face.frag.glsl"))
+        except Exception as exc:  # a shader that does not compile is a bug of ours, say where
+            raise RenderError(f"shader build failed: {exc}", where="renderer") from None
+        size = (self.width, self.height)
+        self.fbo = ctx.framebuffer(ctx.renderbuffer(size, 4), ctx.depth_renderbuffer(size))
+        self.ms_fbo = None
+        if self.samples:
+            self.ms_fbo = ctx.framebuffer(ctx.renderbuffer(size, 4, samples=self.samples),
+                                          ctx.depth_renderbuffer(size, samples=self.samples))
+        lay = self.layout
+        self.dynamic = ctx.buffer(reserve=lay.n_vertices * 6 * 4, dynamic=True)
+        self.static = ctx.buffer(np.c_[lay.uv, lay.material].astype(np.float32).tobytes())
+        self.index = ctx.buffer(lay.indices.astype(np.uint32).tobytes())
+        self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
+                                                   (self.static, "2f 1f", "in_uv", "in_material")],
+                                    index_buffer=self.index, index_element_size=4)
+        self._set_static_uniforms()
+
+    def _set_static_uniforms(self) -> None:
+        m, prog = self.materials, self.program
+        slots = [m.skin, m.mouth, m.sclera, m.teeth, m.tongue, m.tongue]
+        prog["base_colour"].write(np.array([s.colour for s in slots], np.float32).tobytes())
+        prog["shine"].write(np.array([(s.specular, s.shininess) for s in slots], np.float32).tobytes())
+        prog["iris_colour"].value = tuple(m.iris)
+        prog["pupil_colour"].value = tuple(m.pupil)
+        prog["iris_radius"].value = float(self.face.fapu.IRISD0) / 2.0
+        prog["light_direction"].write(np.array([_unit(KEY_LIGHT[0]), _unit(FILL_LIGHT[0])], np.float32).tobytes())
+        prog["light_colour"].write(np.array([KEY_LIGHT[1], FILL_LIGHT[1]], np.float32).tobytes())
+        prog["ambient"].value = AMBIENT
+        self.set_camera(self.camera)
+
+    def set_camera(self, camera: Camera) -> None:
+        """Look from another camera (e.g. :func:`.camera.frame_points` with another view)."""
+        self.camera = camera
+        prog = self.program
+        prog["world_to_clip"].write(camera.matrix.T.astype(np.float32).tobytes())
+        prog["camera_position"].value = tuple(camera.position)
+        prog["orthographic"].value = camera.orthographic
+        prog["view_direction"].value = tuple(-camera.view[2, :3])
+        prog["lighting"].value = self.lighting
+
+    def set_texture(self, texture: np.ndarray | None) -> None:
+        """Use an (H, W, 3) uint8 UV image as the skin's colour (row 0 = v 1, as images are stored)."""
+        self.texture = None
+        if texture is not None:
+            img = np.ascontiguousarray(np.asarray(texture, np.uint8)[::-1, :, :3])
+            if img.ndim != 3:
+                raise RenderError("a skin texture is an (H, W, 3) image", where="renderer")
+            tex = self.ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), alignment=1)
+            tex.build_mipmaps()
+            tex.repeat_x = tex.repeat_y = False
+            self.texture = tex
+        self.program["use_texture"].value = self.texture is not None
+        self.program["skin_texture"].value = 0
+
+    # -- drawing ---------------------------------------------------------------------------
+
+    def _upload(self, pose: Pose) -> None:
+        vertices = pose.vertices
+        vertex_data(self.layout, vertices, out=self._vertex_data)
+        self.dynamic.write(self._vertex_data)
+        centres, axes, pupils = [], [], []
+        for part, joint in _EYES:
+            centre = vertices[self.face.mesh.joints[joint]]
+            front = vertices[pose.parts[part].start]  # vertex 0 of an eyeball is its front pole
+            centres.append(centre)
+            axes.append(_unit(front - centre))
+            pupils.append(max(pose.pupil_diameter.get(part, 0.0), 0.0) / 2.0)
+        prog = self.program
+        prog["eye_centre"].write(np.array(centres, np.float32).tobytes())
+        prog["eye_axis"].write(np.array(axes, np.float32).tobytes())
+        prog["pupil_radius"].write(np.array(pupils, np.float32).tobytes())
+
+    def draw(self, pose: Pose) -> None:
+        """Draw a pose into the framebuffer (resolved if anti-aliased); read it with :meth:`read`."""
+        if pose.vertices.shape != self.face.mesh.vertices.shape:
+            raise RenderError(f"pose has {len(pose.vertices)} vertices, the face {self.face.mesh.n_vertices}",
+                              where="renderer", hint="render poses of the face the renderer was made for")
+        ctx = self.ctx
+        self._upload(pose)
+        target = self.ms_fbo or self.fbo
+        target.use()
+        bg = self.materials.background
+        target.clear(bg[0], bg[1], bg[2], 1.0, depth=1.0)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE)
+        if self.texture is not None:
+            self.texture.use(0)
+        self.vao.render()
+        if self.ms_fbo is not None:
+            ctx.copy_framebuffer(self.fbo, self.ms_fbo)
+
+    def read(self, out: np.ndarray | None = None) -> np.ndarray:
+        """The last drawn image as (H, W, 3) uint8, top row first (into ``out`` if given)."""
+        self.fbo.read_into(self._pixels, components=3, alignment=1)
+        if out is None:
+            out = np.empty_like(self._pixels)
+        np.copyto(out, self._pixels[::-1])
+        return out
+
+    def render(self, pose: Pose, out: np.ndarray | None = None) -> np.ndarray:
+        """Draw and read back one pose."""
+        self.draw(pose)
+        return self.read(out)
+
+    def release(self) -> None:
+        """Free this renderer's GPU objects (the shared context stays)."""
+        for obj in (self.vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture,
+                    self.program):
+            if obj is not None:
+                obj.release()
+
+    def __enter__(self) -> "Renderer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()

@@ -1,0 +1,76 @@
+"""The head as GL geometry: which mesh vertex feeds each GL vertex, and per-frame normals.
+
+A mesh vertex on a texture seam has several UVs; GL needs one vertex per
+(position, UV) pair. The layout is computed once per mesh, so each frame only
+gathers positions and normals through one index array.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+
+from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.render.materials import PART_MATERIAL
+
+
+@dataclass(frozen=True)
+class SceneLayout:
+    source: np.ndarray     # (N,) mesh vertex index of each GL vertex
+    uv: np.ndarray         # (N, 2) float32
+    material: np.ndarray   # (N,) float32 material slot
+    indices: np.ndarray    # (T, 3) uint32 GL vertex indices, all drawn parts
+    triangles: np.ndarray  # (T, 3) mesh vertex indices (for normals)
+    incidence: sparse.csr_matrix  # (V, T): sums face normals onto vertices
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.source)
+
+
+def build_layout(mesh: HeadMesh) -> SceneLayout:
+    """One GL vertex per distinct (mesh vertex, UV) among the drawn parts' triangle corners."""
+    tris, uvs, mats = [], [], []
+    for part, slot in PART_MATERIAL.items():
+        t = mesh.triangles.get(part)
+        if t is None or not len(t):
+            continue
+        tris.append(np.asarray(t, np.int64))
+        uvs.append(np.asarray(mesh.corner_uvs[part], np.float64))
+        mats.append(np.full(len(t), slot))
+    tri = np.concatenate(tris)
+    corner_uv = np.concatenate(uvs).reshape(-1, 2)
+    corner_mat = np.repeat(np.concatenate(mats), 3)
+    keys = np.c_[tri.reshape(-1), np.round(corner_uv * 2**20)].astype(np.int64)
+    unique, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    n_tri = len(tri)
+    incidence = sparse.csr_matrix(
+        (np.ones(3 * n_tri), (tri.reshape(-1), np.repeat(np.arange(n_tri), 3))), shape=(mesh.n_vertices, n_tri))
+    return SceneLayout(
+        source=unique[:, 0].astype(np.int64),
+        uv=corner_uv[first].astype(np.float32),
+        material=corner_mat[first].astype(np.float32),
+        indices=inverse.reshape(-1, 3).astype(np.uint32),
+        triangles=tri,
+        incidence=incidence,
+    )
+
+
+def vertex_normals(layout: SceneLayout, vertices: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals (V, 3) of the drawn triangles; unit length where defined."""
+    v = vertices[layout.triangles]
+    face = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    normals = layout.incidence @ face
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return normals / np.where(length > 0, length, 1.0)
+
+
+def vertex_data(layout: SceneLayout, vertices: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """Interleaved position + normal per GL vertex, (N, 6) float32, written into ``out`` if given."""
+    if out is None:
+        out = np.empty((layout.n_vertices, 6), np.float32)
+    normals = vertex_normals(layout, vertices)
+    out[:, :3] = vertices[layout.source]
+    out[:, 3:] = normals[layout.source]
+    return out
