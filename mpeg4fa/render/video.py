@@ -142,7 +142,8 @@ class Mp4Writer(_Writer):
     """H.264 (libx264, yuv420p) video with optional AAC audio in an MP4/MOV file.
 
     Frames are encoded as they are written; the audio, given whole up front, is
-    encoded and muxed at :meth:`close`, after the video, which keeps ``write`` cheap.
+    encoded alongside, up to each frame's end, so the file interleaves sound and
+    pictures (and ``+faststart`` puts the index first) for players that stream it.
     Leaving a ``with`` block through an exception finishes the file with the frames
     written so far and no audio, and lets the exception through.
     """
@@ -167,6 +168,7 @@ class Mp4Writer(_Writer):
         self.audio = audio
         self._samples = _check_audio(audio, where) if audio is not None else None
         self._frames = 0
+        self._audio_pos = 0
         self._closed = False
         self._time_base = 1 / self.rate
         muxer = _MUXER_FOR_SUFFIX.get(self.path.suffix.lower(), "mp4")
@@ -176,7 +178,8 @@ class Mp4Writer(_Writer):
             # create it now so that a bad path fails here, not after rendering.
             with open(self.path, "wb"):
                 pass
-            self._container = av.open(where, "w", format=muxer, options={"use_editlist": "1"})
+            self._container = av.open(where, "w", format=muxer,
+                                      options={"use_editlist": "1", "movflags": "+faststart"})
             self._video = self._container.add_stream("libx264", rate=self.rate)
             self._video.width, self._video.height = self.width, self.height
             self._video.pix_fmt = "yuv420p"
@@ -219,6 +222,8 @@ class Mp4Writer(_Writer):
         frame.time_base = self._time_base
         try:
             self._container.mux(self._video.encode(frame))
+            if self._audio is not None:
+                self._write_audio(until=int(math.ceil((self._frames + 1) / self.rate * self._audio_rate)))
         except (av.FFmpegError, OSError) as exc:
             raise RenderError(f"cannot encode frame {self._frames}: {exc}", where=where) from None
         self._frames += 1
@@ -233,25 +238,27 @@ class Mp4Writer(_Writer):
         try:
             self._container.mux(self._video.encode(None))
             if self._audio is not None:
-                self._write_audio()
+                self._write_audio(until=len(self._samples))
+                self._container.mux(self._audio.encode(None))
             self._container.close()
         except (av.FFmpegError, OSError) as exc:
             self._discard()
             raise RenderError(f"cannot finish the video: {exc}", where=str(self.path)) from None
 
-    def _write_audio(self) -> None:
+    def _write_audio(self, until: int) -> None:
+        """Encode and mux the audio from where it stopped up to sample ``until`` (in whole chunks)."""
         import av
 
-        planar = np.ascontiguousarray(self._samples.T)
-        time_base = Fraction(1, self._audio_rate)
-        for start in range(0, planar.shape[1], _AUDIO_CHUNK):
-            frame = av.AudioFrame.from_ndarray(np.ascontiguousarray(planar[:, start:start + _AUDIO_CHUNK]),
-                                               format="fltp", layout=self._layout)
+        until = min(until, len(self._samples))
+        while self._audio_pos < until:
+            start = self._audio_pos
+            chunk = np.ascontiguousarray(self._samples[start:min(start + _AUDIO_CHUNK, until)].T)
+            frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout=self._layout)
             frame.sample_rate = self._audio_rate
-            frame.time_base = time_base
+            frame.time_base = Fraction(1, self._audio_rate)
             frame.pts = start
             self._container.mux(self._audio.encode(frame))
-        self._container.mux(self._audio.encode(None))
+            self._audio_pos = start + chunk.shape[1]
 
     def _abort(self) -> None:
         """Finish the file with what was written (no audio), swallowing errors: another is on its way."""
