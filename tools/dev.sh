@@ -3,18 +3,26 @@
 #   tools/dev.sh demo   install what is missing, then run the main job (encode + decode + show a stream,
 #                       build the generic head and pose it)
 #   tools/dev.sh test   install what is missing, then run the test suite
-# Installing is idempotent: Debian packages only when python3/venv are missing, the virtual
-# environment in .venv, the project and its pinned dependencies (pyproject.toml) into it.
+# Installing is idempotent: Debian packages only when missing (python3 and venv; Mesa's EGL and
+# GL for headless rendering), the virtual environment in .venv, the project and its pinned
+# dependencies (pyproject.toml) into it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 as_root() { if [ "$(id -u)" = 0 ]; then "$@"; else sudo "$@"; fi; }
 
+GL_PACKAGES="libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri"   # Mesa EGL + llvmpipe: headless OpenGL
+DEBIAN_PACKAGES="python3 python3-venv ca-certificates $GL_PACKAGES"
+
 ensure_python() {
-    if ! command -v python3 >/dev/null || ! python3 -c 'import venv, ensurepip' 2>/dev/null; then
-        echo "installing python3 and python3-venv (Debian packages)..." >&2
+    local missing=""
+    for pkg in $GL_PACKAGES; do
+        dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing="$missing $pkg"
+    done
+    if ! command -v python3 >/dev/null || ! python3 -c 'import venv, ensurepip' 2>/dev/null || [ -n "$missing" ]; then
+        echo "installing Debian packages:${missing:- python3 python3-venv}..." >&2
         as_root apt-get update -qq
-        as_root apt-get install -y -qq --no-install-recommends python3 python3-venv ca-certificates >/dev/null
+        as_root apt-get install -y -qq --no-install-recommends $DEBIAN_PACKAGES >/dev/null
     fi
     python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
         || { echo "mpeg4fa needs Python >= 3.11 (found $(python3 --version))" >&2; exit 1; }
@@ -40,6 +48,8 @@ case "$job" in
         .venv/bin/mpeg4fa demo -o out/demo.fba
         .venv/bin/mpeg4fa model install
         .venv/bin/mpeg4fa model pose --viseme AA --expression joy=40 --fap 19=300 --fap 20=300
+        .venv/bin/mpeg4fa play out/demo.fba -o out/demo.mp4
+        .venv/bin/mpeg4fa snapshot out/demo.fba --frame 40 --aa 4 -o out/demo-frame40.png
         ;;
     test)
         ensure_python; ensure_venv
