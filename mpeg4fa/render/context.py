@@ -7,11 +7,13 @@ shared by every renderer in the process.
 from __future__ import annotations
 
 import threading
+from importlib import resources
 
 from mpeg4fa.render.errors import RenderError
 
 _LOCK = threading.Lock()
 _CONTEXT = None
+_PROGRAMS: dict = {}
 
 APT_HINT = ("install Mesa's EGL and GL (Debian: apt-get install libegl1 libgl1 libegl-mesa0 "
             "libgl1-mesa-dri), or run tools/dev.sh, which does")
@@ -33,6 +35,23 @@ def gl_context():
                 raise RenderError(f"cannot create a headless OpenGL context ({exc})", where="GL context",
                                   hint=APT_HINT) from None
         return _CONTEXT
+
+
+def program(name: str):
+    """The shader program ``shaders/<name>.vert.glsl`` + ``.frag.glsl``, built once per process."""
+    prog = _PROGRAMS.get(name)
+    if prog is None:
+        shaders = resources.files("mpeg4fa.render").joinpath("shaders")
+        try:
+            prog = gl_context().program(
+                vertex_shader=shaders.joinpath(f"{name}.vert.glsl").read_text(encoding="utf-8"),
+                fragment_shader=shaders.joinpath(f"{name}.frag.glsl").read_text(encoding="utf-8"))
+        except RenderError:
+            raise
+        except Exception as exc:  # a shader that does not compile is a bug of ours: say which
+            raise RenderError(f"shader build failed: {exc}", where=f"shaders/{name}") from None
+        _PROGRAMS[name] = prog
+    return prog
 
 
 def describe_context() -> dict[str, str]:

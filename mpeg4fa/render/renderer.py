@@ -10,14 +10,12 @@ only positions and normals change, so the layout (:mod:`.scene`) is built once.
 """
 from __future__ import annotations
 
-from importlib import resources
-
 import numpy as np
 
 from mpeg4fa.face.deform import Pose
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.render.camera import Camera, frame_points
-from mpeg4fa.render.context import gl_context
+from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
 from mpeg4fa.render.materials import Materials
 from mpeg4fa.render.scene import build_layout, vertex_data
@@ -28,10 +26,6 @@ MAX_SIZE = 8192
 KEY_LIGHT = ((-0.45, 0.45, 0.77), (0.78, 0.76, 0.72))
 FILL_LIGHT = ((0.65, 0.05, 0.75), (0.28, 0.30, 0.34))
 AMBIENT = (0.24, 0.24, 0.26)
-
-
-def _shader(name: str) -> str:
-    return resources.files("mpeg4fa.render").joinpath("shaders").joinpath(name).read_text(encoding="utf-8")
 
 
 def _unit(v) -> np.ndarray:
@@ -70,11 +64,7 @@ class Renderer:
             raise RenderError(f"{samples} samples for anti-aliasing is not supported here", where="renderer",
                               hint=f"0 (off) to {max_samples}")
         self.samples = int(samples)
-        try:
-            self.program = ctx.program(vertex_shader=_shader("face.vert.glsl"),
-                                       fragment_shader=_shader("face.frag.glsl"))
-        except Exception as exc:  # a shader that does not compile is a bug of ours, say where
-            raise RenderError(f"shader build failed: {exc}", where="renderer") from None
+        self.program = program("face")  # shared: uniforms are set again before every draw
         size = (self.width, self.height)
         self.fbo = ctx.framebuffer(ctx.renderbuffer(size, 4), ctx.depth_renderbuffer(size))
         self.ms_fbo = None
@@ -83,49 +73,51 @@ class Renderer:
                                           ctx.depth_renderbuffer(size, samples=self.samples))
         lay = self.layout
         self.dynamic = ctx.buffer(reserve=lay.n_vertices * 6 * 4, dynamic=True)
-        self.static = ctx.buffer(np.c_[lay.uv, lay.material].astype(np.float32).tobytes())
+        self.static = ctx.buffer(np.c_[lay.uv, lay.material, lay.lips].astype(np.float32).tobytes())
         self.index = ctx.buffer(lay.indices.astype(np.uint32).tobytes())
         self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                   (self.static, "2f 1f", "in_uv", "in_material")],
+                                                   (self.static, "2f 1f 1f", "in_uv", "in_material", "in_lips")],
                                     index_buffer=self.index, index_element_size=4)
-        self._set_static_uniforms()
 
-    def _set_static_uniforms(self) -> None:
+    def _apply_uniforms(self) -> None:
+        """Materials, lights, camera and texture (the program is shared by all renderers)."""
         m, prog = self.materials, self.program
         slots = [m.skin, m.mouth, m.sclera, m.teeth, m.tongue, m.tongue]
         prog["base_colour"].write(np.array([s.colour for s in slots], np.float32).tobytes())
         prog["shine"].write(np.array([(s.specular, s.shininess) for s in slots], np.float32).tobytes())
+        prog["lip_colour"].value = tuple(m.lips)
         prog["iris_colour"].value = tuple(m.iris)
         prog["pupil_colour"].value = tuple(m.pupil)
         prog["iris_radius"].value = float(self.face.fapu.IRISD0) / 2.0
         prog["light_direction"].write(np.array([_unit(KEY_LIGHT[0]), _unit(FILL_LIGHT[0])], np.float32).tobytes())
         prog["light_colour"].write(np.array([KEY_LIGHT[1], FILL_LIGHT[1]], np.float32).tobytes())
         prog["ambient"].value = AMBIENT
-        self.set_camera(self.camera)
-
-    def set_camera(self, camera: Camera) -> None:
-        """Look from another camera (e.g. :func:`.camera.frame_points` with another view)."""
-        self.camera = camera
-        prog = self.program
+        camera = self.camera
         prog["world_to_clip"].write(camera.matrix.T.astype(np.float32).tobytes())
         prog["camera_position"].value = tuple(camera.position)
         prog["orthographic"].value = camera.orthographic
         prog["view_direction"].value = tuple(-camera.view[2, :3])
         prog["lighting"].value = self.lighting
+        prog["use_texture"].value = self.texture is not None
+        prog["skin_texture"].value = 0
+
+    def set_camera(self, camera: Camera) -> None:
+        """Look from another camera (e.g. :func:`.camera.frame_points` with another view)."""
+        self.camera = camera
 
     def set_texture(self, texture: np.ndarray | None) -> None:
         """Use an (H, W, 3) uint8 UV image as the skin's colour (row 0 = v 1, as images are stored)."""
         self.texture = None
         if texture is not None:
-            img = np.ascontiguousarray(np.asarray(texture, np.uint8)[::-1, :, :3])
-            if img.ndim != 3:
-                raise RenderError("a skin texture is an (H, W, 3) image", where="renderer")
+            img = np.asarray(texture)
+            if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8:
+                raise RenderError(f"a skin texture is an (H, W, 3) uint8 image, got {img.shape} {img.dtype}",
+                                  where="renderer", hint="convert it to 8-bit RGB first")
+            img = np.ascontiguousarray(img[::-1, :, :3])
             tex = self.ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), alignment=1)
             tex.build_mipmaps()
             tex.repeat_x = tex.repeat_y = False
             self.texture = tex
-        self.program["use_texture"].value = self.texture is not None
-        self.program["skin_texture"].value = 0
 
     # -- drawing ---------------------------------------------------------------------------
 
@@ -151,6 +143,7 @@ class Renderer:
             raise RenderError(f"pose has {len(pose.vertices)} vertices, the face {self.face.mesh.n_vertices}",
                               where="renderer", hint="render poses of the face the renderer was made for")
         ctx = self.ctx
+        self._apply_uniforms()
         self._upload(pose)
         target = self.ms_fbo or self.fbo
         target.use()
@@ -179,8 +172,7 @@ class Renderer:
 
     def release(self) -> None:
         """Free this renderer's GPU objects (the shared context stays)."""
-        for obj in (self.vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture,
-                    self.program):
+        for obj in (self.vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture):
             if obj is not None:
                 obj.release()
 

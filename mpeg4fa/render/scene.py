@@ -12,7 +12,7 @@ import numpy as np
 from scipy import sparse
 
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.render.materials import PART_MATERIAL
+from mpeg4fa.render.materials import LIP_OUTLINE, PART_MATERIAL, lip_weights
 
 
 @dataclass(frozen=True)
@@ -20,6 +20,7 @@ class SceneLayout:
     source: np.ndarray     # (N,) mesh vertex index of each GL vertex
     uv: np.ndarray         # (N, 2) float32
     material: np.ndarray   # (N,) float32 material slot
+    lips: np.ndarray       # (N,) float32 0..1, how much of the lip colour the untextured skin takes
     indices: np.ndarray    # (T, 3) uint32 GL vertex indices, all drawn parts
     triangles: np.ndarray  # (T, 3) mesh vertex indices (for normals)
     incidence: sparse.csr_matrix  # (V, T): sums face normals onto vertices
@@ -44,24 +45,41 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
     corner_mat = np.repeat(np.concatenate(mats), 3)
     keys = np.c_[tri.reshape(-1), np.round(corner_uv * 2**20)].astype(np.int64)
     unique, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-    n_tri = len(tri)
-    incidence = sparse.csr_matrix(
-        (np.ones(3 * n_tri), (tri.reshape(-1), np.repeat(np.arange(n_tri), 3))), shape=(mesh.n_vertices, n_tri))
+    source = unique[:, 0].astype(np.int64)
+    lips = np.zeros(len(source), np.float32)
+    if all(label in mesh.fp_labels for label in LIP_OUTLINE):
+        skin = corner_mat[first] == PART_MATERIAL["skin"]
+        outline = np.array([mesh.fp(label) for label in LIP_OUTLINE])
+        lips[skin] = lip_weights(mesh.vertices[source[skin]], outline)
     return SceneLayout(
-        source=unique[:, 0].astype(np.int64),
+        source=source,
         uv=corner_uv[first].astype(np.float32),
         material=corner_mat[first].astype(np.float32),
+        lips=lips,
         indices=inverse.reshape(-1, 3).astype(np.uint32),
         triangles=tri,
-        incidence=incidence,
+        incidence=incidence_matrix(tri, mesh.n_vertices),
     )
 
 
-def vertex_normals(layout: SceneLayout, vertices: np.ndarray) -> np.ndarray:
-    """Area-weighted vertex normals (V, 3) of the drawn triangles; unit length where defined."""
-    v = vertices[layout.triangles]
+def incidence_matrix(triangles: np.ndarray, n_vertices: int) -> sparse.csr_matrix:
+    """(V, T) ones where a vertex is a corner of a triangle: sums per-triangle values onto vertices."""
+    n_tri = len(triangles)
+    return sparse.csr_matrix((np.ones(3 * n_tri), (triangles.reshape(-1), np.repeat(np.arange(n_tri), 3))),
+                             shape=(n_vertices, n_tri))
+
+
+def vertex_normals(vertices: np.ndarray, triangles: np.ndarray,
+                   incidence: sparse.csr_matrix | None = None) -> np.ndarray:
+    """Area-weighted unit vertex normals (V, 3) from the given triangles (zero where a vertex has none).
+
+    Pass ``incidence`` (:func:`incidence_matrix`) when the triangles are used for many frames.
+    """
+    v = vertices[triangles]
     face = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-    normals = layout.incidence @ face
+    if incidence is None:
+        incidence = incidence_matrix(triangles, len(vertices))
+    normals = incidence @ face
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     return normals / np.where(length > 0, length, 1.0)
 
@@ -70,7 +88,7 @@ def vertex_data(layout: SceneLayout, vertices: np.ndarray, out: np.ndarray | Non
     """Interleaved position + normal per GL vertex, (N, 6) float32, written into ``out`` if given."""
     if out is None:
         out = np.empty((layout.n_vertices, 6), np.float32)
-    normals = vertex_normals(layout, vertices)
+    normals = vertex_normals(vertices, layout.triangles, layout.incidence)
     out[:, :3] = vertices[layout.source]
     out[:, 3:] = normals[layout.source]
     return out

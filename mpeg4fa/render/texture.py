@@ -49,8 +49,11 @@ import numpy as np
 from scipy import ndimage
 
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.render.context import gl_context
+from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
+from mpeg4fa.render.scene import vertex_normals
+
+__all__ = ["PhotoView", "BakedTexture", "Alignment", "UVRaster", "bake_texture", "uv_rasterise", "align_view"]
 
 VIEWS = ("front", "left", "right")
 SIDE_VIEWS = ("left", "right")
@@ -65,12 +68,11 @@ _DRAWN_PARTS = ("skin", "eye_l", "eye_r", "teeth_upper", "teeth_lower", "tongue"
 DEPTH_MAP_SIZE = 1024      # long side of the visibility depth maps, in pixels
 MIN_SIZE, MAX_SIZE = 16, 8192
 
-_PROGRAMS: dict[str, object] = {}
 
 
 # -- inputs ----------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PhotoView:
     """A photo of the head and its annotated feature points.
 
@@ -132,7 +134,7 @@ class Alignment:
         return np.c_[x, y, p @ toward]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class UVRaster:
     """The skin in texture space, row 0 = v 1 like the texture image.
 
@@ -150,7 +152,7 @@ class UVRaster:
         return self.skin.shape[0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BakedTexture:
     """A baked skin texture and how it came about.
 
@@ -168,35 +170,6 @@ class BakedTexture:
 
 # -- GL helpers ------------------------------------------------------------------------------
 
-def _program(name: str):
-    """The ``<name>.vert/.frag.glsl`` program, built once per process (the context is shared)."""
-    prog = _PROGRAMS.get(name)
-    if prog is None:
-        shaders = resources.files("mpeg4fa.render").joinpath("shaders")
-        try:
-            prog = gl_context().program(
-                vertex_shader=shaders.joinpath(f"{name}.vert.glsl").read_text(encoding="utf-8"),
-                fragment_shader=shaders.joinpath(f"{name}.frag.glsl").read_text(encoding="utf-8"))
-        except RenderError:
-            raise
-        except Exception as exc:  # a shader that does not compile is a bug of ours, say which
-            raise RenderError(f"shader build failed: {exc}", where=f"texture bake ({name})") from None
-        _PROGRAMS[name] = prog
-    return prog
-
-
-def _vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Area-weighted unit normals of the vertices (those of the given triangles)."""
-    v = vertices[triangles]
-    face = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-    normals = np.zeros_like(vertices)
-    for k in range(3):
-        for axis in range(3):
-            normals[:, axis] += np.bincount(triangles[:, k], face[:, axis], minlength=len(vertices))
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    return normals / np.where(length > 0, length, 1.0)
-
-
 # -- step 1: the skin in UV space ------------------------------------------------------------
 
 def uv_rasterise(mesh: HeadMesh, size: int = 1024, vertices: np.ndarray | None = None) -> UVRaster:
@@ -209,11 +182,11 @@ def uv_rasterise(mesh: HeadMesh, size: int = 1024, vertices: np.ndarray | None =
     verts = np.asarray(mesh.vertices if vertices is None else vertices, float)
     tri = np.asarray(mesh.triangles["skin"], np.int64)
     uv = np.asarray(mesh.corner_uvs["skin"], np.float64).reshape(-1, 2)
-    normals = _vertex_normals(verts, tri)
+    normals = vertex_normals(verts, tri)
     data = np.c_[verts[tri.reshape(-1)], normals[tri.reshape(-1)], uv].astype(np.float32)
 
     ctx = gl_context()
-    prog = _program("uv_bake")
+    prog = program("uv_bake")
     targets = [ctx.texture((size, size), 4, dtype="f4") for _ in range(2)]
     fbo = ctx.framebuffer(color_attachments=targets)
     vbo = ctx.buffer(data.tobytes())
@@ -296,7 +269,7 @@ def align_view(mesh: HeadMesh, photo: PhotoView) -> Alignment:
 
 # -- step 3: sampling with visibility ---------------------------------------------------------
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _DepthMap:
     depth: np.ndarray   # (h, w) float32, toward the camera, mm
     solid: np.ndarray   # (h, w) bool: the head covers the pixel and its neighbours
@@ -318,7 +291,7 @@ def _depth_map(mesh: HeadMesh, vertices: np.ndarray, align: Alignment, photo_siz
     m[3, 3] = 1.0
 
     ctx = gl_context()
-    prog = _program("depth_view")
+    prog = program("depth_view")
     prog["world_to_clip"].write(m.T.astype(np.float32).tobytes())
     prog["toward_camera"].value = tuple(float(t) for t in toward)
     tri = mesh.all_triangles(_DRAWN_PARTS).astype(np.uint32)
@@ -338,7 +311,9 @@ def _depth_map(mesh: HeadMesh, vertices: np.ndarray, align: Alignment, photo_siz
         for obj in (vao, ibo, vbo, fbo, target):
             obj.release()
     covered = img[..., 1] > 0.5
-    solid = ndimage.binary_erosion(covered, np.ones((3, 3), bool), border_value=0)
+    # keep samples a photo pixel inside the outline: a bilinear tap there sees no background
+    steps = max(1, int(np.ceil(w / width)))
+    solid = ndimage.binary_erosion(covered, np.ones((3, 3), bool), iterations=steps, border_value=0)
     return _DepthMap(depth=np.ascontiguousarray(img[..., 0]), solid=solid, photo_size=(width, height))
 
 
@@ -347,8 +322,8 @@ def _bilinear(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     h, w = image.shape[:2]
     fx = np.clip(x - 0.5, 0.0, w - 1.0)
     fy = np.clip(y - 0.5, 0.0, h - 1.0)
-    x0 = np.minimum(fx.astype(np.int64), w - 2 if w > 1 else 0)
-    y0 = np.minimum(fy.astype(np.int64), h - 2 if h > 1 else 0)
+    x0 = np.minimum(fx.astype(np.int64), w - 2)   # photos are at least 2x2 (PhotoView checks)
+    y0 = np.minimum(fy.astype(np.int64), h - 2)
     tx = (fx - x0).astype(np.float32)[:, None]
     ty = (fy - y0).astype(np.float32)[:, None]
     flat = image.reshape(-1, 3)

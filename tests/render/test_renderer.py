@@ -99,23 +99,31 @@ def test_pupil_sits_on_the_gaze_axis(generic_face):
                 assert np.hypot(*(centroid - (ex, ey))) < 2.0, (values, centroid, ex, ey)
 
 
-def test_open_jaw_shows_the_mouth_interior(generic_face):
-    """(The procedural head has no mouth slit: its lips stretch, so this is the generic head's.)"""
+def test_open_jaw_shows_teeth_tongue_and_mouth_interior(generic_face):
+    """Unlit, with a pure colour per material: what the opened lips reveal is teeth, tongue and
+    mouth interior. (The procedural head has no mouth slit: its lips stretch, so this is the
+    generic head's.)"""
     face = generic_face
-    with _close_up(face, ["8.1", "8.2", "8.3", "8.4", "2.1"], size=128, margin=0.3) as r:
+    marked = Materials().with_colours(teeth=(0, 0, 1), tongue=(0, 1, 0), mouth=(1, 0, 0))
+    pts = np.array([face.mesh.fp(label) for label in ("8.1", "8.2", "8.3", "8.4", "2.1")])
+    with Renderer(face, width=160, height=160, lighting=False, materials=marked,
+                  camera=frame_points(pts, 160, 160, margin=0.3)) as r:
         closed = r.render(face.neutral())
         pose = face.deform({3: 700})
         opened = r.render(pose)
-        top, bottom = r.camera.project(pose.feature_points[[face.mesh.fp_labels.index(x) for x in ("2.2", "2.3")]],
-                                       128, 128)[:, :2]
-    x = int(round((top[0] + bottom[0]) / 2))
-    rows = slice(int(np.ceil(top[1])) + 1, int(np.floor(bottom[1])) - 1)
-    assert rows.stop - rows.start >= 3
-    gap_open, gap_closed = opened[rows, x - 1:x + 2].astype(float), closed[rows, x - 1:x + 2].astype(float)
-    skin = np.array(Materials().skin.colour) * 255
-    # inside the opened lips: darker and redder than the lit skin there before (mouth, tongue, teeth shadow)
-    assert gap_open.mean() < gap_closed.mean() - 15
-    assert np.abs(gap_open.mean(axis=(0, 1)) - skin).sum() > 40
+        corners = r.camera.project(pose.feature_points[[face.mesh.fp_labels.index(x)
+                                                        for x in ("2.2", "2.3", "2.4", "2.5")]], 160, 160)[:, :2]
+    top, bottom, left, right = corners[0, 1], corners[1, 1], corners[:, 0].min(), corners[:, 0].max()
+    gap = np.s_[int(np.ceil(top)) + 1:int(np.floor(bottom)) - 1, int(left) + 4:int(right) - 4]
+
+    def pure(image, channel):
+        others = [c for c in range(3) if c != channel]
+        return ((image[..., channel] > 200) & (image[..., others] < 40).all(axis=-1))
+
+    shut = sum(pure(closed[gap], c).mean() for c in range(3))
+    found = {name: pure(opened[gap], c).mean() for name, c in (("mouth", 0), ("tongue", 1), ("teeth", 2))}
+    assert found["teeth"] > 0.02 and found["tongue"] > 0.02, found
+    assert sum(found.values()) > 0.6 and shut < 0.05, (found, shut)
 
 
 @pytest.mark.parametrize("size", [(64, 64), (320, 240), (200, 360)])
@@ -169,3 +177,30 @@ def test_errors(procedural_face, generic_face):
     with Renderer(procedural_face, width=16, height=16) as r:
         with pytest.raises(RenderError, match="vertices"):
             r.render(generic_face.neutral())
+
+
+def test_renderers_share_the_program_without_leaking_settings(procedural_face):
+    """Two renderers with other materials, cameras and lighting, drawn in turn, each as if alone."""
+    pose = procedural_face.deform({3: 200})
+    kinds = [dict(), dict(materials=Materials().with_colours(skin=(0.2, 0.6, 0.3)), view="left", lighting=False)]
+    alone = []
+    for kind in kinds:
+        with Renderer(procedural_face, width=48, height=48, **kind) as r:
+            alone.append(r.render(pose))
+    a, b = (Renderer(procedural_face, width=48, height=48, **kind) for kind in kinds)
+    with a, b:
+        for _ in range(2):
+            np.testing.assert_array_equal(a.render(pose), alone[0])
+            np.testing.assert_array_equal(b.render(pose), alone[1])
+    assert np.abs(alone[0].astype(int) - alone[1]).max() > 50
+
+
+def test_texture_must_be_an_8_bit_rgb_image(procedural_face):
+    with pytest.raises(RenderError, match="uint8"):
+        Renderer(procedural_face, width=16, height=16, texture=np.zeros((8, 8)))
+    with pytest.raises(RenderError, match="uint8"):
+        Renderer(procedural_face, width=16, height=16, texture=np.ones((8, 8, 3)))
+    with Renderer(procedural_face, width=32, height=32, lighting=False,
+                  texture=np.full((8, 8, 3), (10, 200, 30), np.uint8)) as r:
+        centre = r.render(procedural_face.neutral())[12:20, 12:20].reshape(-1, 3)
+    np.testing.assert_allclose(np.median(centre, axis=0), (10, 200, 30), atol=2)

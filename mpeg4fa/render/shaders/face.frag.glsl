@@ -9,6 +9,7 @@ uniform vec3 view_direction;      // toward the camera, for orthographic views
 
 uniform vec3 base_colour[6];      // skin, mouth, sclera, teeth, tongue, (unused)
 uniform vec2 shine[6];            // specular strength, shininess
+uniform vec3 lip_colour;
 uniform vec3 iris_colour;
 uniform vec3 pupil_colour;
 
@@ -28,6 +29,7 @@ in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
 flat in int v_material;
+in float v_lips;
 
 out vec4 colour;
 
@@ -54,7 +56,7 @@ void main() {
     if (v_material == 0) {
         if (gl_FrontFacing) {
             slot = 0;
-            base = use_texture ? texture(skin_texture, v_uv).rgb : base_colour[0];
+            base = use_texture ? texture(skin_texture, v_uv).rgb : mix(base_colour[0], lip_colour, v_lips);
         } else {
             slot = 1;
             base = base_colour[1];
