@@ -13,7 +13,7 @@ from ..face import FaceError
 from ..fba import FbaError
 from ..formats import FormatError
 from ..render.errors import RenderError
-from . import codec, model, play
+from . import codec, model, play, texture
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -28,6 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     codec.register(commands)
     model.register(commands)
     play.register(commands)
+    texture.register(commands)
     return parser
 
 

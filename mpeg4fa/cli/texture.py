@@ -1,0 +1,95 @@
+"""``mpeg4fa texture``: bake the skin's UV texture from a front photo (and a side photo)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..render import RenderError
+from .model import face_from_args, face_options
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    p = commands.add_parser(
+        "texture", help="texture the head from a front photo (and a side photo) with annotated feature points",
+        description="Align the head's bounding box to each photo through its annotated feature points, project "
+                    "the skin orthographically, blend front and side colours by the surface normal "
+                    "(k = |Nz| / (|Nx| + |Nz|)), and write the result as a UV texture image that "
+                    "'mpeg4fa play --texture' (or any renderer using the head's UVs) can use. Points files are "
+                    'JSON objects of feature point label -> [x, y] pixels (x right, y down), e.g. '
+                    '{"3.5": [246, 102], "3.6": [203, 100], "9.3": [223, 126], "2.1": [224, 170]}.',
+        epilog="example: mpeg4fa texture me-front.jpg --points me-front.json --side me-left.jpg "
+               "--side-points me-left.json --side-view left -o skin.png --preview check.png")
+    p.add_argument("front", type=Path, help="the front photo")
+    p.add_argument("--points", type=Path, required=True, help="JSON: the front photo's feature points")
+    p.add_argument("--side", type=Path, help="a side photo (optional; without it: front-only mode)")
+    p.add_argument("--side-points", type=Path, help="JSON: the side photo's feature points")
+    p.add_argument("--side-view", choices=("left", "right"), default="left",
+                   help="which side of the face the side photo shows (default left)")
+    p.add_argument("--size", type=int, default=1024, help="texture size in pixels (default 1024)")
+    p.add_argument("-o", "--output", type=Path, required=True, help="the texture image (.png)")
+    p.add_argument("--preview", type=Path, help="also render the textured head (front and three-quarter) here")
+    face_options(p)
+    p.set_defaults(run=run_texture)
+
+
+def _photo(path: Path) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+    try:
+        with Image.open(path) as img:
+            return np.asarray(img.convert("RGB"))
+    except FileNotFoundError:
+        raise RenderError("no such photo", where=str(path)) from None
+    except (OSError, UnidentifiedImageError) as exc:
+        raise RenderError(f"cannot read the photo ({exc})", where=str(path)) from None
+
+
+def _points(path: Path) -> dict[str, tuple[float, float]]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise RenderError("no such points file", where=str(path)) from None
+    except json.JSONDecodeError as exc:
+        raise RenderError(exc.msg, where=f"{path}:{exc.lineno}:{exc.colno}",
+                          hint='a JSON object like {"3.5": [246, 102], ...}') from None
+    if not isinstance(data, dict):
+        raise RenderError("expected a JSON object of label -> [x, y]", where=str(path))
+    return data
+
+
+def run_texture(args: argparse.Namespace) -> int:
+    from PIL import Image
+
+    from ..render import Renderer
+    from ..render.texture import PhotoView, bake_texture
+
+    if (args.side is None) != (args.side_points is None):
+        raise RenderError("--side and --side-points go together", hint="give both, or neither for front-only")
+    face = face_from_args(args)
+    front = PhotoView(_photo(args.front), _points(args.points), "front")
+    side = PhotoView(_photo(args.side), _points(args.side_points), args.side_view) if args.side else None
+    baked = bake_texture(face.mesh, front, side, size=args.size)
+    _save(Image.fromarray(baked.image), args.output)
+    for view, align in baked.alignments.items():
+        print(f"{view} photo: {len(align.labels)} points, alignment residual {align.residual:.1f} px",
+              file=sys.stderr)
+    print(f"{args.output}: {args.size}x{args.size}, {baked.coverage[baked.skin].mean():.0%} of the skin seen "
+          f"in a photo")
+    if args.preview is not None:
+        images = []
+        for view in ("front", "three-quarter"):
+            with Renderer(face, width=384, height=384, samples=4, view=view, texture=baked.image) as r:
+                images.append(r.render(face.neutral()))
+        _save(Image.fromarray(np.concatenate(images, axis=1)), args.preview)
+        print(f"{args.preview}: preview")
+    return 0
+
+
+def _save(image, path: Path) -> None:
+    try:
+        image.save(path)
+    except (OSError, ValueError) as exc:
+        raise RenderError(f"cannot write the image ({exc})", where=str(path)) from None
