@@ -22,6 +22,12 @@ def require_generic() -> None:
 
 
 @pytest.fixture(scope="session")
+def generic_head_installed() -> None:
+    """Skips a test (``pytest.mark.usefixtures("generic_head_installed")``) when the head is not built."""
+    require_generic()
+
+
+@pytest.fixture(scope="session")
 def procedural_head():
     return build_procedural_head()
 

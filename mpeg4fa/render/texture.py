@@ -42,7 +42,6 @@ from an image viewer are half a pixel off, which does not matter).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from importlib import resources
 from typing import Mapping
 
 import numpy as np

@@ -4,20 +4,13 @@ import json
 import pytest
 
 from mpeg4fa.cli import main
-from mpeg4fa.face import asset
 
-pytestmark = pytest.mark.skipif(not asset.is_installed(),
-                                reason="generic head not built: run `mpeg4fa model install` (needs network once)")
+pytestmark = pytest.mark.usefixtures("generic_head_installed")
 
 
-def run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
-
-def test_pose_json_has_the_documented_shape(capsys):
-    code, out, _ = run(capsys, "model", "pose", "--fap", "3=200", "--fap", "19=-100", "--json")
+def test_pose_json_has_the_documented_shape(cli):
+    code, out, _ = cli("model", "pose", "--fap", "3=200", "--fap", "19=-100", "--json")
     assert code == 0
     data = json.loads(out)
     assert set(data) == {"fapu", "neutral", "posed"}
@@ -29,27 +22,27 @@ def test_pose_json_has_the_documented_shape(capsys):
     assert lift == pytest.approx(100 * data["fapu"]["IRISD0"] / 1024, rel=1e-6)
 
 
-def test_pose_text_and_viseme(capsys):
-    code, out, _ = run(capsys, "model", "pose", "--viseme", "AA", "--expression", "joy=30")
+def test_pose_text_and_viseme(cli):
+    code, out, _ = cli("model", "pose", "--viseme", "AA", "--expression", "joy=30")
     assert code == 0 and "open_jaw" in out and "2.1" in out
 
 
-def test_pose_arkit_deformer_gives_the_same_points(capsys):
-    _, a, _ = run(capsys, "model", "pose", "--viseme", "ou", "--json")
-    _, b, _ = run(capsys, "model", "pose", "--viseme", "ou", "--deformer", "arkit", "--json")
+def test_pose_arkit_deformer_gives_the_same_points(cli):
+    _, a, _ = cli("model", "pose", "--viseme", "ou", "--json")
+    _, b, _ = cli("model", "pose", "--viseme", "ou", "--deformer", "arkit", "--json")
     pa, pb = json.loads(a)["posed"], json.loads(b)["posed"]
     assert all(pa[k] == pytest.approx(pb[k], abs=1e-6) for k in pa)
 
 
-def test_bad_pose_requests(capsys):
+def test_bad_pose_requests(cli):
     with pytest.raises(SystemExit):
         main(["model", "pose", "--fap", "1=3"])
-    code, _, err = run(capsys, "model", "pose", "--viseme", "XX")
+    code, _, err = cli("model", "pose", "--viseme", "XX")
     assert code == 1 and "unknown viseme" in err
 
 
-def test_info_and_calibration_to_an_fdp(capsys, tmp_path):
-    code, out, _ = run(capsys, "model", "info", "--json")
+def test_info_and_calibration_to_an_fdp(cli, tmp_path):
+    code, out, _ = cli("model", "info", "--json")
     info = json.loads(out)
     assert info["parts"]["skin"]["vertices"] > 4000 and len(info["feature_points"]) == 84
     from mpeg4fa.face import FaceModel
@@ -58,10 +51,10 @@ def test_info_and_calibration_to_an_fdp(capsys, tmp_path):
     bigger = Fdp.from_points({label: 1.2 * fdp.point(label) for label in fdp.labels})
     path = tmp_path / "face.fdp"
     save_fdp(bigger, path)
-    code, out, _ = run(capsys, "model", "info", "--fdp", str(path), "--json")
+    code, out, _ = cli("model", "info", "--fdp", str(path), "--json")
     assert code == 0
     calibrated = json.loads(out)
     assert calibrated["fapu"]["ES0"] == pytest.approx(1.2 * info["fapu"]["ES0"], rel=1e-6)
     assert calibrated["calibration"]["max_error_relative"] < 1e-6
-    code, _, err = run(capsys, "model", "info", "--fdp", str(tmp_path / "missing.fdp"))
+    code, _, err = cli("model", "info", "--fdp", str(tmp_path / "missing.fdp"))
     assert code == 1 and "missing.fdp" in err

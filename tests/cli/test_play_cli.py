@@ -7,18 +7,11 @@ import pytest
 from PIL import Image
 
 from mpeg4fa.cli import main
-from mpeg4fa.face import asset
 from mpeg4fa.fba import demo_stream, encode
 from mpeg4fa.render.video import probe_media
 
-pytestmark = pytest.mark.skipif(not asset.is_installed(),
-                                reason="generic head not built: run `mpeg4fa model install` (needs network once)")
+pytestmark = pytest.mark.usefixtures("generic_head_installed")
 
-
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture
@@ -40,9 +33,9 @@ def _wav(path, seconds, rate=16000):
         w.writeframes((8000 * np.sin(2 * np.pi * 200 * t)).astype("<i2").tobytes())
 
 
-def test_play_mp4_finds_the_wav_beside_the_stream(capsys, talk, tmp_path):
+def test_play_mp4_finds_the_wav_beside_the_stream(cli, talk, tmp_path):
     path, stream = talk
-    code, out, err = run(capsys, "play", path, "-o", tmp_path / "talk.mp4", "--size", "64", "--json")
+    code, out, err = cli("play", path, "-o", tmp_path / "talk.mp4", "--size", "64", "--json")
     assert code == 0, err
     assert "talk.wav (found beside the stream" in err
     summary = json.loads(out)
@@ -51,40 +44,40 @@ def test_play_mp4_finds_the_wav_beside_the_stream(capsys, talk, tmp_path):
     assert summary["audio"].endswith("talk.wav") and abs(info.av_offset) <= 0.001
 
 
-def test_play_png_frames_without_audio(capsys, talk, tmp_path):
+def test_play_png_frames_without_audio(cli, talk, tmp_path):
     path, stream = talk
-    code, out, err = run(capsys, "play", path, "-o", tmp_path / "frames", "--size", "40x32", "--no-audio")
+    code, out, err = cli("play", path, "-o", tmp_path / "frames", "--size", "40x32", "--no-audio")
     assert code == 0, err
     pngs = sorted((tmp_path / "frames").glob("*.png"))
     assert len(pngs) == len(stream) and Image.open(pngs[0]).size == (40, 32)
     assert not (tmp_path / "frames" / "audio.wav").exists() and "frames at" in out
 
 
-def test_play_says_what_it_padded(capsys, talk, tmp_path):
+def test_play_says_what_it_padded(cli, talk, tmp_path):
     path, stream = talk
     _wav(tmp_path / "long.wav", stream.duration + 1.0)
-    code, _, err = run(capsys, "play", path, "-o", tmp_path / "x.mp4", "--size", "32", "--audio", tmp_path / "long.wav")
+    code, _, err = cli("play", path, "-o", tmp_path / "x.mp4", "--size", "32", "--audio", tmp_path / "long.wav")
     assert code == 0 and "warning: audio is" in err and "video padded with 25 frames" in err
 
 
-def test_play_errors_are_one_line(capsys, talk, tmp_path):
+def test_play_errors_are_one_line(cli, talk, tmp_path):
     path, _ = talk
-    code, _, err = run(capsys, "play", path)
+    code, _, err = cli("play", path)
     assert code == 1 and "say where the frames go" in err
     bad = tmp_path / "bad.wav"
     bad.write_text("not audio")
-    code, _, err = run(capsys, "play", path, "-o", tmp_path / "x.mp4", "--audio", bad)
+    code, _, err = cli("play", path, "-o", tmp_path / "x.mp4", "--audio", bad)
     assert code == 1 and "bad.wav" in err and err.count("\n") == 1
-    code, _, err = run(capsys, "play", tmp_path / "missing.fba", "-o", tmp_path / "x.mp4")
+    code, _, err = cli("play", tmp_path / "missing.fba", "-o", tmp_path / "x.mp4")
     assert code == 1 and "missing.fba" in err
     with pytest.raises(SystemExit):
         main(["play", str(path), "-o", "x.mp4", "--size", "big"])
 
 
-def test_snapshot(capsys, talk, tmp_path):
+def test_snapshot(cli, talk, tmp_path):
     path, stream = talk
-    code, out, err = run(capsys, "snapshot", path, "--frame", "3", "-o", tmp_path / "f3.png", "--size", "96", "--aa", "4")
+    code, out, err = cli("snapshot", path, "--frame", "3", "-o", tmp_path / "f3.png", "--size", "96", "--aa", "4")
     assert code == 0, err
     assert Image.open(tmp_path / "f3.png").size == (96, 96)
-    code, _, err = run(capsys, "snapshot", path, "--frame", str(len(stream)), "-o", tmp_path / "f.png")
+    code, _, err = cli("snapshot", path, "--frame", str(len(stream)), "-o", tmp_path / "f.png")
     assert code == 1 and "outside the stream" in err

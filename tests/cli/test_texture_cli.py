@@ -5,18 +5,11 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from mpeg4fa.cli import main
-from mpeg4fa.face import FaceModel, asset
+from mpeg4fa.face import FaceModel
 from mpeg4fa.render import Materials, Renderer, frame_points
 
-pytestmark = pytest.mark.skipif(not asset.is_installed(),
-                                reason="generic head not built: run `mpeg4fa model install` (needs network once)")
+pytestmark = pytest.mark.usefixtures("generic_head_installed")
 
-
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture
@@ -35,9 +28,9 @@ def front_photo(tmp_path):
     return tmp_path / "front.png", tmp_path / "front.json"
 
 
-def test_texture_bakes_and_previews(capsys, tmp_path, front_photo):
+def test_texture_bakes_and_previews(cli, tmp_path, front_photo):
     photo, points = front_photo
-    code, out, err = run(capsys, "texture", photo, "--points", points, "--size", "256", "-o", tmp_path / "skin.png",
+    code, out, err = cli("texture", photo, "--points", points, "--size", "256", "-o", tmp_path / "skin.png",
                          "--preview", tmp_path / "preview.png")
     assert code == 0, err
     skin = np.asarray(Image.open(tmp_path / "skin.png"))
@@ -49,13 +42,13 @@ def test_texture_bakes_and_previews(capsys, tmp_path, front_photo):
     assert "alignment residual" in err and "of the skin seen" in out
 
 
-def test_texture_errors(capsys, tmp_path, front_photo):
+def test_texture_errors(cli, tmp_path, front_photo):
     photo, points = front_photo
     bad = tmp_path / "bad.json"
     bad.write_text('{"3.5": [1, 2],\n  "3.6": [3, }')
-    code, _, err = run(capsys, "texture", photo, "--points", bad, "-o", tmp_path / "s.png")
+    code, _, err = cli("texture", photo, "--points", bad, "-o", tmp_path / "s.png")
     assert code == 1 and "bad.json:2:" in err
-    code, _, err = run(capsys, "texture", photo, "--points", points, "--side", photo, "-o", tmp_path / "s.png")
+    code, _, err = cli("texture", photo, "--points", points, "--side", photo, "-o", tmp_path / "s.png")
     assert code == 1 and "--side-points" in err
-    code, _, err = run(capsys, "texture", tmp_path / "none.png", "--points", points, "-o", tmp_path / "s.png")
+    code, _, err = cli("texture", tmp_path / "none.png", "--points", points, "-o", tmp_path / "s.png")
     assert code == 1 and "none.png" in err
