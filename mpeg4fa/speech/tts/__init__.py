@@ -1,0 +1,1 @@
+"""Speech engines behind one interface: audio plus timed phoneme, word and mark events."""
