@@ -1,0 +1,284 @@
+r"""Inline expression tags in the text that the encoder speaks: ``(joy, 40, 0.5) Hello``.
+
+The encoder needs two things from the tagged text: the plain text for the speech
+engine, and for each tag the place in that plain text where it stood, because a
+tag's start time is the speech time at that character. So :func:`parse_markup`
+removes the tags and returns each one with its character offset.
+
+Grammar (``WS`` is any run of characters for which ``str.isspace()`` is true)::
+
+    markup     := ( text | escape | tag )*
+    escape     := "\(" | "\)" | "\\"          -- a literal "(", ")" or "\"
+    tag        := "(" WS? expression WS? "," WS? intensity WS? "," WS? seconds WS? ")"
+    expression := word                         -- case-insensitive, a known expression
+    intensity  := ["+" | "-"] [0-9]+           -- must lie in 0..63; 0 resets to neutral
+    seconds    := ["+" | "-"] ( [0-9]+ ["." [0-9]*] | "." [0-9]+ )   -- must be >= 0
+    word       := a letter or "_", then letters, digits or "_" (Unicode, as in regex \w)
+
+Which parentheses are tags: an unescaped ``(`` followed (after optional
+whitespace) by a word and a comma starts a tag, and a ``(`` with nothing but
+whitespace before its ``)`` is an empty tag (an error). Every other parenthesis
+is ordinary text, so ``(see below)``, ``(3, 4)`` and a stray ``)`` are spoken
+as written. A tag ends at the first ``)``; reaching a ``(`` or the end of the
+text first means it is unclosed. A tag may span lines. A backslash before any
+other character is an ordinary backslash.
+
+Whitespace rule (offsets refer to the text after it is applied):
+
+* a tag, together with the whitespace touching it and any further tags in that
+  run, is a *gap*; the gap becomes one space " " if it contained whitespace and
+  lies between two pieces of text, and nothing otherwise (so ``word(joy,9,1)word``
+  stays ``wordword``, which is right for Chinese, where words are not spaced);
+* a gap at the start or end of the text becomes nothing, and leading and trailing
+  whitespace of the whole text is trimmed;
+* all other whitespace is kept as written, so text without tags parses to
+  itself, stripped.
+
+Each tag's offset is that of the first character spoken after it, i.e. where
+the gap ended in the plain text (``len(text)`` for tags at the end); tags in the
+same gap share one offset. Line breaks are ``\n``, ``\r\n`` and a lone ``\r``;
+lines and columns are 1-based and count characters (a tab is one column).
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from bisect import bisect_right
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from mpeg4fa.spec import HIGH_LEVEL_FIELDS
+from mpeg4fa.spec.profiles import EXPRESSION_PROFILES
+from mpeg4fa.speech.errors import MarkupError
+
+__all__ = ["Tag", "Markup", "parse_markup", "INTENSITY_MIN", "INTENSITY_MAX"]
+
+_INTENSITY = next(f for f in HIGH_LEVEL_FIELDS if f.fap == 2 and f.field == "intensity1")
+INTENSITY_MIN: int = _INTENSITY.i_min
+"""Lowest tag intensity (0: neutral), FAP 2's intensity range so a tag always fits the stream."""
+INTENSITY_MAX: int = _INTENSITY.i_max
+"""Highest tag intensity (63: the full expression)."""
+
+_HEAD = re.compile(r"\(\s*([^\W\d]\w*)\s*,")
+"""What makes a ``(`` a tag: a word, then a comma."""
+_EMPTY = re.compile(r"\(\s*\)")
+_PAREN = re.compile(r"[()]")
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+_INTEGER = re.compile(r"([+-]?)([0-9]+)")
+_DECIMAL = re.compile(r"([+-]?)([0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
+_ESCAPABLE = "()\\"
+_EXAMPLE = "(joy, 40, 0.5)"
+_LITERAL_HINT = r"write \( for a literal parenthesis"
+_QUOTE_MAX = 24
+
+
+def _quote(text: str) -> str:
+    """The offending part for a message, cut short so a runaway tag does not flood it."""
+    return repr(text if len(text) <= _QUOTE_MAX else text[:_QUOTE_MAX] + "...")
+
+
+@dataclass(frozen=True)
+class Tag:
+    """One expression change: reach ``intensity`` of ``expression`` in ``seconds``, from ``offset`` on."""
+
+    expression: str
+    """Lower-case expression name."""
+    intensity: int
+    """Target intensity 0..63 (0: back to neutral)."""
+    seconds: float
+    """Time to reach the intensity, >= 0."""
+    offset: int
+    """Character offset in :attr:`Markup.text` of the first character spoken after the tag."""
+    line: int
+    """1-based line of the tag's ``(`` in the source, for messages."""
+    column: int
+    """1-based column of the tag's ``(`` in the source."""
+
+
+@dataclass(frozen=True)
+class Markup:
+    """Tagged text taken apart: what to speak and, in source order, when the face changes."""
+
+    text: str
+    tags: tuple[Tag, ...]
+    name: str = "<text>"
+    """Where the text came from (a file name), as used in error messages."""
+
+
+class _Positions:
+    """Index -> (line, column), 1-based, so errors can name the place the user sees in an editor."""
+
+    def __init__(self, source: str) -> None:
+        self._starts = [0] + [m.end() for m in _LINE_BREAK.finditer(source)]
+
+    def __call__(self, index: int) -> tuple[int, int]:
+        line = bisect_right(self._starts, index)
+        return line, index - self._starts[line - 1] + 1
+
+
+class _Parser:
+    """One pass over the source; builds the plain text character by character.
+
+    Characters go to a list so that an offset is simply its length; whitespace
+    next to tags is held back until it is known whether text follows.
+    """
+
+    def __init__(self, source: str, known: tuple[str, ...], name: str) -> None:
+        self.source, self.known, self.name = source, known, name
+        self.where = _Positions(source)
+        self.out: list[str] = []
+        self.tags: list[Tag] = []
+        self.pending: list[tuple[str, int, float, int]] = []
+        """Tags of the current gap: (expression, intensity, seconds, source index)."""
+        self.gap_space = False
+
+    def error(self, index: int, message: str, hint: str) -> MarkupError:
+        line, column = self.where(index)
+        return MarkupError(message, line, column, hint, self.name)
+
+    # -- building the plain text ------------------------------------------------------------------
+
+    def emit(self, char: str, literal: bool = False) -> None:
+        space = not literal and char.isspace()
+        if space and self.pending:
+            self.gap_space = True
+        elif space and not self.out:
+            return  # leading whitespace is trimmed
+        else:
+            self.flush(separate=True)
+            self.out.append(char)
+
+    def add_tag(self, expression: str, intensity: int, seconds: float, index: int) -> None:
+        while self.out and self.out[-1].isspace():
+            self.out.pop()
+            self.gap_space = True
+        self.pending.append((expression, intensity, seconds, index))
+
+    def flush(self, separate: bool) -> None:
+        if not self.pending:
+            return
+        if separate and self.gap_space and self.out:
+            self.out.append(" ")
+        offset = len(self.out)
+        for expression, intensity, seconds, index in self.pending:
+            line, column = self.where(index)
+            self.tags.append(Tag(expression, intensity, seconds, offset, line, column))
+        self.pending.clear()
+        self.gap_space = False
+
+    def finish(self) -> Markup:
+        while self.out and self.out[-1].isspace():
+            self.out.pop()
+        self.flush(separate=False)
+        return Markup("".join(self.out), tuple(self.tags), self.name)
+
+    # -- reading the source -----------------------------------------------------------------------
+
+    def run(self) -> Markup:
+        source, i, n = self.source, 0, len(self.source)
+        while i < n:
+            char = source[i]
+            if char == "\\" and i + 1 < n and source[i + 1] in _ESCAPABLE:
+                self.emit(source[i + 1], literal=True)
+                i += 2
+            elif char == "(" and _EMPTY.match(source, i):
+                raise self.error(i, "empty tag", f"write a tag as {_EXAMPLE}, or {_LITERAL_HINT}")
+            elif char == "(" and (head := _HEAD.match(source, i)):
+                i = self.tag(i, head)
+            else:
+                self.emit(char)
+                i += 1
+        return self.finish()
+
+    def tag(self, start: int, head: re.Match[str]) -> int:
+        """Reads the tag whose ``(`` is at ``start``; returns the index after its ``)``."""
+        close = _PAREN.search(self.source, head.end())
+        if close is None or close.group() == "(":
+            before = "the end of the text" if close is None else "the next '('"
+            raise self.error(start, f"tag is not closed before {before}",
+                             f"end the tag with ')', as in {_EXAMPLE}, or {_LITERAL_HINT}")
+        end = close.start()
+        # Commas that split the parts (the first one is the head's); the word is part 0.
+        commas = [head.end() - 1]
+        while (comma := self.source.find(",", commas[-1] + 1, end)) != -1:
+            commas.append(comma)
+        delimiters = [*commas[1:], end]
+        parts = [(head.start(1), head.end(1))]
+        parts += [self.strip(comma + 1, stop) for comma, stop in zip(commas, delimiters)]
+        expression = self.expression(*parts[0])
+        intensity = self.intensity(*parts[1], delimiter=delimiters[0])
+        if len(parts) < 3:
+            raise self.error(end, f"tag has {len(parts)} parts, needs 3: missing T (seconds)",
+                             f"add the time to reach the intensity, as in {_EXAMPLE}")
+        seconds = self.seconds(*parts[2], delimiter=delimiters[1])
+        if len(parts) > 3:
+            raise self.error(commas[2], f"tag has {len(parts)} parts, needs 3",
+                             f"write (expression, intensity, seconds), as in {_EXAMPLE}")
+        self.add_tag(expression, intensity, seconds, start)
+        return end + 1
+
+    def strip(self, start: int, stop: int) -> tuple[int, int]:
+        """Source bounds of a part without the whitespace around it."""
+        text = self.source[start:stop]
+        lead = len(text) - len(text.lstrip())
+        return start + lead, start + len(text.rstrip())
+
+    def expression(self, start: int, stop: int) -> str:
+        word = self.source[start:stop]
+        name = word.lower()
+        if name in self.known:
+            return name
+        close = difflib.get_close_matches(name, self.known, n=1)
+        guess = f"did you mean {close[0]!r}? " if close else ""
+        known = ", ".join(self.known) if self.known else "(none)"
+        raise self.error(start, f"unknown expression {_quote(word)}",
+                         f"{guess}known expressions: {known}; or {_LITERAL_HINT}")
+
+    def intensity(self, start: int, stop: int, delimiter: int) -> int:
+        text = self.source[start:stop]
+        hint = f"write a whole number from {INTENSITY_MIN} (neutral) to {INTENSITY_MAX} (full), " \
+               f"as in {_EXAMPLE}"
+        if not text:
+            raise self.error(delimiter, "missing intensity", hint)
+        match = _INTEGER.fullmatch(text)
+        if match is None:
+            raise self.error(start, f"intensity {_quote(text)} is not an integer", hint)
+        digits = match.group(2).lstrip("0") or "0"
+        # Compare long digit strings without int(): int() refuses very long ones.
+        value = int(digits) if len(digits) <= 6 else INTENSITY_MAX + 1
+        if match.group(1) == "-":
+            value = -value
+        if not INTENSITY_MIN <= value <= INTENSITY_MAX:
+            raise self.error(
+                start, f"intensity {_quote(text)} is out of range {INTENSITY_MIN}..{INTENSITY_MAX}", hint)
+        return value
+
+    def seconds(self, start: int, stop: int, delimiter: int) -> float:
+        text = self.source[start:stop]
+        hint = f"write the time to reach the intensity in seconds, e.g. 0.5, 1 or .25, as in {_EXAMPLE}"
+        if not text:
+            raise self.error(delimiter, "missing T (seconds)", hint)
+        match = _DECIMAL.fullmatch(text)
+        if match is None:
+            raise self.error(start, f"T {_quote(text)} is not a number", hint)
+        value = float(match.group(2))
+        if match.group(1) == "-" and value != 0.0:
+            raise self.error(start, f"T {_quote(text)} is negative", "a time cannot be negative: " + hint)
+        if not math.isfinite(value):
+            raise self.error(start, f"T {_quote(text)} is too large", hint)
+        return value + 0.0
+
+
+def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name: str = "<text>") -> Markup:
+    """Split tagged text into the plain text to speak and its tags (see the module docstring).
+
+    ``expressions`` are the names a tag may use, matched case-insensitively;
+    by default those of :data:`~mpeg4fa.spec.profiles.EXPRESSION_PROFILES`, so
+    an expression added to ``expression_faps.csv`` can be tagged at once.
+    ``name`` labels error messages. Raises :class:`MarkupError` (with line,
+    column and a hint) for a malformed tag, and nothing else for any text.
+    """
+    names = EXPRESSION_PROFILES if expressions is None else expressions
+    known = tuple(dict.fromkeys(str(n).lower() for n in names))
+    return _Parser(source, known, name).run()
