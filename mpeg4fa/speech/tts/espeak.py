@@ -1,0 +1,440 @@
+"""espeak-ng through its C API (ctypes), the engine that gives sample-exact phoneme timing.
+
+Only the C API reports *when* each phoneme starts in the audio (``espeak_EVENT.sample``); the
+command line and pyttsx3 do not. The library and its data come from the ``espeakng_loader``
+wheel (espeak-ng 1.52): Debian's 1.51 reads Mandarin tone digits as English numbers.
+
+espeak-ng is one global state per process, so it is initialised once (module level) and every
+synthesis holds one lock. Do not use pyttsx3 in the same process: it drives the same instance.
+"""
+from __future__ import annotations
+
+import bisect
+import ctypes
+import html
+import threading
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from mpeg4fa.speech.errors import TTSError
+from mpeg4fa.speech.tts.base import Event, Speech
+
+WHERE = "espeak"
+DEFAULT_VOICE = "en-us"
+DEFAULT_RATE = 175
+RATE_RANGE = (80, 450)  # espeakRATE_MINIMUM .. espeakRATE_MAXIMUM (words per minute)
+
+# speak_lib.h constants
+AUDIO_OUTPUT_SYNCHRONOUS = 2
+POS_CHARACTER = 1
+espeakINITIALIZE_PHONEME_EVENTS = 0x0001
+espeakCHARS_UTF8 = 0x1
+espeakSSML = 0x10
+espeakENDPAUSE = 0x1000
+espeakRATE = 1
+EE_OK = 0
+
+EV_LIST_TERMINATED = 0
+EV_WORD = 1
+EV_SENTENCE = 2
+EV_MARK = 3
+EV_PLAY = 4
+EV_END = 5  # end of clause or sentence
+EV_MSG_TERMINATED = 6
+EV_PHONEME = 7
+EV_SAMPLERATE = 8
+
+
+class _EventId(ctypes.Union):
+    """``espeak_EVENT.id``: a number (word, sentence), a name (mark) or an 8-byte phoneme name."""
+
+    _fields_ = [
+        ("number", ctypes.c_int),
+        ("name", ctypes.c_char_p),
+        ("string", ctypes.c_char * 8),
+    ]
+
+
+class EspeakEvent(ctypes.Structure):
+    """``espeak_EVENT`` as laid out on 64-bit Linux: six 4-byte ints, a pointer at offset 24,
+    the 8-byte union at offset 32; 40 bytes in all."""
+
+    _fields_ = [
+        ("type", ctypes.c_int),
+        ("unique_identifier", ctypes.c_uint),
+        ("text_position", ctypes.c_int),
+        ("length", ctypes.c_int),
+        ("audio_position", ctypes.c_int),
+        ("sample", ctypes.c_int),
+        ("user_data", ctypes.c_void_p),
+        ("id", _EventId),
+    ]
+
+
+class EspeakVoice(ctypes.Structure):
+    """``espeak_VOICE``; ``languages`` is a list of (priority byte, NUL-ended name), 0-ended."""
+
+    _fields_ = [
+        ("name", ctypes.c_char_p),
+        ("languages", ctypes.c_void_p),
+        ("identifier", ctypes.c_char_p),
+        ("gender", ctypes.c_ubyte),
+        ("age", ctypes.c_ubyte),
+        ("variant", ctypes.c_ubyte),
+        ("xx1", ctypes.c_ubyte),
+        ("score", ctypes.c_int),
+        ("spare", ctypes.c_void_p),
+    ]
+
+
+SYNTH_CALLBACK = ctypes.CFUNCTYPE(
+    ctypes.c_int, ctypes.POINTER(ctypes.c_short), ctypes.c_int, ctypes.POINTER(EspeakEvent)
+)
+
+
+@dataclass
+class RawEvent:
+    """One espeak event copied out of the callback (the C memory is reused after it returns)."""
+
+    type: int
+    text_position: int
+    length: int
+    audio_position: int
+    sample: int
+    number: int = 0
+    name: str = ""
+
+
+@dataclass
+class _Collector:
+    """Where the callback puts one synthesis' PCM chunks and events."""
+
+    chunks: list[np.ndarray] = field(default_factory=list)
+    events: list[RawEvent] = field(default_factory=list)
+    error: BaseException | None = None
+
+
+_lock = threading.RLock()
+_lib: ctypes.CDLL | None = None
+_sample_rate = 0
+_collector: _Collector | None = None
+_callback_ref = None  # keeps the C function pointer alive for the life of the process
+
+
+def _on_synth(wav, n: int, events) -> int:
+    """Copy audio and events out; never raise into C (store the error, raise after)."""
+    col = _collector
+    if col is None:
+        return 0
+    try:
+        if wav and n > 0:
+            col.chunks.append(np.ctypeslib.as_array(wav, shape=(n,)).astype(np.int16, copy=True))
+        if events:
+            i = 0
+            while True:
+                ev = events[i]
+                if ev.type == EV_LIST_TERMINATED:
+                    break
+                raw = RawEvent(ev.type, ev.text_position, ev.length, ev.audio_position, ev.sample)
+                if ev.type == EV_PHONEME:
+                    raw.name = bytes(ev.id.string).split(b"\0", 1)[0].decode("utf-8", "replace")
+                elif ev.type in (EV_MARK, EV_PLAY):
+                    raw.name = (ev.id.name or b"").decode("utf-8", "replace")
+                else:
+                    raw.number = ev.id.number
+                col.events.append(raw)
+                i += 1
+    except BaseException as exc:  # noqa: BLE001 - must not cross into C
+        if col.error is None:
+            col.error = exc
+    return 0
+
+
+def _load() -> ctypes.CDLL:
+    """Load and initialise the wheel's libespeak-ng once per process (caller holds ``_lock``)."""
+    global _lib, _sample_rate, _callback_ref
+    if _lib is not None:
+        return _lib
+    hint = "install the espeakng-loader wheel (pip install espeakng-loader==0.2.4)"
+    try:
+        import espeakng_loader
+    except ImportError as exc:
+        raise TTSError(f"espeakng_loader is not installed ({exc})", where=WHERE, hint=hint) from exc
+    try:
+        lib_path = str(espeakng_loader.get_library_path())
+        data_path = str(espeakng_loader.get_data_path())
+        lib = ctypes.CDLL(lib_path)
+    except OSError as exc:
+        raise TTSError(f"cannot load libespeak-ng ({exc})", where=WHERE, hint=hint) from exc
+
+    lib.espeak_Initialize.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p, ctypes.c_int]
+    lib.espeak_Initialize.restype = ctypes.c_int
+    lib.espeak_SetSynthCallback.argtypes = [SYNTH_CALLBACK]
+    lib.espeak_SetSynthCallback.restype = None
+    lib.espeak_SetVoiceByName.argtypes = [ctypes.c_char_p]
+    lib.espeak_SetVoiceByName.restype = ctypes.c_int
+    lib.espeak_SetParameter.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int]
+    lib.espeak_SetParameter.restype = ctypes.c_int
+    lib.espeak_Synth.argtypes = [
+        ctypes.c_void_p, ctypes.c_size_t, ctypes.c_uint, ctypes.c_int, ctypes.c_uint,
+        ctypes.c_uint, ctypes.POINTER(ctypes.c_uint), ctypes.c_void_p,
+    ]
+    lib.espeak_Synth.restype = ctypes.c_int
+    lib.espeak_Synchronize.argtypes = []
+    lib.espeak_Synchronize.restype = ctypes.c_int
+    lib.espeak_ListVoices.argtypes = [ctypes.POINTER(EspeakVoice)]
+    lib.espeak_ListVoices.restype = ctypes.POINTER(ctypes.POINTER(EspeakVoice))
+
+    rate = lib.espeak_Initialize(
+        AUDIO_OUTPUT_SYNCHRONOUS, 0, data_path.encode(), espeakINITIALIZE_PHONEME_EVENTS
+    )
+    if rate <= 0:
+        raise TTSError(
+            f"espeak_Initialize failed (returned {rate}) with data path {data_path}",
+            where=WHERE, hint="reinstall the espeakng-loader wheel; its espeak-ng-data may be damaged",
+        )
+    _callback_ref = SYNTH_CALLBACK(_on_synth)
+    lib.espeak_SetSynthCallback(_callback_ref)
+    _lib, _sample_rate = lib, rate
+    return lib
+
+
+def _languages(ptr: int | None) -> tuple[str, ...]:
+    """Decode espeak's packed language list: (priority byte, NUL-ended name)*, then a 0 byte."""
+    if not ptr:
+        return ()
+    out: list[str] = []
+    offset = 0
+    while ctypes.c_ubyte.from_address(ptr + offset).value != 0 and len(out) < 32:
+        name = ctypes.string_at(ptr + offset + 1)
+        out.append(name.decode("utf-8", "replace"))
+        offset += 2 + len(name)
+    return tuple(out)
+
+
+def list_voices() -> list[tuple[str, tuple[str, ...]]]:
+    """All installed voices as (name, languages); a voice can be chosen by name or language."""
+    with _lock:
+        lib = _load()
+        table = lib.espeak_ListVoices(None)
+        out: list[tuple[str, tuple[str, ...]]] = []
+        i = 0
+        while table and table[i]:
+            v = table[i].contents
+            out.append(((v.name or b"").decode("utf-8", "replace"), _languages(v.languages)))
+            i += 1
+    return out
+
+
+def _voice_hint(voice: str) -> str:
+    """A few voices close to the one asked for, so the error says what to write instead."""
+    voices = list_voices()
+    key = voice.lower().split("-")[0][:2]
+    close = [lang for _, langs in voices for lang in langs if lang.lower().startswith(key)]
+    common = ["en-us", "en-gb", "cmn", "cmn-latn-pinyin", "fr-fr", "de", "es", "ja"]
+    names = list(dict.fromkeys(close + common))[:10]
+    return f"try one of: {', '.join(names)} ({len(voices)} voices installed; see list_voices())"
+
+
+def _ssml_with_marks(text: str, marks: Sequence[tuple[int, str]]) -> tuple[str, list[int], dict[str, str]]:
+    """Escape ``text`` for XML and insert ``<mark name=.../>`` at each offset.
+
+    Returns the SSML; for each SSML character index (plus one past the end) the plain-text
+    offset it came from, so positions espeak reports can be mapped back; and the mark names
+    used in the SSML -> the caller's names. espeak hands attribute values back still escaped,
+    so the SSML carries plain generated names (``m0``, ``m1``...) instead of the caller's.
+    """
+    by_offset: dict[int, list[str]] = {}
+    names: dict[str, str] = {}
+    for k, (offset, name) in enumerate(marks):
+        tag_name = f"m{k}"
+        names[tag_name] = name
+        by_offset.setdefault(offset, []).append(tag_name)
+    parts: list[str] = []
+    back: list[int] = []
+    for i in range(len(text) + 1):
+        for tag_name in by_offset.get(i, ()):
+            tag = f'<mark name="{tag_name}"/>'
+            parts.append(tag)
+            back.extend([i] * len(tag))
+        if i < len(text):
+            piece = html.escape(text[i], quote=False)
+            parts.append(piece)
+            back.extend([i] * len(piece))
+    back.append(len(text))
+    return "".join(parts), back, names
+
+
+class EspeakEngine:
+    """espeak-ng speech with phoneme, word, sentence and mark events timed to the sample.
+
+    Voices: ``en-us`` (default) for English, ``cmn`` for hanzi, ``cmn-latn-pinyin`` for pinyin
+    with tone digits. Phoneme ``text`` is espeak's mnemonic (``h``, ``@``, ``oU``; pauses start
+    with ``_``); Mandarin phonemes carry no tones.
+    """
+
+    name = "espeak"
+
+    def __init__(self, voice: str = DEFAULT_VOICE, rate: int = DEFAULT_RATE, *,
+                 keep_stress: bool = False) -> None:
+        self.voice = voice
+        self.rate = rate
+        # espeak prefixes stressed vowels with ' (primary) or , (secondary); visemes do not care
+        self.keep_stress = keep_stress
+
+    @property
+    def sample_rate(self) -> int:
+        """The library's output rate (22050 Hz for espeak-ng voices)."""
+        with _lock:
+            _load()
+            return _sample_rate
+
+    def synthesize(
+        self,
+        text: str,
+        *,
+        voice: str | None = None,
+        rate: int | None = None,
+        marks: Sequence[tuple[int, str]] = (),
+    ) -> Speech:
+        """Speak ``text`` and return the audio with its events (see ``Engine.synthesize``).
+
+        Marks go in as SSML ``<mark/>``s; put them between words: espeak splits a word at a
+        mark inside it (and pronounces the halves separately).
+        """
+        global _collector
+        voice = voice or self.voice
+        wpm = self.rate if rate is None else rate
+        if not isinstance(text, str) or not text.strip():
+            raise TTSError("nothing to say: the text is empty", where=WHERE,
+                           hint="pass some words to synthesize")
+        if "\0" in text:
+            raise TTSError("the text contains a NUL character", where=WHERE,
+                           hint="remove NUL characters from the text")
+        if not RATE_RANGE[0] <= int(wpm) <= RATE_RANGE[1]:
+            raise TTSError(f"rate {wpm} words per minute is out of range", where=WHERE,
+                           hint=f"use {RATE_RANGE[0]}..{RATE_RANGE[1]} (default {DEFAULT_RATE})")
+        marks = [(int(o), str(n)) for o, n in marks]
+        for offset, name in marks:
+            if not 0 <= offset <= len(text):
+                raise TTSError(f"mark {name!r} at offset {offset} is outside the text",
+                               where=WHERE, hint=f"offsets run 0..{len(text)}")
+            if not name:
+                raise TTSError("a mark has an empty name", where=WHERE, hint="name every mark")
+
+        flags = espeakCHARS_UTF8 | espeakENDPAUSE
+        if marks:
+            source, back, mark_names = _ssml_with_marks(text, marks)
+            flags |= espeakSSML
+        else:
+            source, back, mark_names = text, list(range(len(text) + 1)), {}
+
+        with _lock:
+            lib = _load()
+            if lib.espeak_SetVoiceByName(voice.encode("utf-8")) != EE_OK:
+                raise TTSError(f"unknown voice {voice!r}", where=WHERE, hint=_voice_hint(voice))
+            lib.espeak_SetParameter(espeakRATE, int(wpm), 0)
+            col = _collector = _Collector()
+            try:
+                data = source.encode("utf-8") + b"\0"
+                buf = ctypes.create_string_buffer(data, len(data))
+                err = lib.espeak_Synth(buf, len(data), 0, POS_CHARACTER, 0, flags, None, None)
+                if err != EE_OK:
+                    raise TTSError(f"espeak_Synth failed with status {err}", where=WHERE,
+                                   hint="retry; if it persists the text may be too long")
+                lib.espeak_Synchronize()
+            finally:
+                _collector = None
+            rate_hz = _sample_rate
+        if col.error is not None:
+            raise TTSError(f"event callback failed: {col.error!r}", where=WHERE,
+                           hint="this is a bug in the ctypes binding") from col.error
+
+        samples = np.concatenate(col.chunks) if col.chunks else np.zeros(0, np.int16)
+        events = _to_events(col.events, text, back, len(samples), rate_hz,
+                            keep_stress=self.keep_stress, mark_names=mark_names)
+        return Speech(samples=samples, rate=rate_hz, events=events, engine=self.name, voice=voice)
+
+
+STRESS_MARKS = "',"
+
+
+def _extend_word(text: str, stop: int, limit: int) -> int:
+    """espeak can report a short length for a word it read as one unit (Mandarin 你好 has
+    length 1): grow it over letters, never past the next word's start."""
+    while stop < limit and text[stop].isalnum():
+        stop += 1
+    return stop
+
+
+def _to_events(raw: list[RawEvent], text: str, back: list[int], n: int, rate: int, *,
+               keep_stress: bool = False, mark_names: dict[str, str] | None = None,
+               ) -> tuple[Event, ...]:
+    """Turn espeak's raw events into ``Event``s: seconds from samples, plain-text positions,
+    interval ends from the next event of the same kind (or the end of the audio).
+
+    espeak's synchronous mode never delivers its end-of-message event, so the ``end`` event is
+    added at the end of the audio when missing. End-of-clause events are dropped: the pause
+    phonemes already mark clause ends.
+    """
+    total = n / rate
+
+    def plain(pos: int) -> int:
+        # text_position counts characters from 1 in the string espeak read (0: none); the
+        # closing pauses point past the end of the text, which is no position at all
+        idx = pos - 1
+        if idx < 0 or idx >= len(back) - 1:
+            return -1
+        return back[idx]
+
+    word_positions = sorted({plain(ev.text_position) for ev in raw if ev.type == EV_WORD})
+    sentence_positions = sorted({plain(ev.text_position) for ev in raw if ev.type == EV_SENTENCE})
+
+    def following(positions: list[int], p: int) -> int:
+        """The first position after ``p`` (where the next word or sentence starts)."""
+        k = bisect.bisect_right(positions, p)
+        return positions[k] if k < len(positions) else len(text)
+    mark_names = mark_names or {}
+
+    def at(sample: int) -> float:
+        return min(max(sample, 0), n) / rate
+
+    starts: list[tuple[str, float, str, int]] = []
+    for ev in raw:
+        t = at(ev.sample)
+        if ev.type == EV_PHONEME:
+            name = ev.name if keep_stress else ev.name.lstrip(STRESS_MARKS) or ev.name
+            starts.append(("phoneme", t, name, plain(ev.text_position)))
+        elif ev.type == EV_WORD:
+            p = plain(ev.text_position)
+            word = ""
+            if p >= 0:
+                stop = min(ev.text_position - 1 + max(ev.length, 0), len(back) - 1)
+                limit = following(word_positions, p)  # numbers split into sub-words
+                word = text[p:_extend_word(text, min(max(back[stop], p), limit), limit)].strip()
+            starts.append(("word", t, word, p))
+        elif ev.type == EV_SENTENCE:
+            p = plain(ev.text_position)
+            limit = following(sentence_positions, p)
+            starts.append(("sentence", t, text[p:limit].strip() if p >= 0 else "", p))
+        elif ev.type == EV_MARK:
+            starts.append(("mark", t, mark_names.get(ev.name, ev.name), plain(ev.text_position)))
+        elif ev.type == EV_MSG_TERMINATED:
+            starts.append(("end", t, "", -1))
+
+    if not any(s[0] == "end" for s in starts):
+        starts.append(("end", total, "", -1))
+
+    out: list[Event] = []
+    next_start = {"phoneme": total, "word": total, "sentence": total}
+    for kind, t, label, pos in reversed(starts):  # one pass: each interval ends at the next start
+        end = t
+        if kind in next_start:
+            end = max(next_start[kind], t)
+            next_start[kind] = t
+        out.append(Event(kind, t, end, label, pos))
+    out.reverse()
+    out.sort(key=lambda e: e.start)  # stable: espeak's order among equal times is kept
+    return tuple(out)
