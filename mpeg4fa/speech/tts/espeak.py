@@ -184,6 +184,8 @@ def _load() -> ctypes.CDLL:
     lib.espeak_Synth.restype = ctypes.c_int
     lib.espeak_Synchronize.argtypes = []
     lib.espeak_Synchronize.restype = ctypes.c_int
+    lib.espeak_SetVoiceByProperties.argtypes = [ctypes.POINTER(EspeakVoice)]
+    lib.espeak_SetVoiceByProperties.restype = ctypes.c_int
     lib.espeak_ListVoices.argtypes = [ctypes.POINTER(EspeakVoice)]
     lib.espeak_ListVoices.restype = ctypes.POINTER(ctypes.POINTER(EspeakVoice))
 
@@ -212,6 +214,23 @@ def _languages(ptr: int | None) -> tuple[str, ...]:
         out.append(name.decode("utf-8", "replace"))
         offset += 2 + len(name)
     return tuple(out)
+
+
+def _set_voice_by_language(lib, language: str) -> bool:
+    """Choose a voice by language code ("en-gb"): voice files are named by case-sensitive paths."""
+    code = language.encode("utf-8")
+    if not code or any(c in code for c in b"/ "):
+        return False
+    spec = EspeakVoice()
+    spec.languages = ctypes.cast(ctypes.c_char_p(code), ctypes.c_void_p)
+    return lib.espeak_SetVoiceByProperties(ctypes.byref(spec)) == EE_OK and _voice_is(lib, language)
+
+
+def _voice_is(lib, language: str) -> bool:
+    """espeak falls back to a default voice rather than failing: check the language it took."""
+    lib.espeak_GetCurrentVoice.restype = ctypes.POINTER(EspeakVoice)
+    current = lib.espeak_GetCurrentVoice()
+    return bool(current) and language.lower() in (lang.lower() for lang in _languages(current.contents.languages))
 
 
 def list_voices() -> list[tuple[str, tuple[str, ...]]]:
@@ -333,7 +352,7 @@ class EspeakEngine:
 
         with _lock:
             lib = _load()
-            if lib.espeak_SetVoiceByName(voice.encode("utf-8")) != EE_OK:
+            if lib.espeak_SetVoiceByName(voice.encode("utf-8")) != EE_OK and not _set_voice_by_language(lib, voice):
                 raise TTSError(f"unknown voice {voice!r}", where=WHERE, hint=_voice_hint(voice))
             lib.espeak_SetParameter(espeakRATE, int(wpm), 0)
             col = _collector = _Collector()
