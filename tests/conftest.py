@@ -21,6 +21,18 @@ def require_generic() -> None:
         pytest.skip(GENERIC_MISSING)
 
 
+@pytest.fixture
+def cli(capsys):
+    """``cli(*argv) -> (exit code, stdout, stderr)``: the command run in-process; arguments may be paths."""
+    from mpeg4fa.cli import main
+
+    def run(*argv):
+        code = main([str(a) for a in argv])
+        out, err = capsys.readouterr()
+        return code, out, err
+    return run
+
+
 @pytest.fixture(scope="session")
 def generic_head_installed() -> None:
     """Skips a test (``pytest.mark.usefixtures("generic_head_installed")``) when the head is not built."""

@@ -50,6 +50,9 @@ case "$job" in
         .venv/bin/mpeg4fa model pose --viseme AA --expression joy=40 --fap 19=300 --fap 20=300
         .venv/bin/mpeg4fa play out/demo.fba -o out/demo.mp4
         .venv/bin/mpeg4fa snapshot out/demo.fba --frame 40 --aa 4 -o out/demo-frame40.png
+        .venv/bin/mpeg4fa say "(joy, 40, 0.5) Hello! I am an MPEG-4 talking head. (surprise, 30, 0.4) Really." \
+            -o out/say.mp4 --keep
+        .venv/bin/mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o out/say-zh.mp4 --keep
         ;;
     test)
         ensure_python; ensure_venv

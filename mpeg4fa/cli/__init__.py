@@ -13,7 +13,8 @@ from ..face import FaceError
 from ..fba import FbaError
 from ..formats import FormatError
 from ..render.errors import RenderError
-from . import codec, model, play, texture
+from ..speech.errors import MarkupError, TTSError
+from . import codec, model, play, speech, texture
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -29,6 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     model.register(commands)
     play.register(commands)
     texture.register(commands)
+    speech.register(commands)
     return parser
 
 
@@ -37,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.run(args) or 0)
-    except (FbaError, FormatError, FaceError, RenderError) as exc:
+    except (FbaError, FormatError, FaceError, RenderError, MarkupError, TTSError) as exc:
         print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
         return 1
     except BrokenPipeError:  # output piped into head, less...: not an error

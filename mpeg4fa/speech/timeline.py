@@ -184,6 +184,66 @@ def _profile(span: VisemeSpan, k: int) -> np.ndarray:
     return table[span.viseme].astype(np.float64)
 
 
+@dataclass(frozen=True)
+class _Segment:
+    """One move of the mouth: from a shape to another over [start, end]."""
+
+    start: float
+    end: float
+    source: tuple[str, str]   # (set, viseme) it leaves
+    target: tuple[str, str]   # (set, viseme) it reaches
+    a_s: np.ndarray
+    a_e: np.ndarray
+
+
+_REST = ("mpeg4", "none")
+
+
+def _viseme_segments(spans: Sequence[VisemeSpan], rest: float) -> list[_Segment]:
+    """The spans as moves between shapes, plus the closing moves into silence."""
+    checked = []
+    for k, span in enumerate(spans):
+        start, end = _finite(span.start, f"span {k} start"), _finite(span.end, f"span {k} end")
+        if not start < end:
+            raise ValueError(f"span {k} ({span.viseme}): start {start} must be before end {end}")
+        checked.append((start, end, k, span, _profile(span, k)))
+    checked.sort(key=lambda item: (item[0], item[2]))
+    for (s0, e0, k0, _, _), (s1, _, k1, _, _) in zip(checked, checked[1:]):
+        if s1 < e0:
+            raise ValueError(f"span {k1} starts at {s1}, before span {k0} ends at {e0}: spans overlap")
+    rest_pose = np.zeros(N_FAPS)
+    segments: list[_Segment] = []
+    previous, previous_key = rest_pose, _REST
+    for i, (start, end, _, span, profile) in enumerate(checked):
+        key = (span.set, span.viseme)
+        segments.append(_Segment(start, end, previous_key, key, previous, profile))
+        previous, previous_key = profile, key
+        next_start = checked[i + 1][0] if i + 1 < len(checked) else math.inf
+        if next_start > end:  # silence follows: close the mouth
+            segments.append(_Segment(end, end + min(rest, next_start - end), key, _REST, profile, rest_pose))
+            previous, previous_key = rest_pose, _REST
+    return segments
+
+
+def _locate(segments: list[_Segment], t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each time: its segment index (-1 before the first), whether it is live, and u in [0, 1]."""
+    starts = np.array([seg.start for seg in segments])
+    ends = np.array([seg.end for seg in segments])
+    idx = np.searchsorted(starts, t, side="right") - 1
+    live = idx >= 0
+    i = np.maximum(idx, 0)
+    length = ends[i] - starts[i]  # 0 only for a closing move with rest_time 0: a step
+    u = np.where(t < ends[i], (t - starts[i]) / np.where(length > 0, length, 1.0), 1.0)
+    return idx, live, np.clip(u, 0.0, 1.0)
+
+
+def _rest_time(rest_time: float) -> float:
+    rest = _finite(rest_time, "rest_time")
+    if rest < 0:
+        raise ValueError(f"rest_time {rest_time!r} must be >= 0")
+    return rest
+
+
 def viseme_track(spans: Sequence[VisemeSpan], times: npt.ArrayLike, tangent: float = 0.0,
                  rest_time: float = 0.15) -> np.ndarray:
     """Low-level FAPs (n, 68) of the mouth speaking ``spans``, sampled at ``times`` (seconds).
@@ -199,43 +259,42 @@ def viseme_track(spans: Sequence[VisemeSpan], times: npt.ArrayLike, tangent: flo
     k_tan = _finite(tangent, "tangent")
     if not 0.0 <= k_tan <= 3.0:
         raise ValueError(f"tangent {tangent!r} must be in [0, 3]: outside it the mouth overshoots")
-    rest = _finite(rest_time, "rest_time")
-    if rest < 0:
-        raise ValueError(f"rest_time {rest_time!r} must be >= 0")
-    checked = []
-    for k, span in enumerate(spans):
-        start, end = _finite(span.start, f"span {k} start"), _finite(span.end, f"span {k} end")
-        if not start < end:
-            raise ValueError(f"span {k} ({span.viseme}): start {start} must be before end {end}")
-        checked.append((start, end, k, _profile(span, k)))
-    checked.sort(key=lambda item: (item[0], item[2]))
-    for (s0, e0, k0, _), (s1, _, k1, _) in zip(checked, checked[1:]):
-        if s1 < e0:
-            raise ValueError(f"span {k1} starts at {s1}, before span {k0} ends at {e0}: spans overlap")
-
-    # Segments (start, end, a_s, a_e): the spans plus the closing moves into silence.
-    rest_pose = np.zeros(N_FAPS)
-    segments: list[tuple[float, float, np.ndarray, np.ndarray]] = []
-    previous = rest_pose
-    for i, (start, end, _, profile) in enumerate(checked):
-        segments.append((start, end, previous, profile))
-        previous = profile
-        next_start = checked[i + 1][0] if i + 1 < len(checked) else math.inf
-        if next_start > end:  # silence follows: close the mouth
-            segments.append((end, end + min(rest, next_start - end), profile, rest_pose))
-            previous = rest_pose
+    segments = _viseme_segments(spans, _rest_time(rest_time))
     out = np.zeros((len(t), N_FAPS))
     if not segments:
         return out
-    starts, ends = (np.array([seg[j] for seg in segments]) for j in (0, 1))
-    a_s, a_e = (np.stack([seg[j] for seg in segments]) for j in (2, 3))
-    idx = np.searchsorted(starts, t, side="right") - 1
-    live = idx >= 0
-    i, tt = idx[live], t[live]
-    length = ends[i] - starts[i]  # 0 only for a closing move with rest_time 0: a step
-    u = np.where(tt < ends[i], (tt - starts[i]) / np.where(length > 0, length, 1.0), 1.0)
-    out[live] = _hermite_rows(np.clip(u, 0.0, 1.0), a_s[i], a_e[i], k_tan * (a_e[i] - a_s[i]))
+    idx, live, u = _locate(segments, t)
+    a_s, a_e = np.stack([seg.a_s for seg in segments]), np.stack([seg.a_e for seg in segments])
+    i = idx[live]
+    out[live] = _hermite_rows(u[live], a_s[i], a_e[i], k_tan * (a_e[i] - a_s[i]))
     return out
+
+
+@dataclass(frozen=True)
+class VisemeFields:
+    """Per frame, FAP 1 as a decoder blends it: ``select1 x blend/63 + select2 x (1 - blend/63)``.
+
+    ``select1``/``select2`` are (set, viseme) names: the shape being reached and
+    the one being left; ``blend`` is the eased progress (Hermite, tangent 0) in 0..63,
+    so the blend of the two profiles is the :func:`viseme_track` curve up to rounding.
+    """
+
+    select1: list[tuple[str, str]]
+    select2: list[tuple[str, str]]
+    blend: np.ndarray
+
+
+def viseme_fields(spans: Sequence[VisemeSpan], times: npt.ArrayLike, rest_time: float = 0.15) -> VisemeFields:
+    """FAP 1 fields (which two visemes, how far between them) for every time."""
+    t = _times(times)
+    segments = _viseme_segments(spans, _rest_time(rest_time))
+    if not segments:
+        return VisemeFields([_REST] * len(t), [_REST] * len(t), np.zeros(len(t), np.int64))
+    idx, live, u = _locate(segments, t)
+    weight = np.where(live, hermite(u, 0.0, 1.0), 1.0)
+    select1 = [segments[i].target if ok else _REST for i, ok in zip(idx, live)]
+    select2 = [segments[i].source if ok else _REST for i, ok in zip(idx, live)]
+    return VisemeFields(select1, select2, np.rint(63 * weight).astype(np.int64))
 
 
 # ---- expressions -----------------------------------------------------------------------------------

@@ -1,0 +1,106 @@
+"""Tagged text -> FAP frames: the encoder's last step before the bitstream.
+
+The timeline (:mod:`.timeline`) gives low-level FAPs for every frame; the stream
+then carries them at the chosen level:
+
+* ``high``: FAP 1 (two visemes and their blend) and FAP 2 (two expressions and
+  intensities), a few bits a frame. FAP 1 can only name the 14 MPEG-4 visemes
+  and FAP 2 the 6 MPEG-4 expressions: Chinese visemes and further expressions go
+  out as low-level FAPs in the frames that need them (their merged values, since a
+  sent low-level FAP overrides the high-level one at the decoder);
+* ``low``: FAPs 3-68, the merged curves (visemes, expressions, idle motion);
+* ``both``: the high-level fields plus the low-level FAPs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mpeg4fa.fba.stream import FapStream
+from mpeg4fa.spec import EXPRESSIONS, VISEMES
+from mpeg4fa.speech.markup import parse_markup
+from mpeg4fa.speech.timeline import (expression_fields, expression_track, frame_times, idle_track, merge_tracks,
+                                     viseme_fields, viseme_track)
+from mpeg4fa.speech.tts.base import Engine
+from mpeg4fa.speech.utterance import Utterance, speak
+
+LEVELS = ("high", "low", "both")
+_VISEME_CODE = {v.name: v.number for v in VISEMES}
+_EXPRESSION_CODE = {e.name: e.number for e in EXPRESSIONS}
+
+
+@dataclass(frozen=True)
+class Encoded:
+    """What the encoder made: the FAP stream, the speech it goes with, and the timeline behind it."""
+
+    stream: FapStream
+    utterance: Utterance
+    values: np.ndarray  # (n, 68) merged low-level FAP values the stream stands for
+    level: str
+
+    @property
+    def speech(self):
+        return self.utterance.speech
+
+
+def _engine(name: str) -> Engine:
+    if name == "espeak":
+        from mpeg4fa.speech.tts.espeak import EspeakEngine
+        return EspeakEngine()
+    from mpeg4fa.speech.errors import TTSError
+    raise TTSError(f"unknown engine {name!r}", hint="espeak (pyttsx3 and estimate are not built yet)")
+
+
+def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto", voice: str | None = None,
+                rate: int | None = None, fps: float = 25.0, level: str = "high", idle: bool = False,
+                seed: int = 0, name: str = "<text>") -> Encoded:
+    """Speak tagged text and turn it into a FapStream at ``fps`` (see the module docstring for levels)."""
+    if level not in LEVELS:
+        raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
+    markup = parse_markup(text, name=name)
+    utterance = speak(markup, _engine(engine) if isinstance(engine, str) else engine, lang=lang, voice=voice,
+                      rate=rate)
+    times = frame_times(utterance.speech.duration, fps)
+    spans, cues = utterance.spans(), list(utterance.cues)
+    visemes, expressions = viseme_track(spans, times), expression_track(cues, times)
+    tracks = [visemes, expressions] + ([idle_track(times, seed)] if idle else [])
+    values = np.rint(merge_tracks(*tracks))
+
+    n = len(times)
+    stream = FapStream.empty(n)
+    stream.source_fps = fps
+    stream.timestamps[:] = times
+    if level in ("low", "both"):
+        used = np.abs(values).max(axis=0) > 0
+        used[:2] = False
+        stream.fap_mask[:, used] = True
+        stream.fap_values[:, used] = values[:, used]
+    if level in ("high", "both"):
+        _high_level(stream, utterance, times, values, level)
+    return Encoded(stream, utterance, values, level)
+
+
+def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, values: np.ndarray, level: str) -> None:
+    """FAP 1 and 2 fields; frames whose visemes or expressions they cannot name get low-level FAPs."""
+    vis = viseme_fields(utterance.spans(), times)
+    exp = expression_fields(list(utterance.cues), times)
+    n = len(times)
+    standard_vis = np.array([a[0] == "mpeg4" and b[0] == "mpeg4" for a, b in zip(vis.select1, vis.select2)])
+    select1 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select1, standard_vis)])
+    select2 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select2, standard_vis)])
+    stream.fap_mask[:, 0] = True
+    stream.viseme[:] = np.c_[select1, select2, np.where(standard_vis, vis.blend, 63), np.zeros(n)]
+    known = np.array([[s in _EXPRESSION_CODE for s in col] for col in (exp.select1, exp.select2)]).all(axis=0)
+    stream.fap_mask[:, 1] = True
+    stream.expression[:] = np.c_[
+        [_EXPRESSION_CODE.get(s, 0) for s in exp.select1], np.where(known, exp.intensity1, 0),
+        [_EXPRESSION_CODE.get(s, 0) for s in exp.select2], np.where(known, exp.intensity2, 0), np.zeros((n, 2))]
+    if level == "high":
+        low = ~standard_vis | ~known
+        if low.any():  # the mouth (or the whole face) of those frames as low-level FAPs
+            used = np.abs(values[low]).max(axis=0) > 0
+            used[:2] = False
+            rows = np.flatnonzero(low)
+            stream.fap_mask[np.ix_(rows, np.flatnonzero(used))] = True
+            stream.fap_values[np.ix_(rows, np.flatnonzero(used))] = values[np.ix_(rows, np.flatnonzero(used))]

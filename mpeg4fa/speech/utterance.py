@@ -1,0 +1,221 @@
+"""Tagged text spoken: one audio track, the visemes it shows, and when each tag takes effect.
+
+Text is cut into runs by script. Latin runs go to an English voice and map their
+phonemes through ``spec/english_visemes.csv``. Hanzi runs (with CJK punctuation)
+are read as pinyin (:mod:`.mandarin`, phrase-aware, tones kept) and spoken by
+espeak-ng's pinyin voice, which reports one word event per syllable; inside a
+syllable the initial takes the time of its consonant phoneme, and the glide, main
+vowel and ending share the rest by the engine's phoneme boundaries when the counts
+match, else by fixed weights. Runs are spoken separately and joined, so mixed
+Chinese/English text works. A tag's time is a mark event placed at its offset.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from mpeg4fa.speech.errors import MarkupError, TTSError
+from mpeg4fa.speech.mandarin import Syllable, syllables
+from mpeg4fa.speech.markup import Markup
+from mpeg4fa.speech.timeline import ExpressionCue, VisemeSpan
+from mpeg4fa.speech.tts.base import Engine, Event, Speech
+from mpeg4fa.speech.visemes import PAUSE, english_visemes
+
+ENGLISH_VOICE = "en-us"
+PINYIN_VOICE = "cmn-latn-pinyin"
+LANGS = ("auto", "en", "zh")
+_ZH = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\u3000-\u303f\uff00-\uffef]")
+_HAN = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
+_PUNCT = {"，": ", ", "、": ", ", "；": "; ", "：": ": ", "。": ". ", "！": "! ", "？": "? ", "…": "... "}
+_FINAL_WEIGHT = {"glide": 0.35, "main": 1.0, "ending": 0.6}
+
+
+@dataclass(frozen=True)
+class Timing:
+    """One viseme interval and the phoneme (or pinyin part) it came from, in the audio's seconds."""
+
+    phoneme: str
+    viseme: str
+    start: float
+    end: float
+    set: str = "mpeg4"
+
+    def as_dict(self) -> dict:
+        return {"phoneme": self.phoneme, "viseme": self.viseme, "start": round(self.start, 6),
+                "end": round(self.end, 6)}
+
+
+@dataclass(frozen=True)
+class Utterance:
+    speech: Speech
+    timings: tuple[Timing, ...]
+    cues: tuple[ExpressionCue, ...]
+    markup: Markup
+
+    def spans(self) -> list[VisemeSpan]:
+        """Viseme spans for the timeline: pauses left out, repeats of one viseme joined."""
+        out: list[VisemeSpan] = []
+        for t in self.timings:
+            if t.viseme == PAUSE or t.end <= t.start:
+                continue
+            if out and out[-1].viseme == t.viseme and out[-1].set == t.set and abs(out[-1].end - t.start) < 1e-9:
+                out[-1] = VisemeSpan(t.viseme, out[-1].start, t.end, t.set)
+            else:
+                out.append(VisemeSpan(t.viseme, t.start, t.end, t.set))
+        return out
+
+
+def _runs(text: str) -> list[tuple[str, int, int]]:
+    """(kind, start, end) runs of ``text``: 'zh' for hanzi and CJK punctuation, else 'en'."""
+    runs: list[tuple[str, int, int]] = []
+    for i, ch in enumerate(text):
+        kind = "zh" if _ZH.match(ch) else ("ws" if ch.isspace() else "en")
+        if kind == "ws" and runs:
+            kind = runs[-1][0]
+        if runs and runs[-1][0] == kind:
+            runs[-1] = (kind, runs[-1][1], i + 1)
+        else:
+            runs.append((kind if kind != "ws" else "en", i, i + 1))
+    return [r for r in runs if text[r[1]:r[2]].strip()]
+
+
+def _pinyin_text(text: str, start: int, end: int) -> tuple[str, dict[int, int], list[tuple[Syllable, int]]]:
+    """The run as pinyin for espeak, a map text offset -> pinyin offset, and each syllable's offset."""
+    sylls = {s.position: s for s in syllables(text[start:end])}
+    parts: list[str] = []
+    where: dict[int, int] = {}
+    placed: list[tuple[Syllable, int]] = []
+    length = 0
+    for i in range(start, end):
+        where[i] = length
+        ch = text[i]
+        if (i - start) in sylls:
+            token = sylls[i - start].pinyin + " "
+            placed.append((sylls[i - start], length))
+        else:
+            token = _PUNCT.get(ch, " " if ch.isspace() else "")
+        parts.append(token)
+        length += len(token)
+    where[end] = length
+    return "".join(parts), where, placed
+
+
+def _split_final(s: Syllable, final_visemes: tuple[str, ...], phones: list[Event], start: float,
+                 end: float) -> list[Timing]:
+    """Time the final's glide / main vowel / ending inside [start, end]."""
+    if len(phones) == len(final_visemes):
+        return [Timing(p.text, v, p.start, p.end, "zh") for v, p in zip(final_visemes, phones)]
+    roles = []
+    glide = len(final_visemes) > 1 and s.final[:1] in "iuv" and s.final not in ("in", "ing", "vn")
+    for k, _ in enumerate(final_visemes):
+        roles.append("glide" if glide and k == 0 else ("main" if k == int(glide) else "ending"))
+    weights = np.array([_FINAL_WEIGHT[r] for r in roles])
+    edges = start + (end - start) * np.r_[0.0, np.cumsum(weights) / weights.sum()]
+    return [Timing(f"{s.pinyin}:{role}", v, float(a), float(b), "zh")
+            for v, role, a, b in zip(final_visemes, roles, edges[:-1], edges[1:])]
+
+
+def _syllable_timings(s: Syllable, phones: list[Event]) -> list[Timing]:
+    """A syllable's visemes timed by its phoneme events (pauses excluded)."""
+    if not phones:
+        return []
+    start, end = phones[0].start, phones[-1].end
+    if len(s.visemes) == 1:
+        return [Timing(s.pinyin, s.visemes[0], start, end, "zh")]
+    if s.initial and len(phones) >= 2:
+        head = Timing(phones[0].text, s.visemes[0], phones[0].start, phones[0].end, "zh")
+        return [head] + _split_final(s, s.visemes[1:], phones[1:], phones[1].start, end)
+    if s.initial:  # one phoneme for initial + final: share it
+        return _split_final(s, s.visemes, phones, start, end)
+    return _split_final(s, s.visemes, phones, start, end)
+
+
+def _mark_times(speech: Speech, marks: list[tuple[int, str]]) -> dict[str, float]:
+    """When speech reached each mark; espeak drops a mark at a sentence start: take the next word's start."""
+    times = {e.text: e.start for e in speech.marks()}
+    words = sorted(speech.words(), key=lambda e: e.position)
+    for offset, name in marks:
+        if name not in times:
+            later = [w.start for w in words if w.position >= offset]
+            times[name] = later[0] if later else speech.duration
+    return times
+
+
+def _speak_zh(engine: Engine, text: str, start: int, end: int, marks: list[tuple[int, str]],
+              rate: int | None) -> tuple[Speech, list[Timing], dict[str, float]]:
+    pinyin, where, placed = _pinyin_text(text, start, end)
+    local = [(min(where[min(max(o, start), end)], len(pinyin.strip())), name) for o, name in marks]
+    speech = engine.synthesize(pinyin.strip() or ".", voice=PINYIN_VOICE, rate=rate, marks=local)
+    words = sorted(speech.words(), key=lambda e: e.start)
+    phonemes = [p for p in speech.phonemes()]
+    by_position = {w.position: w for w in words}
+    timings: list[Timing] = []
+    for k, (syl, offset) in enumerate(placed):
+        word = by_position.get(offset)
+        if word is None:
+            raise TTSError(f"the engine gave no timing for the syllable {syl.pinyin} ({syl.text})",
+                           where=engine.name, hint="check the pinyin voice is installed")
+        stop = words[words.index(word) + 1].start if words.index(word) + 1 < len(words) else speech.duration
+        phones = [p for p in phonemes if word.start - 0.02 <= p.start < stop and not p.text.startswith("_")]
+        timings += _syllable_timings(syl, phones)
+    timings += [Timing(p.text, PAUSE, p.start, p.end) for p in phonemes if p.text.startswith("_")]
+    return speech, sorted(timings, key=lambda t: t.start), _mark_times(speech, local)
+
+
+def _speak_en(engine: Engine, text: str, start: int, end: int, marks: list[tuple[int, str]],
+              voice: str | None, rate: int | None) -> tuple[Speech, list[Timing], dict[str, float]]:
+    chunk = text[start:end]
+    lead = len(chunk) - len(chunk.lstrip())
+    body = chunk.strip()
+    local = [(min(max(o - start - lead, 0), len(body)), name) for o, name in marks]
+    speech = engine.synthesize(body, voice=voice or ENGLISH_VOICE, rate=rate, marks=local)
+    pairs = english_visemes(list(speech.phonemes()))
+    return speech, [Timing(e.text, v, e.start, e.end) for v, e in pairs], _mark_times(speech, local)
+
+
+def _join(parts: list[tuple[Speech, list[Timing], dict[str, float]]], engine_name: str,
+          voice: str) -> tuple[Speech, list[Timing], dict[str, float]]:
+    rate = parts[0][0].rate
+    samples, events, timings, marks, offset = [], [], [], {}, 0.0
+    for speech, times, mark_times in parts:
+        if speech.rate != rate:
+            raise TTSError(f"runs came back at {speech.rate} and {rate} Hz", where=engine_name)
+        samples.append(speech.samples)
+        events += [Event(e.kind, e.start + offset, e.end + offset, e.text, e.position) for e in speech.events]
+        timings += [Timing(t.phoneme, t.viseme, t.start + offset, t.end + offset, t.set) for t in times]
+        marks.update({name: t + offset for name, t in mark_times.items()})
+        offset += speech.duration
+    joined = Speech(np.concatenate(samples), rate, tuple(sorted(events, key=lambda e: e.start)), engine_name, voice)
+    return joined, timings, marks
+
+
+def speak(markup: Markup, engine: Engine, *, lang: str = "auto", voice: str | None = None,
+          rate: int | None = None) -> Utterance:
+    """Speak the markup's text and time its visemes and tags (see the module docstring)."""
+    if lang not in LANGS:
+        raise TTSError(f"unknown language {lang!r}", hint=f"one of {', '.join(LANGS)}")
+    text = markup.text
+    if not text.strip():
+        raise MarkupError("there is nothing to say", 1, 1, hint="give some text", source=markup.name)
+    han = _HAN.search(text)
+    if lang == "en" and han:
+        line = text.count("\n", 0, han.start()) + 1
+        raise MarkupError(f"{han.group()!r} is Chinese but --lang is en", line, han.start() + 1,
+                          hint="use --lang zh or auto", source=markup.name)
+    runs = _runs(text)
+    names = {i: f"tag{i}" for i in range(len(markup.tags))}
+    parts = []
+    for n, (kind, start, end) in enumerate(runs):
+        last = n == len(runs) - 1
+        marks = [(tag.offset, names[i]) for i, tag in enumerate(markup.tags)
+                 if (start <= tag.offset < end or (last and tag.offset >= end)) or (n == 0 and tag.offset < start)]
+        if kind == "zh":
+            parts.append(_speak_zh(engine, text, start, end, marks, rate))
+        else:
+            parts.append(_speak_en(engine, text, start, end, marks, voice, rate))
+    speech, timings, times = _join(parts, engine.name, voice or ENGLISH_VOICE)
+    cues = tuple(ExpressionCue(tag.expression, tag.intensity, tag.seconds, times[names[i]])
+                 for i, tag in enumerate(markup.tags))
+    return Utterance(speech, tuple(timings), cues, markup)
