@@ -44,6 +44,13 @@ class Encoded:
         return self.utterance.speech
 
 
+def _moving(values: np.ndarray) -> np.ndarray:
+    """Columns of the low-level FAPs (3-68) that move anywhere in ``values``."""
+    used = np.abs(values).max(axis=0) > 0
+    used[:2] = False
+    return np.flatnonzero(used)
+
+
 def _engine(name: str) -> Engine:
     if name == "espeak":
         from mpeg4fa.speech.tts.espeak import EspeakEngine
@@ -72,8 +79,7 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
     stream.source_fps = fps
     stream.timestamps[:] = times
     if level in ("low", "both"):
-        used = np.abs(values).max(axis=0) > 0
-        used[:2] = False
+        used = _moving(values)
         stream.fap_mask[:, used] = True
         stream.fap_values[:, used] = values[:, used]
     if level in ("high", "both"):
@@ -99,8 +105,6 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
     if level == "high":
         low = ~standard_vis | ~known
         if low.any():  # the mouth (or the whole face) of those frames as low-level FAPs
-            used = np.abs(values[low]).max(axis=0) > 0
-            used[:2] = False
-            rows = np.flatnonzero(low)
-            stream.fap_mask[np.ix_(rows, np.flatnonzero(used))] = True
-            stream.fap_values[np.ix_(rows, np.flatnonzero(used))] = values[np.ix_(rows, np.flatnonzero(used))]
+            cells = np.ix_(np.flatnonzero(low), _moving(values[low]))
+            stream.fap_mask[cells] = True
+            stream.fap_values[cells] = values[cells]

@@ -45,6 +45,11 @@ class Syllable:
         return _spelled(self.initial, self.final) + str(self.tone)
 
 
+def has_glide(final: str) -> bool:
+    """Whether a strict final opens with a glide (the i of ``iao``, the u of ``uan``, the ü of ``ve``)."""
+    return len(final) > 1 and final[0] in "iuv" and final not in _NO_GLIDE
+
+
 def syllable_visemes(initial: str, final: str) -> tuple[str, ...]:
     """The visemes of one syllable, from its strict initial and final (see the module docstring)."""
     table = CHINESE_VISEME_BY_PINYIN
@@ -60,7 +65,7 @@ def syllable_visemes(initial: str, final: str) -> tuple[str, ...]:
         if final == "er":
             out.append(table["er"])
         elif final in table:
-            if len(final) > 1 and final[0] in "iuv" and final not in _NO_GLIDE:
+            if has_glide(final):
                 out.append(table[final[0] + "-"])
             out.append(table[final])
             if final.endswith("ng"):
@@ -84,7 +89,7 @@ def _spelled(initial: str, final: str) -> str:
             short = "u" + short[1:]
         return initial + short
     if final.startswith("i"):
-        return "y" + (final[1:] if len(final) > 1 and final not in _NO_GLIDE else final)
+        return "y" + (final[1:] if has_glide(final) else final)
     if final.startswith("u"):
         return "w" + (final[1:] if len(final) > 1 else final)
     if final.startswith("v"):

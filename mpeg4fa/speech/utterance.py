@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mpeg4fa.speech.errors import MarkupError, TTSError
-from mpeg4fa.speech.mandarin import Syllable, syllables
+from mpeg4fa.speech.mandarin import Syllable, has_glide, syllables
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.timeline import ExpressionCue, VisemeSpan
 from mpeg4fa.speech.tts.base import Engine, Event, Speech
@@ -108,7 +108,7 @@ def _split_final(s: Syllable, final_visemes: tuple[str, ...], phones: list[Event
     if len(phones) == len(final_visemes):
         return [Timing(p.text, v, p.start, p.end, "zh") for v, p in zip(final_visemes, phones)]
     roles = []
-    glide = len(final_visemes) > 1 and s.final[:1] in "iuv" and s.final not in ("in", "ing", "vn")
+    glide = len(final_visemes) > 1 and has_glide(s.final)
     for k, _ in enumerate(final_visemes):
         roles.append("glide" if glide and k == 0 else ("main" if k == int(glide) else "ending"))
     weights = np.array([_FINAL_WEIGHT[r] for r in roles])
@@ -127,9 +127,7 @@ def _syllable_timings(s: Syllable, phones: list[Event]) -> list[Timing]:
     if s.initial and len(phones) >= 2:
         head = Timing(phones[0].text, s.visemes[0], phones[0].start, phones[0].end, "zh")
         return [head] + _split_final(s, s.visemes[1:], phones[1:], phones[1].start, end)
-    if s.initial:  # one phoneme for initial + final: share it
-        return _split_final(s, s.visemes, phones, start, end)
-    return _split_final(s, s.visemes, phones, start, end)
+    return _split_final(s, s.visemes, phones, start, end)  # no initial, or one phoneme for both: share
 
 
 def _mark_times(speech: Speech, marks: list[tuple[int, str]]) -> dict[str, float]:

@@ -188,6 +188,8 @@ def _load() -> ctypes.CDLL:
     lib.espeak_SetVoiceByProperties.restype = ctypes.c_int
     lib.espeak_ListVoices.argtypes = [ctypes.POINTER(EspeakVoice)]
     lib.espeak_ListVoices.restype = ctypes.POINTER(ctypes.POINTER(EspeakVoice))
+    lib.espeak_GetCurrentVoice.argtypes = []
+    lib.espeak_GetCurrentVoice.restype = ctypes.POINTER(EspeakVoice)
 
     rate = lib.espeak_Initialize(
         AUDIO_OUTPUT_SYNCHRONOUS, 0, data_path.encode(), espeakINITIALIZE_PHONEME_EVENTS
@@ -228,7 +230,6 @@ def _set_voice_by_language(lib, language: str) -> bool:
 
 def _voice_is(lib, language: str) -> bool:
     """espeak falls back to a default voice rather than failing: check the language it took."""
-    lib.espeak_GetCurrentVoice.restype = ctypes.POINTER(EspeakVoice)
     current = lib.espeak_GetCurrentVoice()
     return bool(current) and language.lower() in (lang.lower() for lang in _languages(current.contents.languages))
 
