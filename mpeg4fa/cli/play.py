@@ -4,16 +4,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import warnings
 from pathlib import Path
 
-import numpy as np
 
 from ..formats import read_stream
-from ..render import RenderError, RenderWarning
+from ..render import RenderError
 from ..render.camera import VIEWS
 from .model import face_from_args, face_options
-from .progress import ProgressBar
+from .media import read_image, render_with_progress
 
 AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
 
@@ -83,12 +81,7 @@ def _size(text: str) -> tuple[int, int]:
 def _renderer_options(args: argparse.Namespace) -> dict:
     options = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
     if args.texture is not None:
-        from PIL import Image, UnidentifiedImageError
-        try:
-            with Image.open(args.texture) as img:
-                options["texture"] = np.asarray(img.convert("RGB"))
-        except (OSError, UnidentifiedImageError) as exc:
-            raise RenderError(f"cannot read the texture image ({exc})", where=str(args.texture)) from None
+        options["texture"] = read_image(args.texture, "texture image")
     return options
 
 
@@ -104,7 +97,7 @@ def _audio_for(args: argparse.Namespace) -> Path | None:
 
 
 def run_play(args: argparse.Namespace) -> int:
-    from ..render import Renderer, play, play_live
+    from ..render import Renderer, play_live
 
     if args.output is None and not args.show:
         raise RenderError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
@@ -119,16 +112,8 @@ def run_play(args: argparse.Namespace) -> int:
         if args.output is None:
             return 0
     audio = _audio_for(args)
-    bar = ProgressBar(f"rendering {args.output.name}")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", RenderWarning)
-        try:
-            result = play(stream, args.output, face=face, audio=audio, fps=args.fps, fit=args.fit, progress=bar,
-                          writer_options={"crf": args.crf} if _is_video(args.output) else None, **options)
-        finally:
-            bar.close()
-    for w in caught:
-        print(f"mpeg4fa play: warning: {w.message}", file=sys.stderr)
+    result = render_with_progress("play", stream, args.output, face=face, audio=audio, fps=args.fps, fit=args.fit,
+                                  writer_options={"crf": args.crf} if _is_video(args.output) else None, **options)
     summary = {"output": str(args.output), "frames": result.n_frames, "rendered": result.rendered,
                "fps": result.fps, "duration": round(result.duration, 6),
                "audio": str(audio) if audio else None, "audio_duration": result.audio_duration,

@@ -4,12 +4,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
 
-from .progress import ProgressBar
+from .media import render_with_progress
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -51,7 +50,7 @@ def read_text(arg: str) -> tuple[str, str]:
 def run_say(args: argparse.Namespace) -> int:
     from ..fba import decode, encode
     from ..face import FaceModel
-    from ..render import Audio, RenderWarning, play
+    from ..render import Audio
     from ..speech.encoder import encode_text
 
     text, name = read_text(args.text)
@@ -67,16 +66,8 @@ def run_say(args: argparse.Namespace) -> int:
         speech.write_wav(base.with_suffix(".wav"))
         timings = [t.as_dict() for t in encoded.utterance.timings]
         base.with_suffix(".timings.json").write_text(json.dumps(timings, ensure_ascii=False, indent=1))
-    bar = ProgressBar(f"rendering {args.output.name}")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", RenderWarning)
-        try:
-            result = play(stream, args.output, face=FaceModel.default(), audio=audio, progress=bar,
-                          width=args.size, height=args.size, samples=args.aa)
-        finally:
-            bar.close()
-    for w in caught:
-        print(f"mpeg4fa say: warning: {w.message}", file=sys.stderr)
+    result = render_with_progress("say", stream, args.output, face=FaceModel.default(), audio=audio,
+                                  width=args.size, height=args.size, samples=args.aa)
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s), "
           f"{len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs ({args.level}-level); "
           f"rendered in {result.seconds:.1f} s")

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..render import RenderError
+from .media import read_image
 from .model import face_from_args, face_options
 
 
@@ -36,17 +37,6 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run_texture)
 
 
-def _photo(path: Path) -> np.ndarray:
-    from PIL import Image, UnidentifiedImageError
-    try:
-        with Image.open(path) as img:
-            return np.asarray(img.convert("RGB"))
-    except FileNotFoundError:
-        raise RenderError("no such photo", where=str(path)) from None
-    except (OSError, UnidentifiedImageError) as exc:
-        raise RenderError(f"cannot read the photo ({exc})", where=str(path)) from None
-
-
 def _points(path: Path) -> dict[str, tuple[float, float]]:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
@@ -69,8 +59,8 @@ def run_texture(args: argparse.Namespace) -> int:
     if (args.side is None) != (args.side_points is None):
         raise RenderError("--side and --side-points go together", hint="give both, or neither for front-only")
     face = face_from_args(args)
-    front = PhotoView(_photo(args.front), _points(args.points), "front")
-    side = PhotoView(_photo(args.side), _points(args.side_points), args.side_view) if args.side else None
+    front = PhotoView(read_image(args.front, "photo"), _points(args.points), "front")
+    side = PhotoView(read_image(args.side, "photo"), _points(args.side_points), args.side_view) if args.side else None
     baked = bake_texture(face.mesh, front, side, size=args.size)
     _save(Image.fromarray(baked.image), args.output)
     for view, align in baked.alignments.items():
