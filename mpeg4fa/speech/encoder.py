@@ -51,12 +51,22 @@ def _moving(values: np.ndarray) -> np.ndarray:
     return np.flatnonzero(used)
 
 
-def _engine(name: str) -> Engine:
+ENGINES = ("espeak", "pyttsx3", "estimate")
+
+
+def make_engine(name: str) -> Engine:
+    """An engine by name: espeak (phoneme times), pyttsx3 (word boundaries), estimate (silent)."""
     if name == "espeak":
         from mpeg4fa.speech.tts.espeak import EspeakEngine
         return EspeakEngine()
+    if name == "pyttsx3":
+        from mpeg4fa.speech.tts.pyttsx3_engine import Pyttsx3Engine
+        return Pyttsx3Engine()
+    if name == "estimate":
+        from mpeg4fa.speech.tts.estimate import EstimateEngine
+        return EstimateEngine()
     from mpeg4fa.speech.errors import TTSError
-    raise TTSError(f"unknown engine {name!r}", hint="espeak (pyttsx3 and estimate are not built yet)")
+    raise TTSError(f"unknown engine {name!r}", hint=f"one of {', '.join(ENGINES)}")
 
 
 def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto", voice: str | None = None,
@@ -66,7 +76,7 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
     markup = parse_markup(text, name=name)
-    utterance = speak(markup, _engine(engine) if isinstance(engine, str) else engine, lang=lang, voice=voice,
+    utterance = speak(markup, make_engine(engine) if isinstance(engine, str) else engine, lang=lang, voice=voice,
                       rate=rate)
     times = frame_times(utterance.speech.duration, fps)
     spans, cues = utterance.spans(), list(utterance.cues)

@@ -50,6 +50,17 @@ def has_glide(final: str) -> bool:
     return len(final) > 1 and final[0] in "iuv" and final not in _NO_GLIDE
 
 
+FINAL_WEIGHT = {"glide": 0.35, "main": 1.0, "ending": 0.6}
+"""Relative lengths of a final's parts when the engine does not time them: the main vowel
+carries the syllable, a glide passes quickly, an ending is in between."""
+
+
+def final_roles(final: str, count: int) -> list[str]:
+    """The role (glide, main, ending) of each of the ``count`` visemes a final shows, in order."""
+    glide = count > 1 and has_glide(final)
+    return ["glide" if glide and k == 0 else ("main" if k == int(glide) else "ending") for k in range(count)]
+
+
 def syllable_visemes(initial: str, final: str) -> tuple[str, ...]:
     """The visemes of one syllable, from its strict initial and final (see the module docstring)."""
     table = CHINESE_VISEME_BY_PINYIN

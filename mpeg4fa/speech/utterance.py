@@ -17,11 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from mpeg4fa.speech.errors import MarkupError, TTSError
-from mpeg4fa.speech.mandarin import Syllable, has_glide, syllables
+from mpeg4fa.speech.graphemes import SYLLABLE_UNIT, english_units, seconds_per_unit, syllable_units
+from mpeg4fa.speech.mandarin import FINAL_WEIGHT, Syllable, final_roles, syllables
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.timeline import ExpressionCue, VisemeSpan
-from mpeg4fa.speech.tts.base import Engine, Event, Speech
+from mpeg4fa.speech.tts.base import Engine, Event, Speech, snap_to_tokens, word_tokens
 from mpeg4fa.speech.visemes import PAUSE, english_visemes
+from mpeg4fa.speech.wordsync import resync
 
 ENGLISH_VOICE = "en-us"
 PINYIN_VOICE = "cmn-latn-pinyin"
@@ -29,7 +31,6 @@ LANGS = ("auto", "en", "zh")
 _ZH = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\u3000-\u303f\uff00-\uffef]")
 _HAN = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
 _PUNCT = {"，": ", ", "、": ", ", "；": "; ", "：": ": ", "。": ". ", "！": "! ", "？": "? ", "…": "... "}
-_FINAL_WEIGHT = {"glide": 0.35, "main": 1.0, "ending": 0.6}
 
 
 @dataclass(frozen=True)
@@ -107,11 +108,8 @@ def _split_final(s: Syllable, final_visemes: tuple[str, ...], phones: list[Event
     """Time the final's glide / main vowel / ending inside [start, end]."""
     if len(phones) == len(final_visemes):
         return [Timing(p.text, v, p.start, p.end, "zh") for v, p in zip(final_visemes, phones)]
-    roles = []
-    glide = len(final_visemes) > 1 and has_glide(s.final)
-    for k, _ in enumerate(final_visemes):
-        roles.append("glide" if glide and k == 0 else ("main" if k == int(glide) else "ending"))
-    weights = np.array([_FINAL_WEIGHT[r] for r in roles])
+    roles = final_roles(s.final, len(final_visemes))
+    weights = np.array([FINAL_WEIGHT[r] for r in roles])
     edges = start + (end - start) * np.r_[0.0, np.cumsum(weights) / weights.sum()]
     return [Timing(f"{s.pinyin}:{role}", v, float(a), float(b), "zh")
             for v, role, a, b in zip(final_visemes, roles, edges[:-1], edges[1:])]
@@ -150,11 +148,20 @@ def _speak_zh(engine: Engine, text: str, start: int, end: int, marks: list[tuple
     phonemes = [p for p in speech.phonemes()]
     by_position = {w.position: w for w in words}
     timings: list[Timing] = []
-    for k, (syl, offset) in enumerate(placed):
+    found = []
+    for syl, offset in placed:
         word = by_position.get(offset)
         if word is None:
             raise TTSError(f"the engine gave no timing for the syllable {syl.pinyin} ({syl.text})",
                            where=engine.name, hint="check the pinyin voice is installed")
+        found.append((syl, word))
+    if not _has_phonemes(speech):  # word boundaries only: estimate inside each syllable, resync at the next
+        spu = seconds_per_unit(rate or getattr(engine, "rate", None), SYLLABLE_UNIT)
+        placed_units = resync([w.start for _, w in found], [syllable_units(syl) for syl, _ in found],
+                              speech.duration, spu)
+        timings = [Timing(u.label, u.viseme, a, b, "zh") for u, a, b in placed_units]
+        return speech, timings, _mark_times(speech, local)
+    for syl, word in found:
         stop = words[words.index(word) + 1].start if words.index(word) + 1 < len(words) else speech.duration
         phones = [p for p in phonemes if word.start - 0.02 <= p.start < stop and not p.text.startswith("_")]
         timings += _syllable_timings(syl, phones)
@@ -169,8 +176,29 @@ def _speak_en(engine: Engine, text: str, start: int, end: int, marks: list[tuple
     body = chunk.strip()
     local = [(min(max(o - start - lead, 0), len(body)), name) for o, name in marks]
     speech = engine.synthesize(body, voice=voice or ENGLISH_VOICE, rate=rate, marks=local)
-    pairs = english_visemes(list(speech.phonemes()))
-    return speech, [Timing(e.text, v, e.start, e.end) for v, e in pairs], _mark_times(speech, local)
+    if not _has_phonemes(speech):
+        timings = _english_by_words(speech, body, rate or getattr(engine, "rate", None))
+    else:
+        timings = [Timing(e.text, v, e.start, e.end) for v, e in english_visemes(list(speech.phonemes()))]
+    return speech, timings, _mark_times(speech, local)
+
+
+def _has_phonemes(speech: Speech) -> bool:
+    return any(not p.text.startswith("_") for p in speech.phonemes())
+
+
+def _english_by_words(speech: Speech, body: str, rate: int | None) -> list[Timing]:
+    """Visemes from each word's spelling, timed by estimate between the engine's word boundaries.
+
+    A boundary covers its word and any following words the engine did not report on their own."""
+    tokens = word_tokens(body)
+    words = sorted(speech.words(), key=lambda e: e.start)
+    first = snap_to_tokens([w.position for w in words], tokens)
+    keep = [(w, k) for w, k in zip(words, first) if k >= 0]
+    bounds = [k for _, k in keep[1:]] + [len(tokens)]
+    units = [[u for tok in tokens[k:stop] for u in english_units(tok[2])] for (_, k), stop in zip(keep, bounds)]
+    placed = resync([w.start for w, _ in keep], units, speech.duration, seconds_per_unit(rate))
+    return [Timing(u.label, u.viseme, a, b) for u, a, b in placed]
 
 
 def _join(parts: list[tuple[Speech, list[Timing], dict[str, float]]], engine_name: str,

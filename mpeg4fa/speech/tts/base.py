@@ -6,6 +6,8 @@ free of engine objects lets it be pickled, cached and compared in tests.
 """
 from __future__ import annotations
 
+import bisect
+import re
 import wave
 from dataclasses import dataclass
 from os import PathLike
@@ -110,3 +112,27 @@ class Engine(Protocol):
         """Speak ``text``; ``marks`` are (character offset in ``text``, name) pairs whose times
         come back as mark events (where expression tags sit inside the text)."""
         ...
+
+
+_WORD = re.compile(r"[^\W_]+(?:'[^\W_]+)*")
+
+
+def word_tokens(text: str) -> list[tuple[int, int, str]]:
+    """(start, end, word) for each run of letters and digits (an inner apostrophe kept: don't)."""
+    return [(m.start(), m.end(), m.group()) for m in _WORD.finditer(text)]
+
+
+def snap_to_tokens(positions: Sequence[int], tokens: Sequence[tuple[int, int, str]]) -> list[int]:
+    """Index of the token each engine position falls in, or of the next token (-1: past the end).
+
+    Engines report a word's character position loosely (espeak one character late after a
+    sentence end, or on the space before it); snapping makes positions comparable with the text.
+    """
+    starts = [t[0] for t in tokens]
+    out = []
+    for p in positions:
+        k = bisect.bisect_right(starts, p) - 1
+        if k < 0 or p >= tokens[k][1]:
+            k += 1
+        out.append(k if k < len(tokens) else -1)
+    return out
