@@ -15,6 +15,7 @@ from ..formats import FormatError
 from ..render.errors import RenderError
 from ..speech.errors import MarkupError, TTSError
 from . import codec, model, play, speech, texture
+from .errors import UsageError
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -42,6 +43,9 @@ def main(argv: list[str] | None = None) -> int:
     except (FbaError, FormatError, FaceError, RenderError, MarkupError, TTSError) as exc:
         print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except UsageError as exc:
+        print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
+        return 2
     except BrokenPipeError:  # output piped into head, less...: not an error
         sys.stderr.close()
         return 0

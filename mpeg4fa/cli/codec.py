@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -9,6 +10,8 @@ from pathlib import Path
 
 from ..fba import EncodeOptions, FbaError, decode, demo_stream, describe, encode
 from ..formats import read_stream, write_fap
+from ..formats.sniff import sniff
+from . import speech
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -26,11 +29,20 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", type=Path, required=True, help="the .fap file to write")
     p.set_defaults(run=run_decode)
 
-    p = commands.add_parser("encode", help="encode a .fap file (or re-encode a .fba stream) to .fba",
-                            description="Encode FAPs into a binary FBA stream. A .fba input is re-encoded with "
-                                        "the coding parameters it carries (the same bytes for a stream from a "
-                                        "conforming encoder) unless options override them.")
-    p.add_argument("input", type=Path, help="a .fap or .fba file")
+    p = commands.add_parser(
+        "encode", help="encode tagged text (speech -> FAPs), a .fap file or a .fba stream to .fba",
+        description="Encode FAPs into a binary FBA stream. INPUT is a .fap or .fba file (a .fba is re-encoded "
+                    "with the coding parameters it carries, the same bytes for a stream from a conforming "
+                    "encoder, unless options override them), or text with expression tags such as "
+                    "'(joy, 40, 0.5) Hello there': spoken by a TTS engine, turned into visemes and "
+                    "expressions and encoded with the speech as --audio. Text may also come from a file "
+                    "(INPUT names a file that is not a stream, or @FILE) or standard input (-).",
+        epilog='examples:\n  mpeg4fa encode "(joy, 40, 0.5) Hello there!" -o talk.fba --audio talk.wav '
+               '--timings talk.json\n  mpeg4fa encode script.txt -o talk.fba --audio talk.wav --fdp-out face.fdp\n'
+               '  echo "你好，世界" | mpeg4fa encode - -o nihao.fba --audio nihao.wav --level both\n'
+               '  mpeg4fa encode received.fap -o received.fba --optimize',
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("input", help="a .fap or .fba file, tagged text, @FILE or - (text from standard input)")
     p.add_argument("-o", "--output", type=Path, required=True, help="the .fba stream to write")
     p.add_argument("--quant", type=_quant, metavar="0-31", help="fap_quant: 0 = exact, larger = coarser (default 1)")
     p.add_argument("--bap-quant", type=_quant, metavar="0-31", help="bap_quant for body data (default 1)")
@@ -44,6 +56,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--time-codes", action="store_true", help="send a time code in every intra header")
     p.add_argument("--optimize", action="store_true",
                    help="smallest stream with the same decoded values (tight ranges, repeats skipped)")
+    speech.text_encoding_options(p)
     p.set_defaults(run=run_encode)
 
     p = commands.add_parser("validate", help="check that a .fba stream decodes to its end code",
@@ -121,13 +134,30 @@ def run_decode(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_encode(args: argparse.Namespace) -> int:
-    stream, kind = read_stream(args.input)
+def is_stream_file(arg: str) -> bool:
+    """Whether an encode INPUT names a .fba/.fap stream (else it is text, or names a text file)."""
+    path = Path(arg)
+    return path.is_file() and (path.suffix.lower() in (".fap", ".fba") or sniff(path) == "fba")
+
+
+def coding_options(args: argparse.Namespace, default: EncodeOptions | None) -> EncodeOptions | None:
+    """``default`` with the coding flags given on the command line put over it (None: none given)."""
     chosen = {"fap_quant": args.quant, "bap_quant": args.bap_quant, "intra_period": args.intra_period,
-              "fps": args.fps, "mask_types": args.mask_types, "start_codes": args.start_codes}
-    flags = {"skip_repeats": args.skip_repeats, "time_codes": args.time_codes, "optimize": args.optimize}
-    overridden = any(v is not None for v in chosen.values()) or any(flags.values())
-    options = EncodeOptions(**chosen, **flags) if overridden or kind == "fap" else None
+              "fps": args.fps, "mask_types": args.mask_types, "start_codes": args.start_codes,
+              "skip_repeats": args.skip_repeats or None, "time_codes": args.time_codes or None,
+              "optimize": args.optimize or None}
+    given = {k: v for k, v in chosen.items() if v is not None}
+    if not given:
+        return default
+    return dataclasses.replace(default, **given) if default is not None else EncodeOptions(**given)
+
+
+def run_encode(args: argparse.Namespace) -> int:
+    if not is_stream_file(args.input):
+        return speech.run_encode_text(args)
+    speech.reject_text_options(args)
+    stream, kind = read_stream(args.input)
+    options = coding_options(args, EncodeOptions() if kind == "fap" else None)
     data = encode(stream, options)
     args.output.write_bytes(data)
     print(f"{args.input} -> {args.output}: {len(stream)} frames, {len(data)} bytes", file=sys.stderr)

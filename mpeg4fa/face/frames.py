@@ -25,25 +25,11 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from mpeg4fa.fba.stream import FapStream, Frame
-from mpeg4fa.spec import FAP_BY_NAME, FAP_GROUP, FAPS, N_FAPS, expand_high_level
+from mpeg4fa.spec import FAP_GROUP, FAP_PARTNERS, N_FAPS, expand_high_level
 
 
-def _counterparts() -> np.ndarray:
-    """``(68, 2)`` columns of each FAP's interpolation partners: left/right first, then
-    inner/outer lip (-1: none)."""
-    partner = np.full((N_FAPS, 2), -1)
-    for record in FAPS:
-        for a, b in (("_l_", "_r_"), ("_r_", "_l_"), ("_lm", "_rm"), ("_rm", "_lm")):
-            if a in record.name:
-                other = FAP_BY_NAME.get(record.name.replace(a, b))
-                if other is not None:
-                    partner[record.number - 1, 0] = other.number - 1
-    for inner in range(4, 14):
-        partner[inner - 1, 1], partner[inner + 47 - 1, 1] = inner + 47 - 1, inner - 1
-    return partner
-
-
-PARTNERS = _counterparts()
+PARTNERS = FAP_PARTNERS
+"""Interpolation counterparts of each FAP (see :data:`mpeg4fa.spec.FAP_PARTNERS`)."""
 
 
 def _last_sent(mask: np.ndarray) -> np.ndarray:

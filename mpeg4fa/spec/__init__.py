@@ -16,7 +16,7 @@ from mpeg4fa.spec._records import Expression, Fap, Fapu, FeaturePoint, HighLevel
 __all__ = [
     "Fap", "FeaturePoint", "Fapu", "Viseme", "Expression", "HighLevelField",
     "N_FAPS", "N_BAPS", "FAPS", "FAP_BY_NAME", "QUANT_STEP", "I_MAX_DEFAULT", "P_MAX_DEFAULT",
-    "FAP_GROUP", "FAP_GROUP_SLICES", "HIGH_LEVEL_FIELDS", "FEATURE_POINTS", "FAPU",
+    "FAP_GROUP", "FAP_GROUP_SLICES", "FAP_PARTNERS", "HIGH_LEVEL_FIELDS", "FEATURE_POINTS", "FAPU",
     "VISEMES", "EXPRESSIONS", "BAP_GROUPS", "BAP_QUANT_STEP", "BAP_QUANT_STEP_ALT",
     "BAP_PRED_SCALE",
 ]
@@ -73,6 +73,26 @@ def _group_slices() -> tuple[tuple[int, int], ...]:
 
 FAP_GROUP_SLICES = _group_slices()
 """Half-open 0-based column range of each FAP group; the mask is sent per group."""
+
+
+def _counterparts() -> np.ndarray:
+    partner = np.full((N_FAPS, 2), -1, dtype=np.int32)
+    for record in FAPS:
+        for a, b in (("_l_", "_r_"), ("_r_", "_l_"), ("_lm", "_rm"), ("_rm", "_lm")):
+            if a in record.name:
+                other = FAP_BY_NAME.get(record.name.replace(a, b))
+                if other is not None:
+                    partner[record.number - 1, 0] = other.number - 1
+    for inner in range(4, 14):  # inner lip FAPs 4-13 <-> outer lip FAPs 51-60
+        partner[inner - 1, 1], partner[inner + 47 - 1, 1] = inner + 47 - 1, inner - 1
+    partner.flags.writeable = False
+    return partner
+
+
+FAP_PARTNERS = _counterparts()
+"""``(68, 2)`` 0-based columns of each FAP's interpolation counterparts (-1: none): left/right
+(``_l_`` <-> ``_r_``, by name), then inner/outer lip (FAPs 4-13 <-> 51-60). Mask type 2 copies an
+unsent FAP from the first one that is sent; the encoder leaves out what the decoder can copy."""
 
 HIGH_LEVEL_FIELDS: tuple[HighLevelField, ...] = tuple(
     HighLevelField(

@@ -293,13 +293,16 @@ def expand_high_level(viseme: np.ndarray, expression: np.ndarray) -> np.ndarray:
         raise ValueError(f"viseme must be (n, 4) and expression (n, 6), got {vis.shape} and {exp.shape}")
     if not (np.issubdtype(vis.dtype, np.integer) and np.issubdtype(exp.dtype, np.integer)):
         raise ValueError(f"viseme and expression fields must be integers, got {vis.dtype} and {exp.dtype}")
+    # Blend and intensities are quantised by fap_quant (up to 31) with the reference rounding, so a
+    # legal stream can bring 63 back as up to 63 + 31 // 2 (64 at q = 2, 65 at q = 5): clip those.
     for fap, fields, table in ((1, ("select1", "select2", "blend"), vis),
                                (2, ("select1", "intensity1", "select2", "intensity2"), exp)):
         for k, field in enumerate(fields):
             label = ("viseme " if fap == 1 else "expression ") + field
-            _check_column(table[:, k], *_RANGE[(fap, field)], label)
-    w = vis[:, 2, None] / _FULL
+            lo, hi = _RANGE[(fap, field)]
+            _check_column(table[:, k], lo, hi + 15 if hi == _FULL else hi, label)
+    w = np.clip(vis[:, 2, None], 0, _FULL) / _FULL
     out = _VISEME_STACK[vis[:, 0]] * w + _VISEME_STACK[vis[:, 1]] * (1.0 - w)
-    out += _EXPRESSION_STACK[exp[:, 0]] * (exp[:, 1, None] / _FULL)
-    out += _EXPRESSION_STACK[exp[:, 2]] * (exp[:, 3, None] / _FULL)
+    out += _EXPRESSION_STACK[exp[:, 0]] * (np.clip(exp[:, 1, None], 0, _FULL) / _FULL)
+    out += _EXPRESSION_STACK[exp[:, 2]] * (np.clip(exp[:, 3, None], 0, _FULL) / _FULL)
     return out

@@ -17,8 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mpeg4fa.fba import EncodeOptions
 from mpeg4fa.fba.stream import FapStream
-from mpeg4fa.spec import EXPRESSIONS, VISEMES
+from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
+from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, VISEMES
 from mpeg4fa.speech.markup import parse_markup
 from mpeg4fa.speech.timeline import (expression_fields, expression_track, frame_times, idle_track, merge_tracks,
                                      viseme_fields, viseme_track)
@@ -26,6 +28,8 @@ from mpeg4fa.speech.tts.base import Engine
 from mpeg4fa.speech.utterance import Utterance, speak
 
 LEVELS = ("high", "low", "both")
+TEXT_CODING = {"optimize": True, "fap_quant": 3}
+"""Coding options for streams made from text (tools/bench_encoder.py measures what they save)."""
 _VISEME_CODE = {v.name: v.number for v in VISEMES}
 _EXPRESSION_CODE = {e.name: e.number for e in EXPRESSIONS}
 
@@ -38,6 +42,11 @@ class Encoded:
     utterance: Utterance
     values: np.ndarray  # (n, 68) merged low-level FAP values the stream stands for
     level: str
+    mask_types: tuple[int, ...]  # per FAP group: how the decoder must read unsent FAPs
+
+    def coding(self, **overrides) -> EncodeOptions:
+        """The options to encode :attr:`stream` with: ``TEXT_CODING``, these mask types, then ``overrides``."""
+        return EncodeOptions(**{**TEXT_CODING, "mask_types": self.mask_types, **overrides})
 
     @property
     def speech(self):
@@ -71,8 +80,12 @@ def make_engine(name: str) -> Engine:
 
 def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto", voice: str | None = None,
                 rate: int | None = None, fps: float = 25.0, level: str = "high", idle: bool = False,
-                seed: int = 0, name: str = "<text>") -> Encoded:
-    """Speak tagged text and turn it into a FapStream at ``fps`` (see the module docstring for levels)."""
+                seed: int = 0, name: str = "<text>", fold: bool = True) -> Encoded:
+    """Speak tagged text and turn it into a FapStream at ``fps`` (see the module docstring for levels).
+
+    ``fold`` leaves out the FAPs the decoder can copy from their counterparts (:func:`fold_symmetric`);
+    encode the stream with :meth:`Encoded.coding` so their groups are sent with mask type 2.
+    """
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
     markup = parse_markup(text, name=name)
@@ -94,7 +107,8 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
         stream.fap_values[:, used] = values[:, used]
     if level in ("high", "both"):
         _high_level(stream, utterance, times, values, level)
-    return Encoded(stream, utterance, values, level)
+    mask_types = fold_symmetric(stream, fold)
+    return Encoded(stream, utterance, values, level, mask_types)
 
 
 def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, values: np.ndarray, level: str) -> None:
@@ -114,7 +128,45 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
         [_EXPRESSION_CODE.get(s, 0) for s in exp.select2], np.where(known, exp.intensity2, 0), np.zeros((n, 2))]
     if level == "high":
         low = ~standard_vis | ~known
-        if low.any():  # the mouth (or the whole face) of those frames as low-level FAPs
-            cells = np.ix_(np.flatnonzero(low), _moving(values[low]))
-            stream.fap_mask[cells] = True
-            stream.fap_values[cells] = values[cells]
+        if low.any():  # what those frames need, sent in every frame: a change of FAP mask costs an intra frame
+            used = _moving(values[low])
+            stream.fap_mask[:, used] = True
+            stream.fap_values[:, used] = values[:, used]
+
+
+def fold_symmetric(stream: FapStream, fold: bool = True) -> tuple[int, ...]:
+    """Stop sending low-level FAPs the decoder can copy from a counterpart; return the mask types.
+
+    With mask type 2 (interpolate) an unsent FAP copies its left/right counterpart if that is
+    sent, else its inner/outer lip counterpart (:data:`mpeg4fa.spec.FAP_PARTNERS`, the rule
+    the decoder applies). Visemes and expressions are symmetric, so about a third of the
+    lip, jaw and brow FAPs go. A FAP is dropped only where the counterpart the decoder will
+    choose is sent in the same frames with the same values, and that counterpart then stays.
+    Right-side and outer FAPs are tried first (highest numbers), so the left and inner ones stay.
+    """
+    sent = stream.fap_mask.any(axis=0)
+    pinned = np.zeros_like(sent)
+    folded_groups: set[int] = set()
+    for c in sorted(np.flatnonzero(sent), reverse=True) if fold else ():
+        if c < 2 or pinned[c]:
+            continue
+        choice = next((int(p) for p in FAP_PARTNERS[c] if p >= 0 and sent[p]), None)
+        if choice is None:
+            continue
+        same_mask = np.array_equal(stream.fap_mask[:, c], stream.fap_mask[:, choice])
+        if same_mask and np.array_equal(stream.fap_values[:, c], stream.fap_values[:, choice]):
+            sent[c] = False
+            pinned[choice] = True
+            stream.fap_mask[:, c] = False
+            stream.fap_values[:, c] = 0
+            folded_groups.add(int(FAP_GROUP[c]))
+    types = []
+    for g, (a, b) in enumerate(FAP_GROUP_SLICES, start=1):
+        cols = stream.fap_mask[:, a:b]
+        if not cols.any():
+            types.append(MASK_NONE)
+        elif cols.all():
+            types.append(MASK_ALL)
+        else:
+            types.append(MASK_INTERPOLATE if g in folded_groups else MASK_HOLD)
+    return tuple(types)

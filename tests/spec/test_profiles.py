@@ -294,9 +294,12 @@ def test_expand_high_level_zero_rows_and_errors():
     assert expand_high_level(np.zeros((0, 4), np.int32), np.zeros((0, 6), np.int32)).shape == (0, 68)
     vis, exp = random_frames(10)
     bad = vis.copy()
-    bad[4, 2] = 70
-    with pytest.raises(ValueError, match="frame 4: viseme blend 70 out of range 0..63"):
+    bad[4, 2] = 79
+    with pytest.raises(ValueError, match="frame 4: viseme blend 79 out of range 0..78"):
         expand_high_level(bad, exp)
+    over = vis.copy()
+    over[:, 2], vis[:, 2] = 64, 63  # 63 quantised at fap_quant 2 comes back as 64: full scale
+    np.testing.assert_array_equal(expand_high_level(over, exp), expand_high_level(vis, exp))
     bad = exp.copy()
     bad[6, 2] = 9
     with pytest.raises(ValueError, match="frame 6: expression select2 9 out of range 0..6"):

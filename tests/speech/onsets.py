@@ -15,9 +15,10 @@ def _inverse_ease(w: np.ndarray) -> np.ndarray:
 def recovered_onset(stream, start: float, end: float, viseme: str, fps: float) -> float | None:
     """When the viseme spanning [start, end] began, as the decoded FAP 1 says: the first frame inside
     the span names it, and its eased blend says how far into the span that frame is (None: not named)."""
+    fields = np.repeat(stream.viseme, stream.skip + 1, axis=0)  # skipped repeats back on the frame grid
     k = int(np.ceil(start * fps - 1e-9))
     t = k / fps
-    if t >= end or k >= len(stream) or NAMES[stream.viseme[k, 0]] != viseme:
+    if t >= end or k >= len(fields) or NAMES[fields[k, 0]] != viseme:
         return None
-    u = _inverse_ease(stream.viseme[k, 2] / 63.0)
+    u = _inverse_ease(min(fields[k, 2], 63) / 63.0)
     return float(t - u * (end - start))

@@ -46,7 +46,7 @@ def test_pyttsx3_stream_keeps_sync_at_every_word_boundary(both_english):
     """Each word's first viseme, read back from the decoded FAP 1, starts within one frame of the
     word's start in the audio (espeak's own word event: ground truth)."""
     enc = encode_text(TEXT, engine="pyttsx3", level="high", fps=FPS)
-    stream = decode(encode(enc.stream))
+    stream = decode(encode(enc.stream, enc.coding()))
     _, es = both_english
     spans = enc.utterance.spans()
     errors = []

@@ -1,0 +1,8 @@
+"""The CLI's own error: options that do not go together (exit status 2, like argparse's)."""
+from __future__ import annotations
+
+from ..errors import WhereHintError
+
+
+class UsageError(WhereHintError):
+    """A combination of command-line options that cannot work; ``hint`` names one that does."""
