@@ -53,6 +53,9 @@ case "$job" in
         .venv/bin/mpeg4fa say "(joy, 40, 0.5) Hello! I am an MPEG-4 talking head. (surprise, 30, 0.4) Really." \
             -o out/say.mp4 --keep
         .venv/bin/mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o out/say-zh.mp4 --keep
+        .venv/bin/mpeg4fa encode "(joy, 40, 0.5) Hello there! (sadness, 30, 1) Goodbye." -o out/talk.fba \
+            --audio out/talk.wav --timings out/talk.json --fdp-out out/face.fdp
+        .venv/bin/mpeg4fa info out/talk.fba
         ;;
     test)
         ensure_python; ensure_venv

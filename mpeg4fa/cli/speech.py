@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -149,17 +150,26 @@ def _speaker_fdp(args: argparse.Namespace):
     if args.face_mesh is not None:
         need("face_points")
         mesh = fdp_io.read_obj(args.face_mesh)
-        return fdp_io.fdp_from_mesh(mesh, fdp_io.read_points_json(args.face_points), name=args.face_mesh.stem)
+        with _located(str(args.face_points)):
+            return fdp_io.fdp_from_mesh(mesh, fdp_io.read_points_json(args.face_points), name=args.face_mesh.stem)
     if args.front is not None or args.side is not None:
         need("front", "front_points", "side", "side_points")
-        from .media import read_image
-        width, height = read_image(args.front, "photo").shape[1::-1]
-        return fdp_io.fdp_from_photos(fdp_io.read_points_json(args.front_points),
-                                      fdp_io.read_points_json(args.side_points), side_view=args.side_view,
-                                      front_size=(width, height), texture=fdp_io.texture_from_file(args.front),
-                                      name=args.front.stem)
+        with _located(f"{args.front_points} + {args.side_points}"):
+            return fdp_io.fdp_from_photos(fdp_io.read_points_json(args.front_points),
+                                          fdp_io.read_points_json(args.side_points), side_view=args.side_view,
+                                          texture=fdp_io.texture_from_file(args.front), name=args.front.stem)
     from ..face import FaceModel
     return FaceModel.default().to_fdp()
+
+
+@contextlib.contextmanager
+def _located(path: str):
+    """A value the FDP model rejects (a point outside the photo, a bad vertex index) named by its file."""
+    from ..fdp import FdpError, FdpValueError
+    try:
+        yield
+    except FdpValueError as exc:
+        raise FdpError.no_place(path, exc.message, hint="check the feature point annotations") from None
 
 
 def _write_timings(encoded, path: Path) -> None:
