@@ -22,7 +22,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from mpeg4fa.fdp.errors import FdpError
+from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.json_form import _decode, _Doc, _kind, _parse
 from mpeg4fa.fdp.model import LABEL_INDEX, Fdp, FdpMesh, FdpValueError, TextureImage
 from mpeg4fa.spec import FEATURE_POINTS
@@ -142,10 +142,7 @@ def read_points_json(path: str | os.PathLike[str]) -> dict[str, int | tuple[floa
     mesh points no pixels. Every fault is an :class:`FdpError` at its line:column.
     """
     name = str(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise FdpError.from_os_error(name, exc) from None
+    data = read_bytes(path)
     text = _decode(data, name)
     doc = _Doc(text, name)
     points = doc.obj(_parse(text, name), (), "a feature points file", ())
@@ -343,10 +340,7 @@ _JPEG_SOF = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}   # frame headers;
 def texture_from_file(path: str | os.PathLike[str]) -> TextureImage:
     """The image file at ``path`` as a texture (bytes kept as they are), typed by its first bytes."""
     name = str(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise FdpError.from_os_error(name, exc) from None
+    data = read_bytes(path)
     if data.startswith(_PNG):
         media_type = "image/png"
     elif data.startswith(_JPEG):

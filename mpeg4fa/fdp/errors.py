@@ -8,6 +8,9 @@ that already catch the formats layer's error catch this one too.
 """
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 from mpeg4fa.formats.errors import FormatError
 
 
@@ -59,3 +62,11 @@ class FdpError(FormatError):
 
     def __reduce__(self):  # keep every attribute when pickled
         return (type(self), (self.path, self.line, self.column, self.problem, self.hint, self.offset))
+
+
+def read_bytes(path: "str | os.PathLike[str]") -> bytes:
+    """The file's bytes; a missing or unreadable file becomes an :class:`FdpError` naming it."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise FdpError.from_os_error(str(path), exc) from None

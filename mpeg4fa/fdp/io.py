@@ -8,7 +8,7 @@ from typing import Mapping
 from numpy.typing import ArrayLike
 
 from mpeg4fa.fdp.binary import MAGIC, fdp_from_bytes, fdp_to_bytes
-from mpeg4fa.fdp.errors import FdpError
+from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.json_form import fdp_from_json, fdp_to_json
 from mpeg4fa.fdp.model import Fdp
 from mpeg4fa.fdp.xface import xface_from_xml
@@ -43,10 +43,7 @@ def load_fdp(path: str | os.PathLike[str], meshes: Mapping[str, ArrayLike] | Non
     :func:`~mpeg4fa.fdp.xface.read_xface_fdp`.
     """
     name = str(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise FdpError.from_os_error(name, exc) from None
+    data = read_bytes(path)
     kind = sniff_fdp(data)
     if kind == "binary":
         return fdp_from_bytes(data, name)

@@ -19,11 +19,10 @@ from __future__ import annotations
 import math
 import os
 import re
-from pathlib import Path
 
 import numpy as np
 
-from mpeg4fa.fdp.errors import FdpError
+from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.model import FdpMesh
 
 _TOKEN = re.compile(r"\S+")
@@ -35,10 +34,7 @@ _V, _V_RAW, _HAS_VT, _VT, _VT_RAW, _LINE, _COL_V, _COL_VT = range(8)
 def read_obj(path: str | os.PathLike[str]) -> FdpMesh:
     """Read the OBJ file at ``path`` as an :class:`FdpMesh`."""
     name = str(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise FdpError.from_os_error(name, exc) from None
+    data = read_bytes(path)
     return mesh_from_obj(data, name)
 
 

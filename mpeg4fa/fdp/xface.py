@@ -28,14 +28,13 @@ import math
 import os
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Mapping, NamedTuple
 from xml.parsers import expat
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mpeg4fa.fdp.errors import FdpError
+from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.model import FAPU_KEYS, LABEL_INDEX, Fdp, FdpValueError
 from mpeg4fa.spec import N_FAPS
 
@@ -302,8 +301,5 @@ def _entries(src: _Source, root: _Node) -> list[XfaceEntry]:
 
 def read_xface_fdp(path: str | os.PathLike[str]) -> XfaceFdp:
     """Read an Xface ``.fdp`` file; pair with :meth:`XfaceFdp.to_fdp` and the model's vertices."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise FdpError.from_os_error(str(path), exc) from None
+    data = read_bytes(path)
     return xface_from_xml(data, str(path))

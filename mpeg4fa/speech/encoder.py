@@ -119,8 +119,10 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
     standard_vis = np.array([a[0] == "mpeg4" and b[0] == "mpeg4" for a, b in zip(vis.select1, vis.select2)])
     select1 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select1, standard_vis)])
     select2 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select2, standard_vis)])
-    stream.fap_mask[:, 0] = True
-    stream.viseme[:] = np.c_[select1, select2, np.where(standard_vis, vis.blend, 63), np.zeros(n)]
+    names = {s[1] for s, ok in zip(vis.select1 + vis.select2, np.r_[standard_vis, standard_vis]) if ok}
+    if names - {"none"}:  # all-Chinese speech leaves FAP 1 nothing to name
+        stream.fap_mask[:, 0] = True
+        stream.viseme[:] = np.c_[select1, select2, np.where(standard_vis, vis.blend, 63), np.zeros(n)]
     known = np.array([[s in _EXPRESSION_CODE for s in col] for col in (exp.select1, exp.select2)]).all(axis=0)
     stream.fap_mask[:, 1] = True
     stream.expression[:] = np.c_[

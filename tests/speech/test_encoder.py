@@ -62,9 +62,11 @@ def test_chinese_visemes_follow_the_pinyin_and_go_out_low_level():
     zh = [t.viseme for t in enc.utterance.timings if t.set == "zh"]
     assert zh == ["dtnl", "i", "gkh", "a", "o", "zhchsh", "jqx", "i", "e"]
     stream = decode(encode(enc.stream, enc.coding()))
-    mouth = stream.fap_mask[:, 2:].any(axis=1)
-    assert mouth.sum() >= 0.5 * len(stream)   # Chinese visemes cannot be named by FAP 1
+    assert stream.fap_mask[:, 2:].any(axis=1).all()  # Chinese visemes cannot be named by FAP 1: low level
+    assert not stream.fap_mask[:, 0].any()  # so FAP 1 is not sent at all
     assert (stream.expression[:, 0] == 1).any()  # joy still goes as FAP 2
+    mixed = encode_text("Hello 你好", level="high")
+    assert mixed.stream.fap_mask[:, 0].all() and mixed.stream.fap_mask[:, 2:].any(axis=0).sum() > 10
 
 
 def test_tag_times_follow_the_speech():
