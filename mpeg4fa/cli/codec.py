@@ -137,7 +137,7 @@ def run_decode(args: argparse.Namespace) -> int:
 def is_stream_file(arg: str) -> bool:
     """Whether an encode INPUT names a .fba/.fap stream (else it is text, or names a text file)."""
     path = Path(arg)
-    return path.is_file() and (path.suffix.lower() in (".fap", ".fba") or sniff(path) == "fba")
+    return speech.names_file(arg) and (path.suffix.lower() in (".fap", ".fba") or sniff(path) == "fba")
 
 
 def coding_options(args: argparse.Namespace, default: EncodeOptions | None) -> EncodeOptions | None:

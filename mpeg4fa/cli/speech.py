@@ -88,11 +88,19 @@ def reject_text_options(args: argparse.Namespace) -> None:
                          hint="drop them, or pass the text itself")
 
 
+def names_file(arg: str) -> bool:
+    """Whether ``arg`` is the path of an existing file (a long sentence is not: its name is too long)."""
+    try:
+        return Path(arg).is_file()
+    except (OSError, ValueError):
+        return False
+
+
 def read_text(arg: str) -> tuple[str, str]:
     """The text and its name for messages: literal, '-' (stdin) or @FILE."""
     if arg == "-":
         return sys.stdin.read(), "<stdin>"
-    if arg.startswith("@") or Path(arg).is_file():
+    if arg.startswith("@") or names_file(arg):
         path = Path(arg[1:] if arg.startswith("@") else arg)
         try:
             return path.read_text(encoding="utf-8"), str(path)

@@ -7,7 +7,12 @@ espeak-ng's pinyin voice, which reports one word event per syllable; inside a
 syllable the initial takes the time of its consonant phoneme, and the glide, main
 vowel and ending share the rest by the engine's phoneme boundaries when the counts
 match, else by fixed weights. Runs are spoken separately and joined, so mixed
-Chinese/English text works. A tag's time is a mark event placed at its offset.
+Chinese/English text works. A tag's time is a mark event placed at its offset
+(or, when the engine drops or cannot send marks, the start of the next word).
+
+Engines that time words but no phonemes (pyttsx3, the silent estimator) get their
+visemes from the spelling or the pinyin (:mod:`.graphemes`), timed by estimate
+and resynchronised at every word or syllable boundary (:mod:`.wordsync`).
 """
 from __future__ import annotations
 

@@ -44,6 +44,12 @@ def test_text_from_stdin_and_from_a_file(cli, tmp_path, monkeypatch):
     assert len(decode(tmp_path / "b.fba")) > 10
 
 
+def test_a_long_text_is_not_taken_for_a_file_name(cli, tmp_path):
+    long_text = "Hello there. " * 40  # longer than any file name may be
+    code, _, err = cli("encode", long_text, "-o", tmp_path / "a.fba", "--engine", "estimate")
+    assert code == 0, err
+
+
 def test_stream_input_still_reencodes_and_refuses_text_options(cli, tmp_path):
     cli("encode", "Hello", "-o", tmp_path / "a.fba", "--engine", "estimate")
     code, _, err = cli("encode", tmp_path / "a.fba", "-o", tmp_path / "b.fba")
