@@ -81,6 +81,14 @@ def test_pyttsx3_stream_keeps_sync_at_every_word_boundary(both_english):
     assert len(errors) >= 8 and max(errors) <= 1 / FPS, errors
 
 
+def test_pyttsx3_speaks_a_long_text_to_its_end():
+    """espeak may still be speaking when pyttsx3's loop returns: the worker waits for the end."""
+    text = " ".join([TEXT] * 6)  # about 30 s of speech; the audio used to stop after ~11 s
+    p3, es = Pyttsx3Engine().synthesize(text), fresh_espeak(text)
+    assert np.array_equal(p3.samples, es.samples) and p3.duration > 25
+    assert p3.words()[-1].text == "back" and p3.words()[-1].position == text.rindex("back")
+
+
 def test_pyttsx3_speaks_pinyin_syllable_by_syllable():
     enc = encode_text("你好，世界！", engine="pyttsx3", level="low")
     es = fresh_espeak("ni3 hao3 , shi4 jie4 !", voice="cmn-latn-pinyin")

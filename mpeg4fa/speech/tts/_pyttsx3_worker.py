@@ -16,6 +16,7 @@ import ctypes
 import json
 import os
 import sys
+import threading
 
 
 def _load_pyttsx3():
@@ -58,20 +59,31 @@ def run(request: dict) -> dict:
                     "hint": "use a voice name or language code espeak-ng knows, e.g. en-us, en-gb, cmn-latn-pinyin"}
         engine.setProperty("rate", int(request["rate"]))
         words: list[list[int]] = []
+        finished = threading.Event()
         forward = driver._onSynth
 
         def hook(wav, numsamples, events):
             i = 0
-            while events[i].type not in (espeak.EVENT_LIST_TERMINATED, espeak.EVENT_MSG_TERMINATED):
+            while events[i].type != espeak.EVENT_LIST_TERMINATED:
                 e = events[i]
                 if e.type == espeak.EVENT_WORD:
                     words.append([e.text_position - 1, e.length, e.sample])
+                elif e.type == espeak.EVENT_MSG_TERMINATED:
+                    break
                 i += 1
-            return forward(wav, numsamples, events)
+            status = forward(wav, numsamples, events)
+            if events[i].type == espeak.EVENT_MSG_TERMINATED:
+                finished.set()  # pyttsx3 has written the file
+            return status
 
         espeak.SetSynthCallback(hook)
         engine.save_to_file(request["text"], request["wav"])
         engine.runAndWait()
+        # runAndWait returns once espeak_Synth does, and in retrieval mode espeak may still be
+        # speaking a long text on its own thread: wait for the end of the message
+        espeak.Synchronize()
+        if not finished.wait(request.get("timeout", 120.0)):
+            return {"error": "pyttsx3 did not finish the speech in time", "hint": "split the text"}
     return {"words": words, "rate": 22050}
 
 
