@@ -38,12 +38,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run_say)
 
 
-_TEXT_OPTIONS = ("audio", "fdp_out", "timings", "engine", "lang", "voice", "rate", "level", "idle", "face_mesh",
-                 "face_points", "front", "front_points", "side", "side_points")
-
-
 def text_encoding_options(p: argparse.ArgumentParser) -> None:
     """The options of ``encode`` when INPUT is text (speech, FAP timeline, FDP of the speaker)."""
+    first = len(p._actions)
     g = p.add_argument_group("text input: speech and FAPs")
     g.add_argument("--audio", type=Path, metavar="WAV", help="write the speech here (16-bit mono WAV)")
     g.add_argument("--timings", type=Path, metavar="JSON",
@@ -65,6 +62,9 @@ def text_encoding_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--side-points", type=Path, metavar="JSON", help="the side photo's feature points, label -> [x, y]")
     g.add_argument("--side-view", choices=("left", "right"), default="left",
                    help="which side of the face the side photo shows (default left)")
+    # what these options default to, so a stream INPUT can tell which were given (argparse keeps
+    # no public list of a parser's actions; _actions has been stable since Python 3.2)
+    p.set_defaults(text_defaults={a.dest: a.default for a in p._actions[first:]})
 
 
 def speech_options(g) -> None:
@@ -80,8 +80,7 @@ def speech_options(g) -> None:
 
 def reject_text_options(args: argparse.Namespace) -> None:
     """A stream INPUT with text-only options is a mistake worth one clear line."""
-    given = [name for name in _TEXT_OPTIONS if getattr(args, name, None) not in (None, False, "auto", "espeak",
-                                                                                  "high", "left")]
+    given = [name for name, default in args.text_defaults.items() if getattr(args, name) != default]
     if given:
         flags = ", ".join("--" + name.replace("_", "-") for name in given)
         raise UsageError(f"{flags} apply to text input, but {args.input} is a stream file",

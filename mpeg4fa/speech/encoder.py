@@ -107,8 +107,8 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
         stream.fap_values[:, used] = values[:, used]
     if level in ("high", "both"):
         _high_level(stream, utterance, times, values, level)
-    mask_types = fold_symmetric(stream, fold)
-    return Encoded(stream, utterance, values, level, mask_types)
+    interpolated = fold_symmetric(stream) if fold else set()
+    return Encoded(stream, utterance, values, level, _mask_types(stream, interpolated))
 
 
 def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, values: np.ndarray, level: str) -> None:
@@ -136,8 +136,8 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
             stream.fap_values[:, used] = values[:, used]
 
 
-def fold_symmetric(stream: FapStream, fold: bool = True) -> tuple[int, ...]:
-    """Stop sending low-level FAPs the decoder can copy from a counterpart; return the mask types.
+def fold_symmetric(stream: FapStream) -> set[int]:
+    """Stop sending low-level FAPs the decoder can copy from a counterpart; return their FAP groups.
 
     With mask type 2 (interpolate) an unsent FAP copies its left/right counterpart if that is
     sent, else its inner/outer lip counterpart (:data:`mpeg4fa.spec.FAP_PARTNERS`, the rule
@@ -149,7 +149,7 @@ def fold_symmetric(stream: FapStream, fold: bool = True) -> tuple[int, ...]:
     sent = stream.fap_mask.any(axis=0)
     pinned = np.zeros_like(sent)
     folded_groups: set[int] = set()
-    for c in sorted(np.flatnonzero(sent), reverse=True) if fold else ():
+    for c in sorted(np.flatnonzero(sent), reverse=True):
         if c < 2 or pinned[c]:
             continue
         choice = next((int(p) for p in FAP_PARTNERS[c] if p >= 0 and sent[p]), None)
@@ -162,6 +162,11 @@ def fold_symmetric(stream: FapStream, fold: bool = True) -> tuple[int, ...]:
             stream.fap_mask[:, c] = False
             stream.fap_values[:, c] = 0
             folded_groups.add(int(FAP_GROUP[c]))
+    return folded_groups
+
+
+def _mask_types(stream: FapStream, interpolated: set[int]) -> tuple[int, ...]:
+    """Per FAP group: none, all, or partly sent (interpolate where FAPs were folded, else hold)."""
     types = []
     for g, (a, b) in enumerate(FAP_GROUP_SLICES, start=1):
         cols = stream.fap_mask[:, a:b]
@@ -170,5 +175,5 @@ def fold_symmetric(stream: FapStream, fold: bool = True) -> tuple[int, ...]:
         elif cols.all():
             types.append(MASK_ALL)
         else:
-            types.append(MASK_INTERPOLATE if g in folded_groups else MASK_HOLD)
+            types.append(MASK_INTERPOLATE if g in interpolated else MASK_HOLD)
     return tuple(types)

@@ -57,6 +57,7 @@ def english_graphemes() -> dict[tuple[str, str], tuple[tuple[str, ...], float]]:
     return table
 
 
+@lru_cache(maxsize=None)
 def _longest() -> int:
     return max(len(g) for g, _ in english_graphemes())
 
