@@ -52,7 +52,8 @@ from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
 from mpeg4fa.render.scene import vertex_normals
 
-__all__ = ["PhotoView", "BakedTexture", "Alignment", "UVRaster", "bake_texture", "uv_rasterise", "align_view"]
+__all__ = ["PhotoView", "BakedTexture", "Alignment", "UVRaster", "bake_texture", "uv_rasterise", "align_view",
+           "projected_depth_map", "sample_projected", "skin_texels", "assemble"]
 
 VIEWS = ("front", "left", "right")
 SIDE_VIEWS = ("left", "right")
@@ -269,34 +270,43 @@ def align_view(mesh: HeadMesh, photo: PhotoView) -> Alignment:
 # -- step 3: sampling with visibility ---------------------------------------------------------
 
 @dataclass(frozen=True, eq=False)
-class _DepthMap:
+class DepthMap:
     depth: np.ndarray   # (h, w) float32, toward the camera, mm
     solid: np.ndarray   # (h, w) bool: the head covers the pixel and its neighbours
     photo_size: tuple[int, int]  # photo (width, height)
 
 
-def _depth_map(mesh: HeadMesh, vertices: np.ndarray, align: Alignment, photo_size: tuple[int, int]) -> _DepthMap:
+def _depth_map(mesh: HeadMesh, vertices: np.ndarray, align: Alignment, photo_size: tuple[int, int]) -> DepthMap:
     """The head drawn in the photo's frame (at most DEPTH_MAP_SIZE pixels a side) for occlusion tests."""
+    return projected_depth_map(mesh, align.project(vertices), photo_size)
+
+
+def projected_depth_map(mesh: HeadMesh, projected: np.ndarray, photo_size: tuple[int, int]) -> DepthMap:
+    """The head drawn from vertices already mapped into a photo: (V, 3) pixel x, y and depth (mm, larger = nearer).
+
+    Any map into the photo will do (an orthographic view, or a warp interpolated
+    from texture coordinates): occlusion is decided where each surface lands.
+    """
     width, height = photo_size
     f = DEPTH_MAP_SIZE / max(width, height)
     w, h = max(int(round(width * f)), 2), max(int(round(height * f)), 2)
-    across, toward = (np.asarray(a) for a in _AXES[align.view])
-    depth = vertices @ toward
+    proj = np.asarray(projected, float)
+    depth = proj[:, 2]
     mid, half = (depth.max() + depth.min()) / 2.0, (np.ptp(depth) / 2.0) * 1.05 + 1.0
-    m = np.zeros((4, 4))
-    m[0, :3], m[0, 3] = 2.0 * align.scale[0] / width * across, 2.0 * align.offset[0] / width - 1.0
-    m[1, 1], m[1, 3] = 2.0 * align.scale[1] / height, 1.0 - 2.0 * align.offset[1] / height
-    m[2, :3], m[2, 3] = -toward / half, mid / half
+    m = np.zeros((4, 4))      # pixels -> clip: x right, y down, nearer = smaller GL depth
+    m[0, 0], m[0, 3] = 2.0 / width, -1.0
+    m[1, 1], m[1, 3] = -2.0 / height, 1.0
+    m[2, 2], m[2, 3] = -1.0 / half, mid / half
     m[3, 3] = 1.0
 
     ctx = gl_context()
     prog = program("depth_view")
     prog["world_to_clip"].write(m.T.astype(np.float32).tobytes())
-    prog["toward_camera"].value = tuple(float(t) for t in toward)
+    prog["toward_camera"].value = (0.0, 0.0, 1.0)
     tri = mesh.all_triangles(_DRAWN_PARTS).astype(np.uint32)
     target = ctx.texture((w, h), 4, dtype="f4")
     fbo = ctx.framebuffer(color_attachments=[target], depth_attachment=ctx.depth_renderbuffer((w, h)))
-    vbo = ctx.buffer(vertices.astype(np.float32).tobytes())
+    vbo = ctx.buffer(proj.astype(np.float32).tobytes())
     ibo = ctx.buffer(tri.tobytes())
     vao = ctx.vertex_array(prog, [(vbo, "3f", "in_position")], index_buffer=ibo, index_element_size=4)
     try:
@@ -313,7 +323,7 @@ def _depth_map(mesh: HeadMesh, vertices: np.ndarray, align: Alignment, photo_siz
     # keep samples a photo pixel inside the outline: a bilinear tap there sees no background
     steps = max(1, int(np.ceil(w / width)))
     solid = ndimage.binary_erosion(covered, np.ones((3, 3), bool), iterations=steps, border_value=0)
-    return _DepthMap(depth=np.ascontiguousarray(img[..., 0]), solid=solid, photo_size=(width, height))
+    return DepthMap(depth=np.ascontiguousarray(img[..., 0]), solid=solid, photo_size=(width, height))
 
 
 def _bilinear(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -334,25 +344,35 @@ def _bilinear(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return top + (bottom - top) * ty
 
 
-def _sample_view(photo: PhotoView, align: Alignment, dmap: _DepthMap, points: np.ndarray, normals: np.ndarray,
+def _sample_view(photo: PhotoView, align: Alignment, dmap: DepthMap, points: np.ndarray, normals: np.ndarray,
                  tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(colours (N, 3) float32, seen (N,) bool) of surface points in one photo."""
-    width, height = dmap.photo_size
     _, toward = (np.asarray(a) for a in _AXES[align.view])
-    proj = align.project(points)
-    x, y, d = proj[:, 0], proj[:, 1], proj[:, 2]
-    facing = normals @ toward
+    return sample_projected(photo.image, align.project(points), normals @ toward, dmap,
+                            align.scale, tolerance_mm)
+
+
+def sample_projected(image: np.ndarray, projected: np.ndarray, facing: np.ndarray, dmap: DepthMap,
+                     scale: tuple[float, float], tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """(colours (N, 3) float32, seen (N,) bool) of surface points mapped into a photo.
+
+    ``projected`` is (N, 3) pixel x, y and depth toward the camera; ``facing`` the
+    cosine between each point's normal and the direction toward the camera;
+    ``scale`` the photo's pixels per mm across and up (for the depth tolerance).
+    """
+    width, height = dmap.photo_size
+    x, y, d = projected[:, 0], projected[:, 1], projected[:, 2]
     inside = (x >= 0) & (x < width) & (y >= 0) & (y < height) & (facing > 0)
     h, w = dmap.depth.shape
     col = np.clip((x * (w / width)).astype(np.int64), 0, w - 1)
     row = np.clip((y * (h / height)).astype(np.int64), 0, h - 1)
     # a depth pixel spans this many mm; a slanted surface's depth varies across it by its slope
-    pixel_mm = max(width / w / align.scale[0], height / h / align.scale[1])
+    pixel_mm = max(width / w / scale[0], height / h / scale[1])
     slope = np.sqrt(np.maximum(1.0 - facing ** 2, 0.0)) / np.maximum(facing, 1e-3)
     tol = tolerance_mm + pixel_mm * (1.0 + np.minimum(slope, 8.0))
     seen = inside & dmap.solid[row, col] & (d >= dmap.depth[row, col] - tol)
-    colours = np.zeros((len(points), 3), np.float32)
-    colours[seen] = _bilinear(photo.image, x[seen], y[seen])
+    colours = np.zeros((len(projected), 3), np.float32)
+    colours[seen] = _bilinear(image, x[seen], y[seen])
     return colours, seen
 
 
@@ -402,9 +422,7 @@ def bake_texture(mesh: HeadMesh, front: PhotoView, side: PhotoView | None = None
     size = _check_size(size)
     raster = uv_rasterise(mesh, size)
     vertices = np.asarray(mesh.vertices, float)
-    skin_idx = np.flatnonzero(raster.skin.reshape(-1))
-    points = raster.position.reshape(-1, 3)[skin_idx].astype(np.float64)
-    normals = raster.normal.reshape(-1, 3)[skin_idx].astype(np.float64)
+    _, points, normals = skin_texels(raster)
     head_size = float(np.ptp(vertices[mesh.part("skin")], axis=0).max())
     tolerance = 0.005 * head_size
 
@@ -430,8 +448,27 @@ def bake_texture(mesh: HeadMesh, front: PhotoView, side: PhotoView | None = None
         k = np.where(seen_front & seen_side, k_geo, np.where(seen_front, 1.0, 0.0))
         colours = k[:, None] * c_front + (1.0 - k[:, None]) * c_side
         seen = seen_front | seen_side
-    colours = _fill_unseen(points, colours, seen)
+    return assemble(raster, colours, seen, k, alignments)
 
+
+def skin_texels(raster: UVRaster) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Flat indices of the skin texels, and their 3D points and normals (float64)."""
+    skin_idx = np.flatnonzero(raster.skin.reshape(-1))
+    points = raster.position.reshape(-1, 3)[skin_idx].astype(np.float64)
+    normals = raster.normal.reshape(-1, 3)[skin_idx].astype(np.float64)
+    return skin_idx, points, normals
+
+
+def assemble(raster: UVRaster, colours: np.ndarray, seen: np.ndarray, k: np.ndarray,
+             alignments: dict[str, Alignment] | None = None) -> BakedTexture:
+    """Per-skin-texel colours (unseen ones filled here) spread over the whole UV image.
+
+    Off-skin texels repeat their nearest skin texel, across seams and island
+    borders, so mip-maps and bilinear lookups never see a background colour.
+    """
+    size = raster.size
+    skin_idx, points, _ = skin_texels(raster)
+    colours = _fill_unseen(points, colours, seen)
     per_texel = np.zeros((size * size, 3), np.float32)
     per_texel[skin_idx] = colours
     image = np.clip(np.rint(per_texel[raster.nearest.reshape(-1)]), 0, 255).astype(np.uint8)
@@ -440,4 +477,4 @@ def bake_texture(mesh: HeadMesh, front: PhotoView, side: PhotoView | None = None
     weight = np.zeros(size * size, np.float32)
     weight[skin_idx] = np.where(seen, k, 0.0)
     return BakedTexture(image=image.reshape(size, size, 3), coverage=coverage.reshape(size, size),
-                        weight_front=weight.reshape(size, size), skin=raster.skin, alignments=alignments)
+                        weight_front=weight.reshape(size, size), skin=raster.skin, alignments=dict(alignments or {}))
