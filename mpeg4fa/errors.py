@@ -1,4 +1,4 @@
-"""What the layers' exceptions share: a message, the thing at fault, and what to do about it."""
+"""What the layers' exceptions and warnings share: a message, the thing at fault, and what to do about it."""
 from __future__ import annotations
 
 
@@ -20,3 +20,10 @@ class WhereHintError(Exception):
 
     def __reduce__(self):
         return (type(self), (self.message, self.where, self.hint))
+
+
+class MpegFaWarning(UserWarning):
+    """Base of the layers' warnings: something was adjusted so that the work could go on.
+
+    The CLI prints each as one ``mpeg4fa COMMAND: warning: ...`` line.
+    """

@@ -1,12 +1,14 @@
 """The ``mpeg4fa`` command: a thin shell over the Python API.
 
 Each group of subcommands lives in its own module and registers itself on the
-parser; errors of any layer become one line on stderr and exit status 1.
+parser; errors of any layer become one line on stderr and exit status 1, and
+warnings one ``mpeg4fa COMMAND: warning: ...`` line each (no source lines).
 """
 from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 from .. import __version__
 from ..face import FaceError
@@ -38,6 +40,18 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warnings(args.command)
+        return _run(args)
+
+
+def _one_line_warnings(command: str):
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        print(f"mpeg4fa {command}: warning: {message}", file=sys.stderr)
+    return show
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.run(args) or 0)
     except (FbaError, FormatError, FaceError, RenderError, MarkupError, TTSError) as exc:

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..render import RenderError, RenderWarning
+from ..errors import MpegFaWarning
+from ..render import RenderError
 from .progress import ProgressBar
 
 
@@ -29,7 +30,7 @@ def render_with_progress(command: str, stream, output: Path, **play_options):
 
     bar = ProgressBar(f"rendering {output.name}")
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", RenderWarning)
+        warnings.simplefilter("always", MpegFaWarning)
         try:
             result = play(stream, output, progress=bar, **play_options)
         finally:

@@ -15,9 +15,9 @@ The generic head is built from CC0 assets at set-up: :mod:`.asset`.
 """
 from mpeg4fa.face.calibrate import CalibrationReport
 from mpeg4fa.face.deform import Pose
-from mpeg4fa.face.errors import FaceError
+from mpeg4fa.face.errors import FaceError, FaceWarning
 from mpeg4fa.face.fapu import Fapu, measure_fapu
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.model import FaceModel
 
-__all__ = ["FaceModel", "Pose", "HeadMesh", "Fapu", "measure_fapu", "CalibrationReport", "FaceError"]
+__all__ = ["FaceModel", "Pose", "HeadMesh", "Fapu", "measure_fapu", "CalibrationReport", "FaceError", "FaceWarning"]

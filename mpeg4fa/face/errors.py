@@ -1,7 +1,7 @@
-"""The face layer's one exception type."""
+"""The face layer's exception and warning types."""
 from __future__ import annotations
 
-from mpeg4fa.errors import WhereHintError
+from mpeg4fa.errors import MpegFaWarning, WhereHintError
 
 
 class FaceError(WhereHintError, ValueError):
@@ -10,3 +10,7 @@ class FaceError(WhereHintError, ValueError):
     ``where`` names the thing at fault (a feature point label, a FAP number, a
     frame index, a cache path) so that the message says what to fix.
     """
+
+
+class FaceWarning(MpegFaWarning):
+    """A value a face cannot show was clamped to one it can (see :mod:`mpeg4fa.face.limits`): said, not fatal."""

@@ -11,7 +11,10 @@ A decoded :class:`~mpeg4fa.fba.stream.FapStream` says which FAPs each frame
 * **high level**: FAP 1 (viseme blend) and FAP 2 (expression blend) hold like
   the others and expand through the shared profiles in ``spec/``
   (:func:`mpeg4fa.spec.expand_high_level`); a low-level FAP that the stream has
-  sent overrides the high-level value of that FAP.
+  sent overrides the high-level value of that FAP;
+* **clamp**: a value no face can show (negative on a unidirectional FAP, or
+  beyond :mod:`.limits`' bounds) is clamped, and a :class:`.FaceWarning` says so
+  once per FAP per stream, with the number of frames and the worst value.
 
 Every rule looks only at the current and earlier frames, so a stream can be
 resolved in pieces: :func:`resolve` takes and returns a :class:`ResolveState`,
@@ -22,8 +25,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Iterable, Iterator
 
+import warnings
+
 import numpy as np
 
+from mpeg4fa.face.errors import FaceWarning
+from mpeg4fa.face.limits import clamp
 from mpeg4fa.fba.stream import FapStream, Frame
 from mpeg4fa.spec import FAP_GROUP, FAP_PARTNERS, N_FAPS, expand_high_level
 
@@ -48,6 +55,9 @@ class ResolveState:
     known: np.ndarray = field(default_factory=lambda: np.zeros(N_FAPS, dtype=bool))
     viseme: np.ndarray = field(default_factory=lambda: np.zeros(4, dtype=np.int32))
     expression: np.ndarray = field(default_factory=lambda: np.zeros(6, dtype=np.int32))
+    frames: int = 0  # frames resolved so far
+    warned: set[int] = field(default_factory=set)  # FAPs already said to be clamped in this stream
+    live: bool = False  # frames come one piece at a time: a clamp is said when first seen
 
 
 def _mask_types(stream: FapStream, initial: np.ndarray) -> np.ndarray:
@@ -103,20 +113,34 @@ def resolve(stream: FapStream, state: ResolveState | None = None) -> np.ndarray:
         high = expand_high_level(viseme, expression)
         out = np.where(low_level_known, out, high)
     out[:, :2] = 0.0
+    out = _clamp_and_say(out, state)
 
     state.mask_types = types[-1].copy()
     state.held = out[-1].copy()
     state.known = low_level_known[-1].copy()
     state.held[:2], state.known[:2] = 0.0, False
     state.viseme, state.expression = viseme[-1].copy(), expression[-1].copy()
+    state.frames += n
     return out
+
+
+def _clamp_and_say(values: np.ndarray, state: ResolveState) -> np.ndarray:
+    """Values held inside what a face shows; one warning per FAP per stream (the first piece that needs it)."""
+    clamped, report = clamp(values)
+    for item in report:
+        if item.fap in state.warned:
+            continue
+        state.warned.add(item.fap)
+        where = f"the stream from frame {state.frames} on (later frames not counted)" if state.live else "the stream"
+        warnings.warn(item.message(where), FaceWarning, stacklevel=3)
+    return clamped
 
 
 class FrameResolver:
     """:func:`resolve` for a live source: one decoded :class:`Frame` in, its 68 values out."""
 
     def __init__(self) -> None:
-        self.state = ResolveState()
+        self.state = ResolveState(live=True)
 
     def push(self, frame: Frame) -> np.ndarray:
         return resolve(FapStream.from_frames([frame]), self.state)[0]

@@ -13,6 +13,7 @@ unsent FAPs and the high-level visemes and expressions first.
 from __future__ import annotations
 
 from functools import cached_property
+import warnings
 from typing import Iterable, Iterator, Mapping
 
 import numpy as np
@@ -21,11 +22,11 @@ from mpeg4fa.face.arkit import ArkitRig, build_arkit_rig, deform_arkit
 from mpeg4fa.face.asset import load_head
 from mpeg4fa.face.calibrate import CalibrationReport, calibrate_mesh
 from mpeg4fa.face.deform import Pose, deform
-from mpeg4fa.face.errors import FaceError
+from mpeg4fa.face.errors import FaceError, FaceWarning
 from mpeg4fa.face.fapu import Fapu, measure_fapu
 from mpeg4fa.face.frames import FrameResolver, resolve
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.motion import check_values
+from mpeg4fa.face.limits import check_finite, clamp
 from mpeg4fa.face.rig import Rig, build_rig
 from mpeg4fa.fba.stream import FapStream, Frame
 from mpeg4fa.spec import N_FAPS, expand_high_level
@@ -136,7 +137,9 @@ class FaceModel:
             raise FaceError(f"a frame has {N_FAPS} FAP values, got shape {values.shape}",
                             hint="pass an array of 68 values or a {fap: value} mapping")
         values[:2] = 0.0
-        check_values(values)
+        values, report = clamp(values)
+        for item in report:
+            warnings.warn(item.message(None), FaceWarning, stacklevel=3)
         return values
 
     def deform(self, frame: "np.ndarray | Mapping[int, float] | Frame") -> Pose:
@@ -158,6 +161,9 @@ class FaceModel:
             yield self.pose_values(resolver.push(frame))
 
     def pose_values(self, values: np.ndarray) -> Pose:
-        """The pose for one row of resolved values (68, as :func:`.frames.resolve` gives)."""
-        check_values(values)
-        return self._pose(values)
+        """The pose for one row of resolved values (68, as :func:`.frames.resolve` gives).
+
+        Resolved rows are already inside what a face shows; anything else is clamped silently here.
+        """
+        check_finite(values)
+        return self._pose(clamp(values)[0])

@@ -38,9 +38,6 @@ TONGUE_ROLL = 47
 HEAD = {48: "pitch", 49: "yaw", 50: "roll"}
 AXIS_OF = {"pitch": 0, "yaw": 1, "roll": 2}
 
-TRANSLATION_LIMIT = 8192
-"""|value| above this many FAPU (8 times the key distance) is rejected as out of range."""
-
 
 def kind(fap: int) -> str:
     """How the engine realises FAP ``fap`` (3..68)."""
@@ -96,24 +93,3 @@ def arc_angle(offset: np.ndarray, drop: float) -> float:
     base = np.arccos(np.clip((y - drop) / radius, -1.0, 1.0))
     roots = (np.array([base - phase, -base - phase]) + np.pi) % (2 * np.pi) - np.pi
     return float(roots[np.argmin(np.abs(roots))])
-
-
-def check_values(values: np.ndarray) -> None:
-    """Reject FAP values no face can show: non-finite, negative unidirectional, absurdly large."""
-    values = np.asarray(values, dtype=float)
-    if values.shape != (N_FAPS,):
-        raise FaceError(f"a frame has {N_FAPS} FAP values, got shape {values.shape}")
-    bad = ~np.isfinite(values)
-    if bad.any():
-        fap = int(np.argmax(bad)) + 1
-        raise FaceError(f"FAP {fap} ({FAPS[fap - 1].name}) is {values[fap - 1]}", where=f"FAP {fap}")
-    for fap in range(3, N_FAPS + 1):
-        v = values[fap - 1]
-        record = FAPS[fap - 1]
-        if record.unidirectional and v < 0:
-            raise FaceError(f"FAP {fap} ({record.name}) is unidirectional; {v:g} is out of range",
-                            where=f"FAP {fap}", hint="use values >= 0")
-        limit = np.pi / 1e-5 if record.fapu == "AU" else TRANSLATION_LIMIT
-        if abs(v) > limit:
-            raise FaceError(f"FAP {fap} ({record.name}) = {v:g} is out of range (|value| <= {limit:g})",
-                            where=f"FAP {fap}")

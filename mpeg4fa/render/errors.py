@@ -1,7 +1,7 @@
 """The render layer's exception and warning types."""
 from __future__ import annotations
 
-from mpeg4fa.errors import WhereHintError
+from mpeg4fa.errors import MpegFaWarning, WhereHintError
 
 
 class RenderError(WhereHintError, RuntimeError):
@@ -12,5 +12,5 @@ class RenderError(WhereHintError, RuntimeError):
     """
 
 
-class RenderWarning(UserWarning):
+class RenderWarning(MpegFaWarning):
     """Something was adjusted to go on (audio padded or trimmed, frames dropped): said, not fatal."""

@@ -245,3 +245,43 @@ def test_resolving_in_pieces_carries_the_state():
 
 def _piece(s: FapStream, a: int, b: int) -> FapStream:
     return FapStream.from_frames([s.frame(k) for k in range(a, b)])
+
+
+def test_values_no_face_can_show_are_clamped_and_said_once_per_fap():
+    from mpeg4fa.face import FaceWarning
+
+    s = FapStream.empty(6)
+    s.intra[0] = _intra()
+    for k, jaw in enumerate([-8, 40, -30, 0, -2, 9000]):
+        _send(s, k, {3: jaw, 41: -5 if k < 2 else 0, 4: -9000 if k == 3 else 10})
+    with pytest.warns(FaceWarning) as caught:
+        out = resolve(s)
+    said = sorted(str(w.message) for w in caught)
+    assert said == [
+        "FAP 3 (open_jaw) is outside 0..8192 in 4 frames of the stream (as far as 9000): clamped",
+        "FAP 4 (lower_t_midlip) is outside -8192..8192 in 1 frame of the stream (as far as -9000): clamped",
+        "FAP 41 (lift_l_cheek) is negative on a unidirectional FAP in 2 frames of the stream (as far as -5): "
+        "clamped to 0",
+    ]
+    assert list(out[:, 2]) == [0, 40, 0, 0, 0, 8192]
+    assert list(out[:, 40]) == [0, 0, 0, 0, 0, 0] and out[3, 3] == -8192
+
+
+def test_a_live_stream_says_each_clamped_fap_once():
+    import warnings
+
+    from mpeg4fa.face import FaceWarning
+    from mpeg4fa.face.frames import FrameResolver
+
+    s = FapStream.empty(5)
+    s.intra[0] = _intra()
+    for k in range(5):
+        _send(s, k, {3: -10 - k})
+    resolver = FrameResolver()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rows = [resolver.push(frame) for frame in s]
+    assert [r[2] for r in rows] == [0] * 5
+    messages = [str(w.message) for w in caught if issubclass(w.category, FaceWarning)]
+    assert len(messages) == 1 and messages[0].startswith("FAP 3 (open_jaw) is negative")
+    assert "from frame 0 on" in messages[0]
