@@ -26,6 +26,7 @@ def register(commands: argparse._SubParsersAction) -> None:
                     "--no-audio says otherwise.",
         epilog="examples:\n  mpeg4fa play talk.fba -o talk.mp4\n"
                "  mpeg4fa play talk.fap --fdp face.fdp --audio talk.wav -o frames/ --size 256\n"
+               "  mpeg4fa play talk.fba --fdp face.fdp -o talk.mp4   # the skin wears the FDP's texture, if any\n"
                "  mpeg4fa play talk.fba --show",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) stream")
@@ -63,7 +64,10 @@ def _render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--aa", type=int, default=0, metavar="N",
                    help="anti-aliasing samples (4 or 8 for final output; default 0 = off, fastest)")
     p.add_argument("--view", default="front", choices=tuple(VIEWS), help="camera position (default front)")
-    p.add_argument("--texture", type=Path, help="a UV texture image for the skin (e.g. from photos)")
+    p.add_argument("--texture", type=Path, help="a UV texture image for the skin (e.g. from photos); wins over the "
+                                                "FDP's own texture")
+    p.add_argument("--no-fdp-texture", action="store_true",
+                   help="do not paint the skin with the texture the --fdp file carries (its front photo)")
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -78,11 +82,30 @@ def _size(text: str) -> tuple[int, int]:
     return parts[0], parts[1]
 
 
-def _renderer_options(args: argparse.Namespace) -> dict:
+def _renderer_options(args: argparse.Namespace, face) -> dict:
     options = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
-    if args.texture is not None:
-        options["texture"] = read_image(args.texture, "texture image")
+    texture = _skin_texture(args, face)
+    if texture is not None:
+        options["texture"] = texture
     return options
+
+
+def _skin_texture(args: argparse.Namespace, face):
+    """--texture, else the texture the FDP carries (mapped through its points' texture coordinates), else None."""
+    if args.texture is not None:
+        return read_image(args.texture, "texture image")
+    if args.fdp is None or args.no_fdp_texture:
+        return None
+    from ..fdp import load_fdp
+    from ..render.fdp_texture import fdp_skin_texture
+
+    sent = fdp_skin_texture(face.mesh, load_fdp(args.fdp), source=str(args.fdp))
+    if sent is None:
+        return None
+    width, height = sent.map.size
+    print(f"texture: {sent.name} ({width}x{height}) from {args.fdp}, mapped through {len(sent.map.labels)} feature "
+          f"points onto {sent.coverage:.0%} of the skin (--no-fdp-texture to leave it out)", file=sys.stderr)
+    return sent.image
 
 
 def _audio_for(args: argparse.Namespace) -> Path | None:
@@ -103,7 +126,7 @@ def run_play(args: argparse.Namespace) -> int:
         raise RenderError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
     stream, _ = read_stream(args.stream)
     face = face_from_args(args).with_deformer(args.deformer)
-    options = _renderer_options(args)
+    options = _renderer_options(args, face)
     if args.show:
         from ..render.window import show
         with Renderer(face, **options) as renderer:
@@ -138,7 +161,7 @@ def run_snapshot(args: argparse.Namespace) -> int:
 
     stream, _ = read_stream(args.stream)
     face = face_from_args(args).with_deformer(args.deformer)
-    image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args))
+    image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args, face))
     try:
         Image.fromarray(image).save(args.output)
     except (OSError, ValueError) as exc:

@@ -23,7 +23,9 @@ from mpeg4fa.face.frames import FrameResolver, resolve
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba.stream import FapStream, Frame
 from mpeg4fa.render.audio import Audio, fit_audio, read_audio
+from mpeg4fa.fdp.model import Fdp
 from mpeg4fa.render.errors import RenderError, RenderWarning
+from mpeg4fa.render.fdp_texture import fdp_skin_texture
 from mpeg4fa.render.realtime import LiveFrame, LiveStats, live
 from mpeg4fa.render.renderer import Renderer
 from mpeg4fa.render.timing import Schedule, schedule
@@ -85,6 +87,21 @@ def _reconcile(plan: Schedule, audio: Audio | None, fit: str) -> tuple[Schedule,
     return plan, fit_audio(audio, plan.duration), said
 
 
+def _face_and_options(face: FaceModel | None, fdp: Fdp | None, fdp_texture: bool, renderer: Renderer | None,
+                      options: dict) -> tuple[FaceModel, dict]:
+    """The face to pose (the generic head calibrated to ``fdp`` unless one is given) and the renderer's options,
+    with the FDP's own texture mapped onto the face when it carries one and no texture was given."""
+    if face is None:
+        face = FaceModel.default()
+        if fdp is not None:
+            face = face.calibrate(fdp)
+    if fdp is not None and fdp_texture and renderer is None and options.get("texture") is None:
+        sent = fdp_skin_texture(face.mesh, fdp)
+        if sent is not None:
+            options = {**options, "texture": sent.image}
+    return face, options
+
+
 def _renderer_for(face: FaceModel, renderer: Renderer | None, options: dict) -> tuple[Renderer, bool]:
     if renderer is not None:
         if options:
@@ -93,17 +110,20 @@ def _renderer_for(face: FaceModel, renderer: Renderer | None, options: dict) -> 
     return Renderer(face, **options), True
 
 
-def play(stream: FapStream, target: str | os.PathLike, *, face: FaceModel | None = None,
-         audio: Audio | str | os.PathLike | None = None, fps: float | None = None, fit: str = "pad",
+def play(stream: FapStream, target: str | os.PathLike, *, face: FaceModel | None = None, fdp: Fdp | None = None,
+         fdp_texture: bool = True, audio: Audio | str | os.PathLike | None = None, fps: float | None = None, fit: str = "pad",
          renderer: Renderer | None = None, progress: Progress | None = None, writer_options: dict | None = None,
          **render_options) -> PlayResult:
     """Render every frame of ``stream`` to ``target`` (.mp4/.mov/.m4v file, else a PNG folder).
 
     ``render_options`` go to :class:`.Renderer` (width, height, samples, view, texture...).
+    ``fdp``: the sender's FDP; without ``face`` the generic head is calibrated to it, and when it
+    carries a texture (FDP case 3) the skin wears it (:mod:`.fdp_texture`) unless ``texture`` is
+    given or ``fdp_texture`` is False.
     Warnings (:class:`.RenderWarning`) say how stream and audio lengths were matched.
     """
     started = time.perf_counter()
-    face = face or FaceModel.default()
+    face, render_options = _face_and_options(face, fdp, fdp_texture, renderer, render_options)
     plan, audio_fit, said = _reconcile(schedule(stream, fps), _as_audio(audio), fit)
     for message in said:
         warnings.warn(message, RenderWarning, stacklevel=2)
@@ -148,9 +168,13 @@ def frame_at(stream: FapStream, *, frame: int | None = None, seconds: float | No
 
 
 def snapshot(stream: FapStream, *, frame: int | None = None, seconds: float | None = None,
-             face: FaceModel | None = None, renderer: Renderer | None = None, **render_options) -> np.ndarray:
-    """One frame of a stream as an (H, W, 3) image (held and interpolated FAPs resolved as in playback)."""
-    face = face or FaceModel.default()
+             face: FaceModel | None = None, fdp: Fdp | None = None, fdp_texture: bool = True,
+             renderer: Renderer | None = None, **render_options) -> np.ndarray:
+    """One frame of a stream as an (H, W, 3) image (held and interpolated FAPs resolved as in playback).
+
+    ``fdp`` and ``fdp_texture`` as in :func:`play`.
+    """
+    face, render_options = _face_and_options(face, fdp, fdp_texture, renderer, render_options)
     k = frame_at(stream, frame=frame, seconds=seconds)
     values = resolve(stream)[k]
     rend, owned = _renderer_for(face, renderer, render_options)
