@@ -14,7 +14,10 @@ lips that funnel and pucker). This deformer:
    its target: the residuals spread by the same Sibson weights cut to edge
    regions that the feature-point deformer uses.
 
-Eyes, teeth and tongue come from the feature-point deformer; the head turns last.
+Eyes, teeth and tongue come from the feature-point deformer, and so do the lids
+(:mod:`.lids`, turned after the sculpt): the sculpted ``eyeBlink*`` units move
+the lid in straight lines, through the eyeball, and leave the corners open. The
+head turns last.
 """
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deform import Pose, apply_head_rotation, pose_in_head_frame
+from mpeg4fa.face.deform import Pose, apply_head_rotation, apply_lids, pose_in_head_frame
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.rig import Rig, part_weights
@@ -109,10 +112,11 @@ def unit_weights(arkit: ArkitRig, values: np.ndarray) -> np.ndarray:
 def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray) -> Pose:
     """Pose one frame with the sculpted face units, feature points exactly where the FAPs put them."""
     v = np.asarray(values, dtype=np.float64)
-    p, pupils = pose_in_head_frame(rig, v)
+    p, pupils = pose_in_head_frame(rig, v, lids=False)
     skin = rig.parts["skin"]
     sculpted = rig.rest[skin] + (arkit.deltas @ unit_weights(arkit, v)).reshape(-1, 3)
     residual = p[arkit.fp_global] - sculpted[arkit.fp_local]
     p[skin] = sculpted + arkit.correction @ residual
+    apply_lids(rig, p, v)  # after sculpting: the lids turn over the eyeball as in the feature-point deformer
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mpeg4fa.face import motion
+from mpeg4fa.face.lids import turn_lid
 from mpeg4fa.face.rig import Rig
 
 _EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
@@ -49,8 +50,19 @@ def _rotate_rows(points: np.ndarray, rows: np.ndarray, weights: np.ndarray, cent
     points[rows] += weights[:, None] * step
 
 
-def pose_in_head_frame(rig: Rig, v: np.ndarray) -> tuple[np.ndarray, dict[str, float]]:
-    """Every layer but the head rotation: vertices in the head's own frame, and pupil sizes."""
+def apply_lids(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
+    """FAPs 19-22: turn each lid sheet so that its point moves by value x IRISD (in place)."""
+    for fap, sheet in rig.lids.items():
+        if v[fap - 1]:
+            drop = -motion.direction(fap)[1] * v[fap - 1] * rig.fapu.unit("IRISD")
+            turn_lid(p, sheet, rig.rest, drop)
+
+
+def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[np.ndarray, dict[str, float]]:
+    """Every layer but the head rotation: vertices in the head's own frame, and pupil sizes.
+
+    ``lids=False`` leaves the lids to the caller (the ARKit deformer turns them after sculpting).
+    """
     rest = rig.rest
     p = rest.copy()
     fapu = rig.fapu
@@ -59,14 +71,8 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray) -> tuple[np.ndarray, dict[str, f
     if fp_motion.any():
         p[rig.moving] += rig.weights_moving @ fp_motion
 
-    for fap, fp in rig.lid_fp.items():
-        if v[fap - 1]:
-            eye = motion.LIDS[fap]
-            centre = rest[rig.joints[_EYE_JOINT[eye]]]
-            drop = -motion.direction(fap)[1] * v[fap - 1] * fapu.unit("IRISD")
-            angle = motion.arc_angle((rest[rig.fp_vertex[fp]] - centre)[1:], drop)
-            rows, w = rig.lid_rows[fap]
-            _rotate_rows(p, rows, w, centre, motion.rotation_matrix(0, angle))
+    if lids:
+        apply_lids(rig, p, v)
 
     roll = v[motion.TONGUE_ROLL - 1]
     if roll:

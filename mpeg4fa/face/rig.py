@@ -10,6 +10,7 @@
 * **Jaw**: a weight per vertex read off the CC0 ``jawOpen`` face unit (the fraction
   of a rigid jaw rotation each vertex follows), 1 on the lower teeth and at 2.1.
 * **Head**: 1 on the whole head, fading to 0 down the neck.
+* **Lids**: sheets of skin turning about the eye centres (:mod:`.lids`).
 * **Eyes, upper teeth**: rigid.
 """
 from __future__ import annotations
@@ -21,6 +22,7 @@ import scipy.sparse as sp
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.fapu import Fapu
+from mpeg4fa.face.lids import LidSheet, build_lids
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import adjacency, edge_hops, falloff
 from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
@@ -42,7 +44,7 @@ class Rig:
     moving: np.ndarray  # vertex indices with any feature point weight
     weights_moving: sp.csr_matrix  # weights restricted to the moving rows
     lid_fp: dict[int, int]  # lid FAP -> feature point index
-    lid_rows: dict[int, tuple[np.ndarray, np.ndarray]]  # lid FAP -> (vertices, weights)
+    lids: dict[int, LidSheet]  # lid FAP -> the lid sheet it turns (see :mod:`.lids`)
     jaw_rows: tuple[np.ndarray, np.ndarray]
     head_rows: tuple[np.ndarray, np.ndarray]
     roll_rows: dict[int, tuple[np.ndarray, np.ndarray, float]]  # fp index -> (vertices, weights, side)
@@ -85,10 +87,6 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     weights.eliminate_zeros()
     moving = np.unique(weights.nonzero()[0])
 
-    lid_rows = {}
-    for fap, i in lid_fp.items():
-        col = weights[:, i].tocoo()
-        lid_rows[fap] = (col.row, col.data)
     roll_rows = {}
     for label, side in (("6.3", 1.0), ("6.4", -1.0)):
         col = weights[:, index[label]].tocoo()
@@ -99,7 +97,7 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
 
     return Rig(
         rest=rest, fapu=fapu, translate=translate, weights=weights, moving=moving,
-        weights_moving=weights[moving], lid_fp=lid_fp, lid_rows=lid_rows,
+        weights_moving=weights[moving], lid_fp=lid_fp, lids=build_lids(mesh),
         jaw_rows=_jaw_weights(mesh), head_rows=_head_weights(mesh), roll_rows=roll_rows,
         parts={p: mesh.part(p) for p in mesh.part_ranges}, joints=dict(mesh.joints), fp_vertex=fp_vertex,
         chin_fp=index["2.1"], head_fp=index["7.1"],

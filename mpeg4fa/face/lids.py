@@ -1,0 +1,147 @@
+"""Eyelids that close: each lid is a sheet of skin turning about its eyeball's horizontal axis.
+
+FAPs 19-22 move the lid points 3.1-3.4 vertically by value x IRISD; at the value
+that brings 3.1 to the height of 3.3 (1024 on a neutral face whose lid opening
+is IRISD0) the upper lid must cover the eye, and half of that must cover half
+of the iris. Weighting the lid skin by one smooth bump around 3.1 cannot do it:
+the margin's corners stay up and the lid drops as a V. So the lid model is
+built from the margin itself:
+
+1. the **margins**: the shortest paths along the skin from the lateral corner
+   (3.7/3.8) through the upper (3.1/3.2) or lower (3.3/3.4) lid point to the
+   medial corner (3.11/3.12);
+2. each margin vertex's **closure**: the rotation about the eye centre's x axis
+   that brings it to the height of the opposite margin at its x, and
+   :data:`OVERLAP_MM` past it (the closed eye is the two margins meeting); divided by the lid point's own closure, a
+   **ratio** (1 at 3.1, falling to 0 at the corners);
+3. the **lid sheet**: skin on the lid's side of the margin, within the orbit,
+   turns with the margin's ratio at its x, fading to 0 over
+   :data:`LID_HEIGHT_MM` of surface distance from the margin.
+
+A frame turns the lid point by the angle that lowers it by exactly value x IRISD
+(:func:`mpeg4fa.face.motion.arc_angle`) and every sheet vertex by its ratio
+times that angle. Rotations about the eye centre keep every vertex at its
+distance from the centre, so a lid that starts outside the eyeball never cuts
+into it, at any value.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
+
+from mpeg4fa.face import motion
+from mpeg4fa.face.mesh import HeadMesh
+
+LID_HEIGHT_MM = 9.0  # the lid sheet fades out over this surface distance from the margin (to the crease)
+ORBIT_MARGIN_MM = 9.0
+OVERLAP_MM = 0.3  # a closed margin reaches this far past the opposite one (but at the lid point)  # the sheet reaches this far beyond the eyeball's radius from its centre
+
+# per lid FAP: (eye part, eye joint, lid point, opposite lid point, lateral corner, medial corner, side)
+LIDS = {
+    19: ("eye_l", "l-eye", "3.1", "3.3", "3.7", "3.11", "upper"),
+    20: ("eye_r", "r-eye", "3.2", "3.4", "3.8", "3.12", "upper"),
+    21: ("eye_l", "l-eye", "3.3", "3.1", "3.7", "3.11", "lower"),
+    22: ("eye_r", "r-eye", "3.4", "3.2", "3.8", "3.12", "lower"),
+}
+
+
+@dataclass(frozen=True)
+class LidSheet:
+    """The skin one lid FAP turns: vertices, their share of the lid point's angle, and the pivot."""
+
+    rows: np.ndarray     # vertex indices
+    ratios: np.ndarray   # angle ratio per row (1 at the lid point)
+    joint: int           # vertex index of the eye centre joint
+    point: int           # vertex index of the lid's feature point (3.1 ... 3.4)
+
+
+def _edge_graph(vertices: np.ndarray, triangles: np.ndarray, n: int) -> sp.csr_matrix:
+    t = np.asarray(triangles)
+    e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    length = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
+    g = sp.coo_matrix((length, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    return g.maximum(g.T).tocsr()
+
+
+def _path(graph: sp.csr_matrix, a: int, b: int) -> list[int]:
+    _, pred = dijkstra(graph, indices=a, return_predecessors=True)
+    out = [b]
+    while out[-1] != a:
+        if pred[out[-1]] < 0:
+            raise ValueError("no path along the skin")
+        out.append(int(pred[out[-1]]))
+    return out[::-1]
+
+
+def _margin(graph: sp.csr_matrix, mesh: HeadMesh, lateral: str, middle: str, medial: str) -> np.ndarray:
+    v = lambda label: int(mesh.fp_vertex[mesh.fp_index(label)])  # noqa: E731
+    return np.array(_path(graph, v(lateral), v(middle)) + _path(graph, v(middle), v(medial))[1:])
+
+
+def _height_at(margin: np.ndarray, vertices: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The margin's height (y) at each x, linear between its vertices."""
+    p = vertices[margin]
+    order = np.argsort(p[:, 0])
+    return np.interp(x, p[order, 0], p[order, 1])
+
+
+def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
+    """The lid sheet of each lid FAP (19-22) on a neutral face."""
+    rest = mesh.vertices
+    skin = mesh.part("skin")
+    graph = _edge_graph(rest, mesh.triangles["skin"], mesh.n_vertices)
+    sheets = {}
+    for fap, (eye, joint_name, point, opposite, lateral, medial, side) in LIDS.items():
+        joint = mesh.joints[joint_name]
+        centre = rest[joint]
+        own = _margin(graph, mesh, lateral, point, medial)
+        other = _margin(graph, mesh, lateral, opposite, medial)
+        # closure of each margin vertex: turn to the opposite margin's height at its x
+        fp_vertex = int(mesh.fp_vertex[mesh.fp_index(point)])
+        drop = rest[own, 1] - _height_at(other, rest, rest[own, 0])
+        # a little past the other margin, so the two close without slivers (the lid point itself is exact)
+        drop += np.sign(drop) * np.where(own == fp_vertex, 0.0, OVERLAP_MM)
+        closure = np.array([motion.arc_angle(rest[i, 1:] - centre[1:], d) for i, d in zip(own, drop)])
+        lid_closure = closure[list(own).index(fp_vertex)]
+        ratio = np.where(lid_closure != 0, closure / lid_closure, 0.0)
+
+        # the sheet: skin on this lid's side of the margins, within the orbit
+        radius = np.linalg.norm(rest[mesh.part(eye)] - centre, axis=1).max()
+        p = rest[skin.start:skin.stop]
+        idx = np.arange(skin.start, skin.stop)
+        x_lo, x_hi = rest[own, 0].min(), rest[own, 0].max()
+        inside_x = (p[:, 0] > x_lo) & (p[:, 0] < x_hi)
+        own_y = _height_at(own, rest, p[:, 0])
+        beyond = p[:, 1] > own_y if side == "upper" else p[:, 1] < own_y
+        in_front = p[:, 2] > centre[2]
+        near = np.linalg.norm(p - centre, axis=1) < radius + ORBIT_MARGIN_MM
+        candidates = np.setdiff1d(idx[inside_x & beyond & in_front & near], np.concatenate([own, other]))
+        dist = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)[candidates]
+        keep = np.isfinite(dist)
+        rows = np.concatenate([own, candidates[keep]])
+        t = np.clip(dist[keep] / LID_HEIGHT_MM, 0.0, 1.0)
+        fade = 1.0 - t * t * (3.0 - 2.0 * t)
+        order = np.argsort(rest[own, 0])
+        sheet_ratio = np.interp(rest[candidates[keep], 0], rest[own[order], 0], ratio[order]) * fade
+        ratios = np.concatenate([ratio, sheet_ratio])
+        ratios[np.isin(rows, mesh.fp_vertex) & (rows != fp_vertex)] = 0.0  # other feature points stay put
+        good = ratios > 1e-4
+        sheets[fap] = LidSheet(rows=rows[good], ratios=ratios[good], joint=joint, point=fp_vertex)
+    return sheets
+
+
+def turn_lid(points: np.ndarray, sheet: LidSheet, rest: np.ndarray, drop: float) -> None:
+    """Turn one lid sheet (in place) so that its feature point drops by ``drop`` mm on its arc."""
+    centre = rest[sheet.joint]
+    angle = motion.arc_angle(rest[sheet.point, 1:] - centre[1:], drop)
+    if angle == 0.0:
+        return
+    a = sheet.ratios * angle
+    c, s = np.cos(a), np.sin(a)
+    dy = points[sheet.rows, 1] - centre[1]
+    dz = points[sheet.rows, 2] - centre[2]
+    points[sheet.rows, 1] = centre[1] + c * dy - s * dz
+    points[sheet.rows, 2] = centre[2] + s * dy + c * dz

@@ -1,0 +1,78 @@
+"""Eyelids (mpeg4fa.face.lids): sheets of skin turning about the eye centre.
+
+The lid point moves by exactly value x IRISD vertically, the lid never enters the
+eyeball, the margin closes onto the opposite margin at the closing value, and
+nothing but the lid sheet moves.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mpeg4fa.face.lids import LIDS
+
+LID_FAPS = sorted(LIDS)
+
+
+def closing_value(face, fap: int) -> float:
+    """The FAP value that brings the lid point to the height of the opposite lid point."""
+    _, _, point, opposite, *_ = LIDS[fap]
+    return abs(face.mesh.fp(point)[1] - face.mesh.fp(opposite)[1]) / face.fapu.unit("IRISD")
+
+
+def _radius(face, pose, eye_joint: str) -> np.ndarray:
+    centre = face.mesh.vertices[face.mesh.joints[eye_joint]]
+    return np.linalg.norm(pose.part("skin") - centre, axis=1)
+
+
+@pytest.mark.parametrize("fap", LID_FAPS)
+def test_the_lid_point_moves_value_times_irisd(face, fap):
+    _, _, point, *_ = LIDS[fap]
+    i = face.mesh.fp_index(point)
+    sign = -1.0 if LIDS[fap][6] == "upper" else 1.0
+    for value in (-200, 100, 512, closing_value(face, fap)):
+        moved = face.deform({fap: value}).feature_points[i] - face.mesh.fp(point)
+        assert moved[1] == pytest.approx(sign * value * face.fapu.unit("IRISD"), abs=1e-9)
+        assert moved[0] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("fap", LID_FAPS)
+def test_no_lid_vertex_enters_the_eyeball(face, fap):
+    eye, joint = LIDS[fap][:2]
+    centre = face.mesh.vertices[face.mesh.joints[joint]]
+    eyeball = np.linalg.norm(face.mesh.vertices[face.mesh.part(eye)] - centre, axis=1).max()
+    rest = _radius(face, face.neutral(), joint)
+    sheet = face.rig.lids[fap].rows - face.mesh.part("skin").start
+    assert rest[sheet].min() > eyeball  # the lid starts outside the eyeball ...
+    close = closing_value(face, fap)
+    for value in np.linspace(-300, 1.2 * close, 9):
+        r = _radius(face, face.deform({fap: value}), joint)
+        # ... and turning about the centre keeps every vertex at its distance from it
+        np.testing.assert_allclose(r, rest, atol=1e-9)
+
+
+@pytest.mark.parametrize("fap", LID_FAPS)
+def test_only_the_lid_sheet_and_its_point_move(face, fap):
+    pose = face.deform({fap: 600})
+    moved = np.flatnonzero(np.abs(pose.vertices - face.mesh.vertices).max(axis=1) > 1e-12)
+    assert set(moved) <= set(face.rig.lids[fap].rows)
+    others = [k for k in range(len(face.mesh.fp_labels)) if face.mesh.fp_labels[k] != LIDS[fap][2]]
+    np.testing.assert_array_equal(pose.feature_points[others], face.neutral().feature_points[others])
+
+
+def test_the_upper_margin_meets_the_lower_one_when_closed(generic_face):
+    face = generic_face
+    for fap in (19, 20):
+        sheet = face.rig.lids[fap]
+        pose = face.deform({fap: closing_value(face, fap)})
+        lower = face.mesh.fp(LIDS[fap][3])
+        upper_now = pose.vertices[sheet.point]
+        assert upper_now[1] == pytest.approx(lower[1], abs=1e-9)
+
+
+def test_the_lids_of_both_deformers_agree(generic_face):
+    fap_pose = generic_face.deform({19: 900, 22: 400})
+    ark_pose = generic_face.with_deformer("arkit").deform({19: 900, 22: 400})
+    for fap in (19, 22):
+        rows = generic_face.rig.lids[fap].rows
+        np.testing.assert_allclose(ark_pose.vertices[rows], fap_pose.vertices[rows], atol=1e-6)
