@@ -2,11 +2,17 @@
 
 * **Skin**: every skin vertex gets Sibson (natural-neighbour) coordinates with
   respect to the skin feature points plus a zero-motion cage (so weights exist
-  everywhere and far skin stays put), cut to each FAP-driven point's region by a
-  breadth-first search along mesh edges with a raised-cosine falloff. A feature
-  point's own vertex has weight 1 for itself and 0 for every other point, so each
-  point moves exactly as its FAPs say and no other feature point moves.
-* **Tongue**: the same with the tongue's own points 6.1-6.4 plus fixed root points.
+  everywhere and far skin stays put). Sibson coordinates already vanish smoothly
+  at the edge of a point's natural-neighbour region, so they are not cut to an
+  edge-ring region (that cut left a step where the weight was still large, e.g. a
+  raised block of forehead); they are only faded where the surface path is much
+  longer than the straight line (:func:`.regions.detour_fade`: the other lip, the
+  other lid), and weights under :data:`WEIGHT_FLOOR` are soft-thresholded away
+  (no step, fewer rows to move). A feature point's own vertex has weight 1 for
+  itself and 0 for every other point, so each point moves exactly as its FAPs say
+  and no other feature point moves.
+* **Tongue**: Sibson weights on the tongue's own points 6.1-6.4 plus fixed root
+  points, cut to edge-ring regions with a raised-cosine falloff.
 * **Jaw**: a weight per vertex read off the CC0 ``jawOpen`` face unit (the fraction
   of a rigid jaw rotation each vertex follows), 1 on the lower teeth and at 2.1.
 * **Head**: 1 on the whole head, fading to 0 down the neck.
@@ -21,16 +27,18 @@ import numpy as np
 import scipy.sparse as sp
 
 from mpeg4fa.face import motion
+from mpeg4fa.face.couplings import add_couplings
 from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.face.lids import LidSheet, build_lids
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.regions import adjacency, edge_hops, falloff
+from mpeg4fa.face.regions import adjacency, detour_fade, edge_hops, falloff, soft_floor
 from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
 JAW_WEIGHT_FLOOR = 0.03  # jaw weights below this are noise of the face unit: dropped
 NECK_FADE_MM = 45.0  # the head rotation fades out over this height above the neck cut
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
+WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
 
 
 @dataclass(frozen=True)
@@ -72,14 +80,14 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
                 translate[3 * i:3 * i + 3, record.number - 1] = fapu.unit(record.fapu) * motion.direction(record.number)
         elif k == "lid":
             lid_fp[record.number] = index[record.feature_point[0]]
+    add_couplings(translate, index, fapu)  # documented extra points (lip protrusion)
 
     driven = sorted({index[label] for r in FAPS[2:] if motion.kind(r.number) in ("translate", "lid", "tongue_roll")
                      for label in r.feature_point})
     skin = mesh.part("skin")
     tongue = mesh.part("tongue")
     columns = []
-    columns.append(part_weights(mesh, skin, [i for i in range(len(labels)) if _in(fp_vertex[i], skin)], driven,
-                                 extra_controls=None))
+    columns.append(skin_weights(mesh, [i for i in range(len(labels)) if _in(fp_vertex[i], skin)], driven))
     root = _tongue_root(rest, tongue)
     columns.append(part_weights(mesh, tongue, [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)],
                                  driven, extra_controls=root))
@@ -108,13 +116,11 @@ def _in(v: int, s: slice) -> bool:
     return s.start <= v < s.stop
 
 
-def part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
-                 extra_controls: np.ndarray | None, reach: np.ndarray | None = None) -> sp.csr_matrix:
-    """Sibson weights of a part's vertices on its feature points, cut to their BFS regions."""
+def _sibson(mesh: HeadMesh, part: slice, fps: list[int],
+            extra_controls: np.ndarray | None) -> tuple[list[int], sp.csc_matrix]:
+    """One control per distinct vertex (11.5 shares 11.4's) and the part's Sibson weights on them."""
     rest = mesh.vertices
-    n = mesh.n_vertices
     fp_v = mesh.fp_vertex
-    # one control per distinct vertex (11.5 shares 11.4's vertex)
     controls, seen = [], set()
     for i in fps:
         if fp_v[i] not in seen:
@@ -126,8 +132,42 @@ def part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
     queries = rest[part]
     cloud = np.concatenate(sites + [queries])
     sites.append(cage_points(cloud))
-    sites = np.concatenate(sites)
-    w = natural_neighbour_weights(sites, queries)[:, :len(controls)].tocsc()
+    w = natural_neighbour_weights(np.concatenate(sites), queries)[:, :len(controls)].tocsc()
+    return controls, w
+
+
+def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_matrix:
+    """``(V, 84)`` skin weights of the ``driven`` points among the skin feature points ``fps``.
+
+    Sibson coordinates (smooth, exact at the points), faded where the surface goes the
+    long way round (:func:`.regions.detour_fade`), soft-thresholded by :data:`WEIGHT_FLOOR`.
+    """
+    skin = mesh.part("skin")
+    n = mesh.n_vertices
+    fp_v = mesh.fp_vertex
+    controls, w = _sibson(mesh, skin, fps, None)
+    keep = [c for c, i in enumerate(controls) if i in driven]
+    if not keep:
+        return sp.csr_matrix((n, len(mesh.fp_labels)))
+    local = mesh.vertices[skin]
+    fade = detour_fade(local, mesh.triangles["skin"] - skin.start, fp_v[[controls[c] for c in keep]] - skin.start)
+    rows, cols, vals = [], [], []
+    for j, c in enumerate(keep):
+        col = soft_floor(w[:, c].toarray().ravel() * fade[j], WEIGHT_FLOOR)
+        nz = np.flatnonzero(col > 0)
+        rows.append(nz + skin.start)
+        cols.append(np.full(len(nz), controls[c]))
+        vals.append(col[nz])
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(n, len(mesh.fp_labels)))
+
+
+def part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
+                 extra_controls: np.ndarray | None, reach: np.ndarray | None = None) -> sp.csr_matrix:
+    """Sibson weights of a part's vertices on its feature points, cut to their BFS regions (the tongue)."""
+    n = mesh.n_vertices
+    fp_v = mesh.fp_vertex
+    controls, w = _sibson(mesh, part, fps, extra_controls)
 
     keep = [c for c, i in enumerate(controls) if i in driven]
     if not keep:

@@ -4,7 +4,8 @@ For each FAP 3..68 a frame carries that FAP alone, at +V and (unless the FAP is
 unidirectional) -V. The moved feature points must do what ``spec/faps.csv``
 says, in the face's own FAPU, on both faces (the procedural test head and the
 generic CC0 head); every other feature point stays put, except the documented
-couplings (the jaw carries the points it weighs, the head carries everything).
+couplings (the jaw carries the points it weighs, the head carries everything, lip protrusion
+carries the outer lip: ``face/data/couplings.csv``).
 Then: faces of different sizes move in proportion to their FAPU, and the
 animation is left/right mirror symmetric.
 """
@@ -14,6 +15,7 @@ import numpy as np
 import pytest
 
 from mpeg4fa.face import motion
+from mpeg4fa.face.couplings import coupled_points
 from mpeg4fa.face.fapu import DISTANCES
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.spec import FAPS, N_FAPS
@@ -160,6 +162,11 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
     else:  # pragma: no cover - every FAP has a kind
         raise AssertionError(f"FAP {fap}: kind {kind}")
 
+    for label, fraction in coupled_points(fap).items():  # documented couplings (face/data/couplings.csv)
+        i = index[label]
+        amount = fraction * value * fapu.unit(record.fapu)
+        errors.append((f"{label} coupled", float(np.linalg.norm(moved[i] - amount * motion.direction(fap))) / abs(value * fapu.unit(record.fapu))))
+        coupled.add(i)
     if fap in motion.JAW:
         jaw_vertices = set(rig.jaw_rows[0].tolist())
         coupled |= {i for i, v in enumerate(mesh.fp_vertex) if int(v) in jaw_vertices}
