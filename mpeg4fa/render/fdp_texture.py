@@ -131,7 +131,7 @@ def texture_map(mesh: HeadMesh, fdp: Fdp, size: tuple[int, int], *, source: str 
     if fdp.texture_coords is None:
         raise RenderError("the FDP carries a texture but no texture coordinates for its feature points", where=where,
                           hint="send the points' texture coordinates (TXCO) with the image, or play without it "
-                               "(--no-fdp-texture)")
+                               "(--no-fdp-texture; fdp_texture=False in the API)")
     labels = tuple(label for label in fdp.labels if label in mesh.fp_labels)
     if len(labels) < MIN_CONTROLS:
         raise RenderError(f"{len(labels)} feature point(s) with texture coordinates; at least {MIN_CONTROLS} are "
