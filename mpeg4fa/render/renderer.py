@@ -73,19 +73,23 @@ class Renderer:
                                           ctx.depth_renderbuffer(size, samples=self.samples))
         lay = self.layout
         self.dynamic = ctx.buffer(reserve=lay.n_vertices * 6 * 4, dynamic=True)
-        self.static = ctx.buffer(np.c_[lay.uv, lay.material, lay.lips].astype(np.float32).tobytes())
+        static = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail].astype(np.float32)
+        self.static = ctx.buffer(static.tobytes())
         self.index = ctx.buffer(lay.indices.astype(np.uint32).tobytes())
         self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                   (self.static, "2f 1f 1f", "in_uv", "in_material", "in_lips")],
+                                                   (self.static, "2f 1f 2f 2f", "in_uv", "in_material", "in_tints",
+                                                    "in_detail")],
                                     index_buffer=self.index, index_element_size=4)
 
     def _apply_uniforms(self) -> None:
         """Materials, lights, camera and texture (the program is shared by all renderers)."""
         m, prog = self.materials, self.program
-        slots = [m.skin, m.mouth, m.sclera, m.teeth, m.tongue, m.tongue]
+        slots = [m.skin, m.mouth, m.sclera, m.teeth, m.tongue, m.gums]
         prog["base_colour"].write(np.array([s.colour for s in slots], np.float32).tobytes())
         prog["shine"].write(np.array([(s.specular, s.shininess) for s in slots], np.float32).tobytes())
         prog["lip_colour"].value = tuple(m.lips)
+        prog["brow_colour"].value = tuple(m.brows)
+        prog["cavity_colour"].value = tuple(m.cavity)
         prog["iris_colour"].value = tuple(m.iris)
         prog["pupil_colour"].value = tuple(m.pupil)
         prog["iris_radius"].value = float(self.face.fapu.IRISD0) / 2.0

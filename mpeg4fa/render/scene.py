@@ -12,6 +12,7 @@ import numpy as np
 from scipy import sparse
 
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.render.details import brow_coordinates, cavity_weights, tooth_coordinates
 from mpeg4fa.render.materials import LIP_OUTLINE, PART_MATERIAL, lip_weights
 
 
@@ -21,6 +22,8 @@ class SceneLayout:
     uv: np.ndarray         # (N, 2) float32
     material: np.ndarray   # (N,) float32 material slot
     lips: np.ndarray       # (N,) float32 0..1, how much of the lip colour the untextured skin takes
+    cavity: np.ndarray     # (N,) float32 0..1, how deep in the mouth (dark) a skin vertex is
+    detail: np.ndarray     # (N, 2) float32: brow coordinates on the skin, tooth coordinates on the teeth
     indices: np.ndarray    # (T, 3) uint32 GL vertex indices, all drawn parts
     triangles: np.ndarray  # (T, 3) mesh vertex indices (for normals)
     incidence: sparse.csr_matrix  # (V, T): sums face normals onto vertices
@@ -47,15 +50,25 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
     unique, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     source = unique[:, 0].astype(np.int64)
     lips = np.zeros(len(source), np.float32)
+    skin = corner_mat[first] == PART_MATERIAL["skin"]
     if all(label in mesh.fp_labels for label in LIP_OUTLINE):
-        skin = corner_mat[first] == PART_MATERIAL["skin"]
         outline = np.array([mesh.fp(label) for label in LIP_OUTLINE])
         lips[skin] = lip_weights(mesh.vertices[source[skin]], outline)
+    detail = np.zeros((len(source), 2), np.float32)
+    detail[skin] = brow_coordinates(mesh, mesh.vertices[source[skin]])
+    for part in ("teeth_upper", "teeth_lower"):
+        if part in mesh.part_ranges and len(mesh.triangles.get(part, ())):
+            a, b = mesh.part_ranges[part]
+            arch = tooth_coordinates(mesh.vertices[a:b], upper=part == "teeth_upper")
+            mine = (source >= a) & (source < b)
+            detail[mine] = arch[source[mine] - a]
     return SceneLayout(
         source=source,
         uv=corner_uv[first].astype(np.float32),
         material=corner_mat[first].astype(np.float32),
         lips=lips,
+        cavity=cavity_weights(mesh)[source].astype(np.float32),
+        detail=detail,
         indices=inverse.reshape(-1, 3).astype(np.uint32),
         triangles=tri,
         incidence=incidence_matrix(tri, mesh.n_vertices),

@@ -101,10 +101,10 @@ def test_pupil_sits_on_the_gaze_axis(generic_face):
 
 def test_open_jaw_shows_teeth_tongue_and_mouth_interior(generic_face):
     """Unlit, with a pure colour per material: what the opened lips reveal is teeth, tongue and
-    mouth interior. (The procedural head has no mouth slit: its lips stretch, so this is the
-    generic head's.)"""
+    the dark oral cavity. (The procedural head has no mouth slit: its lips stretch, so this is the
+    generic head's; tests/render/test_mouth.py checks where each of them is.)"""
     face = generic_face
-    marked = Materials().with_colours(teeth=(0, 0, 1), tongue=(0, 1, 0), mouth=(1, 0, 0))
+    marked = Materials().with_colours(teeth=(0, 0, 1), tongue=(0, 1, 0), cavity=(1, 0, 0))
     pts = np.array([face.mesh.fp(label) for label in ("8.1", "8.2", "8.3", "8.4", "2.1")])
     with Renderer(face, width=160, height=160, lighting=False, materials=marked,
                   camera=frame_points(pts, 160, 160, margin=0.3)) as r:

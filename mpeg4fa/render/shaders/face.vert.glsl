@@ -6,19 +6,22 @@ in vec3 in_position;
 in vec3 in_normal;
 in vec2 in_uv;
 in float in_material;
-in float in_lips;
+in vec2 in_tints;    // lips, oral cavity (0..1)
+in vec2 in_detail;   // skin: brow coordinates; teeth: tooth coordinates (see render/details.py)
 
 out vec3 v_position;
 out vec3 v_normal;
 out vec2 v_uv;
 flat out int v_material;
-out float v_lips;
+out vec2 v_tints;
+out vec2 v_detail;
 
 void main() {
     v_position = in_position;
     v_normal = in_normal;
     v_uv = in_uv;
     v_material = int(in_material + 0.5);
-    v_lips = in_lips;
+    v_tints = in_tints;
+    v_detail = in_detail;
     gl_Position = world_to_clip * vec4(in_position, 1.0);
 }
