@@ -129,20 +129,21 @@ def tooth_coordinates(vertices: np.ndarray, upper: bool) -> np.ndarray:
         return np.zeros((len(v), 2))
     contour[1:-1] = (contour[:-2] + 2 * contour[1:-1] + contour[2:]) / 4
     arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(contour, axis=0), axis=1))]
-    # nearest point on the contour polyline, in x-z
     a, b = contour[:-1], contour[1:]
     ab = b - a
-    p = v[:, None, [0, 2]]
-    t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12), 0.0, 1.0)
-    dist = np.linalg.norm(p - (a + t[..., None] * ab), axis=-1)
-    seg = dist.argmin(axis=1)
-    at = arc[seg] + t[np.arange(len(v)), seg] * (arc[seg + 1] - arc[seg])
-    mid = np.interp(0.0, contour[:, 0], arc) if contour[0, 0] < 0 < contour[-1, 0] else arc[-1] / 2
-    s = at - mid
+
+    def arc_at(xz: np.ndarray) -> np.ndarray:  # arc length of the nearest contour point
+        p = xz[:, None, :]
+        t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12), 0.0, 1.0)
+        seg = np.linalg.norm(p - (a + t[..., None] * ab), axis=-1).argmin(axis=1)
+        return arc[seg] + t[np.arange(len(xz)), seg] * (arc[seg + 1] - arc[seg])
+
+    at = arc_at(v[:, [0, 2]])
+    s = (at - arc_at(v[:, [0, 2]] * (-1.0, 1.0))) / 2  # from the midline, symmetric left/right
     edge = np.interp(at, arc, bite)
     widths = np.array(UPPER_TOOTH_MM if upper else LOWER_TOOTH_MM)
     bounds = np.concatenate([[0.0], np.cumsum(widths)])
-    reach = max(arc[-1] - mid, mid)
+    reach = np.abs(s).max()  # the half arch
     bounds *= reach / bounds[-1] if reach < bounds[-1] else 1.0
     teeth = np.interp(np.abs(s), bounds, np.arange(len(bounds)), right=len(widths))
     height = (v[:, 1] - edge) if upper else (edge - v[:, 1])
