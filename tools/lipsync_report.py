@@ -1,15 +1,32 @@
 #!/usr/bin/env python3
-"""Lip sync report: for every FBA stream with a same-named .wav in a folder, how well the mouth
-of the generic head follows the speech.
+"""Lip sync report: how well the mouth of the generic head follows the speech.
 
-For each pair it poses the generic head (FaceModel.default()) at every frame, takes the inner-lip
-gap (feature point 2.2 above 2.3, mm) and correlates it (Pearson r) with the short-time energy of
-the speech in dB around each frame time, at lag 0 and at lags -N..+N frames. A positive best lag
-means the mouth leads the audio (opens before the sound); negative, that it is late.
+Two modes, run on demand (not tests):
 
-Run on demand (not a test):
     .venv/bin/python tools/lipsync_report.py [FOLDER] [--json out.json] [--window S] [--max-lag N]
-FOLDER defaults to ../shared/vectors/fba/en (the 16 visage|SDK speech streams).
+    .venv/bin/python tools/lipsync_report.py --generated [--json OUT] [--level high|low|both] [--no-align]
+
+FOLDER: every FBA stream with a same-named .wav (default ../shared/vectors/fba/en, the 16
+visage|SDK speech streams). For each pair it poses the generic head (FaceModel.default()) at every
+frame, takes the inner-lip gap (feature point 2.2 above 2.3, mm) and correlates it (Pearson r) with
+the short-time energy of the speech in dB around each frame time, at lag 0 and at lags -N..+N
+frames. A positive best lag means the mouth leads the audio (opens before the sound); negative,
+that it is late.
+
+--generated: English and Chinese sentences spoken by espeak-ng and encoded by ``encode_text``
+at 25 fps, coded, decoded, resolved and posed again (mpeg4fa.render.visemesync), against the
+phoneme spans the encoder was given:
+  half     share of visemes whose weight peaks in the first half of its phoneme (25 fps, and at
+           --peak-fps, 100 by default, where a frame is shorter than most phonemes' halves)
+  rel      median peak position in the phoneme (0 onset, 1 end); off: mean peak - onset, ms
+  lag/r0   best lag of the inner-lip gap / energy correlation (frames, + = mouth leads), r at 0
+  closures PP/bpm seen shut within one frame of the onset (share), missed ones, mean offset ms
+English also against pocketsphinx's forced alignment of the audio (the ``test`` extra): mean and
+95th percentile of viseme peak - aligned phone onset (ms), closures within a frame of the aligned
+onsets, and the onsets themselves (espeak's events as given, and the spans after the closure
+correction of mpeg4fa.speech.closures) against the aligned ones. Targets (issue, part 5): half
+>= 90 % per language, lag 0 +- 1 frame, closures within 1 frame; PASS/FAIL lines; JSON to
+out/lipsync_generated.json unless --json.
 """
 from __future__ import annotations
 
@@ -22,12 +39,14 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from mpeg4fa.face.model import FaceModel  # noqa: E402
 from mpeg4fa.formats.sniff import read_stream  # noqa: E402
 from mpeg4fa.render.audio import read_audio  # noqa: E402
 from mpeg4fa.render.lipsync import (DEFAULT_FLOOR_DB, DEFAULT_MAX_LAG, LipSyncReport,  # noqa: E402
                                     lipsync_report)
+from lipsync_generated import run_generated  # noqa: E402
 
 DEFAULT_FOLDER = Path(__file__).resolve().parents[1].parent / "shared" / "vectors" / "fba" / "en"
 
@@ -61,7 +80,17 @@ def main(argv: list[str] | None = None) -> int:
                         help="correlate with linear RMS instead of dB (default dB: see mpeg4fa.render.lipsync)")
     parser.add_argument("--floor-db", type=float, default=DEFAULT_FLOOR_DB,
                         help=f"energy floor in dBFS (default {DEFAULT_FLOOR_DB:g})")
+    parser.add_argument("--generated", action="store_true",
+                        help="measure encode_text's own English and Chinese speech instead of a folder")
+    parser.add_argument("--level", choices=("high", "low", "both"), default="high",
+                        help="--generated: the stream level to encode (default high: FAP 1, Chinese low-level)")
+    parser.add_argument("--peak-fps", type=float, default=100.0,
+                        help="--generated: the finer frame rate the peak share is also measured at (default 100)")
+    parser.add_argument("--no-align", action="store_true", help="--generated: skip the pocketsphinx comparison")
     args = parser.parse_args(argv)
+    if args.generated:
+        return run_generated(args.json or Path("out/lipsync_generated.json"), level=args.level,
+                             peak_fps=args.peak_fps, align=not args.no_align)
 
     if not args.folder.is_dir():
         print(f"{args.folder}: no such folder (give a folder of .fba + .wav pairs)", file=sys.stderr)

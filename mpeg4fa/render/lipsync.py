@@ -66,6 +66,17 @@ def mouth_opening(face: FaceModel, stream: FapStream) -> np.ndarray:
     return gaps[np.asarray(inverse).reshape(-1)]
 
 
+def on_frame_grid(stream: FapStream, per_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Frame times from the first frame (``k / fps``) and ``per_frame`` rows with skipped frames repeated.
+
+    A skipped frame shows the frame before it again; lags and peaks are counted in frames, so
+    they need every frame period present.
+    """
+    repeats = np.asarray(stream.skip, dtype=np.int64) + 1
+    rows = np.repeat(np.asarray(per_frame), repeats, axis=0)
+    return np.arange(len(rows)) / float(stream.fps), rows
+
+
 def speech_energy(audio: Audio, times: np.ndarray, window: float, *, db: bool = True,
                   floor_db: float = DEFAULT_FLOOR_DB) -> np.ndarray:
     """Short-time RMS of the mono speech in a ``window``-second window centred on each time.
@@ -159,7 +170,8 @@ class LipSyncReport:
     at frame k matches the sound at frame k + lag); negative = the mouth is late.
     Only frames whose time lies inside the audio are compared (``n_compared``):
     frames past the end of the speech would pair a moving mouth with silence
-    that is not there, only missing.
+    that is not there, only missing. ``n_frames`` counts the frames shown, skipped
+    ones included.
     """
 
     name: str
@@ -197,24 +209,31 @@ class LipSyncReport:
 
 def lipsync_report(face: FaceModel, stream: FapStream, audio: Audio, name: str = "", *,
                    window: float | None = None, max_lag: int = DEFAULT_MAX_LAG, db: bool = True,
-                   floor_db: float = DEFAULT_FLOOR_DB) -> LipSyncReport:
+                   floor_db: float = DEFAULT_FLOOR_DB, opening: np.ndarray | None = None) -> LipSyncReport:
     """Correlate ``stream``'s mouth opening on ``face`` with the energy of ``audio``.
 
     The audio is taken to start with the stream's first frame (as playback aligns
     them). ``window`` defaults to one frame period, so that each frame's energy
-    covers the sound around it without overlapping its neighbours'.
+    covers the sound around it without overlapping its neighbours'. Skipped frames
+    are put back on the frame grid (:func:`on_frame_grid`); ``opening`` may give
+    the mouth opening on that grid when the caller has it already.
     """
     fps = float(stream.fps)
     if window is None:
         window = 1.0 / fps
-    opening = mouth_opening(face, stream)
-    times = stream.timestamps - stream.timestamps[0] if len(stream) else np.zeros(0)
+    if opening is None:
+        times, opening = on_frame_grid(stream, mouth_opening(face, stream))
+    else:
+        times = np.arange(len(opening)) / fps
+        if len(opening) != int((np.asarray(stream.skip) + 1).sum()):
+            raise ValueError(f"opening has {len(opening)} values, the stream {len(stream)} frames on its grid")
+    opening = np.asarray(opening, dtype=np.float64)
     inside = times < audio.duration
     energy = speech_energy(audio, times[inside], window, db=db, floor_db=floor_db)
     lags = lagged_correlations(opening[inside], energy, max_lag)
     lag = best_lag(lags)
     return LipSyncReport(
-        name=name, n_frames=len(stream), fps=fps, stream_duration=float(stream.duration),
+        name=name, n_frames=len(times), fps=fps, stream_duration=float(stream.duration),
         audio_duration=float(audio.duration), correlation=float(lags[max_lag]), best_lag_frames=lag,
         best_correlation=float(lags[lag + max_lag]), n_compared=int(inside.sum()), window=float(window),
         max_lag=max_lag, lag_correlations=[float(r) for r in lags],

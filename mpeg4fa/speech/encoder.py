@@ -13,7 +13,7 @@ then carries them at the chosen level:
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -21,9 +21,10 @@ from mpeg4fa.fba import EncodeOptions
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
 from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, VISEMES
+from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.markup import parse_markup
-from mpeg4fa.speech.timeline import (expression_fields, expression_track, frame_times, idle_track, merge_tracks,
-                                     viseme_fields, viseme_track)
+from mpeg4fa.speech.timeline import (CLOSURE_HOLD, expression_fields, expression_track, frame_times, idle_track,
+                                     merge_tracks, viseme_fields, viseme_track)
 from mpeg4fa.speech.tts.base import Engine
 from mpeg4fa.speech.utterance import Utterance, speak
 
@@ -91,9 +92,11 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
     markup = parse_markup(text, name=name)
     utterance = speak(markup, make_engine(engine) if isinstance(engine, str) else engine, lang=lang, voice=voice,
                       rate=rate)
+    utterance = replace(utterance, timings=stop_closures(utterance.timings, utterance.speech))
     times = frame_times(utterance.speech.duration, fps)
     spans, cues = utterance.spans(), list(utterance.cues)
-    visemes, expressions = viseme_track(spans, times), expression_track(cues, times)
+    hold = closure_hold(fps)
+    visemes, expressions = viseme_track(spans, times, closure_hold=hold), expression_track(cues, times)
     tracks = [visemes, expressions] + ([idle_track(times, seed)] if idle else [])
     values = np.rint(merge_tracks(*tracks))
 
@@ -106,14 +109,23 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
         stream.fap_mask[:, used] = True
         stream.fap_values[:, used] = values[:, used]
     if level in ("high", "both"):
-        _high_level(stream, utterance, times, values, level)
+        _high_level(stream, utterance, times, values, level, hold)
     interpolated = fold_symmetric(stream) if fold else set()
     return Encoded(stream, utterance, values, level, _mask_types(stream, interpolated))
 
 
-def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, values: np.ndarray, level: str) -> None:
-    """FAP 1 and 2 fields; frames whose visemes or expressions they cannot name get low-level FAPs."""
-    vis = viseme_fields(utterance.spans(), times)
+def closure_hold(fps: float) -> float:
+    """How long a closure (p, b, m) stays shut: :data:`CLOSURE_HOLD`, or one frame if frames are longer,
+    so that a frame always shows it."""
+    return max(CLOSURE_HOLD, 1.0 / fps)
+
+
+def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, values: np.ndarray, level: str,
+                hold: float) -> None:
+    """FAP 1 and 2 fields; frames whose visemes or expressions they cannot name get low-level FAPs.
+
+    FAP 1 comes from the same moves as the low-level track (same spans, same closure hold)."""
+    vis = viseme_fields(utterance.spans(), times, closure_hold=hold)
     exp = expression_fields(list(utterance.cues), times)
     n = len(times)
     standard_vis = np.array([a[0] == "mpeg4" and b[0] == "mpeg4" for a, b in zip(vis.select1, vis.select2)])

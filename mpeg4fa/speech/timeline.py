@@ -15,15 +15,31 @@ Model
 a transition always *arrives* at rest, and the next one that starts with
 ``g = 0`` joins it with a continuous value and slope.
 
-*Visemes* (:func:`viseme_track`): during a span the mouth moves from the
-previous span's profile to this span's profile, reaching it at the span's end.
-Silence is the ``none`` viseme (all zero): before the first span the mouth is
-at rest; after a span that is not followed at once by another, the mouth closes
-to ``none`` over ``min(gap, rest_time)`` and stays there, so the next span
-starts from ``none``. The tangent is ``g = tangent * (a_e - a_s)``: 0 (the
-default) gives ease-in/ease-out and a C1 track; values up to 3 leave the old
-shape faster and stay monotone (no overshoot) but give up the slope continuity
-at the joins.
+*Visemes* (:func:`viseme_track`): a viewer judges lip sync by when each
+shape arrives against the sound, and notices a mouth that lags the voice by
+more than ~45 ms (ITU-R BT.1359) much sooner than one that leads it. So the
+mouth anticipates: every boundary between two phases (a span, or a silence
+before, between or after spans) gets one move from the shape before to the
+shape after, placed *across* the boundary. It starts ``lead = min(LEAD,
+LEAD_SHARE x the phase before)`` before the boundary (at most 100 ms, 70 % of
+that phoneme or pause) and arrives ``lag = min(LAG, LAG_SHARE x the phase
+after)`` after it (at most 30 ms, 20 % of the phoneme): each shape is reached in
+the first fifth of its phoneme, near its acoustic onset, not at its end. The
+shares add up to 0.9, so two moves never overlap and every phase keeps a hold of
+at least a tenth of its length, at its shape. *Closures* (``PP``, Chinese ``bpm``:
+the lips touch) have no lag: shut at the onset itself, and held shut for
+``closure_hold`` (default :data:`CLOSURE_HOLD`, one frame at 25 fps) so that a
+frame always shows them; a move that the hold delays starts when it ends and
+lasts at least :data:`MIN_MOVE` (a lip release is fast). Silence is the ``none``
+viseme (all zero): before the first move the mouth is at rest; the move into
+silence after a span is at most ``rest_time`` long (0: a step at the span's
+end), and the mouth stays at rest until the move into the next span. The
+tangent is ``g = tangent * (a_e - a_s)``: 0 (the default) gives
+ease-in/ease-out and a C1 track, every move starting and arriving at rest;
+values up to 3 leave the old shape faster and stay monotone (no overshoot) but
+give up the slope continuity at the joins. :func:`viseme_fields` gives FAP 1
+from the same moves, so a high-level stream shows the mouth at the same times as
+the low-level one.
 
 *Expressions* (:func:`expression_intensities`): each expression has its own
 intensity track in 0..63. A cue sends its expression to its intensity and every
@@ -63,9 +79,9 @@ from mpeg4fa.spec import FAP_BY_NAME, N_FAPS
 from mpeg4fa.spec.profiles import EXPRESSION_PROFILES, VISEME_PROFILES
 
 __all__ = [
-    "VisemeSpan", "ExpressionCue", "ExpressionFields", "FULL_INTENSITY", "hermite", "hermite_slope",
-    "viseme_track", "expression_intensities", "expression_track", "expression_fields",
-    "merge_tracks", "idle_track", "frame_times",
+    "VisemeSpan", "ExpressionCue", "ExpressionFields", "VisemeFields", "FULL_INTENSITY", "CLOSURES",
+    "CLOSURE_HOLD", "hermite", "hermite_slope", "viseme_track", "viseme_fields", "expression_intensities",
+    "expression_track", "expression_fields", "merge_tracks", "idle_track", "frame_times",
 ]
 
 FULL_INTENSITY = 63
@@ -186,7 +202,7 @@ def _profile(span: VisemeSpan, k: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Segment:
-    """One move of the mouth: from a shape to another over [start, end]."""
+    """One move of the mouth: from a shape to another over [start, end]; held after ``end``."""
 
     start: float
     end: float
@@ -198,9 +214,23 @@ class _Segment:
 
 _REST = ("mpeg4", "none")
 
+LEAD = 0.10
+"""Longest lead (s): how far before a boundary the move into the next shape may start."""
+LAG = 0.03
+"""Longest lag (s): how far after the boundary the shape may still be on its way (a frame at 25 fps)."""
+LEAD_SHARE = 0.7
+"""Most of the phase before the boundary (phoneme or pause) a lead may take."""
+LAG_SHARE = 0.2
+"""Most of the phase after the boundary a lag may take: the shape is reached in its first fifth."""
+CLOSURES = frozenset({("mpeg4", "PP"), ("zh", "bpm")})
+"""Bilabial closures (p, b, m): shut at the onset itself, no lag."""
+CLOSURE_HOLD = 0.04
+"""Shortest time (s) a closure stays shut from its onset: one frame at 25 fps, so a frame sees it."""
+MIN_MOVE = 0.01
+"""Shortest move (s) when a closure's hold delays the next one."""
 
-def _viseme_segments(spans: Sequence[VisemeSpan], rest: float) -> list[_Segment]:
-    """The spans as moves between shapes, plus the closing moves into silence."""
+
+def _checked_spans(spans: Sequence[VisemeSpan]) -> list[tuple[float, float, tuple[str, str], np.ndarray]]:
     checked = []
     for k, span in enumerate(spans):
         start, end = _finite(span.start, f"span {k} start"), _finite(span.end, f"span {k} end")
@@ -211,17 +241,41 @@ def _viseme_segments(spans: Sequence[VisemeSpan], rest: float) -> list[_Segment]
     for (s0, e0, k0, _, _), (s1, _, k1, _, _) in zip(checked, checked[1:]):
         if s1 < e0:
             raise ValueError(f"span {k1} starts at {s1}, before span {k0} ends at {e0}: spans overlap")
+    return [(start, end, (span.set, span.viseme), profile) for start, end, _, span, profile in checked]
+
+
+def _phases(spans: Sequence[VisemeSpan]) -> list[tuple[float, float, tuple[str, str], np.ndarray]]:
+    """The spans with the silences around and between them: (start, end, key, profile) in time order."""
+    checked = _checked_spans(spans)
+    if not checked:
+        return []
     rest_pose = np.zeros(N_FAPS)
+    phases = [(-math.inf, checked[0][0], _REST, rest_pose)]
+    for previous, span in zip([None] + checked[:-1], checked):
+        if previous is not None and span[0] > previous[1]:
+            phases.append((previous[1], span[0], _REST, rest_pose))
+        phases.append(span)
+    phases.append((checked[-1][1], math.inf, _REST, rest_pose))
+    return phases
+
+
+def _viseme_segments(spans: Sequence[VisemeSpan], rest: float, hold: float = CLOSURE_HOLD) -> list[_Segment]:
+    """One move per boundary between phases (see the module docstring), earliest first."""
+    phases = _phases(spans)
     segments: list[_Segment] = []
-    previous, previous_key = rest_pose, _REST
-    for i, (start, end, _, span, profile) in enumerate(checked):
-        key = (span.set, span.viseme)
-        segments.append(_Segment(start, end, previous_key, key, previous, profile))
-        previous, previous_key = profile, key
-        next_start = checked[i + 1][0] if i + 1 < len(checked) else math.inf
-        if next_start > end:  # silence follows: close the mouth
-            segments.append(_Segment(end, end + min(rest, next_start - end), key, _REST, profile, rest_pose))
-            previous, previous_key = rest_pose, _REST
+    floor = -math.inf  # the previous move's end, or the end of a closure's hold
+    for before, after in zip(phases, phases[1:]):
+        at = after[0]
+        lead = min(LEAD, LEAD_SHARE * (before[1] - before[0]))
+        closure = after[2] in CLOSURES
+        lag = 0.0 if closure else min(LAG, LAG_SHARE * (after[1] - after[0]))
+        if after[2] == _REST and lead + lag > rest:  # closing into silence: at most rest_time long
+            lead, lag = (lead * rest / (lead + lag), lag * rest / (lead + lag)) if rest > 0 else (0.0, 0.0)
+        start, end = at - lead, at + lag
+        if start < floor:  # a closure's hold, or a move it delayed, is still on
+            start, end = floor, max(end, floor + min(MIN_MOVE, lead + lag))
+        segments.append(_Segment(start, end, before[2], after[2], before[3], after[3]))
+        floor = max(end, at + hold) if closure else end
     return segments
 
 
@@ -237,29 +291,32 @@ def _locate(segments: list[_Segment], t: np.ndarray) -> tuple[np.ndarray, np.nda
     return idx, live, np.clip(u, 0.0, 1.0)
 
 
-def _rest_time(rest_time: float) -> float:
-    rest = _finite(rest_time, "rest_time")
-    if rest < 0:
-        raise ValueError(f"rest_time {rest_time!r} must be >= 0")
-    return rest
+def _non_negative(value: float, what: str) -> float:
+    x = _finite(value, what)
+    if x < 0:
+        raise ValueError(f"{what} {value!r} must be >= 0")
+    return x
 
 
 def viseme_track(spans: Sequence[VisemeSpan], times: npt.ArrayLike, tangent: float = 0.0,
-                 rest_time: float = 0.15) -> np.ndarray:
+                 rest_time: float = 0.15, closure_hold: float = CLOSURE_HOLD) -> np.ndarray:
     """Low-level FAPs (n, 68) of the mouth speaking ``spans``, sampled at ``times`` (seconds).
 
-    Each span eases from the previous shape to its own, arriving at its end;
-    silence closes to ``none`` over ``min(gap, rest_time)`` (0 = at once).
-    ``tangent`` scales the start slope, ``g = tangent * (a_e - a_s)``: 0 keeps
-    value and slope continuous at every join; anything in [0, 3] keeps every
-    value between the two profiles. Spans may come in any order; they must
-    have ``start < end`` and must not overlap (``ValueError``).
+    Each move into a span's shape crosses the span's onset: it starts up to
+    :data:`LEAD` before it and arrives up to :data:`LAG` after it (closures at
+    the onset, then shut for ``closure_hold``); see the module docstring.
+    Silence closes to ``none`` by a move at most ``rest_time`` long (0 = a step
+    at the span's end). ``tangent`` scales the start slope, ``g = tangent *
+    (a_e - a_s)``: 0 keeps value and slope continuous at every join; anything in
+    [0, 3] keeps every value between the two profiles. Spans may come in any
+    order; they must have ``start < end`` and must not overlap (``ValueError``).
     """
     t = _times(times)
     k_tan = _finite(tangent, "tangent")
     if not 0.0 <= k_tan <= 3.0:
         raise ValueError(f"tangent {tangent!r} must be in [0, 3]: outside it the mouth overshoots")
-    segments = _viseme_segments(spans, _rest_time(rest_time))
+    segments = _viseme_segments(spans, _non_negative(rest_time, "rest_time"),
+                                _non_negative(closure_hold, "closure_hold"))
     out = np.zeros((len(t), N_FAPS))
     if not segments:
         return out
@@ -284,10 +341,13 @@ class VisemeFields:
     blend: np.ndarray
 
 
-def viseme_fields(spans: Sequence[VisemeSpan], times: npt.ArrayLike, rest_time: float = 0.15) -> VisemeFields:
-    """FAP 1 fields (which two visemes, how far between them) for every time."""
+def viseme_fields(spans: Sequence[VisemeSpan], times: npt.ArrayLike, rest_time: float = 0.15,
+                  closure_hold: float = CLOSURE_HOLD) -> VisemeFields:
+    """FAP 1 fields (which two visemes, how far between them) for every time: the same moves as
+    :func:`viseme_track`, so the high-level and the low-level stream show the mouth at one time."""
     t = _times(times)
-    segments = _viseme_segments(spans, _rest_time(rest_time))
+    segments = _viseme_segments(spans, _non_negative(rest_time, "rest_time"),
+                                _non_negative(closure_hold, "closure_hold"))
     if not segments:
         return VisemeFields([_REST] * len(t), [_REST] * len(t), np.zeros(len(t), np.int64))
     idx, live, u = _locate(segments, t)

@@ -10,8 +10,9 @@ from mpeg4fa.fba import decode, encode
 from mpeg4fa.spec import QUANT_STEP
 from mpeg4fa.speech.encoder import encode_text
 from mpeg4fa.speech.errors import MarkupError
+from mpeg4fa.speech.timeline import LAG
 
-from .onsets import NAMES, recovered_onset
+from .onsets import NAMES, reached
 
 EN = "(joy, 40, 0.5) Hello there, (sadness, 30, 1) my old friend. (joy, 0, 0.3) How are you?"
 ZH = "(joy, 30, 0.5)你好，世界！"
@@ -41,20 +42,24 @@ def test_high_level_english_names_visemes_and_expressions():
     assert set(stream.expression[:, 0]) >= {1, 2}  # joy, then sadness
 
 
-def test_viseme_onsets_are_within_half_a_frame_of_the_phoneme_onsets():
-    """Recover each viseme's onset from FAP 1 in the decoded stream: the first frame inside the span
-    names it, and its eased blend says how far into the span that frame is."""
+def test_fap1_shows_each_viseme_near_its_onset_not_at_its_end():
+    """Read back from FAP 1 in the decoded stream, each viseme is shown most (nearly in full) first
+    between a frame before its phoneme's onset and a frame after the onset plus the largest lag, LAG:
+    the move into it crosses the onset. (The seed reached each shape at the phoneme's end, 0.1-0.3 s
+    after the onset on these spans.)"""
     enc = encode_text(EN, level="high")
     stream = decode(encode(enc.stream, enc.coding()))
     fps = 25.0
-    spans = [s for s in enc.utterance.spans() if s.end - s.start > 1 / fps]
-    errors = []
-    for span in spans:
-        onset = recovered_onset(stream, span.start, span.end, span.viseme, fps)
-        if onset is not None:
-            errors.append(abs(onset - span.start))
-    assert len(errors) >= 0.8 * len(spans)
-    assert max(errors) <= 0.5 / fps, max(errors)
+    spans = enc.utterance.spans()
+    offsets = []
+    for k, span in enumerate(spans):
+        if span.end - span.start > 1.5 / fps:  # a shorter one may fall between two frames
+            t, top = reached(stream, spans, k, fps)
+            assert top >= 0.9, span
+            offsets.append(t - span.start)
+    assert len(offsets) >= 10
+    assert min(offsets) >= -1 / fps - 1e-9, offsets
+    assert max(offsets) <= LAG + 1 / fps + 1e-9, offsets
 
 
 def test_chinese_visemes_follow_the_pinyin_and_go_out_low_level():

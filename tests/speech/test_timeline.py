@@ -9,8 +9,9 @@ from hypothesis import strategies as st
 from mpeg4fa.spec import N_FAPS
 from mpeg4fa.spec.profiles import EXPRESSION_PROFILES, VISEME_PROFILES, expression_blend
 from mpeg4fa.speech.timeline import (
-    ExpressionCue, VisemeSpan, expression_fields, expression_intensities, expression_track, frame_times,
-    hermite, hermite_slope, idle_track, merge_tracks, viseme_track,
+    CLOSURE_HOLD, CLOSURES, LAG, LAG_SHARE, LEAD, LEAD_SHARE, MIN_MOVE, ExpressionCue, VisemeSpan,
+    expression_fields, expression_intensities, expression_track, frame_times, hermite, hermite_slope,
+    idle_track, merge_tracks, viseme_fields, viseme_track,
 )
 
 PROPERTY = settings(max_examples=80, deadline=None, derandomize=True)
@@ -81,37 +82,65 @@ def test_hermite_shapes():
 
 SPEECH = [VisemeSpan("PP", 0.10, 0.18), VisemeSpan("AA", 0.18, 0.35), VisemeSpan("ih", 0.35, 0.41),
           VisemeSpan("ou", 0.41, 0.60), VisemeSpan("FF", 0.90, 1.00), VisemeSpan("E", 1.00, 1.30)]
+# The moves of SPEECH by the rule (LEAD 0.1, LAG 0.03, shares 0.7 / 0.2, closure hold 0.04), worked by hand:
+# (start, end, from, to). PP is a closure: shut at its onset 0.10 and held to 0.14, which delays the move
+# into AA (nominally 0.18 - 0.7 * 0.08 = 0.124) to 0.14; AA is reached at 0.18 + min(0.03, 0.2 * 0.17).
+MOVES = [(0.00, 0.10, "none", "PP"), (0.14, 0.21, "PP", "AA"), (0.25, 0.362, "AA", "ih"),
+         (0.368, 0.44, "ih", "ou"), (0.50, 0.63, "ou", "none"), (0.80, 0.92, "none", "FF"),
+         (0.93, 1.03, "FF", "E"), (1.20, 1.33, "E", "none")]
 
 
 def test_viseme_rest_before_and_after():
-    out = viseme_track(SPEECH, np.array([-1.0, 0.0, 0.1, 0.75, 0.85, 1.45, 5.0]))
-    assert out.shape == (7, N_FAPS)
-    assert not out[:3].any()  # before the first span; at its start it is still at rest
-    assert not out[3:5].any()  # the mouth closed within rest_time of 0.60
-    assert not out[5:].any()
+    out = viseme_track(SPEECH, np.array([-1.0, 0.0, 0.05, 0.63, 0.75, 0.80, 1.33, 5.0]))
+    assert out.shape == (8, N_FAPS)
+    assert not out[:2].any()  # at rest until the move into the first span starts, LEAD before it
+    assert out[2].any()  # on the way to PP before PP's onset: anticipation
+    assert not out[3:6].any()  # closed by 0.63, at rest until the move into FF starts
+    assert not out[6:].any()
 
 
-def test_viseme_reaches_each_profile_at_its_end():
-    ends = np.array([s.end for s in SPEECH]) - 1e-12
-    out = viseme_track(SPEECH, ends)
-    for row, span in zip(out, SPEECH):
-        np.testing.assert_allclose(row, profile(span.viseme), atol=1e-6)
+def test_viseme_moves_cross_the_onsets():
+    """Each move starts before its span's onset and ends at most LAG after it (closures at it), then holds."""
+    for start, end, source, target in MOVES:
+        out = viseme_track(SPEECH, np.array([start, end, end + 0.005]))
+        np.testing.assert_allclose(out[0], profile(source), atol=1e-6, err_msg=f"{source}->{target}")
+        np.testing.assert_allclose(out[1], profile(target), atol=1e-6, err_msg=f"{source}->{target}")
+        np.testing.assert_allclose(out[2], profile(target), atol=1e-6, err_msg=f"{source}->{target} holds")
+    for span in SPEECH:
+        reach = span.start if span.viseme == "PP" else span.start + min(LAG, LAG_SHARE * (span.end - span.start))
+        assert reach <= (span.start + span.end) / 2  # every shape is reached in the first half of its span
     assert not out[:, :2].any()  # FAP 1 and 2 are never set by low-level tracks
 
 
+def test_viseme_closure_is_shut_from_its_onset_for_the_hold():
+    spans = [VisemeSpan("AA", 0.0, 0.2), VisemeSpan("PP", 0.2, 0.22), VisemeSpan("AA", 0.22, 0.4)]
+    t = np.array([0.19, 0.2, 0.239, 0.25])
+    out = viseme_track(spans, t)
+    assert not np.allclose(out[0], profile("PP"))  # still closing before the onset
+    np.testing.assert_allclose(out[1:3], np.stack([profile("PP")] * 2), atol=1e-6)  # shut 0.20-0.24
+    np.testing.assert_allclose(out[3], profile("AA"), atol=1e-6)  # opened fast: 0.24-0.25 (MIN_MOVE)
+    longer = viseme_track(spans, t, closure_hold=0.06)
+    np.testing.assert_allclose(longer[3], profile("PP"), atol=1e-6)
+    none = viseme_track(spans, t, closure_hold=0.0)  # the move to AA starts at 0.22 - 0.7 * 0.02
+    assert not np.allclose(none[2], profile("PP"))
+    with pytest.raises(ValueError, match="closure_hold"):
+        viseme_track(spans, t, closure_hold=-0.01)
+
+
 def test_viseme_interpolates_by_hermite():
-    t = np.linspace(0.18, 0.35, 9, endpoint=False)
-    u = (t - 0.18) / 0.17
-    np.testing.assert_allclose(viseme_track(SPEECH, t), hermite(u, profile("PP"), profile("AA")), atol=1e-9)
+    start, end = MOVES[2][:2]
+    t = np.linspace(start, end, 9, endpoint=False)
+    u = (t - start) / (end - start)
+    np.testing.assert_allclose(viseme_track(SPEECH, t), hermite(u, profile("AA"), profile("ih")), atol=1e-9)
 
 
 def test_viseme_joins_are_continuous_in_value_and_slope():
     track = lambda t: viseme_track(SPEECH, t)  # noqa: E731
-    joins = [0.10, 0.18, 0.35, 0.41, 0.60, 0.75, 0.90, 1.00, 1.30, 1.45]
+    joins = sorted({x for move in MOVES for x in move[:2]})
     for step in (1e-3, 1e-4):
         for join in joins:
             around = track(np.array([join - step, join + step]))
-            # the fastest move (~1.5 * 850 / 0.06 per second) bounds the jump over 2 steps
+            # the fastest move (~1.5 * 850 / 0.07 per second) bounds the jump over 2 steps
             assert np.abs(around[1] - around[0]).max() < 3e4 * step, join
     for join in joins:
         before, after = slopes_around(track, join)
@@ -125,27 +154,34 @@ def test_viseme_dense_sampling_has_no_jumps():
 
 
 def test_viseme_gap_shorter_than_rest_time():
+    """AA, a 50 ms pause, PP: the mouth closes to rest across AA's end and closes the lips into PP
+    from rest (the pause shared 0.2 / 0.7 between the two moves)."""
     spans = [VisemeSpan("AA", 0.0, 0.2), VisemeSpan("PP", 0.25, 0.4)]
-    out = viseme_track(spans, np.array([0.2, 0.225, 0.25, 0.4 - 1e-12]), rest_time=0.15)
-    np.testing.assert_allclose(out[0], profile("AA"))
-    np.testing.assert_allclose(out[1], profile("AA") / 2)  # halfway through the closing move
-    assert not out[2].any()  # the closing fills the whole gap and ends at rest
-    np.testing.assert_allclose(out[3], profile("PP"), atol=1e-6)
+    out = viseme_track(spans, np.array([0.1, 0.155, 0.21, 0.215, 0.25, 0.29]), rest_time=0.15)
+    np.testing.assert_allclose(out[0], profile("AA"))  # the closing move starts LEAD before the end
+    np.testing.assert_allclose(out[1], profile("AA") / 2)  # halfway through it (0.10-0.21)
+    assert not out[2].any() and not out[3].any()  # at rest, 0.21-0.215
+    np.testing.assert_allclose(out[4:], np.stack([profile("PP")] * 2), atol=1e-6)  # shut at the onset
 
 
-def test_viseme_rest_time_zero_is_a_step():
-    out = viseme_track([VisemeSpan("AA", 0.0, 0.2)], np.array([0.2 - 1e-12, 0.2]), rest_time=0.0)
+def test_viseme_rest_time_bounds_the_closing_move():
+    spans = [VisemeSpan("AA", 0.0, 0.2)]
+    out = viseme_track(spans, np.array([0.2 - 1e-12, 0.2]), rest_time=0.0)  # a step at the end
     np.testing.assert_allclose(out[0], profile("AA"), atol=1e-6)
     assert not out[1].any()
+    # rest_time 0.065: the move (nominally 0.10 before and 0.03 after the end) is halved, 0.15-0.215
+    out = viseme_track(spans, np.array([0.15, 0.215]), rest_time=0.065)
+    np.testing.assert_allclose(out[0], profile("AA"), atol=1e-6)
+    assert np.abs(out[1]).max() < 1e-6
 
 
 def test_viseme_tangent_parameter():
-    spans = [VisemeSpan("AA", 0.0, 0.2), VisemeSpan("ou", 0.2, 0.5)]
+    spans = [VisemeSpan("AA", 0.0, 0.2), VisemeSpan("ou", 0.2, 0.5)]  # the move to ou: 0.10-0.23
     track = lambda t: viseme_track(spans, t, tangent=1.5)  # noqa: E731
-    _, after = slopes_around(track, 0.2)
-    expected = 1.5 * (profile("ou") - profile("AA")) / 0.3
+    _, after = slopes_around(track, 0.1)
+    expected = 1.5 * (profile("ou") - profile("AA")) / 0.13
     np.testing.assert_allclose(after, expected, rtol=1e-3, atol=1e-2)
-    before, _ = slopes_around(track, 0.2)
+    before, _ = slopes_around(track, 0.23)
     np.testing.assert_allclose(before, 0.0, atol=1e-2)  # arrives at rest whatever the tangent
     with pytest.raises(ValueError, match="tangent"):
         viseme_track(spans, [0.1], tangent=3.5)
@@ -155,8 +191,26 @@ def test_viseme_order_and_sets():
     t = frame_times(1.4, 100.0)
     np.testing.assert_array_equal(viseme_track(SPEECH[::-1], t), viseme_track(SPEECH, t))
     zh = [VisemeSpan("bpm", 0.0, 0.1, "zh"), VisemeSpan("a", 0.1, 0.3, "zh")]
-    np.testing.assert_allclose(viseme_track(zh, [0.3 - 1e-12])[0], profile("a", "zh"), atol=1e-6)
+    out = viseme_track(zh, [0.0, 0.13, 0.2])
+    np.testing.assert_allclose(out[0], profile("bpm", "zh"), atol=1e-6)  # a Chinese closure too: shut at onset
+    np.testing.assert_allclose(out[1:], np.stack([profile("a", "zh")] * 2), atol=1e-6)  # reached at 0.1 + 0.03
     assert not viseme_track([], t).any()
+
+
+def test_viseme_fields_follow_the_same_moves():
+    """FAP 1 (select1 x blend/63 + select2 x (1 - blend/63)) is the low-level track up to blend rounding."""
+    t = frame_times(1.4, 100.0)
+    fields = viseme_fields(SPEECH, t)
+    w = fields.blend[:, None] / 63.0
+    first = np.stack([VISEME_PROFILES[s][v] for s, v in fields.select1]).astype(np.float64)
+    second = np.stack([VISEME_PROFILES[s][v] for s, v in fields.select2]).astype(np.float64)
+    track = viseme_track(SPEECH, t)
+    step = np.abs(first - second).max(axis=1) / 63.0 / 2 + 1e-9  # half a blend step
+    assert (np.abs(first * w + second * (1 - w) - track).max(axis=1) <= step).all()
+    assert fields.select1[int(0.3 * 100)] == ("mpeg4", "ih") and fields.select2[int(0.3 * 100)] == ("mpeg4", "AA")
+    hold = viseme_fields(SPEECH, [0.12], closure_hold=0.0)  # no hold: PP -> AA starts at 0.124
+    assert viseme_fields(SPEECH, [0.139]).select1 == [("mpeg4", "PP")] and hold.select1 == [("mpeg4", "PP")]
+    assert viseme_fields(SPEECH, [0.13], closure_hold=0.0).select1 == [("mpeg4", "AA")]
 
 
 @pytest.mark.parametrize("spans, match", [
@@ -193,7 +247,7 @@ def span_sequences(draw):
 @PROPERTY
 @given(span_sequences(), st.floats(0.0, 3.0), st.floats(0.0, 0.3))
 def test_viseme_values_stay_between_the_profiles(spans, tangent, rest_time):
-    t = np.linspace(-0.1, spans[-1].end + 0.5, 600)
+    t = np.linspace(-0.2, spans[-1].end + 0.5, 600)
     involved = np.stack([profile(s.viseme, s.set) for s in spans] + [np.zeros(N_FAPS)])
     out = viseme_track(spans, t, tangent=tangent, rest_time=rest_time)
     assert (out >= involved.min(axis=0) - 1e-9).all()
@@ -203,14 +257,36 @@ def test_viseme_values_stay_between_the_profiles(spans, tangent, rest_time):
 @PROPERTY
 @given(span_sequences())
 def test_viseme_tracks_are_continuous(spans):
-    t = np.linspace(0.0, spans[-1].end + 0.4, 4000)
+    t = np.linspace(-0.2, spans[-1].end + 0.4, 4000)
     step = t[1] - t[0]
     out = viseme_track(spans, t)
     gaps = [b.start - a.end for a, b in zip(spans, spans[1:]) if b.start > a.end]
-    shortest = min([s.end - s.start for s in spans] + [min(g, 0.15) for g in gaps] + [0.15])
-    # Hermite with g = 0 moves at most 1.5 * (a_e - a_s) per span length.
-    bound = 1.5 * 2 * np.abs(np.stack([profile(s.viseme, s.set) for s in spans])).max() / shortest
+    shortest = min([s.end - s.start for s in spans] + gaps)
+    # every move lasts at least min(MIN_MOVE, LEAD_SHARE * shortest phase); Hermite with g = 0
+    # moves at most 1.5 * (a_e - a_s) per move length
+    move = min(MIN_MOVE, LEAD_SHARE * shortest)
+    bound = 1.5 * 2 * np.abs(np.stack([profile(s.viseme, s.set) for s in spans])).max() / move
     assert np.abs(np.diff(out, axis=0)).max() <= bound * step + 1e-9
+
+
+@PROPERTY
+@given(span_sequences())
+def test_viseme_shapes_are_reached_early_in_their_spans(spans):
+    """Each span's shape is on by its onset + min(LAG, LAG_SHARE x length) (closures: by the onset),
+    unless a closure's hold delayed its move (each move after a hold can end at most MIN_MOVE later
+    than the one before); and the first move starts LEAD before the first onset, not earlier."""
+    closures = [(i, s.start) for i, s in enumerate(spans) if (s.set, s.viseme) in CLOSURES]
+    for k, span in enumerate(spans):
+        delayed = any(i < k and start + CLOSURE_HOLD + 2 * (k - i) * MIN_MOVE > span.start for i, start in closures)
+        closure = (span.set, span.viseme) in CLOSURES
+        reach = span.start + (0.0 if closure else min(LAG, LAG_SHARE * (span.end - span.start)))
+        assert reach <= (span.start + span.end) / 2
+        if not delayed:
+            np.testing.assert_allclose(viseme_track(spans, [reach])[0], profile(span.viseme, span.set), atol=1e-6)
+    first = spans[0]
+    assert not viseme_track(spans, [first.start - LEAD - 1e-9]).any()
+    if first.viseme != "none":
+        assert viseme_track(spans, [first.start - LEAD + 1e-3]).any()
 
 
 # ---- expressions -----------------------------------------------------------------------------------
