@@ -11,8 +11,8 @@ lips that funnel and pucker). This deformer:
    unit's gain is read off the unit itself: the FAP value whose motion equals the
    unit's full motion at that FAP's feature point, along the FAP's direction);
 3. corrects the sculpted skin so that every skin feature point lands exactly on
-   its target: the residuals spread by the same Sibson weights cut to edge
-   regions that the feature-point deformer uses.
+   its target: the residuals spread by the same smooth skin weights that the
+   feature-point deformer uses (:func:`.rig.skin_weights`), for every skin point.
 
 Eyes, teeth and tongue come from the feature-point deformer, and so do the lids
 (:mod:`.lids`, turned after the sculpt): the sculpted ``eyeBlink*`` units move
@@ -32,10 +32,9 @@ from mpeg4fa.face import motion
 from mpeg4fa.face.deform import Pose, apply_head_rotation, apply_lids, pose_in_head_frame
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.rig import Rig, part_weights
+from mpeg4fa.face.rig import Rig, skin_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
-ANCHOR_REACH = 4  # edge rings over which a fixed feature point pulls sculpted skin back
 MIN_FULL_SCALE = 1.0  # a unit that moves a FAP's point by less than one FAPU unit does not serve it
 
 
@@ -93,8 +92,7 @@ def build_arkit_rig(mesh: HeadMesh, rig: Rig) -> ArkitRig:
                            shape=(3 * n_skin, len(names)))
 
     on_skin = [i for i in range(len(mesh.fp_labels)) if skin.start <= mesh.fp_vertex[i] < skin.stop]
-    reach = np.maximum(mesh.fp_reach, ANCHOR_REACH)
-    weights = part_weights(mesh, skin, on_skin, on_skin, None, reach=reach)[:, on_skin]
+    weights = skin_weights(mesh, on_skin, on_skin)[:, on_skin]
     fp_global = mesh.fp_vertex[on_skin]
     # one column per distinct vertex (11.5 shares 11.4's): keep the first
     _, first = np.unique(fp_global, return_index=True)

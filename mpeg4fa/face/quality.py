@@ -9,7 +9,8 @@ neighbours folds). Two numbers catch this:
   displacement across the edge per unit of its neutral length (0 for a rigid shift,
   1 when the edge's ends move apart by its own length). A step shows as a large
   strain on the edges along its border.
-* **folds**: skin triangles whose normal turned by more than 90 degrees.
+* **folds**: skin triangles whose normal turned by more than 90 degrees (those with a
+  corner inside the lip or lid loops, see below, are not counted).
 
 Two places may strain by design and are left out of the edge strain (the *contact*
 edges): the **lip contact**, where the upper and lower lips touch and the mouth bag
@@ -76,7 +77,7 @@ class Quality:
     edge: tuple[int, int]  # vertex indices of the worst edge
     where: np.ndarray  # neutral midpoint of the worst edge (mm)
     near: str  # the feature point nearest that edge
-    folded: int
+    folded: int  # folded skin triangles outside the lip and lid loops
 
     def describe(self) -> str:
         return f"strain {self.max_strain:.3f} at edge {self.edge} near {self.near}, {self.folded} folded"
@@ -159,7 +160,10 @@ def measure(mesh: HeadMesh, posed: np.ndarray, graph: SkinGraph | None = None) -
     mid = 0.5 * (rest[a] + rest[b])
     fps = mesh.feature_points()
     near = mesh.fp_labels[int(np.argmin(np.linalg.norm(fps - mid, axis=1)))]
-    folded = int(folded_triangles(rest, posed, graph.triangles).sum())
+    is_in = np.zeros(len(rest), bool)
+    is_in[graph.inside] = True
+    outside = ~is_in[graph.triangles].any(axis=1)
+    folded = int(folded_triangles(rest, posed, graph.triangles[outside]).sum())
     return Quality(max_strain=float(strain[k]), edge=(a, b), where=mid, near=near, folded=folded)
 
 

@@ -1,14 +1,23 @@
-"""Regions of influence on the mesh: breadth-first search along edges (seed paper §6.2).
+"""Regions of influence on the mesh: which vertices a feature point may move, and how much.
 
-A feature point moves only the skin it is connected to within a few edge rings,
-so the upper lip's points never drag the lower lip (close in space, far along
-the surface), and the influence fades smoothly to zero at the region's border.
+Two kinds, both along the surface so that the upper lip's points never drag the
+lower lip (close in space, far along the surface):
+
+* **Skin** (:func:`detour_fade`): a feature point's weight is kept where the surface
+  path to the vertex is not much longer than the straight line, and fades
+  smoothly to zero where it is (across the mouth slit, from one lid to the other).
+  The fade is a function of millimetres, not of edge counts, so it has no steps.
+* **Tongue** (:func:`edge_hops`, :func:`falloff`): breadth-first search along edges
+  with a raised-cosine falloff over a number of edge rings (seed paper §6.2).
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
+
+DETOUR_KEEP = 1.6  # surface path up to this many times the straight distance: weight kept
+DETOUR_CUT = 2.6  # from this ratio on: weight 0 (the other lip, the other lid)
 
 
 def adjacency(triangles: np.ndarray, n_vertices: int) -> sp.csr_matrix:
@@ -34,3 +43,41 @@ def falloff(hops: np.ndarray, reach: np.ndarray) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         x = np.where(np.isfinite(hops), hops / (reach + 1.0), np.inf)
     return np.where(x < 1.0, 0.5 * (1.0 + np.cos(np.pi * np.clip(x, 0.0, 1.0))), 0.0)
+
+
+def edge_graph(vertices: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
+    """Symmetric graph of the triangles' edges weighted by their lengths (mm)."""
+    t = np.asarray(triangles, dtype=np.int64)
+    e = np.unique(np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1), axis=0)
+    w = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
+    n = len(vertices)
+    g = sp.coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n))
+    return (g + g.T).tocsr()
+
+
+def smooth_down(x: np.ndarray) -> np.ndarray:
+    """1 for x <= 0, 0 for x >= 1, a cubic with zero slope at both ends in between."""
+    t = np.clip(x, 0.0, 1.0)
+    return 1.0 - t * t * (3.0 - 2.0 * t)
+
+
+def detour_fade(vertices: np.ndarray, triangles: np.ndarray, sources: np.ndarray) -> np.ndarray:
+    """``(len(sources), V)`` weights in 0..1: 1 where the surface is the short way from the source.
+
+    The ratio of surface distance (shortest edge path) to straight distance is about
+    1 on the skin around a point and grows past 3 across a slit; the fade takes it
+    from 1 at :data:`DETOUR_KEEP` to 0 at :data:`DETOUR_CUT`, smoothly.
+    """
+    sources = np.asarray(sources)
+    if len(sources) == 0:
+        return np.zeros((0, len(vertices)))
+    geo = dijkstra(edge_graph(vertices, triangles), indices=sources)
+    straight = np.linalg.norm(vertices[None, :, :] - vertices[sources][:, None, :], axis=2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(straight > 0, geo / np.where(straight > 0, straight, 1.0), 1.0)
+    return smooth_down((ratio - DETOUR_KEEP) / (DETOUR_CUT - DETOUR_KEEP))
+
+
+def soft_floor(w: np.ndarray, floor: float) -> np.ndarray:
+    """``max(w - floor, 0) / (1 - floor)``: tiny weights go to 0 without a step (1 stays 1, 0 stays 0)."""
+    return np.maximum(w - floor, 0.0) / (1.0 - floor)
