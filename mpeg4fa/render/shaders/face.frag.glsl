@@ -65,12 +65,11 @@ vec3 eye_colour(int eye, out int slot) {
 float brow_cover(vec2 d) {
     float along = d.x;
     if (along < -0.06 || along > 1.08) return 0.0;
-    float half_width = (3.3 - 1.9 * clamp(along, 0.0, 1.0))
-                     * sqrt(clamp((along + 0.05) / 0.09, 0.0, 1.0))     // a rounded inner end
-                     * sqrt(clamp((1.07 - along) / 0.3, 0.0, 1.0));     // a tapered outer end
-    float off = abs(d.y + 0.4);
-    float cover = 1.0 - smoothstep(half_width - 0.45, half_width + 0.45, off);
-    if (lighting) cover *= 0.86 + 0.14 * sin(170.0 * along + 2.2 * d.y);   // hair strokes
+    float inner = clamp((along + 0.05) / 0.09, 0.0, 1.0);   // a rounded inner end
+    float outer = clamp((1.07 - along) / 0.3, 0.0, 1.0);    // a tapered outer end
+    float half_width = (3.3 - 1.9 * clamp(along, 0.0, 1.0)) * inner * (2.0 - inner) * outer * (2.0 - outer);
+    float cover = clamp((half_width - abs(d.y + 0.4)) / 0.9 + 0.5, 0.0, 1.0);
+    if (lighting) cover *= 0.8 + 0.4 * abs(fract(27.0 * along + 0.35 * d.y) - 0.5);   // hair strokes
     return cover;
 }
 
@@ -109,17 +108,16 @@ void main() {
             slot = 1;
             base = cavity_colour;
             shade = 0.15;
-        } else if (h > CROWN_MM * (0.8 + 0.2 * sin(3.14159 * f))) {
+        } else if (h > CROWN_MM * (0.8 + 0.8 * f * (1.0 - f))) {
             slot = 5;                                     // gum, scalloped between the teeth
             base = base_colour[5];
         } else {
             slot = 3;
             base = base_colour[3];
-            // each tooth bulges: tilt the flat face normal across the tooth
-            vec3 face = normalize(cross(dFdx(v_position), dFdy(v_position)));
-            if (dot(face, to_eye) < 0.0) face = -face;
-            vec3 across = cross(vec3(0.0, 1.0, 0.0), face);
-            n = normalize(face + across * (2.0 * f - 1.0) * 0.9);
+            // each tooth bulges: tilt the normal across the tooth; the thin band's normals turn
+            // down at the biting edge, so lean them toward the viewer (a tooth's labial face)
+            if (dot(n, to_eye) < 0.0) n = -n;
+            n = normalize(n + 0.7 * to_eye + cross(vec3(0.0, 1.0, 0.0), n) * (1.8 * f - 0.9));
             if (lighting) shade = mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap));   // the gap between teeth
         }
     } else {
