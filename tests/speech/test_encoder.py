@@ -8,6 +8,7 @@ import pytest
 from mpeg4fa.face.frames import resolve
 from mpeg4fa.fba import decode, encode
 from mpeg4fa.spec import QUANT_STEP
+from mpeg4fa.spec.profiles import VISEME_PROFILES
 from mpeg4fa.speech.encoder import encode_text
 from mpeg4fa.speech.errors import MarkupError
 from mpeg4fa.speech.timeline import LAG
@@ -113,3 +114,19 @@ def test_say_writes_an_mp4_with_the_speech(cli, tmp_path, generic_head_installed
     assert abs(info.av_offset) <= 0.001 and info.n_frames >= 10
     assert (tmp_path / "hi.fba").is_file() and (tmp_path / "hi.wav").is_file()
     assert json.loads((tmp_path / "hi.timings.json").read_text())[0]["viseme"]
+
+
+def test_high_and_low_level_streams_move_the_mouth_at_the_same_times():
+    """FAP 1 comes from the same moves as the low-level track: decoded, the two streams differ by no more
+    than FAP 1's blend quantisation (fap_quant / 2 of 63 of the two visemes' difference) plus the low-level
+    FAPs' own quantisation, frame by frame."""
+    text = "Peter picked a peck of pickled peppers."
+    hi, lo = encode_text(text, level="high"), encode_text(text, level="low")
+    quant = hi.coding().fap_quant
+    decoded = [np.repeat(resolve(s), s.skip + 1, axis=0)
+               for s in (decode(encode(hi.stream, hi.coding())), decode(encode(lo.stream, lo.coding())))]
+    high, low = decoded
+    assert high.shape == low.shape and np.abs(low[:, 2:]).max() > 100
+    spread = np.ptp(np.stack([p for p in VISEME_PROFILES["mpeg4"].values()]), axis=0)  # largest viseme difference
+    bound = spread[2:] * (quant / 2 + 1) / 63 + QUANT_STEP[2:] * quant / 2 + 1
+    assert (np.abs(high[:, 2:] - low[:, 2:]) <= bound).all()
