@@ -1,7 +1,9 @@
 """Tagged text -> FAP frames: the encoder's last step before the bitstream.
 
-The timeline (:mod:`.timeline`) gives low-level FAPs for every frame; the stream
-then carries them at the chosen level:
+The spoken text's timings are first corrected where the engine's events and
+the sound part ways (stops start at their closure's silence, :mod:`.closures`);
+the timeline (:mod:`.timeline`) then gives low-level FAPs for every frame; the
+stream carries them at the chosen level:
 
 * ``high``: FAP 1 (two visemes and their blend) and FAP 2 (two expressions and
   intensities), a few bits a frame. FAP 1 can only name the 14 MPEG-4 visemes

@@ -181,6 +181,21 @@ def test_short_audio_compares_only_frames_inside(procedural_face):
     assert rep.correlation > 0.9
 
 
+def test_skipped_frames_are_put_back_on_the_grid(procedural_face):
+    """A stream that skips repeats (as the encoder's optimize does) reads like the same stream sent in
+    full: lags count frame periods, not decoded frames."""
+    loud = syllables(120)
+    full = jaw_stream(np.where(loud[3:], 400, 0))  # the mouth 3 frames early
+    keep = np.r_[True, np.diff(full.fap_values[:, 2]) != 0]
+    sparse = full.take(list(np.flatnonzero(keep)))
+    sparse.skip[:] = np.diff(np.r_[np.flatnonzero(keep), len(full)]) - 1
+    audio = speech_for(loud[:117])
+    a, b = lipsync_report(procedural_face, full, audio), lipsync_report(procedural_face, sparse, audio)
+    assert len(sparse) < len(full) / 2 and b.n_frames == len(full)
+    assert b.best_lag_frames == a.best_lag_frames == 3
+    np.testing.assert_allclose(b.lag_correlations, a.lag_correlations)
+
+
 def test_report_to_json():
     rep = LipSyncReport("x", 3, 25.0, 0.12, 0.2, float("nan"), 0, float("nan"),
                         lag_correlations=[float("nan"), 0.5])
