@@ -51,11 +51,9 @@ def test_alignment_words():
     assert alignment_words("Hello, there! It's 'fine'.") == ["hello", "there", "it's", "'fine'"]
 
 
-pocketsphinx = pytest.importorskip("pocketsphinx", reason="pocketsphinx (the test extra) is not installed")
-
-
 @pytest.fixture(scope="module")
 def aligned():
+    pytest.importorskip("pocketsphinx", reason="pocketsphinx (the test extra) is not installed")
     out = []
     for text in TEXTS:
         enc = encode_text(text, level="high")

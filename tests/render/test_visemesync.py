@@ -25,7 +25,8 @@ from mpeg4fa.speech.timeline import VisemeSpan, frame_times, hermite
 
 EN = ["Peter picked a peck of pickled peppers, and my mother baked bread.",
       "Could you tell me the way to the nearest train station?"]
-ZH = ["我们明天去北京看朋友，爸爸妈妈都很高兴。", "他每天早上六点起床，然后跑步半个小时。", "今天天气很好，我们去公园散步吧。"]
+ZH = ["我们明天去北京看朋友，爸爸妈妈都很高兴。", "他每天早上六点起床，然后跑步半个小时。",
+      "今天天气很好，我们去公园散步吧。"]
 
 
 def profile(name: str, set_name: str = "mpeg4") -> np.ndarray:
