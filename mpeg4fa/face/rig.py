@@ -36,7 +36,7 @@ from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
 JAW_WEIGHT_FLOOR = 0.03  # jaw weights below this are noise of the face unit: dropped
-NECK_FADE_MM = 45.0  # the head rotation fades out over this height above the neck cut
+NECK_FADE_MM = 30.0  # the head rotation fades out over this height above the neck cut (576 mm), below the jaw
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
 WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
 
