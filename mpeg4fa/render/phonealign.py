@@ -111,11 +111,12 @@ def align_phones(audio: Audio, text: str, *, seed: int = 0) -> list[AlignedPhone
                           hint="check the text is what the audio says") from None
     phones = []
     for word in alignment:
+        spelling = re.sub(r"\(\d+\)$", "", word.name)  # "before(2)": the dictionary's second pronunciation
         for phone in word:
             name = phone.name
             if name in ARPABET_VISEMES:
                 phones.append(AlignedPhone(name, phone.start * FRAME, (phone.start + phone.duration) * FRAME,
-                                           word.name))
+                                           spelling))
     return phones
 
 
