@@ -7,17 +7,14 @@ look at them before committing. llvmpipe output may differ slightly between CPUs
 """
 from __future__ import annotations
 
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
-from PIL import Image
 
 from mpeg4fa.render import Materials, Renderer, RenderError, frame_points
 from mpeg4fa.render.context import describe_context
+from goldens import assert_matches_golden
 
-GOLDEN = Path(__file__).with_name("golden")
 POSES = {
     "neutral": {},
     "open-joy-gaze": {3: 500, 12: 200, 13: 200, 23: -15000, 24: -15000, 48: 4000},
@@ -160,13 +157,7 @@ def test_golden_images(request, face_name, pose_name):
     face = request.getfixturevalue(f"{face_name}_face")
     with Renderer(face, width=128, height=128, samples=4) as r:
         image = r.render(face.deform(POSES[pose_name]))
-    path = GOLDEN / f"{face_name}-{pose_name}.png"
-    if os.environ.get("MPEG4FA_UPDATE_GOLDENS"):
-        Image.fromarray(image).save(path)
-    golden = np.asarray(Image.open(path).convert("RGB")).astype(int)
-    diff = np.abs(image.astype(int) - golden)
-    assert diff.mean() < 1.0, f"{path.name}: mean difference {diff.mean():.2f}"
-    assert (diff.max(axis=2) > 24).mean() < 0.005, f"{path.name}: too many pixels differ"
+    assert_matches_golden(image, f"{face_name}-{pose_name}.png")
 
 
 def test_errors(procedural_face, generic_face):
