@@ -18,6 +18,8 @@ from scipy.sparse.csgraph import dijkstra
 
 DETOUR_KEEP = 1.6  # surface path up to this many times the straight distance: weight kept
 DETOUR_CUT = 2.6  # from this ratio on: weight 0 (the other lip, the other lid)
+REACH_KEEP_MM = 22.0  # surface distance up to which a point's weight is kept whole
+REACH_CUT_MM = 44.0  # ... and from which it is 0 (a left point never moves the right side)
 
 
 def adjacency(triangles: np.ndarray, n_vertices: int) -> sp.csr_matrix:
@@ -61,21 +63,25 @@ def smooth_down(x: np.ndarray) -> np.ndarray:
     return 1.0 - t * t * (3.0 - 2.0 * t)
 
 
-def detour_fade(vertices: np.ndarray, triangles: np.ndarray, sources: np.ndarray) -> np.ndarray:
-    """``(len(sources), V)`` weights in 0..1: 1 where the surface is the short way from the source.
+def detour_fade(vertices: np.ndarray, triangles: np.ndarray,
+                sources: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two ``(len(sources), V)`` fades in 0..1: (the surface is the short way, the vertex is near).
 
     The ratio of surface distance (shortest edge path) to straight distance is about
     1 on the skin around a point and grows past 3 across a slit; the fade takes it
-    from 1 at :data:`DETOUR_KEEP` to 0 at :data:`DETOUR_CUT`, smoothly.
+    from 1 at :data:`DETOUR_KEEP` to 0 at :data:`DETOUR_CUT`, smoothly. The
+    second fade goes from 1 to 0 between :data:`REACH_KEEP_MM` and :data:`REACH_CUT_MM` of
+    surface distance, so that weights stay local (a left point leaves the right side alone).
     """
     sources = np.asarray(sources)
     if len(sources) == 0:
-        return np.zeros((0, len(vertices)))
-    geo = dijkstra(edge_graph(vertices, triangles), indices=sources)
+        return np.zeros((0, len(vertices))), np.zeros((0, len(vertices)))
+    geo = dijkstra(edge_graph(vertices, triangles), indices=sources, limit=max(REACH_CUT_MM, 1.0) * DETOUR_CUT)
     straight = np.linalg.norm(vertices[None, :, :] - vertices[sources][:, None, :], axis=2)
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(straight > 0, geo / np.where(straight > 0, straight, 1.0), 1.0)
-    return smooth_down((ratio - DETOUR_KEEP) / (DETOUR_CUT - DETOUR_KEEP))
+    near = smooth_down((geo - REACH_KEEP_MM) / (REACH_CUT_MM - REACH_KEEP_MM))
+    return smooth_down((ratio - DETOUR_KEEP) / (DETOUR_CUT - DETOUR_KEEP)), near
 
 
 def soft_floor(w: np.ndarray, floor: float) -> np.ndarray:

@@ -7,7 +7,10 @@
   edge-ring region (that cut left a step where the weight was still large, e.g. a
   raised block of forehead); they are only faded where the surface path is much
   longer than the straight line (:func:`.regions.detour_fade`: the other lip, the
-  other lid), and weights under :data:`WEIGHT_FLOOR` are soft-thresholded away
+  other lid) and renormalised, so that a point seen only the long way round takes
+  no share (the upper lip neither drags nor holds the lower lip); weights under
+  :data:`WEIGHT_FLOOR` are soft-thresholded away and every weight fades out between
+  22 and 44 mm of surface distance from its point
   (no step, fewer rows to move). A feature point's own vertex has weight 1 for
   itself and 0 for every other point, so each point moves exactly as its FAPs say
   and no other feature point moves.
@@ -150,10 +153,15 @@ def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_ma
     if not keep:
         return sp.csr_matrix((n, len(mesh.fp_labels)))
     local = mesh.vertices[skin]
-    fade = detour_fade(local, mesh.triangles["skin"] - skin.start, fp_v[[controls[c] for c in keep]] - skin.start)
+    fade, near = detour_fade(local, mesh.triangles["skin"] - skin.start, fp_v[controls] - skin.start)
+    dense = w.toarray().T  # (controls, V)
+    # a point seen only the long way round (2.2 from the lower lip) takes no share: the others fill it
+    # (Sibson weights sum to 1 over points and cage; the cage is never faded)
+    share = 1.0 - (dense * (1.0 - fade)).sum(axis=0)
+    faded = dense * fade / np.maximum(share, 1e-12) * near  # then local: 0 past REACH_CUT_MM
     rows, cols, vals = [], [], []
-    for j, c in enumerate(keep):
-        col = soft_floor(w[:, c].toarray().ravel() * fade[j], WEIGHT_FLOOR)
+    for c in keep:
+        col = soft_floor(faded[c], WEIGHT_FLOOR)
         nz = np.flatnonzero(col > 0)
         rows.append(nz + skin.start)
         cols.append(np.full(len(nz), controls[c]))
