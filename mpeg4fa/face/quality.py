@@ -110,6 +110,16 @@ def _loop(graph: sp.csr_matrix, stops: list[int]) -> np.ndarray:
     return np.array(out)
 
 
+def shortest_loop(mesh: HeadMesh, labels: tuple[str, ...]) -> np.ndarray:
+    """Skin vertices of the closed loop of shortest paths through the feature points ``labels``."""
+    tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
+    edges = unique_edges(tris)
+    n = mesh.n_vertices
+    w = np.linalg.norm(mesh.vertices[edges[:, 0]] - mesh.vertices[edges[:, 1]], axis=1)
+    g = sp.coo_matrix((w, (edges[:, 0], edges[:, 1])), shape=(n, n))
+    return _loop((g + g.T).tocsr(), [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels])
+
+
 def skin_graph(mesh: HeadMesh) -> SkinGraph:
     """The skin's edges with the lip contact and lid margin edges marked (rule: module docstring)."""
     skin = mesh.part("skin")

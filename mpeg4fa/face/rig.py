@@ -10,7 +10,9 @@
   other lid) and renormalised, so that a point seen only the long way round takes
   no share (the upper lip neither drags nor holds the lower lip); weights under
   :data:`WEIGHT_FLOOR` are soft-thresholded away and every weight fades out between
-  22 and 44 mm of surface distance from its point
+  22 and 44 mm of surface distance from its point; the weights of points other
+  than the eye's (3.x) fade to 0 over :data:`LID_CLEAR_MM` before a lid margin
+  (a brow raise must not pull the margin off the eyeball)
   (no step, fewer rows to move). A feature point's own vertex has weight 1 for
   itself and 0 for every other point, so each point moves exactly as its FAPs say
   and no other feature point moves.
@@ -28,13 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
 
-from mpeg4fa.face import motion
+from mpeg4fa.face import motion, quality
 from mpeg4fa.face.couplings import add_couplings
 from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.face.lids import LidSheet, build_lids
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.regions import adjacency, detour_fade, edge_hops, falloff, soft_floor
+from mpeg4fa.face.regions import adjacency, detour_fade, edge_graph, edge_hops, falloff, smooth_down, soft_floor
 from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
@@ -42,6 +45,7 @@ JAW_WEIGHT_FLOOR = 0.03  # jaw weights below this are noise of the face unit: dr
 NECK_FADE_MM = 30.0  # the head rotation fades out over this height above the neck cut (576 mm), below the jaw
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
 WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
+LID_CLEAR_MM = 6.0  # brow, cheek and nose weights fade to 0 over this surface distance before a lid margin
 
 
 @dataclass(frozen=True)
@@ -159,9 +163,15 @@ def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_ma
     # (Sibson weights sum to 1 over points and cage; the cage is never faded)
     share = 1.0 - (dense * (1.0 - fade)).sum(axis=0)
     faded = dense * fade / np.maximum(share, 1e-12) * near  # then local: 0 past REACH_CUT_MM
+    # the lid margins belong to the lids (and the eye points): other points leave them in place
+    margins = np.concatenate([quality.shortest_loop(mesh, labels) for labels in quality.LID_LOOPS]) - skin.start
+    to_margin = dijkstra(edge_graph(local, mesh.triangles["skin"] - skin.start), indices=margins,
+                         min_only=True, limit=LID_CLEAR_MM)
+    clear = 1.0 - smooth_down(to_margin / LID_CLEAR_MM)
     rows, cols, vals = [], [], []
     for c in keep:
-        col = soft_floor(faded[c], WEIGHT_FLOOR)
+        col = faded[c] if mesh.fp_labels[controls[c]].startswith("3.") else faded[c] * clear
+        col = soft_floor(col, WEIGHT_FLOOR)
         nz = np.flatnonzero(col > 0)
         rows.append(nz + skin.start)
         cols.append(np.full(len(nz), controls[c]))
