@@ -8,8 +8,8 @@ the margin's corners stay up and the lid drops as a V. So the lid model is
 built from the margin itself:
 
 1. the **margins**: the shortest paths along the skin from the lateral corner
-   (3.7/3.8) through the upper (3.1/3.2) or lower (3.3/3.4) lid point to the
-   medial corner (3.11/3.12);
+   (3.7/3.12) through the upper (3.1/3.2) or lower (3.3/3.4) lid point to the
+   medial corner (3.11/3.8);
 2. each margin vertex's **closure**: the rotation about the eye centre's x axis
    that brings it to the height of the opposite margin at its x, and
    :data:`OVERLAP_MM` past it (the closed eye is the two margins meeting); divided by the lid point's own closure, a
@@ -42,9 +42,9 @@ OVERLAP_MM = 0.3  # a closed margin reaches this far past the opposite one (but 
 # per lid FAP: (eye part, eye joint, lid point, opposite lid point, lateral corner, medial corner, side)
 LIDS = {
     19: ("eye_l", "l-eye", "3.1", "3.3", "3.7", "3.11", "upper"),
-    20: ("eye_r", "r-eye", "3.2", "3.4", "3.8", "3.12", "upper"),
+    20: ("eye_r", "r-eye", "3.2", "3.4", "3.12", "3.8", "upper"),
     21: ("eye_l", "l-eye", "3.3", "3.1", "3.7", "3.11", "lower"),
-    22: ("eye_r", "r-eye", "3.4", "3.2", "3.8", "3.12", "lower"),
+    22: ("eye_r", "r-eye", "3.4", "3.2", "3.12", "3.8", "lower"),
 }
 
 

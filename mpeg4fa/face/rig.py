@@ -33,7 +33,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion, quality
-from mpeg4fa.face.couplings import add_couplings
+from mpeg4fa.face.couplings import add_couplings, couplings
 from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.face.lids import LidSheet, build_lids
 from mpeg4fa.face.mesh import HeadMesh
@@ -87,10 +87,10 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
                 translate[3 * i:3 * i + 3, record.number - 1] = fapu.unit(record.fapu) * motion.direction(record.number)
         elif k == "lid":
             lid_fp[record.number] = index[record.feature_point[0]]
-    add_couplings(translate, index, fapu)  # documented extra points (lip protrusion)
+    add_couplings(translate, index, fapu)  # documented extra points (lip protrusion, lid skin)
 
     driven = sorted({index[label] for r in FAPS[2:] if motion.kind(r.number) in ("translate", "lid", "tongue_roll")
-                     for label in r.feature_point})
+                     for label in r.feature_point} | {index[label] for _, label, _ in couplings() if label in index})
     skin = mesh.part("skin")
     tongue = mesh.part("tongue")
     columns = []
