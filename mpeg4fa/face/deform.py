@@ -111,9 +111,12 @@ def apply_head_rotation(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
     rest = rig.rest
     pitch, yaw, roll_h = (v[f - 1] * motion.ANGLE_UNIT_RAD for f in (48, 49, 50))
     if pitch or yaw or roll_h:
-        rows, w = rig.head_rows
+        rows, w = rig.head_fade
         centre = rest[rig.fp_vertex[rig.head_fp]]
-        _rotate_rows(p, rows, w, centre, motion.head_rotation(pitch, yaw, roll_h))
+        before = p[rows]
+        # turn everything (one product over the whole array), then blend the neck back by its share
+        p[:] = centre + (p - centre) @ motion.head_rotation(pitch, yaw, roll_h).T
+        p[rows] = before + w[:, None] * (p[rows] - before)
 
 
 def deform(rig: Rig, values: np.ndarray) -> Pose:

@@ -61,7 +61,7 @@ class Rig:
     lid_fp: dict[int, int]  # lid FAP -> feature point index
     lids: dict[int, LidSheet]  # lid FAP -> the lid sheet it turns (see :mod:`.lids`)
     jaw_rows: tuple[np.ndarray, np.ndarray]
-    head_rows: tuple[np.ndarray, np.ndarray]
+    head_fade: tuple[np.ndarray, np.ndarray]  # neck vertices that turn only partly with the head, and their share
     roll_rows: dict[int, tuple[np.ndarray, np.ndarray, float]]  # fp index -> (vertices, weights, side)
     parts: dict[str, slice]
     joints: dict[str, int]
@@ -113,7 +113,7 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     return Rig(
         rest=rest, fapu=fapu, translate=translate, weights=weights, moving=moving,
         weights_moving=weights[moving], lid_fp=lid_fp, lids=build_lids(mesh),
-        jaw_rows=_jaw_weights(mesh), head_rows=_head_weights(mesh), roll_rows=roll_rows,
+        jaw_rows=_jaw_weights(mesh), head_fade=_head_weights(mesh), roll_rows=roll_rows,
         parts={p: mesh.part(p) for p in mesh.part_ranges}, joints=dict(mesh.joints), fp_vertex=fp_vertex,
         chin_fp=index["2.1"], head_fp=index["7.1"],
     )
@@ -251,13 +251,14 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
-    """1 on the head; down the neck a smooth fade to 0 at the cut."""
+    """The vertices that turn only partly with the head, and their share: 1 on the head (not
+    listed), fading down the neck to 0 at the cut. Everything not listed turns fully."""
     y = mesh.vertices[:, 1]
     skin = mesh.part("skin")
     bottom = y[skin].min()
     t = np.clip((y - bottom) / NECK_FADE_MM, 0.0, 1.0)
     w = t * t * (3 - 2 * t)
     w[skin.stop:] = 1.0
-    idx = np.flatnonzero(w)
+    idx = np.flatnonzero(w < 1.0)
     return idx, w[idx]
 
