@@ -34,6 +34,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.regions import edge_graph, path_through, smooth_down
 
 LID_HEIGHT_MM = 9.0  # the lid sheet fades out over this surface distance from the margin (to the crease)
 ORBIT_MARGIN_MM = 9.0
@@ -58,27 +59,8 @@ class LidSheet:
     point: int           # vertex index of the lid's feature point (3.1 ... 3.4)
 
 
-def _edge_graph(vertices: np.ndarray, triangles: np.ndarray, n: int) -> sp.csr_matrix:
-    t = np.asarray(triangles)
-    e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
-    length = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
-    g = sp.coo_matrix((length, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
-    return g.maximum(g.T).tocsr()
-
-
-def _path(graph: sp.csr_matrix, a: int, b: int) -> list[int]:
-    _, pred = dijkstra(graph, indices=a, return_predecessors=True)
-    out = [b]
-    while out[-1] != a:
-        if pred[out[-1]] < 0:
-            raise ValueError("no path along the skin")
-        out.append(int(pred[out[-1]]))
-    return out[::-1]
-
-
 def _margin(graph: sp.csr_matrix, mesh: HeadMesh, lateral: str, middle: str, medial: str) -> np.ndarray:
-    v = lambda label: int(mesh.fp_vertex[mesh.fp_index(label)])  # noqa: E731
-    return np.array(_path(graph, v(lateral), v(middle)) + _path(graph, v(middle), v(medial))[1:])
+    return path_through(graph, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, middle, medial)])
 
 
 def _height_at(margin: np.ndarray, vertices: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -92,7 +74,7 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
     """The lid sheet of each lid FAP (19-22) on a neutral face."""
     rest = mesh.vertices
     skin = mesh.part("skin")
-    graph = _edge_graph(rest, mesh.triangles["skin"], mesh.n_vertices)
+    graph = edge_graph(rest, mesh.triangles["skin"])
     sheets = {}
     for fap, (eye, joint_name, point, opposite, lateral, medial, side) in LIDS.items():
         joint = mesh.joints[joint_name]
@@ -122,8 +104,7 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         dist = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)[candidates]
         keep = np.isfinite(dist)
         rows = np.concatenate([own, candidates[keep]])
-        t = np.clip(dist[keep] / LID_HEIGHT_MM, 0.0, 1.0)
-        fade = 1.0 - t * t * (3.0 - 2.0 * t)
+        fade = smooth_down(dist[keep] / LID_HEIGHT_MM)
         order = np.argsort(rest[own, 0])
         sheet_ratio = np.interp(rest[candidates[keep], 0], rest[own[order], 0], ratio[order]) * fade
         ratios = np.concatenate([ratio, sheet_ratio])

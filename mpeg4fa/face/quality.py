@@ -41,6 +41,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra
 
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.regions import edge_graph, path_through
 
 LIP_LOOP = ("2.2", "2.6", "2.4", "2.8", "2.3", "2.9", "2.5", "2.7")
 LID_LOOPS = (("3.1", "3.7", "3.3", "3.11"), ("3.2", "3.12", "3.4", "3.8"))
@@ -98,26 +99,10 @@ def folded_triangles(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray)
     return np.einsum("ij,ij->i", normals(rest), normals(posed)) < 0
 
 
-def _loop(graph: sp.csr_matrix, stops: list[int]) -> np.ndarray:
-    """Vertices of the closed shortest-path loop through ``stops`` in order (no repeat of the start)."""
-    out: list[int] = []
-    for a, b in zip(stops, stops[1:] + stops[:1]):
-        _, pred = dijkstra(graph, indices=a, return_predecessors=True)
-        path = [b]
-        while path[-1] != a:
-            path.append(int(pred[path[-1]]))
-        out.extend(path[::-1][:-1])
-    return np.array(out)
-
-
 def shortest_loop(mesh: HeadMesh, labels: tuple[str, ...]) -> np.ndarray:
     """Skin vertices of the closed loop of shortest paths through the feature points ``labels``."""
-    tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
-    edges = unique_edges(tris)
-    n = mesh.n_vertices
-    w = np.linalg.norm(mesh.vertices[edges[:, 0]] - mesh.vertices[edges[:, 1]], axis=1)
-    g = sp.coo_matrix((w, (edges[:, 0], edges[:, 1])), shape=(n, n))
-    return _loop((g + g.T).tocsr(), [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels])
+    graph = edge_graph(mesh.vertices, mesh.triangles["skin"])
+    return path_through(graph, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels], closed=True)
 
 
 def skin_graph(mesh: HeadMesh) -> SkinGraph:
@@ -126,15 +111,13 @@ def skin_graph(mesh: HeadMesh) -> SkinGraph:
     tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
     edges = unique_edges(tris)
     n = mesh.n_vertices
-    w = np.linalg.norm(mesh.vertices[edges[:, 0]] - mesh.vertices[edges[:, 1]], axis=1)
-    g = sp.coo_matrix((w, (edges[:, 0], edges[:, 1])), shape=(n, n))
-    g = (g + g.T).tocsr()
+    g = edge_graph(mesh.vertices, tris)
     on_skin = np.zeros(n, bool)
     on_skin[skin] = True
     loops, inside = [], []
     contact = np.zeros(len(edges), bool)
     for labels in (LIP_LOOP,) + LID_LOOPS:
-        loop = _loop(g, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels])
+        loop = path_through(g, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels], closed=True)
         loops.append(loop)
         keep = on_skin.copy()
         keep[loop] = False

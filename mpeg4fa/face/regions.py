@@ -57,6 +57,22 @@ def edge_graph(vertices: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
     return (g + g.T).tocsr()
 
 
+def path_through(graph: sp.csr_matrix, stops: list[int], *, closed: bool = False) -> np.ndarray:
+    """Vertices of the chain of shortest paths through ``stops`` in order (back to the first when
+    ``closed``; a closed loop does not repeat its start)."""
+    legs = list(zip(stops, stops[1:] + stops[:1])) if closed else list(zip(stops, stops[1:]))
+    out: list[int] = [] if closed else [int(stops[0])]
+    for a, b in legs:
+        _, pred = dijkstra(graph, indices=a, return_predecessors=True)
+        path = [int(b)]
+        while path[-1] != a:
+            if pred[path[-1]] < 0:
+                raise ValueError(f"no path along the surface from vertex {a} to {b}")
+            path.append(int(pred[path[-1]]))
+        out.extend(path[::-1][:-1] if closed else path[::-1][1:])
+    return np.array(out)
+
+
 def smooth_down(x: np.ndarray) -> np.ndarray:
     """1 for x <= 0, 0 for x >= 1, a cubic with zero slope at both ends in between."""
     t = np.clip(x, 0.0, 1.0)
