@@ -241,3 +241,24 @@ def test_open_mouth_golden(generic_face, view):
     with Renderer(generic_face, width=192, height=192, samples=4, view=view) as r:
         image = r.render(generic_face.deform(AA))
     assert_matches_golden(image, f"generic-aa-{view}.png")
+
+
+def test_back_teeth_sit_in_the_mouth_s_shadow(generic_face):
+    """Seen from three-quarter the far premolars and molars are in shadow (no bright white slab),
+    while the incisors seen from the front stay bright."""
+    face = generic_face
+    pose = face.deform(AA)
+    coded = Materials().with_colours(teeth=(0, 0, 1), gums=(0, 0, 1))
+    luminance = {}
+    for view in ("front", (30.0, 5.0)):
+        camera = frame_points(face.mesh.feature_points(), 256, 256, view=view)
+        with Renderer(face, width=256, height=256, camera=camera, lighting=False, materials=coded) as r:
+            mask = r.render(pose)
+        with Renderer(face, width=256, height=256, camera=camera) as r:
+            lit = r.render(pose).astype(float).mean(axis=2)
+        teeth = (mask[..., 2] > 200) & (mask[..., 0] < 50) & (mask[..., 1] < 50)
+        assert teeth.sum() > 40, view
+        luminance[str(view)] = lit[teeth]
+    front, side = luminance["front"], luminance["(30.0, 5.0)"]
+    assert (front > 200).any()  # measured: 20 % of the front teeth pixels
+    assert side.mean() <= 0.75 * front.mean(), (side.mean(), front.mean())  # measured 0.64; 0.88 unshaded

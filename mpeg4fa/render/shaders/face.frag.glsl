@@ -44,6 +44,7 @@ out vec4 colour;
 const float TOOTH_MM = 7.0;       // a typical tooth width, for the tip rounding
 const float TIP_MM = 1.1;         // radius of a tooth's rounded corners
 const float CROWN_MM = 9.5;       // crown height at the middle of a tooth (gum line above)
+const float BACK_TEETH_SHADE = 0.3;  // premolars and molars: the light that reaches inside the mouth
 
 vec3 eye_colour(int eye, out int slot) {
     vec3 offset = v_position - eye_centre[eye];
@@ -119,6 +120,8 @@ void main() {
             if (dot(n, to_eye) < 0.0) n = -n;
             n = normalize(n + 0.7 * to_eye + cross(vec3(0.0, 1.0, 0.0), n) * (1.8 * f - 0.9));
             if (lighting) shade = mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap));   // the gap between teeth
+            // teeth further back along the arch sit deeper in the mouth, in its shadow
+            shade *= mix(1.0, BACK_TEETH_SHADE, smoothstep(2.0, 5.0, abs(v_detail.x)));
         }
     } else {
         slot = v_material;   // 4 tongue
