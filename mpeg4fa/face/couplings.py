@@ -8,6 +8,10 @@ Chinese o, u, uv) would bulge the inner edge of the lip while its outer border
 points and the fraction of the FAP's motion each follows, with the reason. The
 FAP's own points still move exactly value x FAPU; the coupled ones are the
 documented exceptions to "no other feature point moves".
+
+:data:`PASSIVE_POINTS` are the other exception: the centres of the outer lids,
+which no FAP names. Held fixed, they pinch the lid skin into a fold when the
+brows rise or the cheeks lift; so they ride on the skin around them.
 """
 from __future__ import annotations
 
@@ -20,6 +24,10 @@ import numpy as np
 from mpeg4fa.face import motion
 from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.spec import FAPS
+
+
+PASSIVE_POINTS = ("3.9", "3.10", "3.13", "3.14")
+"""Feature points no FAP names that move with the surrounding skin instead of anchoring it."""
 
 
 @lru_cache(maxsize=1)

@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
+from mpeg4fa.face.couplings import PASSIVE_POINTS
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import edge_graph, path_through, smooth_down
 
@@ -108,7 +109,8 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         order = np.argsort(rest[own, 0])
         sheet_ratio = np.interp(rest[candidates[keep], 0], rest[own[order], 0], ratio[order]) * fade
         ratios = np.concatenate([ratio, sheet_ratio])
-        ratios[np.isin(rows, mesh.fp_vertex) & (rows != fp_vertex)] = 0.0  # other feature points stay put
+        anchors = [v for label, v in zip(mesh.fp_labels, mesh.fp_vertex) if label not in PASSIVE_POINTS]
+        ratios[np.isin(rows, anchors) & (rows != fp_vertex)] = 0.0  # other feature points stay put
         good = ratios > 1e-4
         sheets[fap] = LidSheet(rows=rows[good], ratios=ratios[good], joint=joint, point=fp_vertex)
     return sheets

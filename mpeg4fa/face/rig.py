@@ -33,7 +33,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion, quality
-from mpeg4fa.face.couplings import add_couplings, couplings
+from mpeg4fa.face.couplings import PASSIVE_POINTS, add_couplings, couplings
 from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.face.lids import LidSheet, build_lids
 from mpeg4fa.face.mesh import HeadMesh
@@ -94,7 +94,8 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     skin = mesh.part("skin")
     tongue = mesh.part("tongue")
     columns = []
-    columns.append(skin_weights(mesh, [i for i in range(len(labels)) if _in(fp_vertex[i], skin)], driven))
+    anchors = [i for i in range(len(labels)) if _in(fp_vertex[i], skin) and labels[i] not in PASSIVE_POINTS]
+    columns.append(skin_weights(mesh, anchors, driven))
     root = _tongue_root(rest, tongue)
     columns.append(part_weights(mesh, tongue, [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)],
                                  driven, extra_controls=root))

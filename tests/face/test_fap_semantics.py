@@ -5,7 +5,8 @@ unidirectional) -V. The moved feature points must do what ``spec/faps.csv``
 says, in the face's own FAPU, on both faces (the procedural test head and the
 generic CC0 head); every other feature point stays put, except the documented
 couplings (the jaw carries the points it weighs, the head carries everything, lip protrusion
-carries the outer lip: ``face/data/couplings.csv``).
+carries the outer lip: ``face/data/couplings.csv``; the outer lid centres 3.9/3.10/3.13/3.14,
+which no FAP names, ride on the skin around them).
 Then: faces of different sizes move in proportion to their FAPU, and the
 animation is left/right mirror symmetric.
 """
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.couplings import coupled_points
+from mpeg4fa.face.couplings import PASSIVE_POINTS, coupled_points
 from mpeg4fa.face.fapu import DISTANCES
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.spec import FAPS, N_FAPS
@@ -167,6 +168,7 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
         amount = fraction * value * fapu.unit(record.fapu)
         errors.append((f"{label} coupled", float(np.linalg.norm(moved[i] - amount * motion.direction(fap))) / abs(value * fapu.unit(record.fapu))))
         coupled.add(i)
+    coupled |= {index[label] for label in PASSIVE_POINTS if label in index}  # they ride on the skin
     if fap in motion.JAW:
         jaw_vertices = set(rig.jaw_rows[0].tolist())
         coupled |= {i for i, v in enumerate(mesh.fp_vertex) if int(v) in jaw_vertices}
