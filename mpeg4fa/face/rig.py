@@ -144,6 +144,13 @@ def _sibson(mesh: HeadMesh, part: slice, fps: list[int],
     return controls, w
 
 
+def _driven_controls(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
+                     extra_controls: np.ndarray | None):
+    """Sibson set-up of a part: its controls, their weights, and which of them FAPs drive."""
+    controls, w = _sibson(mesh, part, fps, extra_controls)
+    return controls, w, [c for c, i in enumerate(controls) if i in driven]
+
+
 def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_matrix:
     """``(V, 84)`` skin weights of the ``driven`` points among the skin feature points ``fps``.
 
@@ -151,10 +158,8 @@ def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_ma
     long way round (:func:`.regions.detour_fade`), soft-thresholded by :data:`WEIGHT_FLOOR`.
     """
     skin = mesh.part("skin")
-    n = mesh.n_vertices
-    fp_v = mesh.fp_vertex
-    controls, w = _sibson(mesh, skin, fps, None)
-    keep = [c for c, i in enumerate(controls) if i in driven]
+    n, fp_v = mesh.n_vertices, mesh.fp_vertex
+    controls, w, keep = _driven_controls(mesh, skin, fps, driven, None)
     if not keep:
         return sp.csr_matrix((n, len(mesh.fp_labels)))
     local = mesh.vertices[skin]
@@ -184,11 +189,8 @@ def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_ma
 def part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
                  extra_controls: np.ndarray | None, reach: np.ndarray | None = None) -> sp.csr_matrix:
     """Sibson weights of a part's vertices on its feature points, cut to their BFS regions (the tongue)."""
-    n = mesh.n_vertices
-    fp_v = mesh.fp_vertex
-    controls, w = _sibson(mesh, part, fps, extra_controls)
-
-    keep = [c for c, i in enumerate(controls) if i in driven]
+    n, fp_v = mesh.n_vertices, mesh.fp_vertex
+    controls, w, keep = _driven_controls(mesh, part, fps, driven, extra_controls)
     if not keep:
         return sp.csr_matrix((n, len(mesh.fp_labels)))
     rings = mesh.fp_reach if reach is None else reach
