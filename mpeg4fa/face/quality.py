@@ -38,13 +38,12 @@ from importlib import resources
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.regions import edge_graph, path_through
+from mpeg4fa.face.regions import (LID_MARGIN_LOOPS, LIP_CONTACT_LOOP, cut_off, length_graph, shortest_loop,
+                                  unique_edges)
 
-LIP_LOOP = ("2.2", "2.6", "2.4", "2.8", "2.3", "2.9", "2.5", "2.7")
-LID_LOOPS = (("3.1", "3.7", "3.3", "3.11"), ("3.2", "3.12", "3.4", "3.8"))
 DOUBLED = set(range(4, 14)) | {16, 17} | set(range(31, 43)) | set(range(51, 61))
 """FAPs tested at twice their largest used value: lips, brows and cheeks (where ridges show)."""
 UNUSED_MAGNITUDE = 200.0
@@ -63,11 +62,7 @@ class SkinGraph:
 
     def geodesic(self, vertices: np.ndarray) -> sp.csr_matrix:
         """Edge-length graph over the non-contact edges (global vertex indices)."""
-        e = self.edges[~self.contact]
-        w = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
-        n = len(vertices)
-        g = sp.coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n))
-        return (g + g.T).tocsr()
+        return length_graph(vertices, self.edges[~self.contact])
 
 
 @dataclass(frozen=True)
@@ -84,13 +79,6 @@ class Quality:
         return f"strain {self.max_strain:.3f} at edge {self.edge} near {self.near}, {self.folded} folded"
 
 
-def unique_edges(triangles: np.ndarray) -> np.ndarray:
-    """Each undirected edge of the triangles once, as (a, b) with a < b."""
-    t = np.asarray(triangles, dtype=np.int64)
-    e = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
-    return np.unique(e, axis=0)
-
-
 def folded_triangles(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Bool per triangle: its normal turned by more than 90 degrees from ``rest`` to ``posed``."""
     def normals(v):
@@ -99,34 +87,19 @@ def folded_triangles(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray)
     return np.einsum("ij,ij->i", normals(rest), normals(posed)) < 0
 
 
-def shortest_loop(mesh: HeadMesh, labels: tuple[str, ...]) -> np.ndarray:
-    """Skin vertices of the closed loop of shortest paths through the feature points ``labels``."""
-    graph = edge_graph(mesh.vertices, mesh.triangles["skin"])
-    return path_through(graph, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels], closed=True)
-
-
 def skin_graph(mesh: HeadMesh) -> SkinGraph:
     """The skin's edges with the lip contact and lid margin edges marked (rule: module docstring)."""
-    skin = mesh.part("skin")
+    skin = np.arange(*mesh.part_ranges["skin"])
     tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
     edges = unique_edges(tris)
     n = mesh.n_vertices
-    g = edge_graph(mesh.vertices, tris)
-    on_skin = np.zeros(n, bool)
-    on_skin[skin] = True
+    g = length_graph(mesh.vertices, edges)
     loops, inside = [], []
     contact = np.zeros(len(edges), bool)
-    for labels in (LIP_LOOP,) + LID_LOOPS:
-        loop = path_through(g, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels], closed=True)
+    for labels in (LIP_CONTACT_LOOP,) + LID_MARGIN_LOOPS:
+        loop = shortest_loop(mesh, labels, g)
         loops.append(loop)
-        keep = on_skin.copy()
-        keep[loop] = False
-        e = edges[keep[edges[:, 0]] & keep[edges[:, 1]]]
-        cut = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
-        _, comp = connected_components(cut, directed=False)
-        sizes = np.bincount(comp[keep], minlength=comp.max() + 1)
-        main = int(np.argmax(sizes))
-        inner = np.flatnonzero(keep & (comp != main))
+        inner = cut_off(g, skin, loop)
         inside.append(inner)
         is_in = np.zeros(n, bool)
         is_in[inner] = True

@@ -14,12 +14,17 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import connected_components, dijkstra
 
 DETOUR_KEEP = 1.6  # surface path up to this many times the straight distance: weight kept
 DETOUR_CUT = 2.6  # from this ratio on: weight 0 (the other lip, the other lid)
 REACH_KEEP_MM = 22.0  # surface distance up to which a point's weight is kept whole
 REACH_CUT_MM = 44.0  # ... and from which it is 0 (a left point never moves the right side)
+
+LIP_CONTACT_LOOP = ("2.2", "2.6", "2.4", "2.8", "2.3", "2.9", "2.5", "2.7")
+"""The inner lip contact, as feature points round the mouth: inside it lies the mouth bag."""
+LID_MARGIN_LOOPS = (("3.1", "3.7", "3.3", "3.11"), ("3.2", "3.12", "3.4", "3.8"))
+"""Each eye's lid margins (upper point, a corner, lower point, the other corner): inside, the socket."""
 
 
 def adjacency(triangles: np.ndarray, n_vertices: int) -> sp.csr_matrix:
@@ -47,14 +52,25 @@ def falloff(hops: np.ndarray, reach: np.ndarray) -> np.ndarray:
     return np.where(x < 1.0, 0.5 * (1.0 + np.cos(np.pi * np.clip(x, 0.0, 1.0))), 0.0)
 
 
-def edge_graph(vertices: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
-    """Symmetric graph of the triangles' edges weighted by their lengths (mm)."""
+def unique_edges(triangles: np.ndarray) -> np.ndarray:
+    """Each undirected edge of the triangles once, as (a, b) with a < b."""
     t = np.asarray(triangles, dtype=np.int64)
-    e = np.unique(np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1), axis=0)
+    e = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    return np.unique(e, axis=0)
+
+
+def length_graph(vertices: np.ndarray, edges: np.ndarray) -> sp.csr_matrix:
+    """Symmetric graph of ``edges`` weighted by their lengths (mm) in ``vertices``."""
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     w = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
     n = len(vertices)
     g = sp.coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n))
     return (g + g.T).tocsr()
+
+
+def edge_graph(vertices: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
+    """Symmetric graph of the triangles' edges weighted by their lengths (mm)."""
+    return length_graph(vertices, unique_edges(triangles))
 
 
 def path_through(graph: sp.csr_matrix, stops: list[int], *, closed: bool = False) -> np.ndarray:
@@ -71,6 +87,23 @@ def path_through(graph: sp.csr_matrix, stops: list[int], *, closed: bool = False
             path.append(int(pred[path[-1]]))
         out.extend(path[::-1][:-1] if closed else path[::-1][1:])
     return np.array(out)
+
+
+def shortest_loop(mesh, labels: tuple[str, ...], graph: sp.csr_matrix | None = None) -> np.ndarray:
+    """Skin vertices of the closed loop of shortest paths through the feature points ``labels``."""
+    graph = edge_graph(mesh.vertices, mesh.triangles["skin"]) if graph is None else graph
+    return path_through(graph, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in labels], closed=True)
+
+
+def cut_off(graph: sp.csr_matrix, vertices: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """Which of ``vertices`` the ``loop`` separates from the largest part of them (the inside)."""
+    keep = np.zeros(graph.shape[0], bool)
+    keep[vertices] = True
+    keep[loop] = False
+    mask = sp.diags(keep.astype(float))
+    _, comp = connected_components(mask @ graph @ mask, directed=False)
+    sizes = np.bincount(comp[keep], minlength=comp.max() + 1)
+    return np.flatnonzero(keep & (comp != int(np.argmax(sizes))))
 
 
 def smooth_down(x: np.ndarray) -> np.ndarray:

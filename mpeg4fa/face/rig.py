@@ -32,12 +32,13 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from mpeg4fa.face import motion, quality
+from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, add_couplings, couplings
 from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.face.lids import LidSheet, build_lids
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.regions import adjacency, detour_fade, edge_graph, edge_hops, falloff, smooth_down, soft_floor
+from mpeg4fa.face.regions import (LID_MARGIN_LOOPS, adjacency, detour_fade, edge_graph, edge_hops, falloff,
+                                  shortest_loop, smooth_down, soft_floor)
 from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
@@ -170,7 +171,7 @@ def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_ma
     share = 1.0 - (dense * (1.0 - fade)).sum(axis=0)
     faded = dense * fade / np.maximum(share, 1e-12) * near  # then local: 0 past REACH_CUT_MM
     # the lid margins belong to the lids (and the eye points): other points leave them in place
-    margins = np.concatenate([quality.shortest_loop(mesh, labels) for labels in quality.LID_LOOPS]) - skin.start
+    margins = np.concatenate([shortest_loop(mesh, labels) for labels in LID_MARGIN_LOOPS]) - skin.start
     to_margin = dijkstra(edge_graph(local, mesh.triangles["skin"] - skin.start), indices=margins,
                          min_only=True, limit=LID_CLEAR_MM)
     clear = 1.0 - smooth_down(to_margin / LID_CLEAR_MM)
@@ -259,8 +260,7 @@ def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
     y = mesh.vertices[:, 1]
     skin = mesh.part("skin")
     bottom = y[skin].min()
-    t = np.clip((y - bottom) / NECK_FADE_MM, 0.0, 1.0)
-    w = t * t * (3 - 2 * t)
+    w = 1.0 - smooth_down((y - bottom) / NECK_FADE_MM)
     w[skin.stop:] = 1.0
     idx = np.flatnonzero(w < 1.0)
     return idx, w[idx]

@@ -19,12 +19,11 @@ deforms them (like the lip tint in :mod:`.materials`):
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.regions import LIP_CONTACT_LOOP, cut_off, edge_graph, shortest_loop, smooth_down
 
-LIP_LOOP = ("2.2", "2.6", "2.4", "2.8", "2.3", "2.9", "2.5", "2.7")
 CAVITY_RAMP_MM = (2.0, 9.0)  # surface distance from the lip contact where the dark begins and is full
 CAVITY_MIN_DEPTH_MM = 10.0  # a bag shallower than this is no mouth (a face whose lips are one surface)
 
@@ -37,48 +36,23 @@ LOWER_TOOTH_MM = (5.0, 5.5, 7.0, 7.0, 7.0, 11.0, 10.5)
 ARCH_BINS = 24  # directions the biting edge is sampled in
 
 
-def _skin_graph(mesh: HeadMesh) -> sp.csr_matrix:
-    tri = mesh.triangles["skin"].astype(np.int64)
-    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    length = np.linalg.norm(mesh.vertices[e[:, 0]] - mesh.vertices[e[:, 1]], axis=1)
-    n = mesh.n_vertices
-    g = sp.coo_matrix((length, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
-    return g.maximum(g.T).tocsr()
-
-
 def cavity_weights(mesh: HeadMesh) -> np.ndarray:
     """0..1 per vertex: how deep inside the mouth bag a skin vertex is (0 where there is no bag)."""
     out = np.zeros(mesh.n_vertices)
-    if "skin" not in mesh.triangles or not all(label in mesh.fp_labels for label in LIP_LOOP):
+    if "skin" not in mesh.triangles or not all(label in mesh.fp_labels for label in LIP_CONTACT_LOOP):
         return out
-    graph = _skin_graph(mesh)
-    stops = [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in LIP_LOOP]
-    loop = set(stops)
-    for a, b in zip(stops, stops[1:] + stops[:1]):
-        _, pred = dijkstra(graph, indices=a, return_predecessors=True)
-        v = b
-        while v != a and v >= 0:
-            loop.add(int(v))
-            v = pred[v]
-    loop_idx = np.array(sorted(loop))
-    free = np.ones(mesh.n_vertices)
-    free[loop_idx] = 0.0
-    mask = sp.diags(free)
-    _, label = connected_components(mask @ graph @ mask, directed=False)
-    skin = np.arange(*mesh.part_ranges["skin"])
-    top = skin[np.argmax(mesh.vertices[skin, 1])]  # the crown of the head is outside
-    inside = skin[(label[skin] != label[top]) & ~np.isin(skin, loop_idx)]
+    graph = edge_graph(mesh.vertices, mesh.triangles["skin"])
+    loop = np.unique(shortest_loop(mesh, LIP_CONTACT_LOOP, graph))
+    inside = cut_off(graph, np.arange(*mesh.part_ranges["skin"]), loop)
     if not len(inside):
         return out
-    depth = mesh.vertices[loop_idx, 2].mean() - mesh.vertices[inside, 2].min()
+    depth = mesh.vertices[loop, 2].mean() - mesh.vertices[inside, 2].min()
     if depth < CAVITY_MIN_DEPTH_MM:
         return out
-    keep = np.r_[inside, loop_idx]
-    sub = graph[keep][:, keep]
-    dist = dijkstra(sub, indices=np.arange(len(inside), len(keep)), min_only=True)
+    keep = np.r_[inside, loop]
+    dist = dijkstra(graph[keep][:, keep], indices=np.arange(len(inside), len(keep)), min_only=True)
     a, b = CAVITY_RAMP_MM
-    t = np.clip((dist[:len(inside)] - a) / (b - a), 0.0, 1.0)
-    out[inside] = t * t * (3.0 - 2.0 * t)
+    out[inside] = 1.0 - smooth_down((dist[:len(inside)] - a) / (b - a))
     return out
 
 
