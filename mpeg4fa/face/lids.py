@@ -35,19 +35,26 @@ from scipy.sparse.csgraph import dijkstra
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.regions import edge_graph, path_through, smooth_down
+from mpeg4fa.face.regions import LID_MARGIN_LOOPS, edge_graph, path_through, smooth_down
 
 LID_HEIGHT_MM = 9.0  # the lid sheet fades out over this surface distance from the margin (to the crease)
-ORBIT_MARGIN_MM = 9.0
-OVERLAP_MM = 0.3  # a closed margin reaches this far past the opposite one (but at the lid point)  # the sheet reaches this far beyond the eyeball's radius from its centre
+ORBIT_MARGIN_MM = 9.0  # the sheet reaches this far beyond the eyeball's radius from its centre
+OVERLAP_MM = 0.3  # a closed margin reaches this far past the opposite one (but at the lid point)
 
-# per lid FAP: (eye part, eye joint, lid point, opposite lid point, lateral corner, medial corner, side)
-LIDS = {
-    19: ("eye_l", "l-eye", "3.1", "3.3", "3.7", "3.11", "upper"),
-    20: ("eye_r", "r-eye", "3.2", "3.4", "3.12", "3.8", "upper"),
-    21: ("eye_l", "l-eye", "3.3", "3.1", "3.7", "3.11", "lower"),
-    22: ("eye_r", "r-eye", "3.4", "3.2", "3.12", "3.8", "lower"),
-}
+
+def _lid_table() -> dict[int, tuple[str, str, str, str, str, str, str]]:
+    """Per lid FAP: (eye part, eye joint, lid point, opposite lid point, lateral corner, medial corner, side),
+    read off the margin loops (:data:`.regions.LID_MARGIN_LOOPS`: upper, lateral, lower, medial)."""
+    (l_up, l_lat, l_low, l_med), (r_up, r_lat, r_low, r_med) = LID_MARGIN_LOOPS
+    return {
+        19: ("eye_l", "l-eye", l_up, l_low, l_lat, l_med, "upper"),
+        20: ("eye_r", "r-eye", r_up, r_low, r_lat, r_med, "upper"),
+        21: ("eye_l", "l-eye", l_low, l_up, l_lat, l_med, "lower"),
+        22: ("eye_r", "r-eye", r_low, r_up, r_lat, r_med, "lower"),
+    }
+
+
+LIDS = _lid_table()
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ REACH_CUT_MM = 44.0  # ... and from which it is 0 (a left point never moves the 
 LIP_CONTACT_LOOP = ("2.2", "2.6", "2.4", "2.8", "2.3", "2.9", "2.5", "2.7")
 """The inner lip contact, as feature points round the mouth: inside it lies the mouth bag."""
 LID_MARGIN_LOOPS = (("3.1", "3.7", "3.3", "3.11"), ("3.2", "3.12", "3.4", "3.8"))
-"""Each eye's lid margins (upper point, a corner, lower point, the other corner): inside, the socket."""
+"""Each eye's lid margins (upper point, lateral corner, lower point, medial corner), left eye first: inside, the socket."""
 
 
 def adjacency(triangles: np.ndarray, n_vertices: int) -> sp.csr_matrix:
