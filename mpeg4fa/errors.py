@@ -1,9 +1,17 @@
-"""What the layers' exceptions and warnings share: a message, the thing at fault, and what to do about it."""
+"""What every layer's exceptions and warnings share: a message, the thing at fault, and what to do.
+
+:class:`MpegFaError` is the one base: the codec's ``FbaError``, the formats' and
+FDP's ``FormatError``/``FdpError``, the face's, the renderer's, the speech
+layer's and the CLI's errors all derive from it, so a caller (and the CLI)
+catches one type. Each sets ``where`` (the file, bit offset, line:column, FAP or
+frame at fault) and ``hint`` (what to do); subclasses may render ``str()`` their
+own way but always name the place.
+"""
 from __future__ import annotations
 
 
-class WhereHintError(Exception):
-    """Base of errors that name the thing at fault (``where``) and say what to do (``hint``).
+class MpegFaError(Exception):
+    """Base of every error this package raises on bad input or an impossible request.
 
     ``str()`` reads ``"where: message (hint)"``; the attributes survive pickling.
     """

@@ -1,10 +1,10 @@
 """The face layer's exception and warning types."""
 from __future__ import annotations
 
-from mpeg4fa.errors import MpegFaWarning, WhereHintError
+from mpeg4fa.errors import MpegFaWarning, MpegFaError
 
 
-class FaceError(WhereHintError, ValueError):
+class FaceError(MpegFaError, ValueError):
     """A face model, calibration or animation request that cannot be carried out.
 
     ``where`` names the thing at fault (a feature point label, a FAP number, a

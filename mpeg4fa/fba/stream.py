@@ -142,6 +142,9 @@ class Frame:
     start_code: int = 0
     bits: int = 0
     params: CodingParams | None = None
+    stream: "FapStream | None" = field(default=None, repr=False, compare=False)
+    """The stream this frame is a view of (set by :meth:`FapStream.frame`), so that what the frame
+    shows can be resolved with the frames before it; None for a frame read on its own."""
 
     @property
     def is_intra(self) -> bool:
@@ -167,6 +170,10 @@ class FapStream:
     object_start_code: int = OBJECT_START_CODE
     source_fps: float | None = None
     """Frame rate of a stream that has no intra header yet (e.g. read from a .fap file)."""
+    mask_types: tuple[int, ...] | None = None
+    """Intended reading of unsent FAPs per FAP group (10: 1 hold, 2 interpolate) for frames no intra
+    header governs: a stream made in memory (from text, a .fap file) says here how a decoder must read
+    it, so that any encoding keeps its meaning. None: hold. See :meth:`group_mask_types`."""
 
     # ---- construction -------------------------------------------------------------
     @classmethod
@@ -223,11 +230,22 @@ class FapStream:
             fap_mask=self.fap_mask[k], fap_values=self.fap_values[k], viseme=self.viseme[k],
             expression=self.expression[k], bap_mask=self.bap_mask[k], bap_values=self.bap_values[k],
             skip=int(self.skip[k]), start_code=int(self.start_code[k]), bits=int(self.bits[k]),
-            params=self.intra.get(k),
+            params=self.intra.get(k), stream=self,
         )
 
     def __iter__(self) -> Iterator[Frame]:
         return (self.frame(k) for k in range(len(self)))
+
+    def group_mask_types(self) -> np.ndarray:
+        """``(n, 10)`` mask type governing each FAP group at each frame: the latest intra header's
+        face mask types; before any (or with none) :attr:`mask_types`, else hold (1)."""
+        default = np.asarray(self.mask_types if self.mask_types is not None else (1,) * N_FAP_GROUPS, dtype=np.int8)
+        types = np.repeat(default[None, :], len(self), axis=0)
+        for start in sorted(self.intra):
+            face = self.intra[start].face
+            if face is not None:
+                types[start:] = np.asarray(face.mask_types, dtype=np.int8)
+        return types
 
     @property
     def first_params(self) -> CodingParams | None:

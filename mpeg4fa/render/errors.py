@@ -1,10 +1,10 @@
 """The render layer's exception and warning types."""
 from __future__ import annotations
 
-from mpeg4fa.errors import MpegFaWarning, WhereHintError
+from mpeg4fa.errors import MpegFaWarning, MpegFaError
 
 
-class RenderError(WhereHintError, RuntimeError):
+class RenderError(MpegFaError, RuntimeError):
     """Rendering, audio or video output that cannot be carried out.
 
     ``where`` names the thing at fault (a file, a frame index, the GL context)

@@ -1,7 +1,7 @@
 """The speech layer's exception types."""
 from __future__ import annotations
 
-from mpeg4fa.errors import WhereHintError
+from mpeg4fa.errors import MpegFaError
 
 
 class MarkupError(ValueError):
@@ -19,5 +19,5 @@ class MarkupError(ValueError):
         return (type(self), (self.message, self.line, self.column, self.hint, self.source))
 
 
-class TTSError(WhereHintError, RuntimeError):
+class TTSError(MpegFaError, RuntimeError):
     """A speech engine that cannot be loaded or cannot speak the text (``where``: the engine)."""
