@@ -11,6 +11,7 @@ from pathlib import Path
 from ..fba import EncodeOptions, FbaError, decode, demo_stream, describe, encode
 from ..formats import read_stream, write_fap
 from ..formats.sniff import sniff
+from ..spec import N_FAP_GROUPS
 from . import speech
 
 
@@ -49,7 +50,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--intra-period", type=int, metavar="K", help="an intra frame every K frames (0 = first only)")
     p.add_argument("--fps", type=float, help="frame rate to send (default: the input's)")
     p.add_argument("--mask-types", type=_mask_types, metavar="T,T,...",
-                   help="10 FAP group mask types: 0 none, 1 hold unsent, 2 interpolate unsent, 3 all")
+                   help=f"{N_FAP_GROUPS} FAP group mask types: 0 none, 1 hold unsent, 2 interpolate unsent, 3 all")
     p.add_argument("--start-codes", action=argparse.BooleanOptionalAction, default=None,
                    help="send a plane start code before every intra plane")
     p.add_argument("--skip-repeats", action="store_true", help="send repeated frames as skip counts")
@@ -82,8 +83,8 @@ def _quant(text: str) -> int:
 
 def _mask_types(text: str) -> list[int]:
     types = [int(t) for t in text.split(",")]
-    if len(types) != 10 or any(t not in (0, 1, 2, 3) for t in types):
-        raise argparse.ArgumentTypeError("give 10 comma-separated mask types, each 0..3")
+    if len(types) != N_FAP_GROUPS or any(t not in (0, 1, 2, 3) for t in types):
+        raise argparse.ArgumentTypeError(f"give {N_FAP_GROUPS} comma-separated mask types, each 0..3")
     return types
 
 

@@ -9,9 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..face import FaceError, FaceModel, asset
-from ..spec import EXPRESSION_PROFILES, FAPS, VISEME_PROFILES
-
-_FAPU_KEYS = ("ES0", "IRISD0", "ENS0", "MNS0", "MW0")
+from ..spec import EXPRESSION_PROFILES, FAPS, FAPU_NAMES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -43,7 +41,8 @@ def register(commands: argparse._SubParsersAction) -> None:
                    help="low-level FAP N (3..68) set to VALUE (in FAPU); repeat for more")
     p.add_argument("--viseme", metavar="NAME", help="add a viseme at full weight (MPEG-4: PP, AA, ou ...; "
                                                     "Chinese: zh:a, zh:bpm ...)")
-    p.add_argument("--expression", metavar="NAME[=I]", help="add an expression at intensity I of 63 (default 63)")
+    p.add_argument("--expression", metavar="NAME[=I]",
+                   help=f"add an expression at intensity I of {FULL_INTENSITY} (default {FULL_INTENSITY})")
     p.add_argument("--deformer", choices=("fap", "arkit"), default="fap",
                    help="fap: feature points and smooth weights (default); arkit: the sculpted CC0 face units, "
                         "feature points kept exact")
@@ -63,8 +62,8 @@ def _fap_value(text: str) -> tuple[int, float]:
         fap, v = int(number), float(value)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r}: expected N=VALUE, e.g. 3=200") from None
-    if not 3 <= fap <= 68:
-        raise argparse.ArgumentTypeError(f"FAP {fap}: low-level FAPs are 3..68 (use --viseme/--expression for 1, 2)")
+    if not 3 <= fap <= N_FAPS:
+        raise argparse.ArgumentTypeError(f"FAP {fap}: low-level FAPs are 3..{N_FAPS} (use --viseme/--expression for 1, 2)")
     return fap, v
 
 
@@ -89,7 +88,7 @@ def _points(face: FaceModel, vertices: np.ndarray | None = None) -> dict[str, li
 
 def _fapu(face: FaceModel) -> dict[str, float]:
     values = face.fapu.as_dict()
-    return {k: round(values[k], 6) for k in _FAPU_KEYS}
+    return {k: round(values[k], 6) for k in FAPU_NAMES}
 
 
 def run_info(args: argparse.Namespace) -> int:
@@ -141,12 +140,12 @@ def _pose_values(args: argparse.Namespace) -> np.ndarray:
         if name not in EXPRESSION_PROFILES:
             raise FaceError(f"unknown expression {name!r}", hint="one of " + ", ".join(EXPRESSION_PROFILES))
         try:
-            level = int(intensity or 63)
+            level = int(intensity or FULL_INTENSITY)
         except ValueError:
-            raise FaceError(f"expression intensity {intensity!r} is not an integer 0..63") from None
-        if not 0 <= level <= 63:
-            raise FaceError(f"expression intensity {level} is outside 0..63")
-        values += EXPRESSION_PROFILES[name] * level / 63.0
+            raise FaceError(f"expression intensity {intensity!r} is not an integer 0..{FULL_INTENSITY}") from None
+        if not 0 <= level <= FULL_INTENSITY:
+            raise FaceError(f"expression intensity {level} is outside 0..{FULL_INTENSITY}")
+        values += EXPRESSION_PROFILES[name] * level / float(FULL_INTENSITY)
     for fap, v in args.fap:
         values[fap - 1] = v
     return values

@@ -12,11 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from mpeg4fa.face.errors import FaceError
-from mpeg4fa.spec import FAPU
+from mpeg4fa.spec import ANGLE_UNIT, FAPU, FAPU_NAMES
 
 _AXIS = {"x": 0, "y": 1, "z": 2}
 DISTANCES = tuple(f.symbol for f in FAPU.values() if f.point_a)  # IRISD, ES, ENS, MNS, MW
-ANGLE_UNIT = FAPU["AU"].radians  # AU in radians
 
 
 @dataclass(frozen=True)
@@ -36,10 +35,10 @@ class Fapu:
         record = FAPU.get(symbol)
         if record is None:
             raise FaceError(f"unknown FAPU {symbol!r}", hint=f"one of {', '.join(DISTANCES)}, AU")
-        return getattr(self, f"{symbol}0") / record.divisor
+        return getattr(self, record.distance) / record.divisor
 
     def as_dict(self) -> dict[str, float]:
-        return {f"{s}0": float(getattr(self, f"{s}0")) for s in DISTANCES}
+        return {name: float(getattr(self, name)) for name in FAPU_NAMES}
 
 
 def measure_fapu(points: dict[str, np.ndarray]) -> Fapu:
@@ -51,10 +50,10 @@ def measure_fapu(points: dict[str, np.ndarray]) -> Fapu:
         try:
             a, b = points[record.point_a], points[record.point_b]
         except KeyError as exc:
-            raise FaceError(f"cannot measure {record.symbol}0 without feature point {exc.args[0]}",
+            raise FaceError(f"cannot measure {record.distance} without feature point {exc.args[0]}",
                             hint=record.definition) from None
         axis = _AXIS[record.axis]
-        values[f"{record.symbol}0"] = float(a[axis] - b[axis])
+        values[record.distance] = float(a[axis] - b[axis])
     fapu = Fapu(**values)
     bad = [k for k, v in fapu.as_dict().items() if not v > 0]
     if bad:

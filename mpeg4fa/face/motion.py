@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from mpeg4fa.face.errors import FaceError
-from mpeg4fa.face.fapu import ANGLE_UNIT as ANGLE_UNIT_RAD  # noqa: F401  (part of this module's vocabulary)
+from mpeg4fa.spec import ANGLE_UNIT as ANGLE_UNIT_RAD  # noqa: F401  (part of this module's vocabulary)
 from mpeg4fa.spec import FAPS, N_FAPS
 
 DIRECTION = {

@@ -14,7 +14,6 @@ Points files are JSON, read by :func:`read_points_json` with errors at line:colu
 from __future__ import annotations
 
 import os
-import re
 import struct
 from pathlib import Path
 from types import MappingProxyType
@@ -25,7 +24,7 @@ import numpy as np
 from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.json_form import _decode, _Doc, _kind, _parse
 from mpeg4fa.fdp.model import LABEL_INDEX, Fdp, FdpMesh, FdpValueError, TextureImage
-from mpeg4fa.spec import FEATURE_POINTS
+from mpeg4fa.spec import FEATURE_POINT_MIRROR, FEATURE_POINTS
 
 SIDE_VIEWS = ("left", "right")
 MIN_SHARED_EXTENT = 0.05
@@ -33,42 +32,11 @@ MIN_SHARED_EXTENT = 0.05
 _LABEL_HINT = "labels are 2.1 .. 11.6 (groups 2-11 of the standard)"
 
 
-# ---- mirror twins, read off the standard's point descriptions ---------------------------------
+# ---- mirror twins: the ``side`` and ``mirror`` columns of spec/feature_points.csv ---------------
 
-_SIDE_WORD = re.compile(r"\b(left|right)\b")
-_REFERENCE = re.compile(r"\b\d+\.\d+\b")          # a feature point label inside a description
-
-
-def _derive_twins() -> tuple[dict[str, str], dict[str, int]]:
-    """Left/right twins and the side of each (+1 the face's left, -1 its right), from ``feature_points.csv``.
-
-    The tables have no mirror column, but every sided point's description names
-    its side and its twin's description is the same text with left and right
-    swapped ("Left corner of left eye" 3.7 / "Right corner of right eye" 3.12); a
-    point defined by others ("Midpoint between f.p. 2.2 and 2.4 ...") has as twin
-    the point defined by their twins. The side is the last side word ("Right
-    corner of left eyebrow" lies on the left), or that of a defining twin point.
-    """
-    text = {fp.label: fp.description.lower() for fp in FEATURE_POINTS}
-    label_of = {description: label for label, description in text.items()}
-    side = {label: 1 if words[-1] == "left" else -1 for label, d in text.items() if (words := _SIDE_WORD.findall(d))}
-    swapped = {label: _SIDE_WORD.sub(lambda m: "right" if m.group(1) == "left" else "left", text[label])
-               for label in side}
-    twins = {label: label_of[d] for label, d in swapped.items() if label_of.get(d, label) != label}
-    sided = dict(twins)
-    for label, d in text.items():
-        refs = [ref for ref in _REFERENCE.findall(d) if ref in sided]
-        other = label_of.get(_REFERENCE.sub(lambda m: sided.get(m.group(), m.group()), d))
-        if refs and label not in twins and other not in (None, label):
-            twins[label], side[label] = other, side[refs[0]]
-    if any(twins.get(b) != a or side[a] != -side[b] for a, b in twins.items()):
-        raise ValueError("spec tables: feature point descriptions give inconsistent left/right twins")
-    return twins, side
-
-
-_TWINS, _SIDE = _derive_twins()
-MIRROR_TWINS: Mapping[str, str] = MappingProxyType(_TWINS)
+MIRROR_TWINS: Mapping[str, str] = MappingProxyType(dict(FEATURE_POINT_MIRROR))
 """Each sided feature point's left/right twin (both ways: 3.5 -> 3.6 and 3.6 -> 3.5), from the spec data."""
+_ON_LEFT = frozenset(fp.label for fp in FEATURE_POINTS if fp.side == "left")  # +x, the face's left
 
 _GROUP = {fp.label: fp.group for fp in FEATURE_POINTS}
 _UPPER = tuple(label for label, g in _GROUP.items() if g in (3, 4))        # eyes, eyebrows
@@ -233,7 +201,7 @@ def _mean_of(values: Mapping[str, float], labels: Sequence[str]) -> float | None
 def _check_front_across(front: Mapping[str, np.ndarray]) -> None:
     """Every twin pair on the front photo has its face-left point on the image's right."""
     for label, other in MIRROR_TWINS.items():
-        if _SIDE[label] > 0 and label in front and other in front and front[label][0] < front[other][0]:
+        if label in _ON_LEFT and label in front and other in front and front[label][0] < front[other][0]:
             raise FdpValueError(
                 f"front photo points run the wrong way across the image: {label} (face's left) is left of "
                 f"{other} (face's right), but the face's left side should be on the image's right (check for "

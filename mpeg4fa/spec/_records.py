@@ -36,6 +36,10 @@ class Fap:
     """Default intra range magnitude, in quantised units (min = -max)."""
     p_max: int | None
     """Default predicted (P) range magnitude, in quantised units."""
+    lr_partner: int | None = None
+    """The FAP that does the same on the other side of the face (left <-> right), if any."""
+    io_partner: int | None = None
+    """The outer-lip FAP of an inner-lip one and back (FAPs 4-13 <-> 51-60), if any."""
     notes: str = ""
 
 
@@ -67,6 +71,10 @@ class FeaturePoint:
     """FAPs that displace the point; empty for calibration-only points."""
     fapu_role: tuple[str, ...]
     """FAPU distances (e.g. ``"MNS0"``) measured at this point."""
+    side: str | None = None
+    """``"left"`` or ``"right"``: the face's side the point lies on (+x is the face's left); None on the midline."""
+    mirror: str | None = None
+    """Label of the point's left/right twin (3.5 <-> 3.6); None on the midline."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +87,8 @@ class Fapu:
 
     symbol: str
     name: str
+    distance: str | None
+    """Name of the neutral-face distance the unit divides (``"IRISD0"``); None for AU."""
     definition: str
     point_a: str | None
     axis: str | None

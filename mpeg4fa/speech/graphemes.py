@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 
-from mpeg4fa.spec import VISEME_PROFILES
+from mpeg4fa.spec import MANDARIN_DEFAULT_INITIAL_WEIGHT, MANDARIN_INITIAL_WEIGHT, VISEME_PROFILES
 from mpeg4fa.spec._load import read_table
 from mpeg4fa.speech.mandarin import FINAL_WEIGHT, Syllable, final_roles, syllable_visemes
 from mpeg4fa.speech.wordsync import Unit
@@ -27,9 +27,9 @@ REFERENCE_RATE = 175     # words per minute the units were measured at
 UNIT = 0.081             # seconds per unit of English weight at REFERENCE_RATE
 SYLLABLE_UNIT = 0.135    # seconds per unit of Mandarin weight at REFERENCE_RATE
 POSITIONS = ("any", "initial", "medial", "final")
-# A Mandarin initial by its class, on the scale of mandarin.FINAL_WEIGHT (main vowel = 1).
-_INITIAL_WEIGHT = {"bpm": 0.7, "dtnl": 0.35, "f": 0.55}
-_DEFAULT_INITIAL_WEIGHT = 0.5
+# A Mandarin initial by its class, on the scale of mandarin.FINAL_WEIGHT (main vowel = 1): spec/mandarin_weights.csv.
+_INITIAL_WEIGHT = MANDARIN_INITIAL_WEIGHT
+_DEFAULT_INITIAL_WEIGHT = MANDARIN_DEFAULT_INITIAL_WEIGHT
 
 
 @dataclass(frozen=True)

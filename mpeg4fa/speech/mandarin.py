@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from mpeg4fa.spec import CHINESE_VISEME_BY_PINYIN
+from mpeg4fa.spec import CHINESE_VISEME_BY_PINYIN, MANDARIN_PART_WEIGHT
 from mpeg4fa.speech.errors import MarkupError
 
 _HAN = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
@@ -50,9 +50,9 @@ def has_glide(final: str) -> bool:
     return len(final) > 1 and final[0] in "iuv" and final not in _NO_GLIDE
 
 
-FINAL_WEIGHT = {"glide": 0.35, "main": 1.0, "ending": 0.6}
-"""Relative lengths of a final's parts when the engine does not time them: the main vowel
-carries the syllable, a glide passes quickly, an ending is in between."""
+FINAL_WEIGHT = MANDARIN_PART_WEIGHT
+"""Relative lengths of a final's parts when the engine does not time them (``spec/mandarin_weights.csv``):
+the main vowel carries the syllable, a glide passes quickly, an ending is in between."""
 
 
 def final_roles(final: str, count: int) -> list[str]:

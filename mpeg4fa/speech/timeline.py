@@ -75,7 +75,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from mpeg4fa.spec import FAP_BY_NAME, N_FAPS
+from mpeg4fa.spec import AU_PER_RADIAN, FAP_BY_NAME, FULL_INTENSITY, N_FAPS
 from mpeg4fa.spec.profiles import EXPRESSION_PROFILES, VISEME_PROFILES
 
 __all__ = [
@@ -84,8 +84,6 @@ __all__ = [
     "expression_track", "expression_fields", "merge_tracks", "idle_track", "frame_times",
 ]
 
-FULL_INTENSITY = 63
-"""Intensity at which an expression profile applies in full (FAP 2's range is 0..63)."""
 
 NEUTRAL = "neutral"
 """The expression that is no expression: a cue naming it sends every expression to 0."""
@@ -93,8 +91,8 @@ NEUTRAL = "neutral"
 _BLINK_COLUMNS = (FAP_BY_NAME["close_t_l_eyelid"].number - 1, FAP_BY_NAME["close_t_r_eyelid"].number - 1)
 _HEAD_COLUMNS = (FAP_BY_NAME["head_pitch"].number - 1, FAP_BY_NAME["head_yaw"].number - 1,
                  FAP_BY_NAME["head_roll"].number - 1)
-_AU_PER_DEGREE = math.pi / 180.0 * 1e5
-"""Head angles are in AU, 1e-5 rad."""
+_AU_PER_DEGREE = math.pi / 180.0 * AU_PER_RADIAN
+"""Head angles are in AU (:data:`mpeg4fa.spec.ANGLE_UNIT` radians)."""
 
 
 @dataclass(frozen=True)
@@ -354,7 +352,7 @@ def viseme_fields(spans: Sequence[VisemeSpan], times: npt.ArrayLike, rest_time: 
     weight = np.where(live, hermite(u, 0.0, 1.0), 1.0)
     select1 = [segments[i].target if ok else _REST for i, ok in zip(idx, live)]
     select2 = [segments[i].source if ok else _REST for i, ok in zip(idx, live)]
-    return VisemeFields(select1, select2, np.rint(63 * weight).astype(np.int64))
+    return VisemeFields(select1, select2, np.rint(FULL_INTENSITY * weight).astype(np.int64))
 
 
 # ---- expressions -----------------------------------------------------------------------------------
