@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mpeg4fa.face.frames import resolve
+from mpeg4fa.decoded import resolve
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba import decode, encode
 from mpeg4fa.render.audio import Audio

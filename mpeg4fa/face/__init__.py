@@ -3,7 +3,8 @@
 Four layers, each a function over arrays (seed paper §6):
 
 1. high-level FAPs (visemes, expressions) expand to low-level FAPs through the
-   shared profiles in ``spec/`` (:mod:`.frames`);
+   shared profiles in ``spec/``, with unsent FAPs held or interpolated: :mod:`mpeg4fa.decoded`,
+   the rules every reader of a stream shares;
 2. low-level FAPs move feature points by value x FAPU along the standard's
    directions, or rotate eyes, jaw, lids, tongue and head (:mod:`.motion`);
 3. feature point motion spreads to the mesh through Sibson weights cut to edge

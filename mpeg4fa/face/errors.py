@@ -1,7 +1,8 @@
 """The face layer's exception and warning types."""
 from __future__ import annotations
 
-from mpeg4fa.errors import MpegFaWarning, MpegFaError
+from mpeg4fa.decoded.errors import ClampWarning
+from mpeg4fa.errors import MpegFaError
 
 
 class FaceError(MpegFaError, ValueError):
@@ -12,5 +13,6 @@ class FaceError(MpegFaError, ValueError):
     """
 
 
-class FaceWarning(MpegFaWarning):
-    """A value a face cannot show was clamped to one it can (see :mod:`mpeg4fa.face.limits`): said, not fatal."""
+FaceWarning = ClampWarning
+"""A value a face cannot show was clamped to one it can: the decoder output's warning
+(:mod:`mpeg4fa.decoded.limits`), named here for the face's users."""

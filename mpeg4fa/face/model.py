@@ -13,7 +13,6 @@ unsent FAPs and the high-level visemes and expressions first.
 from __future__ import annotations
 
 from functools import cached_property
-import warnings
 from typing import Iterable, Iterator, Mapping
 
 import numpy as np
@@ -22,14 +21,13 @@ from mpeg4fa.face.arkit import ArkitRig, build_arkit_rig, deform_arkit
 from mpeg4fa.face.asset import load_head
 from mpeg4fa.face.calibrate import CalibrationReport, calibrate_mesh
 from mpeg4fa.face.deform import Pose, deform
-from mpeg4fa.face.errors import FaceError, FaceWarning
+from mpeg4fa.decoded import FapValueError, FrameResolver, check_finite, clamp, resolve, shown_frame, shown_values
+from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.fapu import Fapu, measure_fapu
-from mpeg4fa.face.frames import FrameResolver, resolve
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.limits import check_finite, clamp
 from mpeg4fa.face.rig import Rig, build_rig
 from mpeg4fa.fba.stream import FapStream, Frame
-from mpeg4fa.spec import N_FAPS, expand_high_level
+from mpeg4fa.spec import N_FAPS
 
 _DEFAULT: "FaceModel | None" = None
 
@@ -115,32 +113,13 @@ class FaceModel:
     # -- animation ------------------------------------------------------------------------
 
     def frame_values(self, frame: "np.ndarray | Mapping[int, float] | Frame") -> np.ndarray:
-        """68 low-level values from any accepted frame form (high-level fields expanded)."""
-        if isinstance(frame, Frame):
-            values = frame.fap_values.astype(np.float64) * frame.fap_mask
-            if frame.fap_mask[0] or frame.fap_mask[1]:
-                vis = frame.viseme[None] if frame.fap_mask[0] else np.zeros((1, 4), int)
-                exp = frame.expression[None] if frame.fap_mask[1] else np.zeros((1, 6), int)
-                high = expand_high_level(vis, exp)[0]
-                values = np.where(frame.fap_mask.astype(bool), values, high)
-        elif isinstance(frame, Mapping):
-            values = np.zeros(N_FAPS)
-            for fap, value in frame.items():
-                if not 3 <= int(fap) <= N_FAPS:
-                    raise FaceError(f"FAP {fap} is not a low-level FAP", where=f"FAP {fap}",
-                                    hint="low-level FAPs are 3..68; use viseme/expression for 1 and 2")
-                values[int(fap) - 1] = value
-        else:
-            values = np.asarray(frame, dtype=np.float64)
-        values = np.array(values, dtype=np.float64)
-        if values.shape != (N_FAPS,):
-            raise FaceError(f"a frame has {N_FAPS} FAP values, got shape {values.shape}",
-                            hint="pass an array of 68 values or a {fap: value} mapping")
-        values[:2] = 0.0
-        values, report = clamp(values)
-        for item in report:
-            warnings.warn(item.message(None), FaceWarning, stacklevel=3)
-        return values
+        """The 68 values a frame shows (:mod:`mpeg4fa.decoded`, the rules every caller shares): a
+        stream's frame resolved with the frames before it, so ``deform(stream.frame(k))`` is
+        ``animate(stream)``'s pose ``k``; a mapping or array of low-level FAPs as given. Clamps are said."""
+        try:
+            return shown_frame(frame) if isinstance(frame, Frame) else shown_values(frame)
+        except FapValueError as exc:  # said as the face's error: the face was asked to show it
+            raise FaceError(exc.message, where=exc.where, hint=exc.hint) from None
 
     def deform(self, frame: "np.ndarray | Mapping[int, float] | Frame") -> Pose:
         """The face posed by one frame of FAPs."""
@@ -150,7 +129,7 @@ class FaceModel:
         return self._pose(np.zeros(N_FAPS))
 
     def animate(self, stream: FapStream) -> Iterator[Pose]:
-        """One pose per stream frame, with unsent FAPs held or interpolated (see :mod:`.frames`)."""
+        """One pose per stream frame, with unsent FAPs held or interpolated (see :mod:`mpeg4fa.decoded`)."""
         for values in resolve(stream):
             yield self.pose_values(values)
 
@@ -161,7 +140,7 @@ class FaceModel:
             yield self.pose_values(resolver.push(frame))
 
     def pose_values(self, values: np.ndarray) -> Pose:
-        """The pose for one row of resolved values (68, as :func:`.frames.resolve` gives).
+        """The pose for one row of resolved values (68, as :func:`mpeg4fa.decoded.resolve` gives).
 
         Resolved rows are already inside what a face shows; anything else is clamped silently here.
         """

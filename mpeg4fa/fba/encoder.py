@@ -68,16 +68,19 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
     period = options.intra_period or 0
     use_start_codes = _pick(options.start_codes, bool(stream.start_code.any()), False)
 
+    intended = stream.group_mask_types()  # how unsent FAPs read in the source: kept, unless options say otherwise
     intra_frames = [0]
     for k in range(1, len(out)):
         changed = (out.object_mask[k] != out.object_mask[k - 1]
                    or not np.array_equal(out.fap_mask[k], out.fap_mask[k - 1])
-                   or not np.array_equal(out.bap_mask[k], out.bap_mask[k - 1]))
+                   or not np.array_equal(out.bap_mask[k], out.bap_mask[k - 1])
+                   or (options.mask_types is None and not np.array_equal(intended[k], intended[k - 1])))
         if changed or (period and k - intra_frames[-1] >= period):
             intra_frames.append(k)
+    source = list(range(len(out)))  # the source frame of each frame of out
     if options.skip_repeats or options.optimize:  # after choosing intra frames, so they stay where they were
-        out, kept = _fold_repeats(out, protect=intra_frames)
-        intra_frames = [kept.index(k) for k in intra_frames]
+        out, source = _fold_repeats(out, protect=intra_frames)
+        intra_frames = [source.index(k) for k in intra_frames]
     bounds = intra_frames[1:] + [len(out)]
 
     wide = {}
@@ -90,7 +93,8 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
             params.time_code = TimeCode.from_seconds(out.timestamps[k])
         if out.object_mask[k] & FACE_BIT:
             codes = wide["face"] if wide else _range_codes(out, FACE, face_quant, [k], [stop])
-            params.face = PartParams(face_quant, _mask_types(out.fap_mask[k], FACE, options.mask_types, first),
+            params.face = PartParams(face_quant, _mask_types(out.fap_mask[k], FACE, options.mask_types,
+                                                             intended[source[k]]),
                                      out.fap_mask[k].copy(), ranges=RangeSet((True,) * 4, codes))
         if out.object_mask[k] & BODY_BIT:
             codes = wide["body"] if wide else _range_codes(out, BODY, body_quant, [k], [stop])
@@ -137,9 +141,9 @@ def _grid_times(s: FapStream, fps: float) -> np.ndarray:
     return s.timestamps[0] + slots / fps
 
 
-def _mask_types(mask: np.ndarray, part: PartSpec, requested, first: CodingParams | None) -> tuple[int, ...]:
+def _mask_types(mask: np.ndarray, part: PartSpec, requested, carried) -> tuple[int, ...]:
+    """Per group: none or all where the mask says so, else the requested type, else the source's (hold by default)."""
     types = []
-    carried = first.face.mask_types if (first and first.face and part is FACE) else None
     for g, members in enumerate(part.mask_groups):
         sent = mask[list(members)]
         if requested is not None:

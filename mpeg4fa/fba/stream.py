@@ -17,6 +17,8 @@ from typing import Iterable, Iterator
 
 import numpy as np
 
+from mpeg4fa.spec import FAP_GROUP_SLICES
+
 N_FAPS = 68
 N_BAPS = 296
 N_FAP_GROUPS = 10
@@ -237,10 +239,13 @@ class FapStream:
         return (self.frame(k) for k in range(len(self)))
 
     def group_mask_types(self) -> np.ndarray:
-        """``(n, 10)`` mask type governing each FAP group at each frame: the latest intra header's
-        face mask types; before any (or with none) :attr:`mask_types`, else hold (1)."""
-        default = np.asarray(self.mask_types if self.mask_types is not None else (1,) * N_FAP_GROUPS, dtype=np.int8)
-        types = np.repeat(default[None, :], len(self), axis=0)
+        """``(n, 10)`` mask type governing each FAP group at each frame: the latest intra header's face
+        mask types; a frame no header governs reads as an encoder would send it: 0 where the frame
+        sends none of the group, 3 where it sends all, else :attr:`mask_types` (hold, 1, if None)."""
+        intent = np.asarray(self.mask_types if self.mask_types is not None else (1,) * N_FAP_GROUPS, dtype=np.int8)
+        sent = np.add.reduceat(self.fap_mask.astype(np.int16), [a for a, _ in FAP_GROUP_SLICES], axis=1)
+        size = np.array([b - a for a, b in FAP_GROUP_SLICES])
+        types = np.where(sent == 0, 0, np.where(sent == size, 3, intent[None, :])).astype(np.int8)
         for start in sorted(self.intra):
             face = self.intra[start].face
             if face is not None:

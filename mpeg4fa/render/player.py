@@ -19,7 +19,7 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
-from mpeg4fa.face.frames import FrameResolver, resolve
+from mpeg4fa.decoded import FrameResolver, resolve
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba.stream import FapStream, Frame
 from mpeg4fa.render.audio import Audio, fit_audio, read_audio

@@ -33,7 +33,7 @@ from typing import Any, Protocol
 import numpy as np
 from scipy.optimize import nnls
 
-from mpeg4fa.face.frames import resolve
+from mpeg4fa.decoded import resolve
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.render.audio import Audio

@@ -15,14 +15,16 @@ stream carries them at the chosen level:
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from mpeg4fa.decoded import ClampWarning, resolve
 from mpeg4fa.fba import EncodeOptions
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
-from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, VISEMES
+from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, FULL_INTENSITY, VISEMES
 from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.markup import parse_markup
 from mpeg4fa.speech.timeline import (CLOSURE_HOLD, expression_fields, expression_track, frame_times, idle_track,
@@ -39,17 +41,31 @@ _EXPRESSION_CODE = {e.name: e.number for e in EXPRESSIONS}
 
 @dataclass(frozen=True)
 class Encoded:
-    """What the encoder made: the FAP stream, the speech it goes with, and the timeline behind it."""
+    """What the encoder made: the FAP stream, the speech it goes with, and the timeline behind it.
+
+    The stream carries how a decoder must read the FAPs it leaves out
+    (:attr:`~mpeg4fa.fba.stream.FapStream.mask_types`), so it keeps its meaning under any
+    :class:`~mpeg4fa.fba.EncodeOptions`; :meth:`coding` gives the ones streams from text use.
+    """
 
     stream: FapStream
     utterance: Utterance
     values: np.ndarray  # (n, 68) merged low-level FAP values the stream stands for
     level: str
-    mask_types: tuple[int, ...]  # per FAP group: how the decoder must read unsent FAPs
 
     def coding(self, **overrides) -> EncodeOptions:
-        """The options to encode :attr:`stream` with: ``TEXT_CODING``, these mask types, then ``overrides``."""
-        return EncodeOptions(**{**TEXT_CODING, "mask_types": self.mask_types, **overrides})
+        """The options to encode :attr:`stream` with: ``TEXT_CODING``, then ``overrides``."""
+        return EncodeOptions(**{**TEXT_CODING, **overrides})
+
+    @property
+    def mask_types(self) -> tuple[int, ...]:
+        """Per FAP group, the mask type the stream goes out with: none, all, interpolate or hold."""
+        intended = self.stream.group_mask_types()[0] if len(self.stream) else np.ones(len(FAP_GROUP_SLICES))
+        types = []
+        for g, (a, b) in enumerate(FAP_GROUP_SLICES):
+            cols = self.stream.fap_mask[:, a:b]
+            types.append(MASK_NONE if not cols.any() else MASK_ALL if cols.all() else int(intended[g]))
+        return tuple(types)
 
     @property
     def speech(self):
@@ -86,8 +102,8 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
                 seed: int = 0, name: str = "<text>", fold: bool = True) -> Encoded:
     """Speak tagged text and turn it into a FapStream at ``fps`` (see the module docstring for levels).
 
-    ``fold`` leaves out the FAPs the decoder can copy from their counterparts (:func:`fold_symmetric`);
-    encode the stream with :meth:`Encoded.coding` so their groups are sent with mask type 2.
+    ``fold`` leaves out the FAPs the decoder copies from their counterparts (:func:`fold_symmetric`);
+    the stream's :attr:`~mpeg4fa.fba.stream.FapStream.mask_types` say so to any encoding of it.
     """
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
@@ -112,8 +128,9 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
         stream.fap_values[:, used] = values[:, used]
     if level in ("high", "both"):
         _high_level(stream, utterance, times, values, level, hold)
-    interpolated = fold_symmetric(stream) if fold else set()
-    return Encoded(stream, utterance, values, level, _mask_types(stream, interpolated))
+    if fold:
+        fold_symmetric(stream)
+    return Encoded(stream, utterance, values, level)
 
 
 def closure_hold(fps: float) -> float:
@@ -136,7 +153,7 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
     names = {s[1] for s, ok in zip(vis.select1 + vis.select2, np.r_[standard_vis, standard_vis]) if ok}
     if names - {"none"}:  # all-Chinese speech leaves FAP 1 nothing to name
         stream.fap_mask[:, 0] = True
-        stream.viseme[:] = np.c_[select1, select2, np.where(standard_vis, vis.blend, 63), np.zeros(n)]
+        stream.viseme[:] = np.c_[select1, select2, np.where(standard_vis, vis.blend, FULL_INTENSITY), np.zeros(n)]
     known = np.array([[s in _EXPRESSION_CODE for s in col] for col in (exp.select1, exp.select2)]).all(axis=0)
     stream.fap_mask[:, 1] = True
     stream.expression[:] = np.c_[
@@ -151,43 +168,36 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
 
 
 def fold_symmetric(stream: FapStream) -> set[int]:
-    """Stop sending low-level FAPs the decoder can copy from a counterpart; return their FAP groups.
+    """Stop sending low-level FAPs a decoder copies from a counterpart; return their FAP groups.
 
-    With mask type 2 (interpolate) an unsent FAP copies its left/right counterpart if that is
-    sent, else its inner/outer lip counterpart (:data:`mpeg4fa.spec.FAP_PARTNERS`, the rule
-    the decoder applies). Visemes and expressions are symmetric, so about a third of the
-    lip, jaw and brow FAPs go. A FAP is dropped only where the counterpart the decoder will
-    choose is sent in the same frames with the same values, and that counterpart then stays.
-    Right-side and outer FAPs are tried first (highest numbers), so the left and inner ones stay.
+    With mask type 2 (interpolate) an unsent FAP copies its left/right counterpart, else its
+    inner/outer lip counterpart (:data:`mpeg4fa.spec.FAP_PARTNERS`). Visemes and expressions are
+    symmetric, so about a third of the lip, jaw and brow FAPs can go. Each candidate is left out
+    only if the stream then *decodes* to the same values (:func:`mpeg4fa.decoded.resolve`, the
+    decoder's own rules, not re-derived here): interpolation also changes the FAPs of the group
+    that were never sent, so a group whose unsent FAPs would copy a moving counterpart keeps its
+    FAPs (e.g. Mandarin's rounded u-umlaut). Right-side and outer FAPs are tried first (highest
+    numbers), so the left and inner ones stay. Sets ``stream.mask_types`` to match.
     """
     sent = stream.fap_mask.any(axis=0)
-    pinned = np.zeros_like(sent)
-    folded_groups: set[int] = set()
-    for c in sorted(np.flatnonzero(sent), reverse=True):
-        if c < 2 or pinned[c]:
-            continue
-        choice = next((int(p) for p in FAP_PARTNERS[c] if p >= 0 and sent[p]), None)
-        if choice is None:
-            continue
-        same_mask = np.array_equal(stream.fap_mask[:, c], stream.fap_mask[:, choice])
-        if same_mask and np.array_equal(stream.fap_values[:, c], stream.fap_values[:, choice]):
-            sent[c] = False
-            pinned[choice] = True
-            stream.fap_mask[:, c] = False
-            stream.fap_values[:, c] = 0
-            folded_groups.add(int(FAP_GROUP[c]))
+    types = np.asarray(stream.mask_types if stream.mask_types is not None else (MASK_HOLD,) * len(FAP_GROUP_SLICES))
+    with warnings.catch_warnings():  # clamps are said when the stream is played, not while planning
+        warnings.simplefilter("ignore", ClampWarning)
+        reference = resolve(stream)
+        folded_groups: set[int] = set()
+        for c in sorted(np.flatnonzero(sent), reverse=True):
+            if c < 2 or not any(p >= 0 and sent[p] for p in FAP_PARTNERS[c]):
+                continue
+            group = int(FAP_GROUP[c])
+            trial_types = types.copy()
+            trial_types[group - 1] = MASK_INTERPOLATE
+            trial = replace(stream, fap_mask=stream.fap_mask.copy(), fap_values=stream.fap_values.copy(),
+                            mask_types=tuple(int(t) for t in trial_types))
+            trial.fap_mask[:, c] = False
+            trial.fap_values[:, c] = 0
+            if np.array_equal(resolve(trial), reference):
+                stream.fap_mask, stream.fap_values, stream.mask_types = trial.fap_mask, trial.fap_values, trial.mask_types
+                types = trial_types
+                sent[c] = False
+                folded_groups.add(group)
     return folded_groups
-
-
-def _mask_types(stream: FapStream, interpolated: set[int]) -> tuple[int, ...]:
-    """Per FAP group: none, all, or partly sent (interpolate where FAPs were folded, else hold)."""
-    types = []
-    for g, (a, b) in enumerate(FAP_GROUP_SLICES, start=1):
-        cols = stream.fap_mask[:, a:b]
-        if not cols.any():
-            types.append(MASK_NONE)
-        elif cols.all():
-            types.append(MASK_ALL)
-        else:
-            types.append(MASK_INTERPOLATE if g in interpolated else MASK_HOLD)
-    return tuple(types)

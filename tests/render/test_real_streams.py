@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from mpeg4fa.face import FaceWarning
-from mpeg4fa.face.limits import LOWER, UPPER
-from mpeg4fa.face.frames import resolve
+from mpeg4fa.decoded.limits import LOWER, UPPER
+from mpeg4fa.decoded import resolve
 from mpeg4fa.formats import read_stream
 from mpeg4fa.render import RenderWarning, play
 from mpeg4fa.render.timing import schedule

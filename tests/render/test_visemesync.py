@@ -14,7 +14,7 @@ import pytest
 
 from mpeg4fa.fba import decode, encode
 from mpeg4fa.fba.stream import FapStream
-from mpeg4fa.face.frames import resolve
+from mpeg4fa.decoded import resolve
 from mpeg4fa.render.audio import Audio
 from mpeg4fa.render.lipsync import on_frame_grid
 from mpeg4fa.render.visemesync import (SyncFigures, closure_offsets, measure_sync, viseme_peaks,

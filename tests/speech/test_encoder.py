@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from mpeg4fa.face.frames import resolve
+from mpeg4fa.decoded import resolve
 from mpeg4fa.fba import decode, encode
 from mpeg4fa.spec import QUANT_STEP
 from mpeg4fa.spec.profiles import VISEME_PROFILES
@@ -33,6 +33,21 @@ def test_low_level_round_trip_through_codec_and_face_engine(text, level):
         half_step = QUANT_STEP[2:] * quant / 2 + 1
         assert (np.abs(on_grid[:, 2:] - enc.values[:, 2:]) <= half_step).all()
     assert np.abs(enc.values).max() > 50
+
+
+@pytest.mark.parametrize("text", ["女", "绿", "去", "女人去绿色的地方。", EN])
+@pytest.mark.parametrize("options", [{"fap_quant": 1}, {"fap_quant": 1, "intra_period": 7}, {"fap_quant": 4}, {}])
+def test_a_stream_from_text_keeps_its_meaning_under_any_coding(text, options):
+    """The stream says how its unsent FAPs read (FapStream.mask_types), so plain EncodeOptions keep
+    its values; u-umlaut's rounded lips (FAP 57 unsent, its partner moving) decoded 38-40 units off
+    and plain options 178 units off when that intent lived only in the encoder's plan."""
+    from mpeg4fa.fba import EncodeOptions
+
+    enc = encode_text(text, level="low")
+    stream = decode(encode(enc.stream, EncodeOptions(**options)))
+    on_grid = np.repeat(resolve(stream), stream.skip + 1, axis=0)
+    quant = options.get("fap_quant", 1)
+    assert (np.abs(on_grid[:, 2:] - enc.values[:, 2:]) <= QUANT_STEP[2:] * quant / 2).all()
 
 
 def test_high_level_english_names_visemes_and_expressions():

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mpeg4fa.face.frames import PARTNERS, resolve
+from mpeg4fa.decoded import resolve
+from mpeg4fa.spec import FAP_PARTNERS as PARTNERS
 from mpeg4fa.fba.stream import CodingParams, FapStream, PartParams
 from mpeg4fa.spec import FAP_GROUP, N_FAPS, expand_high_level
 
@@ -225,7 +226,7 @@ def _random_stream(seed: int, n: int = 120) -> FapStream:
 @pytest.mark.parametrize("seed", range(6))
 def test_resolving_frame_by_frame_equals_the_whole_stream(seed):
     """A live source is resolved one frame at a time (FrameResolver): same values as the batch."""
-    from mpeg4fa.face.frames import FrameResolver
+    from mpeg4fa.decoded import FrameResolver
 
     s = _random_stream(seed)
     whole = resolve(s)
@@ -236,7 +237,7 @@ def test_resolving_frame_by_frame_equals_the_whole_stream(seed):
 
 
 def test_resolving_in_pieces_carries_the_state():
-    from mpeg4fa.face.frames import ResolveState
+    from mpeg4fa.decoded import ResolveState
 
     s = _random_stream(99, 200)
     state = ResolveState()
@@ -273,7 +274,7 @@ def test_a_live_stream_says_each_clamped_fap_once():
     import warnings
 
     from mpeg4fa.face import FaceWarning
-    from mpeg4fa.face.frames import FrameResolver
+    from mpeg4fa.decoded import FrameResolver
 
     s = FapStream.empty(5)
     s.intra[0] = _intra()

@@ -17,11 +17,12 @@ carry them, so they come from a caller's bug).
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from mpeg4fa.face.errors import FaceError
+from mpeg4fa.decoded.errors import ClampWarning, FapValueError
 from mpeg4fa.spec import FAPS, N_FAPS
 
 TRANSLATION_LIMIT = 8192
@@ -76,12 +77,13 @@ def check_finite(values: np.ndarray) -> None:
     """Refuse what no clamping can mend: a wrong shape or a non-finite value."""
     values = np.asarray(values, dtype=float)
     if values.shape[-1:] != (N_FAPS,):
-        raise FaceError(f"a frame has {N_FAPS} FAP values, got shape {values.shape}",
+        raise FapValueError(f"a frame has {N_FAPS} FAP values, got shape {values.shape}",
                         hint="pass an array of 68 values or a {fap: value} mapping")
     bad = ~np.isfinite(values)
     if bad.any():
         fap = int(np.argwhere(bad)[0][-1]) + 1
-        raise FaceError(f"FAP {fap} ({FAPS[fap - 1].name}) is {values[bad].flat[0]}", where=f"FAP {fap}")
+        raise FapValueError(f"FAP {fap} ({FAPS[fap - 1].name}) is {values[bad].flat[0]}", where=f"FAP {fap}",
+                            hint="FAP values are finite numbers of FAPU")
 
 
 def clamp(values: np.ndarray) -> tuple[np.ndarray, list[Clamped]]:
@@ -103,3 +105,11 @@ def clamp(values: np.ndarray) -> tuple[np.ndarray, list[Clamped]]:
         negative_only = not high[:, col].any() and LOWER[col] == 0.0
         report.append(Clamped(int(col) + 1, int(out.sum()), float(worst), negative_only))
     return np.clip(values, LOWER, UPPER), report
+
+
+def clamp_and_warn(values: np.ndarray, where: str | None = None, *, stacklevel: int = 3) -> np.ndarray:
+    """:func:`clamp`, saying each clamped FAP as a :class:`ClampWarning` (``where`` as in :meth:`Clamped.message`)."""
+    clamped, report = clamp(values)
+    for item in report:
+        warnings.warn(item.message(where), ClampWarning, stacklevel=stacklevel)
+    return clamped
