@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..decoded import shown_values
 from ..face import FaceError, FaceModel, asset
 from ..spec import EXPRESSION_PROFILES, FAPS, FAPU_NAMES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
 
@@ -124,17 +125,16 @@ def run_info(args: argparse.Namespace) -> int:
 
 
 def _pose_values(args: argparse.Namespace) -> np.ndarray:
-    values = np.zeros(len(FAPS))
+    """The 68 values the options stand for, by the decoder's own rules (:func:`mpeg4fa.decoded.shown_values`)."""
+    viseme = expression = None
     if args.viseme:
-        name = args.viseme
-        group, _, viseme = name.rpartition(":")
+        group, _, name = args.viseme.rpartition(":")
         group = group or "mpeg4"
-        profiles = VISEME_PROFILES.get(group, {})
-        if viseme not in profiles:
-            raise FaceError(f"unknown viseme {name!r}",
+        if name not in VISEME_PROFILES.get(group, {}):
+            raise FaceError(f"unknown viseme {args.viseme!r}",
                             hint="MPEG-4: " + " ".join(VISEME_PROFILES["mpeg4"]) + "; Chinese: zh:"
                                  + " zh:".join(VISEME_PROFILES.get("zh", {})))
-        values += profiles[viseme]
+        viseme = (group, name)
     if args.expression:
         name, _, intensity = args.expression.partition("=")
         if name not in EXPRESSION_PROFILES:
@@ -145,10 +145,8 @@ def _pose_values(args: argparse.Namespace) -> np.ndarray:
             raise FaceError(f"expression intensity {intensity!r} is not an integer 0..{FULL_INTENSITY}") from None
         if not 0 <= level <= FULL_INTENSITY:
             raise FaceError(f"expression intensity {level} is outside 0..{FULL_INTENSITY}")
-        values += EXPRESSION_PROFILES[name] * level / float(FULL_INTENSITY)
-    for fap, v in args.fap:
-        values[fap - 1] = v
-    return values
+        expression = (name, level)
+    return shown_values(dict(args.fap), viseme=viseme, expression=expression)
 
 
 def run_pose(args: argparse.Namespace) -> int:
