@@ -89,8 +89,14 @@ def _reconcile(plan: Schedule, audio: Audio | None, fit: str) -> tuple[Schedule,
 
 def _face_and_options(face: FaceModel | None, fdp: Fdp | None, fdp_texture: bool, renderer: Renderer | None,
                       options: dict) -> tuple[FaceModel, dict]:
-    """The face to pose (the generic head calibrated to ``fdp`` unless one is given) and the renderer's options,
-    with the FDP's own texture mapped onto the face when it carries one and no texture was given."""
+    """The face to pose (the renderer's, else the generic head calibrated to ``fdp``, unless one is given) and
+    the renderer's options, with the FDP's own texture mapped onto the face when it carries one and no
+    texture was given."""
+    if face is None and renderer is not None:
+        face = renderer.face  # posing another head than the one the renderer draws gives wrong pixels
+    if renderer is not None and face is not renderer.face and face.mesh.n_vertices != renderer.face.mesh.n_vertices:
+        raise RenderError(f"the face has {face.mesh.n_vertices} vertices, the renderer's {renderer.face.mesh.n_vertices}",
+                          hint="pass the renderer's own face, or no face")
     if face is None:
         face = FaceModel.default()
         if fdp is not None:

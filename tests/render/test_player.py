@@ -160,3 +160,13 @@ def test_every_en_vector_plays_with_its_speech(generic_face, tmp_path, path):
 def _audio_seconds(path: Path) -> float:
     from mpeg4fa.render import read_audio
     return read_audio(path).duration
+
+
+def test_a_renderer_without_a_face_poses_its_own_face(procedural_face):
+    """play/snapshot given only a renderer pose the head it draws (not the generic head)."""
+    stream = _stream([0, 0, 0], [0, 300, 600])
+    with Renderer(procedural_face, **SIZE) as renderer:
+        alone = snapshot(stream, frame=2, renderer=renderer)
+        explicit = snapshot(stream, frame=2, renderer=renderer, face=procedural_face)
+        assert np.array_equal(alone, explicit)
+        assert not np.array_equal(alone, snapshot(stream, frame=0, renderer=renderer))
