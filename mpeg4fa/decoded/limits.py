@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mpeg4fa.decoded.errors import ClampWarning, FapValueError
-from mpeg4fa.spec import FAPS, N_FAPS
+from mpeg4fa.spec import ANGLE_UNIT, FAPS, N_FAPS
 
 TRANSLATION_LIMIT = 8192
 """|value| above this many FAPU (8 times the key distance) is held at it."""
@@ -33,7 +33,7 @@ def _bounds() -> tuple[np.ndarray, np.ndarray]:
     lower = np.full(N_FAPS, -np.inf)
     upper = np.full(N_FAPS, np.inf)
     for record in FAPS[2:]:
-        limit = np.pi / 1e-5 if record.fapu == "AU" else float(TRANSLATION_LIMIT)
+        limit = np.pi / ANGLE_UNIT if record.fapu == "AU" else float(TRANSLATION_LIMIT)
         i = record.number - 1
         lower[i], upper[i] = (0.0 if record.unidirectional else -limit), limit
     return lower, upper

@@ -90,15 +90,7 @@ def resolve(stream: FapStream, state: ResolveState | None = None) -> np.ndarray:
     mask = stream.fap_mask.astype(bool)
     values = stream.fap_values.astype(np.float64)
     group_types = _group_types(stream, state)
-    types = group_types[:, _GROUP_OF]
-    copied = values.copy()
-    copy = np.zeros_like(mask)
-    for k in (1, 0):  # the left/right partner wins over the inner/outer one
-        has = FAP_PARTNERS[:, k] >= 0
-        cols_k = np.where(has, FAP_PARTNERS[:, k], 0)
-        take = (types == MASK_INTERPOLATE) & ~mask & mask[:, cols_k] & has[None, :]
-        copied = np.where(take, values[:, cols_k], copied)
-        copy |= take
+    copied, copy = _interpolate(mask, values, group_types)
     # an interpolated value counts as sent: it holds like one
     last = _last_sent(mask | copy)
     out = _held(last, copied, state.held, state.known)
@@ -120,6 +112,32 @@ def resolve(stream: FapStream, state: ResolveState | None = None) -> np.ndarray:
     state.held[:2], state.known[:2] = 0.0, False
     state.viseme, state.expression = viseme[-1].copy(), expression[-1].copy()
     state.frames += n
+    return out
+
+
+def _interpolate(mask: np.ndarray, values: np.ndarray, group_types: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Values with interpolated FAPs filled in from their counterparts, and where that happened."""
+    types = group_types[:, _GROUP_OF]
+    copied = values.copy()
+    copy = np.zeros_like(mask)
+    for k in (1, 0):  # the left/right partner wins over the inner/outer one
+        has = FAP_PARTNERS[:, k] >= 0
+        cols_k = np.where(has, FAP_PARTNERS[:, k], 0)
+        take = (types == MASK_INTERPOLATE) & ~mask & mask[:, cols_k] & has[None, :]
+        copied = np.where(take, values[:, cols_k], copied)
+        copy |= take
+    return copied, copy
+
+
+def explicit(stream: FapStream) -> FapStream:
+    """The stream with every FAP a decoder copies from its counterpart (mask type 2) sent outright,
+    and no intra headers: for formats that cannot say "interpolate" (``.fap`` text), so that nothing
+    the stream shows is lost. Resolves to the same values as ``stream``."""
+    out = stream.copy()
+    copied, copy = _interpolate(stream.fap_mask.astype(bool), stream.fap_values, stream.group_mask_types())
+    out.fap_mask = stream.fap_mask | copy
+    out.fap_values = copied.astype(stream.fap_values.dtype)
+    out.source_fps, out.intra, out.mask_types = stream.fps, {}, None
     return out
 
 

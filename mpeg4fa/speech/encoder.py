@@ -60,12 +60,7 @@ class Encoded:
     @property
     def mask_types(self) -> tuple[int, ...]:
         """Per FAP group, the mask type the stream goes out with: none, all, interpolate or hold."""
-        intended = self.stream.group_mask_types()[0] if len(self.stream) else np.ones(len(FAP_GROUP_SLICES))
-        types = []
-        for g, (a, b) in enumerate(FAP_GROUP_SLICES):
-            cols = self.stream.fap_mask[:, a:b]
-            types.append(MASK_NONE if not cols.any() else MASK_ALL if cols.all() else int(intended[g]))
-        return tuple(types)
+        return tuple(int(t) for t in self.stream.group_mask_types()[0]) if len(self.stream) else ()
 
     @property
     def speech(self):

@@ -145,3 +145,19 @@ def test_a_frame_of_a_stream_poses_as_the_stream_does(procedural_face, seed, hig
     animated = [pose.vertices for pose in procedural_face.animate(stream)]
     for k in range(len(stream)):
         np.testing.assert_allclose(procedural_face.deform(stream.frame(k)).vertices, animated[k], atol=1e-9)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 30), high_level=st.booleans())
+def test_explicit_streams_show_the_same_and_survive_fap_text(tmp_path_factory, seed, n, high_level):
+    """A .fap has no mask types: what a decoder copies under interpolation is written out, not lost."""
+    from mpeg4fa.decoded import explicit
+    from mpeg4fa.formats import read_fap, write_fap
+
+    rng = np.random.default_rng(seed)
+    stream = decode(encode(random_stream(rng, n, high_level, symmetric=True), random_options(rng)))
+    meant = on_source_frames(stream)
+    assert np.array_equal(on_source_frames(explicit(stream)), meant)
+    path = tmp_path_factory.mktemp("fap") / "s.fap"
+    write_fap(stream, path)
+    assert np.array_equal(on_source_frames(read_fap(path)), meant)
