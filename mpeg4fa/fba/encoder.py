@@ -17,6 +17,7 @@ from . import syntax
 from .arith import SegmentEnd, encode_segment, lookahead_desyncs
 from .bits import BitWriter
 from .errors import FbaError
+from .limits import check_span, fps_problem
 from .params import BODY, FACE, RANGE_DELTA, FieldCoder, PartSpec, ValueCoder, dequantise, quantise
 from .stream import (BODY as BODY_BIT, CONTENT_FIELDS, END_CODE, FACE as FACE_BIT, PLANE_START_CODE,
                      CodingParams, FapStream, FrameRate, PartParams, RangeSet, TimeCode)
@@ -44,6 +45,24 @@ class EncodeOptions:
     optimize: bool = False
     """Smallest stream with the same decoded values: tight ranges per intra period, repeats folded."""
 
+    def __post_init__(self) -> None:
+        """Refuse options no stream can carry, so a bad value fails here and says which."""
+        for name in ("fap_quant", "bap_quant"):
+            value = getattr(self, name)
+            if value is not None and (not _is_int(value) or not 0 <= value <= 31):
+                raise FbaError(f"EncodeOptions {name}={value!r} is not an integer in 0..31",
+                               hint="the quantiser is a 5-bit field; 0 sends values unquantised")
+        if self.intra_period is not None and (not _is_int(self.intra_period) or self.intra_period < 0):
+            raise FbaError(f"EncodeOptions intra_period={self.intra_period!r} is not an integer >= 0",
+                           hint="0 sends an intra frame only where the mask changes")
+        if self.fps is not None and (problem := fps_problem(self.fps)) is not None:
+            raise FbaError(f"EncodeOptions fps={self.fps!r}: {problem}",
+                           hint="an intra header carries 1/16 to 255 15/16 frames per second")
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
 
 def encode(stream: FapStream, options: EncodeOptions | None = None) -> bytes:
     """Encode a stream; with no options a decoded stream re-encodes with its own parameters."""
@@ -61,8 +80,9 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
     out = stream.copy()
     out.intra = {}
     out.object_mask = np.where(out.object_mask == 0, FACE_BIT, out.object_mask).astype(np.uint8)
-    fps = options.fps or stream.fps
+    fps = options.fps if options.fps is not None else stream.fps
     frame_rate = FrameRate.from_fps(fps)
+    check_span(stream, fps)
     face_quant = _pick(options.fap_quant, first.face.quant if first and first.face else None, 1)
     body_quant = _pick(options.bap_quant, first.body.quant if first and first.body else None, 1)
     period = options.intra_period or 0
@@ -311,6 +331,7 @@ def write(stream: FapStream) -> bytes:
     """
     if 0 not in stream.intra:
         raise FbaError("the first frame must be an intra frame with coding parameters", frame=0)
+    check_span(stream, stream.fps)
     pads: set[int] = set()
     for _ in range(MAX_REPAIRS):
         writer = _Writer(stream, pads)

@@ -12,17 +12,14 @@ stream re-encodes to the same bytes.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from typing import Iterable, Iterator
 
 import numpy as np
 
-from mpeg4fa.spec import FAP_GROUP_SLICES
-
-N_FAPS = 68
-N_BAPS = 296
-N_FAP_GROUPS = 10
-N_BAP_GROUPS = 24
+from mpeg4fa.fba.errors import FbaError
+from mpeg4fa.spec import FAP_GROUP_SLICES, N_BAP_GROUPS, N_BAPS, N_FAP_GROUPS, N_FAPS  # noqa: F401  (the codec's vocabulary)
 
 FACE = 1
 BODY = 2
@@ -53,17 +50,27 @@ class FrameRate:
 
     @classmethod
     def from_fps(cls, fps: float) -> "FrameRate":
-        """The closest representable rate: integer + sixteenths, with the 1000/1001 flag if it fits better."""
-        if not 0 < fps < 256:
-            raise ValueError(f"frame rate {fps} is outside 0 < fps < 256")
+        """The closest representable rate: integer + sixteenths, with the 1000/1001 flag if it fits better.
+
+        Raises :class:`~mpeg4fa.fba.errors.FbaError` for a rate the header cannot carry (not a finite
+        number, <= 0, below 1/16 or above 255 15/16 frames per second).
+        """
+        hint = "an intra header carries 1/16 to 255 15/16 frames per second"
+        if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)):
+            raise FbaError(f"frame rate {fps!r} is not a number", hint=hint)
+        if not math.isfinite(fps) or fps <= 0:
+            raise FbaError(f"frame rate {fps:g} is not a positive finite number", hint=hint)
         candidates = []
         for offset in (0, 1):
             nominal = fps * 1001.0 / 1000.0 if offset else fps
             sixteenths = int(round(nominal * 16))
             rate, seconds = divmod(sixteenths, 16)
-            if 0 <= rate <= 255:
+            if 0 < sixteenths and rate <= 255:
                 candidate = cls(rate, seconds, offset)
                 candidates.append((abs(candidate.fps - fps), offset, candidate))
+        if not candidates:
+            side = "more" if fps > 1 else "less"
+            raise FbaError(f"frame rate {fps:g} is {side} than the bitstream can carry", hint=hint)
         return min(candidates, key=lambda c: (c[0], c[1]))[2]
 
 

@@ -218,7 +218,7 @@ class _Stream:
                        textures=tuple(self.textures), mesh=self.parts.get("mesh"), tables=tuple(self.tables),
                        fapu=self.parts.get("fapu"), name=self.parts.get("name", ""))
         except FdpValueError as exc:
-            raise FdpError.at_byte(self.path, self._place(exc.where), exc.message) from None
+            raise FdpError.at_byte(self.path, self._place(exc.field), exc.message) from None
 
     def _place(self, where: Where) -> int:
         head = where[0] if where else None

@@ -3,13 +3,14 @@
 Every reader in :mod:`mpeg4fa.fdp` reports bad content as an :class:`FdpError`
 that points at the spot to fix: ``path:line:column`` for the text forms (JSON,
 Xface XML) and ``path: byte N`` for the binary stream. It is a
-:class:`~mpeg4fa.formats.errors.FormatError` (and so a ``ValueError``), so callers
-that already catch the formats layer's error catch this one too.
+:class:`~mpeg4fa.formats.errors.FormatError` (and so an
+:class:`~mpeg4fa.errors.MpegFaError` and a ``ValueError``), so callers that
+already catch the formats layer's error catch this one too.
 """
 from __future__ import annotations
 
 import os
-from pathlib import Path
+import stat
 
 from mpeg4fa.formats.errors import FormatError
 
@@ -33,40 +34,37 @@ class FdpError(FormatError):
         """An error in a binary stream at byte ``offset``."""
         return cls(path, None, None, problem, hint, offset)
 
-    @classmethod
-    def no_place(cls, path: str, problem: str, hint: str = "") -> "FdpError":
-        """An error about the file as a whole (unreadable, unrecognised)."""
-        return cls(path, None, None, problem, hint)
-
-    @classmethod
-    def from_os_error(cls, path: str, exc: OSError) -> "FdpError":
-        """A file that cannot be opened, read or written, said plainly."""
-        if isinstance(exc, FileNotFoundError):
-            return cls.no_place(path, "no such file", "check the path and the current directory")
-        if isinstance(exc, IsADirectoryError):
-            return cls.no_place(path, "is a directory, not a file", "name the FDP file inside it")
-        if isinstance(exc, PermissionError):
-            return cls.no_place(path, "permission denied", "check the file's permissions")
-        return cls.no_place(path, f"cannot access the file: {exc.strerror or exc}")
-
-    def _render(self) -> str:
+    @property  # type: ignore[override]
+    def where(self) -> str:
+        """``path: byte N`` for the binary form, else ``path:line:column`` (or less)."""
         if self.offset is not None:
-            where = f"{self.path}: byte {self.offset}"
-        elif self.line is None:
-            where = self.path
-        elif self.column is None:
-            where = f"{self.path}:{self.line}"
-        else:
-            where = f"{self.path}:{self.line}:{self.column}"
-        return f"{where}: {self.problem} ({self.hint})" if self.hint else f"{where}: {self.problem}"
+            return f"{self.path}: byte {self.offset}"
+        return super().where
 
     def __reduce__(self):  # keep every attribute when pickled
         return (type(self), (self.path, self.line, self.column, self.problem, self.hint, self.offset))
 
 
+MAX_FILE_BYTES = 256 << 20
+"""Largest FDP file read (256 MiB): far above any face (a textured mesh of a million vertices is
+~60 MB), low enough that a wrong path (a disk image, a device) fails at once instead of filling memory."""
+
+
 def read_bytes(path: "str | os.PathLike[str]") -> bytes:
-    """The file's bytes; a missing or unreadable file becomes an :class:`FdpError` naming it."""
+    """The file's bytes; a missing, unreadable, oversized or non-file path becomes an :class:`FdpError` naming it."""
+    name = str(path)
     try:
-        return Path(path).read_bytes()
+        with open(path, "rb") as handle:
+            info = os.fstat(handle.fileno())
+            if not (stat.S_ISREG(info.st_mode) or stat.S_ISFIFO(info.st_mode)):
+                raise FdpError.no_place(name, "is not a regular file (a device or socket?)", "name an FDP file")
+            if info.st_size > MAX_FILE_BYTES:
+                raise FdpError.no_place(name, f"is {info.st_size:,} bytes, more than an FDP file may be "
+                                        f"({MAX_FILE_BYTES:,})", "is this an FDP file?")
+            data = handle.read(MAX_FILE_BYTES + 1)
     except OSError as exc:
-        raise FdpError.from_os_error(str(path), exc) from None
+        raise FdpError.from_os_error(name, exc) from None
+    if len(data) > MAX_FILE_BYTES:
+        raise FdpError.no_place(name, f"holds more than {MAX_FILE_BYTES:,} bytes, more than an FDP file may be",
+                                "is this an FDP file?")
+    return data

@@ -38,6 +38,7 @@ import numpy as np
 from mpeg4fa.fdp.errors import FdpError
 from mpeg4fa.fdp.model import (FAPU_KEYS, INT32_MAX, INT32_MIN, UINT32_MAX, FaceDefMesh, FaceDefTable,
                                FaceDefTransform, Fdp, FdpMesh, FdpValueError, TextureImage, Where)
+from mpeg4fa.spec import N_FAPS
 
 FORMAT = "mpeg4fa-fdp"
 VERSION = 1
@@ -196,11 +197,11 @@ class _Doc:
         return FdpError(self.path, line, col, problem, hint)
 
     def build(self, prefix: Where, make: Callable[..., Any], *args: Any, **kw: Any) -> Any:
-        """``make(*args, **kw)``, with a model error reported at ``prefix + error.where``."""
+        """``make(*args, **kw)``, with a model error reported at ``prefix + error.field``."""
         try:
             return make(*args, **kw)
         except FdpValueError as exc:
-            raise self.fail(prefix + exc.where, exc.message, key=exc.key) from None
+            raise self.fail(prefix + exc.field, exc.message, key=exc.key) from None
 
     def obj(self, value: Any, where: Where, what: str, keys: tuple[str, ...],
             required: tuple[str, ...] = ()) -> dict:
@@ -418,7 +419,7 @@ def _tables(doc: _Doc, top: dict) -> tuple[FaceDefTable, ...]:
     for i, item in enumerate(doc.array(top.get("face_def_tables", []), ("face_def_tables",), "face_def_tables")):
         here: Where = ("face_def_tables", i)
         table = doc.obj(item, here, "a face def table", _TABLE_KEYS, required=("fap",))
-        fap = doc.integer(table["fap"], here + ("fap",), "fap", 1, 68)
+        fap = doc.integer(table["fap"], here + ("fap",), "fap", 1, N_FAPS)
         hls = doc.integer(table.get("high_level_select", 1), here + ("high_level_select",), "high_level_select",
                           1, 64)
         meshes = tuple(_face_def_mesh(doc, m, here + ("meshes", j))

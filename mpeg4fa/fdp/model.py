@@ -7,9 +7,9 @@ the shape of the BIFS FaceDefTables / FaceDefMesh / FaceDefTransform nodes
 (facts file §5.11).
 
 Objects are immutable: constructors copy and check their inputs and store
-read-only numpy arrays. A bad value raises :class:`FdpValueError`, a plain
-``ValueError`` that also carries ``where``, the path of the fault in the JSON
-form (``("feature_points", "2.1")``, ``("mesh", "triangles", 7)``); the readers
+read-only numpy arrays. A bad value raises :class:`FdpValueError`, an
+:class:`~mpeg4fa.errors.MpegFaError` and ``ValueError`` that also carries ``field``, the path of the
+fault in the JSON form (``("feature_points", "2.1")``, ``("mesh", "triangles", 7)``); the readers
 turn that path into a line:column or byte offset. Equality compares arrays by
 value, so round trips can be checked with ``==``.
 """
@@ -24,13 +24,14 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mpeg4fa.spec import FEATURE_POINTS, N_FAPS
+from mpeg4fa.errors import MpegFaError
+from mpeg4fa.spec import FAPU_NAMES, FEATURE_POINTS, N_FAPS
 
 LABELS: tuple[str, ...] = tuple(fp.label for fp in FEATURE_POINTS)
 """The 84 feature point labels in the standard's (ascending) order."""
 LABEL_INDEX: dict[str, int] = {label: i for i, label in enumerate(LABELS)}
-FAPU_KEYS: tuple[str, ...] = ("IRISD0", "ES0", "ENS0", "MNS0", "MW0")
-"""Neutral-face distances a sender may give; FAPU = distance / 1024 (AU is fixed, so absent)."""
+FAPU_KEYS: tuple[str, ...] = FAPU_NAMES
+"""Neutral-face distances a sender may give, in ``spec/fapu.csv`` order; FAPU = distance / 1024 (AU is fixed, so absent)."""
 TRANSFORM_FIELDS: tuple[str, ...] = ("rotation", "scale", "translation")
 MAX_HIGH_LEVEL_SELECT = 64
 MAX_TEXT_BYTES = 0xFFFF
@@ -42,18 +43,21 @@ Where = tuple[Any, ...]
 _MEDIA_TYPE = re.compile(r"[A-Za-z0-9][A-Za-z0-9!#$&^_.+-]*/[A-Za-z0-9][A-Za-z0-9!#$&^_.+-]*\Z")
 
 
-class FdpValueError(ValueError):
-    """A value the model rejects; ``where`` is its path in the JSON form (may be relative)."""
+class FdpValueError(MpegFaError, ValueError):
+    """A value the model rejects; ``field`` is its path in the JSON form (may be relative).
 
-    def __init__(self, message: str, where: Where = (), key: bool = False) -> None:
-        self.message = message
-        self.where = tuple(where)
+    ``where`` renders that path as text (``feature_points/2.1``), so ``str()`` reads
+    ``feature_points/2.1: message``; the readers turn ``field`` into a line:column or byte offset.
+    """
+
+    def __init__(self, message: str, where: Where = (), key: bool = False, hint: str = "") -> None:
+        self.field: Where = tuple(where)
         self.key = key
         """True when the fault is the last path element itself (a bad label), not the value under it."""
-        super().__init__(message)
+        super().__init__(message, "/".join(str(part) for part in self.field) or None, hint)
 
     def __reduce__(self):
-        return (type(self), (self.message, self.where, self.key))
+        return (type(self), (self.message, self.field, self.key, self.hint))
 
 
 # ---- checking helpers -----------------------------------------------------------------
@@ -432,8 +436,9 @@ class Fdp(_ValueEquality):
     @staticmethod
     def _label_path(exc: FdpValueError, labels: list[str]) -> FdpValueError:
         """Turn a row index in an error path into the row's label."""
-        if len(exc.where) >= 2 and isinstance(exc.where[1], int) and exc.where[1] < len(labels):
-            return FdpValueError(exc.message, (exc.where[0], labels[exc.where[1]]) + exc.where[2:])
+        if len(exc.field) >= 2 and isinstance(exc.field[1], int) and exc.field[1] < len(labels):
+            field = (exc.field[0], labels[exc.field[1]]) + exc.field[2:]
+            return FdpValueError(exc.message, field, exc.key, exc.hint)
         return exc
 
     def _check_parts(self) -> None:

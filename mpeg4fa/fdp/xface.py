@@ -126,7 +126,7 @@ class XfaceFdp:
         try:
             return Fdp.from_points(coords, fapu=dict(self.fapu) or None, name=name)
         except FdpValueError as exc:
-            label = exc.where[1] if len(exc.where) > 1 and exc.where[0] == "feature_points" else None
+            label = exc.field[1] if len(exc.field) > 1 and exc.field[0] == "feature_points" else None
             entry = next((e for e in self.entries if e.label == label), None)
             if entry is None:
                 raise
@@ -205,7 +205,26 @@ def _parse_tree(data: bytes, path: str, override_utf8: bool) -> _Node:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
         raise FdpError(path, exc.lineno, exc.offset + 1, f"invalid XML: {expat.ErrorString(exc.code)}") from None
+    except FdpError:
+        raise
+    except (LookupError, ValueError) as exc:  # expat asks Python's codecs for a declared encoding it lacks
+        raise _encoding_error(data, path, exc) from None
     return roots[0]
+
+
+_ENCODING = re.compile(rb"""<\?xml[^>]*?\sencoding\s*=\s*["']([^"']*)""")
+
+
+def _encoding_error(data: bytes, path: str, exc: Exception) -> FdpError:
+    """The declared encoding cannot be decoded (unknown, multi-byte or not a text codec): said at its name."""
+    head = data.lstrip(b"\xef\xbb\xbf \t\r\n")
+    found = _ENCODING.match(head)
+    hint = "save the file as UTF-8 and declare encoding=\"UTF-8\""
+    if found is None:
+        return FdpError(path, 1, 1, f"cannot decode the file's text ({exc})", hint)
+    offset = len(data) - len(head) + found.start(1)
+    name = found.group(1).decode("ascii", "replace")
+    return _Source(data, path).at_byte(offset, f"unknown or unsupported XML encoding {name!r} ({exc})", hint)
 
 
 def _attr(src: _Source, node: _Node, name: str) -> str:

@@ -15,9 +15,20 @@ Files come from several programs with their own quirks (CRLF and trailing spaces
 from Xface, 69-entry masks from Greta, a leading comment from VREng, names with
 spaces), so the reader is lenient about layout and strict about numbers: every
 problem is a :class:`FormatError` pointing at the line and column to fix.
+
+Limits, so that a few bytes cannot ask for absurd work: a line holds at most
+:data:`MAX_LINE_CHARS` characters; the frame rate must be one an FBA intra header
+can carry (1/16 to 255 15/16 fps, :func:`mpeg4fa.fba.limits.fps_problem`); frame
+numbers stay within 24 h of frames at that rate (:func:`mpeg4fa.fba.limits.frame_limit`;
+a gap between frame numbers is a ``skip`` count, never materialised frames); FAP
+values fit int32 and FAP 1/FAP 2 fields their ranges
+(:func:`mpeg4fa.spec.profiles.high_level_problem`). The header's frame count is
+not trusted and allocates nothing. Files are read as UTF-8 (a BOM is skipped);
+UTF-16 text or NUL bytes are refused as "not a text .fap file".
 """
 from __future__ import annotations
 
+import io
 import math
 import os
 import re
@@ -28,8 +39,11 @@ from typing import IO, Iterable, Iterator, NamedTuple, Union, cast
 
 import numpy as np
 
+from mpeg4fa.decoded import explicit
+from mpeg4fa.fba.limits import MAX_SPAN_SECONDS, fps_problem, frame_limit
 from mpeg4fa.fba.stream import N_FAPS, FapStream
 from mpeg4fa.formats.errors import FormatError
+from mpeg4fa.spec.profiles import first_high_level_fault, high_level_problem
 
 SUPPORTED_VERSIONS = ("1.1", "2.0", "2.1", "2.2")
 """Header versions read (all with the same layout) and accepted by :func:`write_fap`."""
@@ -45,6 +59,11 @@ _TOKEN = re.compile(r"\S+")
 _INT = re.compile(r"[+-]?[0-9]+\Z")
 _FLOAT = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")
 _MAX_INT_DIGITS = 12  # longer than any int32, short enough for int() to stay cheap and safe
+_MAX_TOKEN = 24
+"""Longest number token read; an int32 with sign takes 11 characters, a few leading zeros are tolerated."""
+MAX_LINE_CHARS = 1 << 16
+"""Longest line read (65,536 characters): a frame line of all 68 FAPs takes about 1,000."""
+_UTF16_BOMS = (b"\xff\xfe", b"\xfe\xff")
 
 
 class FapHeader(NamedTuple):
@@ -92,11 +111,22 @@ class _Line:
         return self.text[spans[first][0]:spans[last][1]]
 
 
+def _bounded_lines(handle: Iterable[str | bytes]) -> Iterator[str | bytes]:
+    """The handle's lines, none longer than :data:`MAX_LINE_CHARS` + 1 (so a file without line ends
+    cannot fill memory): ``readline`` with a limit where the handle has one."""
+    readline = getattr(handle, "readline", None)
+    if readline is None:
+        yield from handle
+        return
+    while line := readline(MAX_LINE_CHARS + 1):
+        yield line
+
+
 class _LineReader:
     """Skips blank and ``#`` lines, and counts lines so that end-of-file errors can say where."""
 
     def __init__(self, handle: Iterable[str | bytes], path: str) -> None:
-        self._lines = iter(handle)
+        self._lines = _bounded_lines(handle)
         self.path = path
         self.count = 0
 
@@ -109,13 +139,26 @@ class _LineReader:
             except UnicodeDecodeError as exc:
                 raise FormatError(self.path, self.count + 1, None, f"the line is not valid text ({exc.reason})",
                                   "save the file as ASCII or UTF-8") from None
+            except OSError as exc:
+                raise FormatError.from_os_error(self.path, exc) from None
             self.count += 1
             text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else raw
             if self.count == 1:
                 text = text.lstrip("\ufeff")  # a byte-order mark is not part of the header
+            self._check_text(text)
             stripped = text.strip()
             if stripped and not stripped.startswith("#"):
                 return _Line(self.count, text.rstrip("\r\n"))
+
+    def _check_text(self, text: str) -> None:
+        if len(text) > MAX_LINE_CHARS:
+            raise FormatError(self.path, self.count, None, f"line is longer than {MAX_LINE_CHARS:,} characters",
+                              "a .fap line holds the header, a mask or one frame; is this a .fap file?")
+        nul = text.find("\x00")
+        if nul >= 0:
+            raise FormatError(self.path, self.count, nul + 1, "NUL byte: this is not a text .fap file",
+                              "an .fba stream is read by decode() or read_stream(); UTF-16 text must be saved "
+                              "as UTF-8")
 
     def error_at_end(self, problem: str, hint: str) -> FormatError:
         return FormatError(self.path, self.count + 1, None, problem, hint)
@@ -126,9 +169,19 @@ def _open_source(source: Source, name: str | None) -> Iterator[tuple[Iterable[st
     """Yield (lines, label for messages); close the file only if we opened it."""
     if isinstance(source, (str, bytes, os.PathLike)):
         label = name if name is not None else os.fsdecode(source)
-        # errors="replace": a stray byte in the free-text name must not stop the read
-        with open(source, encoding="utf-8-sig", errors="replace") as handle:
-            yield handle, label
+        try:
+            raw = open(source, "rb")
+        except OSError as exc:
+            raise FormatError.from_os_error(label, exc) from None
+        with raw:
+            try:
+                head = raw.peek(2)[:2] if hasattr(raw, "peek") else b""
+            except OSError as exc:
+                raise FormatError.from_os_error(label, exc) from None
+            if head in _UTF16_BOMS:
+                raise FormatError(label, 1, 1, "the file is UTF-16 text", "save it as ASCII or UTF-8")
+            # errors="replace": a stray byte in the free-text name must not stop the read
+            yield io.TextIOWrapper(raw, encoding="utf-8-sig", errors="replace"), label
     else:
         stream_name = getattr(source, "name", None)
         label = name if name is not None else (stream_name if isinstance(stream_name, str) else "<stream>")
@@ -147,19 +200,30 @@ def _integer(line: _Line, index: int, path: str, what: str, low: int, high: int,
     token = line.tokens[index]
     if not _INT.match(token):
         raise FormatError(path, line.number, line.column(index), f"{what} {_short(token)!r} is not an integer", hint)
-    if len(token.lstrip("+-").lstrip("0")) > _MAX_INT_DIGITS or not low <= int(token) <= high:
+    if len(token) > _MAX_TOKEN:  # 4,301 zeros would also trip int()'s digit limit
+        raise FormatError(path, line.number, line.column(index),
+                          f"{what} {_short(token)} is {len(token):,} characters long, too long for a number in "
+                          f"{low}..{high}", hint)
+    digits = token.lstrip("+-").lstrip("0") or "0"
+    value = int(digits) if len(digits) <= _MAX_INT_DIGITS else None
+    if value is not None and token.startswith("-"):
+        value = -value
+    if value is None or not low <= value <= high:
         raise FormatError(path, line.number, line.column(index),
                           f"{what} {_short(token)} is out of range {low}..{high}", hint)
-    return int(token)
+    return value
 
 
 def _fps(line: _Line, index: int, path: str) -> float:
     token = line.tokens[index]
-    value = float(token) if _FLOAT.match(token) else math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise FormatError(path, line.number, line.column(index),
-                          f"frame rate {_short(token)!r} is not a positive number",
-                          "the third header field is frames per second, e.g. 25 or 29.97")
+    hint = "the third header field is frames per second, e.g. 25 or 29.97"
+    if not _FLOAT.match(token) or len(token) > 64:
+        raise FormatError(path, line.number, line.column(index), f"frame rate {_short(token)!r} is not a number", hint)
+    value = float(token)
+    problem = fps_problem(value)
+    if problem is not None:
+        raise FormatError(path, line.number, line.column(index), problem,
+                          "an FBA stream carries 1/16 to 255 15/16 frames per second")
     return value
 
 
@@ -207,9 +271,15 @@ def _value_count(mask: np.ndarray) -> int:
     return VISEME_WIDTH * int(mask[0]) + EXPRESSION_WIDTH * int(mask[1]) + int(mask[2:].sum())
 
 
-def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int, path: str) -> FapRecord:
+def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int, path: str, fps: float) -> FapRecord:
     number = _integer(line, 0, path, "frame number", 0, INT32_MAX,
                       "a frame line starts with its frame number, a whole number >= 0")
+    if number >= frame_limit(fps):
+        raise FormatError(path, line.number, line.column(0),
+                          f"frame number {number:,} lies {number / fps / 3600:,.1f} h into the stream at {fps:g} fps, "
+                          f"past the {MAX_SPAN_SECONDS // 3600} h a stream may span",
+                          f"frame numbers run below {frame_limit(fps):,} at {fps:g} fps; renumber the frames or "
+                          "split the file")
     if number <= previous:
         raise FormatError(path, line.number, line.column(0),
                           f"frame number {number} does not increase (the previous frame is {previous})",
@@ -223,6 +293,14 @@ def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int,
                           "give one value per masked FAP, 4 for FAP 1 and 6 for FAP 2, in FAP order")
     ints = [_integer(line, i, path, "value", INT32_MIN, INT32_MAX, "FAP values are whole numbers in FAPU")
             for i in range(1, got + 1)]
+    first = 1  # token index of the FAP 1 fields, then of the FAP 2 fields
+    for fap, width in ((1, VISEME_WIDTH), (2, EXPRESSION_WIDTH)):
+        if mask[fap - 1]:
+            fault = high_level_problem(fap, ints[first - 1:first - 1 + width])
+            if fault is not None:
+                k, problem, hint = fault
+                raise FormatError(path, line.number, line.column(first + k), f"frame {number}: {problem}", hint)
+            first += width
     return _record(number, mask, np.array(ints, dtype=np.int32))
 
 
@@ -250,7 +328,8 @@ def _parse(source: Source, name: str | None) -> Iterator[FapHeader | FapRecord]:
         if header_line is None:
             raise lines.error_at_end("the file has no header",
                                      "start with '<version> <name> <fps> <number_of_frames>', e.g. '2.1 a.fap 25 0'")
-        yield _parse_header(header_line, path)
+        header = _parse_header(header_line, path)
+        yield header
         previous = -1
         while (mask_line := lines.next()) is not None:
             mask = _parse_mask(mask_line, path)
@@ -259,7 +338,7 @@ def _parse(source: Source, name: str | None) -> Iterator[FapHeader | FapRecord]:
                 raise lines.error_at_end(f"the file ends after the mask line at line {mask_line.number}",
                                          "add its frame line (frame number, then the masked values) "
                                          "or delete the mask line")
-            record = _parse_frame(frame_line, mask, mask_line, previous, path)
+            record = _parse_frame(frame_line, mask, mask_line, previous, path, header.fps)
             previous = record.frame_number
             yield record
 
@@ -310,14 +389,21 @@ def write_fap(stream: FapStream, target: Target, *, name: str | None = None, ver
     """Write ``stream`` as a ``.fap`` file in the common 2.1 layout.
 
     Frame numbers start at 0 and grow by ``skip + 1``, so skipped frames show as
-    gaps; timestamps are not written (readers rebuild them from fps). BAPs have
+    gaps; FAPs the stream leaves to interpolation (mask type 2) are written as sent
+    (:func:`mpeg4fa.decoded.explicit`: the format has no mask types); timestamps are not written (readers rebuild them from fps). BAPs have
     no place in the format: they are dropped with a warning. Everything is
     checked before the first byte is written, so a bad stream leaves no partial file.
     """
     label = os.fsdecode(target) if isinstance(target, (str, bytes, os.PathLike)) else _stream_label(target)
-    numbers = _frame_numbers(stream, label)
+    stream = explicit(stream)  # a .fap cannot say "interpolate": FAPs a decoder copies are written out
+    fps = float(stream.fps)
+    problem = fps_problem(fps)
+    if problem is not None:
+        raise FormatError(label, 1, None, problem, "set stream.source_fps (or an intra frame rate) to the real rate")
+    numbers = _frame_numbers(stream, label, fps)
+    _check_high_level(stream, label)
     n_frames = int(numbers[-1]) + 1 if len(numbers) else 0
-    header = _format_header(stream, label, _header_name(name, label), version, n_frames)
+    header = _format_header(label, _header_name(name, label), version, fps, n_frames)
     if stream.bap_mask.any():
         warnings.warn(f"{int(stream.bap_mask.any(axis=1).sum())} frames carry BAPs (body animation); "
                       ".fap holds face parameters only, so the BAPs are dropped", UserWarning, stacklevel=2)
@@ -341,7 +427,7 @@ def _header_name(name: str | None, label: str) -> str:
     return (Path(label).name if label != "<stream>" else "") or "stream.fap"
 
 
-def _format_header(stream: FapStream, label: str, name: str, version: str, n_frames: int) -> str:
+def _format_header(label: str, name: str, version: str, fps: float, n_frames: int) -> str:
     if version not in SUPPORTED_VERSIONS:
         raise FormatError(label, 1, 1, f"cannot write .fap version {version!r}",
                           f"use one of {', '.join(SUPPORTED_VERSIONS)}")
@@ -349,15 +435,11 @@ def _format_header(stream: FapStream, label: str, name: str, version: str, n_fra
     if not clean or "\n" in clean or "\r" in clean:
         raise FormatError(label, 1, None, f"header name {name!r} is empty or spans lines",
                           "pass a one-line name, e.g. name='joy.fap'")
-    fps = float(stream.fps)
-    if not (math.isfinite(fps) and fps > 0):
-        raise FormatError(label, 1, None, f"frame rate {fps} is not a positive number",
-                          "set stream.source_fps (or an intra frame rate) to the real rate")
     fps_text = str(int(fps)) if fps.is_integer() else f"{fps:g}"
     return f"{version} {clean} {fps_text} {n_frames}"
 
 
-def _frame_numbers(stream: FapStream, label: str) -> np.ndarray:
+def _frame_numbers(stream: FapStream, label: str, fps: float) -> np.ndarray:
     """0, then previous + skip[previous] + 1: skipped frames become gaps."""
     skip = np.asarray(stream.skip, dtype=np.int64)
     if len(skip) and skip.min() < 0:
@@ -365,10 +447,22 @@ def _frame_numbers(stream: FapStream, label: str) -> np.ndarray:
         raise FormatError(label, 2 * k + 3, 1, f"frame {k} has skip {int(skip[k])} < 0",
                           "skip counts frames left out after a frame and cannot be negative")
     numbers = np.concatenate([[0], np.cumsum(skip[:-1] + 1)]) if len(skip) else skip
-    if len(numbers) and numbers[-1] > INT32_MAX:
-        raise FormatError(label, 2 * len(numbers) + 1, 1, f"frame number {int(numbers[-1])} is too large",
-                          "reduce the skip counts")
+    if len(numbers) and numbers[-1] >= frame_limit(fps):
+        k = int(np.argmax(numbers >= frame_limit(fps)))
+        raise FormatError(label, 2 * k + 3, 1, f"frame number {int(numbers[k]):,} is past the "
+                          f"{MAX_SPAN_SECONDS // 3600} h a stream may span at {fps:g} fps",
+                          "reduce the skip counts or split the stream")
     return numbers.astype(np.int64)
+
+
+def _check_high_level(stream: FapStream, label: str) -> None:
+    """FAP 1/FAP 2 fields the reader would refuse are refused before anything is written."""
+    for fap, table in ((1, stream.viseme), (2, stream.expression)):
+        sent = np.asarray(stream.fap_mask, dtype=bool)[:, fap - 1]
+        fault = first_high_level_fault(fap, np.where(sent[:, None], table, 0))
+        if fault is not None:
+            k, _, problem, hint = fault
+            raise FormatError(label, 2 * k + 3, None, f"frame {k}: {problem}", hint)
 
 
 def _format_lines(stream: FapStream, header: str, numbers: np.ndarray) -> Iterator[str]:

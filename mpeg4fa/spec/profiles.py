@@ -20,25 +20,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mpeg4fa.spec import EXPRESSIONS, FAPS, HIGH_LEVEL_FIELDS, N_FAPS, VISEMES
+from mpeg4fa.spec import EXPRESSIONS, FAPS, FULL_INTENSITY, HIGH_LEVEL_FIELDS, N_FAPS, VISEMES
 from mpeg4fa.spec._load import check, read_table, split_list
+from mpeg4fa.spec.errors import SpecError
 
 __all__ = [
     "ChineseViseme", "CHINESE_VISEMES", "CHINESE_VISEME_BY_PINYIN", "VISEME_PROFILES",
     "EXPRESSION_PROFILES", "viseme_blend", "expression_blend", "expand_high_level",
-    "build_viseme_profiles", "build_expression_profiles",
+    "build_viseme_profiles", "build_expression_profiles", "high_level_problem",
+    "first_high_level_fault", "SpecError",
 ]
 
 MPEG4 = "mpeg4"
 """Name of the viseme set that FAP 1's select codes 0..14 index (``visemes.csv``)."""
 
 _RANGE = {(f.fap, f.field): (f.i_min, f.i_max) for f in HIGH_LEVEL_FIELDS}
-_FULL = _RANGE[(1, "blend")][1]
+_FULL = FULL_INTENSITY
 """Blend or intensity that means "all of it" (63): profiles are stored at this strength."""
 check(_RANGE[(1, "select1")] == (0, len(VISEMES) - 1), "viseme select range must cover visemes.csv")
 check(_RANGE[(2, "select1")] == (0, len(EXPRESSIONS) - 1),
       "expression select range must cover expressions.csv")
-check(_RANGE[(2, "intensity1")][1] == _FULL, "blend and intensity must share one full scale")
 
 _NAME = re.compile(r"[a-z][a-z0-9_]*")
 _INTEGER = re.compile(r"[+-]?[0-9]+")
@@ -211,37 +212,37 @@ def _level(value: object, field: str) -> int:
     """A blend or intensity, checked against the field's range 0..63."""
     lo, hi = _RANGE[(1, "blend")]
     if not _is_int(value):
-        raise ValueError(f"{field} {value!r} is not an integer in {lo}..{hi}")
+        raise SpecError(f"{field} {value!r} is not an integer in {lo}..{hi}")
     if not lo <= value <= hi:
-        raise ValueError(f"{field} {value!r} out of range {lo}..{hi}")
+        raise SpecError(f"{field} {value!r} out of range {lo}..{hi}")
     return int(value)
 
 
 def _viseme(select: int | str, set_name: str) -> np.ndarray:
     if set_name not in VISEME_PROFILES:
-        raise ValueError(f"unknown viseme set {set_name!r} (known: {', '.join(VISEME_PROFILES)})")
+        raise SpecError(f"unknown viseme set {set_name!r} (known: {', '.join(VISEME_PROFILES)})")
     profiles = VISEME_PROFILES[set_name]
     if isinstance(select, str):
         if select not in profiles:
-            raise ValueError(f"viseme {select!r} is not in set {set_name!r} (known: {', '.join(profiles)})")
+            raise SpecError(f"viseme {select!r} is not in set {set_name!r} (known: {', '.join(profiles)})")
         return profiles[select]
     lo, hi = _RANGE[(1, "select1")]
     if set_name != MPEG4:
-        raise ValueError(f"viseme select {select!r}: numbers are FAP 1 codes of the {MPEG4} set; "
+        raise SpecError(f"viseme select {select!r}: numbers are FAP 1 codes of the {MPEG4} set; "
                          f"name a viseme of set {set_name!r} instead")
     if not _is_int(select) or not lo <= select <= hi:
-        raise ValueError(f"viseme select {select!r} out of range {lo}..{hi} (or a viseme name)")
+        raise SpecError(f"viseme select {select!r} out of range {lo}..{hi} (or a viseme name)")
     return profiles[VISEMES[int(select)].name]
 
 
 def _expression(select: int | str) -> np.ndarray:
     if isinstance(select, str):
         if select not in EXPRESSION_PROFILES:
-            raise ValueError(f"unknown expression {select!r} (known: {', '.join(EXPRESSION_PROFILES)})")
+            raise SpecError(f"unknown expression {select!r} (known: {', '.join(EXPRESSION_PROFILES)})")
         return EXPRESSION_PROFILES[select]
     lo, hi = _RANGE[(2, "select1")]
     if not _is_int(select) or not lo <= select <= hi:
-        raise ValueError(f"expression select {select!r} out of range {lo}..{hi} (or an expression name)")
+        raise SpecError(f"expression select {select!r} out of range {lo}..{hi} (or an expression name)")
     return EXPRESSION_PROFILES[EXPRESSIONS[int(select)].name]
 
 
@@ -269,11 +270,62 @@ def expression_blend(select1: int | str, intensity1: int, select2: int | str, in
     return e1 * (i1 / _FULL) + e2 * (i2 / _FULL)
 
 
-def _check_column(column: np.ndarray, lo: int, hi: int, field: str) -> None:
-    bad = np.flatnonzero((column < lo) | (column > hi))
-    if bad.size:
-        k = int(bad[0])
-        raise ValueError(f"frame {k}: {field} {int(column[k])} out of range {lo}..{hi}")
+_ROUNDING = 15
+"""How far above full strength (63) a legal stream brings a blend or intensity back: fap_quant up
+to 31 with the reference rounding adds up to 31 // 2 (64 at q = 2, 65 at q = 5)."""
+
+_LIMITS: dict[int, tuple[tuple[str, int, int, str], ...]] = {
+    fap: tuple((f"{part}_{f.field}", f.i_min, f.i_max + _ROUNDING, "level") if f.quantised
+               else (f"{part}_{f.field}", f.i_min, f.i_max, "select")
+               for f in HIGH_LEVEL_FIELDS if f.fap == fap)
+    + tuple((name, 0, 1, "flag") for name in flags)
+    for fap, part, flags in ((1, "viseme", ("viseme_def",)), (2, "expression", ("init_face", "expression_def")))
+}
+"""Per FAP 1/2, the fields of a ``FapStream`` row (viseme: select1, select2, blend, def; expression:
+select1, intensity1, select2, intensity2, init_face, def) as (syntax name, lowest, highest, kind):
+the arithmetic-coded fields from ``high_level_fields.csv``, then the one-bit flags. The one rule for
+these fields: streams (:func:`expand_high_level`) and ``.fap`` files (:mod:`mpeg4fa.formats.fap_text`)
+are checked against it."""
+_NAMED = {1: "a viseme", 2: "an expression"}
+
+
+def high_level_problem(fap: int, row) -> tuple[int, str, str] | None:
+    """The first field of one FAP 1 (``fap=1``) or FAP 2 row outside its range, as (index, problem,
+    hint); None when every field fits. Used by readers that can point at the offending token."""
+    for k, (name, lo, hi, kind) in enumerate(_LIMITS[fap]):
+        value = int(row[k])
+        if lo <= value <= hi:
+            continue
+        if kind == "select":
+            table = "visemes.csv" if fap == 1 else "expressions.csv"
+            return k, f"FAP {fap} {name} = {value} is not {_NAMED[fap]} ({lo}..{hi})", f"selects index {table}"
+        if kind == "flag":
+            return k, f"FAP {fap} {name} = {value} is not a flag (0 or 1)", "a one-bit field"
+        return k, f"FAP {fap} {name} = {value} is out of range {lo}..{hi}", \
+            f"blend and intensity run {lo}..{_FULL}; a quantised stream may bring {_FULL} back as up to {hi}"
+    return None
+
+
+def first_high_level_fault(fap: int, table: np.ndarray) -> tuple[int, int, str, str] | None:
+    """The first frame of a stream's FAP 1 (``viseme``, ``fap=1``) or FAP 2 (``expression``) array
+    whose fields leave their ranges, as (frame, field index, problem, hint); None if all fit."""
+    limits = _LIMITS[fap]
+    lo = np.array([low for _, low, _, _ in limits])
+    hi = np.array([high for _, _, high, _ in limits])
+    bad = np.flatnonzero(((table < lo) | (table > hi)).any(axis=1))
+    if not bad.size:
+        return None
+    k = int(bad[0])
+    index, problem, hint = high_level_problem(fap, table[k])  # type: ignore[misc]
+    return k, index, problem, hint
+
+
+def _check_rows(fap: int, table: np.ndarray) -> None:
+    """Raise a :class:`SpecError` at the first frame whose FAP 1/2 fields leave their ranges."""
+    fault = first_high_level_fault(fap, table)
+    if fault is not None:
+        k, _, problem, hint = fault
+        raise SpecError(problem, where=f"frame {k}", hint=hint)
 
 
 def expand_high_level(viseme: np.ndarray, expression: np.ndarray) -> np.ndarray:
@@ -290,17 +342,12 @@ def expand_high_level(viseme: np.ndarray, expression: np.ndarray) -> np.ndarray:
     """
     vis, exp = np.asarray(viseme), np.asarray(expression)
     if vis.ndim != 2 or vis.shape[1] != 4 or exp.ndim != 2 or exp.shape[1] != 6 or len(vis) != len(exp):
-        raise ValueError(f"viseme must be (n, 4) and expression (n, 6), got {vis.shape} and {exp.shape}")
+        raise SpecError(f"viseme must be (n, 4) and expression (n, 6), got {vis.shape} and {exp.shape}")
     if not (np.issubdtype(vis.dtype, np.integer) and np.issubdtype(exp.dtype, np.integer)):
-        raise ValueError(f"viseme and expression fields must be integers, got {vis.dtype} and {exp.dtype}")
-    # Blend and intensities are quantised by fap_quant (up to 31) with the reference rounding, so a
-    # legal stream can bring 63 back as up to 63 + 31 // 2 (64 at q = 2, 65 at q = 5): clip those.
-    for fap, fields, table in ((1, ("select1", "select2", "blend"), vis),
-                               (2, ("select1", "intensity1", "select2", "intensity2"), exp)):
-        for k, field in enumerate(fields):
-            label = ("viseme " if fap == 1 else "expression ") + field
-            lo, hi = _RANGE[(fap, field)]
-            _check_column(table[:, k], lo, hi + 15 if hi == _FULL else hi, label)
+        raise SpecError(f"viseme and expression fields must be integers, got {vis.dtype} and {exp.dtype}")
+    # Blend and intensities may come back from a quantised stream a little above 63 (_ROUNDING): clipped.
+    _check_rows(1, vis)
+    _check_rows(2, exp)
     w = np.clip(vis[:, 2, None], 0, _FULL) / _FULL
     out = _VISEME_STACK[vis[:, 0]] * w + _VISEME_STACK[vis[:, 1]] * (1.0 - w)
     out += _EXPRESSION_STACK[exp[:, 0]] * (np.clip(exp[:, 1, None], 0, _FULL) / _FULL)

@@ -4,16 +4,20 @@ from __future__ import annotations
 from mpeg4fa.errors import MpegFaError
 
 
-class MarkupError(ValueError):
-    """Tagged text that cannot be read; says where (line:column, both 1-based) and what to write."""
+class MarkupError(MpegFaError, ValueError):
+    """Tagged text that cannot be read; says where (line:column, both 1-based) and what to write.
+
+    ``where`` is ``source:line:column``; ``str()`` reads ``source:line:column: message (hint)``.
+    """
 
     def __init__(self, message: str, line: int, column: int, hint: str = "", source: str = "<text>") -> None:
         self.message, self.line, self.column, self.hint, self.source = message, line, column, hint, source
-        super().__init__(message)
+        ValueError.__init__(self, message)
 
-    def __str__(self) -> str:
-        text = f"{self.source}:{self.line}:{self.column}: {self.message}"
-        return f"{text} ({self.hint})" if self.hint else text
+    @property  # type: ignore[override]
+    def where(self) -> str:
+        """``source:line:column``, computed so that a caller may rename the source after the fact."""
+        return f"{self.source}:{self.line}:{self.column}"
 
     def __reduce__(self):
         return (type(self), (self.message, self.line, self.column, self.hint, self.source))

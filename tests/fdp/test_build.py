@@ -134,7 +134,7 @@ def test_fdp_from_mesh_explicit_points_drop_texture_coords():
 def test_fdp_from_mesh_errors_name_the_label(points, message, where):
     with pytest.raises(FdpValueError, match=re.escape(message)) as err:
         fdp_from_mesh(mesh_from_obj(SQUARE), points)
-    assert err.value.where == where
+    assert err.value.field == where
 
 
 # ---- points files -------------------------------------------------------------------------------
@@ -271,7 +271,7 @@ def test_photos_wrong_way_errors():
     swapped = dict(front, **{"3.5": front["3.6"], "3.6": front["3.5"]})
     with pytest.raises(FdpValueError, match="3.5 .face's left. is left of 3.6") as err:
         points_from_photos(swapped, left, side_view="left")
-    assert err.value.where == ("front", "3.5")
+    assert err.value.field == ("front", "3.5")
     with pytest.raises(FdpValueError, match="in a 'right' photo the nose should point to the image's right"):
         points_from_photos(front, left, side_view="right")
     upside_down = {k: (x, 600 - y) for k, (x, y) in left.items()}
@@ -299,7 +299,7 @@ def test_photos_too_little_shared():
 def test_photos_bad_input(front, side, view, message, where):
     with pytest.raises(FdpValueError, match=re.escape(message)) as err:
         points_from_photos(front, side, side_view=view)
-    assert err.value.where == where
+    assert err.value.field == where
 
 
 # ---- fdp_from_photos and textures ---------------------------------------------------------------

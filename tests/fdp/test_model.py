@@ -91,7 +91,7 @@ def test_bad_points_raise_value_error_with_path(labels, points, message, where):
     with pytest.raises(FdpValueError, match=message) as info:
         Fdp(labels, points)
     assert isinstance(info.value, ValueError)
-    assert info.value.where == where
+    assert info.value.field == where
 
 
 def test_a_single_string_is_not_a_label_sequence():
@@ -102,7 +102,7 @@ def test_a_single_string_is_not_a_label_sequence():
 def test_texture_coords_checks():
     with pytest.raises(FdpValueError, match=r"2.2 must lie in \[0, 1\]") as info:
         Fdp(("2.1", "2.2"), np.zeros((2, 3)), texture_coords=[[0, 0], [1.5, 0]])
-    assert info.value.where == ("texture_coords", "2.2")
+    assert info.value.field == ("texture_coords", "2.2")
     with pytest.raises(FdpValueError, match="2 feature points but 1 texture"):
         Fdp(("2.1", "2.2"), np.zeros((2, 3)), texture_coords=[[0, 0]])
     with pytest.raises(FdpValueError, match="same labels"):
@@ -117,7 +117,7 @@ def test_fapu_checks_and_canonical_order():
         Fdp((), [], fapu={"AU": 1})
     with pytest.raises(FdpValueError, match="positive") as info:
         Fdp((), [], fapu={"ES0": 0})
-    assert info.value.where == ("fapu", "ES0")
+    assert info.value.field == ("fapu", "ES0")
     with pytest.raises(FdpValueError, match="must be a number"):
         Fdp((), [], fapu={"ES0": "1"})
 
@@ -141,7 +141,7 @@ def test_mesh_checks():
     assert mesh.triangles.dtype == np.int64 and mesh.uvs is None
     with pytest.raises(FdpValueError, match=r"\[0, 4\], got 5") as info:
         FdpMesh(np.zeros((5, 3)), [[0, 1, 2], [2, 3, 5]])
-    assert info.value.where == ("triangles", 1)
+    assert info.value.field == ("triangles", 1)
     with pytest.raises(FdpValueError, match="hold integers"):
         FdpMesh(np.zeros((3, 3)), [[0.0, 1.0, 2.0]])
     with pytest.raises(FdpValueError, match="3 vertices but 2 uvs"):
@@ -194,7 +194,7 @@ def test_face_def_mesh_borders_not_around_zero_measure_from_the_nearest_border()
 def test_face_def_mesh_checks():
     with pytest.raises(FdpValueError, match="strictly increasing") as info:
         FaceDefMesh([0], [0, 5, 5], np.zeros((1, 2, 3)))
-    assert info.value.where == ("interval_borders", 2)
+    assert info.value.field == ("interval_borders", 2)
     with pytest.raises(FdpValueError, match="at least 2"):
         FaceDefMesh([0], [0], np.zeros((1, 0, 3)))
     with pytest.raises(FdpValueError, match=r"\(1, 2, 3\)"):
@@ -203,7 +203,7 @@ def test_face_def_mesh_checks():
         FaceDefMesh([0], [0, 2**31], np.zeros((1, 1, 3)))
     with pytest.raises(FdpValueError, match="finite") as info:
         FaceDefMesh([0, 1], [0, 1], [[[0, 0, 0]], [[0, np.nan, 0]]])
-    assert info.value.where == ("displacements", 1)
+    assert info.value.field == ("displacements", 1)
     with pytest.raises(ValueError, match="finite"):
         two_interval_mesh().displace(float("nan"))
     empty = FaceDefMesh([], [0, 1], [])
@@ -251,24 +251,24 @@ def test_face_def_table_ranges():
         FaceDefTable(1, 65)
     with pytest.raises(FdpValueError, match="FaceDefMesh objects") as info:
         FaceDefTable(3, 1, meshes=("nope",))  # type: ignore[arg-type]
-    assert info.value.where == ("meshes", 0)
+    assert info.value.field == ("meshes", 0)
 
 
 def test_tables_need_the_mesh_they_index():
     table = FaceDefTable(3, 1, (FaceDefMesh([0, 9], [0, 1], np.zeros((2, 1, 3))),))
     with pytest.raises(FdpValueError, match="needs the FDP's mesh") as info:
         Fdp((), [], tables=(table,))
-    assert info.value.where == ("face_def_tables", 0, "meshes", 0)
+    assert info.value.field == ("face_def_tables", 0, "meshes", 0)
     with pytest.raises(FdpValueError, match="coord_index 9 is beyond the mesh's 5 vertices") as info:
         Fdp((), [], mesh=small_mesh(), tables=[table])
-    assert info.value.where == ("face_def_tables", 0, "meshes", 0, "coord_index", 1)
+    assert info.value.field == ("face_def_tables", 0, "meshes", 0, "coord_index", 1)
 
 
 def test_duplicate_tables_are_rejected_but_high_level_selects_differ():
     Fdp((), [], tables=(FaceDefTable(1, 1), FaceDefTable(1, 2)))
     with pytest.raises(FdpValueError, match="already has a table") as info:
         Fdp((), [], tables=(FaceDefTable(5), FaceDefTable(5)))
-    assert info.value.where == ("face_def_tables", 1, "fap")
+    assert info.value.field == ("face_def_tables", 1, "fap")
 
 
 def test_repr_is_short():
@@ -299,4 +299,4 @@ def test_fdp_error_pickles_with_every_attribute():
         assert (back.path, back.line, back.column, back.offset, back.problem, back.hint) == \
             (err.path, err.line, err.column, err.offset, err.problem, err.hint)
     value_error = pickle.loads(pickle.dumps(FdpValueError("m", ("a", 1))))
-    assert value_error.where == ("a", 1)
+    assert value_error.field == ("a", 1) and value_error.where == "a/1" and str(value_error) == "a/1: m"

@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 
 import mpeg4fa.spec as spec
+from mpeg4fa.errors import MpegFaError
 from mpeg4fa.spec import _load, profiles
 from mpeg4fa.spec.profiles import (
     CHINESE_VISEME_BY_PINYIN, CHINESE_VISEMES, EXPRESSION_PROFILES, VISEME_PROFILES,
-    build_expression_profiles, build_viseme_profiles, expand_high_level, expression_blend, viseme_blend,
+    SpecError, build_expression_profiles, build_viseme_profiles, expand_high_level, expression_blend,
+    high_level_problem, viseme_blend,
 )
 
 ZH_NAMES = ["a", "bpm", "dtnl", "e", "f", "gkh", "i", "jqx", "o", "r", "uv", "zcs", "zhchsh", "n", "ng"]
@@ -295,16 +297,18 @@ def test_expand_high_level_zero_rows_and_errors():
     vis, exp = random_frames(10)
     bad = vis.copy()
     bad[4, 2] = 79
-    with pytest.raises(ValueError, match="frame 4: viseme blend 79 out of range 0..78"):
+    with pytest.raises(SpecError, match="frame 4: FAP 1 viseme_blend = 79 is out of range 0..78") as info:
         expand_high_level(bad, exp)
+    assert isinstance(info.value, MpegFaError) and isinstance(info.value, ValueError)
+    assert info.value.where == "frame 4" and "63" in info.value.hint
     over = vis.copy()
     over[:, 2], vis[:, 2] = 64, 63  # 63 quantised at fap_quant 2 comes back as 64: full scale
     np.testing.assert_array_equal(expand_high_level(over, exp), expand_high_level(vis, exp))
     bad = exp.copy()
     bad[6, 2] = 9
-    with pytest.raises(ValueError, match="frame 6: expression select2 9 out of range 0..6"):
+    with pytest.raises(SpecError, match=r"frame 6: FAP 2 expression_select2 = 9 is not an expression \(0..6\)"):
         expand_high_level(vis, bad)
-    with pytest.raises(ValueError, match=r"\(n, 4\)"):
+    with pytest.raises(SpecError, match=r"\(n, 4\)"):
         expand_high_level(vis[:, :3], exp)
     with pytest.raises(ValueError, match=r"\(n, 4\)"):
         expand_high_level(vis[:5], exp)
@@ -350,3 +354,35 @@ def test_chinese_viseme_classes():
 
 def test_module_has_no_loose_names():
     assert set(profiles.__all__) <= set(dir(profiles))
+
+
+@pytest.mark.parametrize("fap,column,value,message", [
+    (1, 0, 20, "frame 12: FAP 1 viseme_select1 = 20 is not a viseme (0..14)"),
+    (1, 1, -1, "frame 12: FAP 1 viseme_select2 = -1 is not a viseme (0..14)"),
+    (1, 3, 2, "frame 12: FAP 1 viseme_def = 2 is not a flag (0 or 1)"),
+    (2, 1, 99, "frame 12: FAP 2 expression_intensity1 = 99 is out of range 0..78"),
+    (2, 3, -5, "frame 12: FAP 2 expression_intensity2 = -5 is out of range 0..78"),
+    (2, 4, 3, "frame 12: FAP 2 init_face = 3 is not a flag (0 or 1)"),
+])
+def test_expand_high_level_names_the_frame_and_field(fap, column, value, message):
+    vis, exp = np.zeros((20, 4), np.int32), np.zeros((20, 6), np.int32)
+    (vis if fap == 1 else exp)[12, column] = value
+    (vis if fap == 1 else exp)[15, column] = value  # the first bad frame is the one named
+    with pytest.raises(SpecError) as info:
+        expand_high_level(vis, exp)
+    assert str(info.value).startswith(message + " (")
+    assert info.value.where == "frame 12" and info.value.hint
+
+
+def test_high_level_problem_points_at_the_field():
+    assert high_level_problem(1, [3, 4, 63, 0]) is None
+    assert high_level_problem(2, [6, 78, 0, 0, 1, 1]) is None
+    index, problem, hint = high_level_problem(2, [1, 10, 7, 0, 0, 0])
+    assert index == 2 and problem == "FAP 2 expression_select2 = 7 is not an expression (0..6)" and hint
+
+
+def test_blend_errors_are_spec_errors():
+    with pytest.raises(SpecError, match="viseme select 15 out of range"):
+        viseme_blend(15, 0, 10)
+    with pytest.raises(SpecError, match="unknown expression"):
+        expression_blend("glee", 10, 0, 0)
