@@ -17,6 +17,7 @@ from mpeg4fa.face.lids import turn_lid
 from mpeg4fa.face.rig import Rig
 
 _EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
+_JAW_FAP = {kind: fap for fap, kind in motion.JAW.items()}  # "open" -> 3, "thrust" -> 14, "shift" -> 15
 
 
 @dataclass(frozen=True)
@@ -81,12 +82,13 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[n
             centre = np.array([0.0, axis_point[1], 0.0])
             _rotate_rows(p, rows, w, centre, motion.rotation_matrix(2, side * roll * motion.ANGLE_UNIT_RAD))
 
-    jaw_open, thrust, shift = (v[f - 1] for f in (3, 14, 15))
+    jaw_open, thrust, shift = (v[_JAW_FAP[k] - 1] for k in ("open", "thrust", "shift"))
     if jaw_open or thrust or shift:
         pivot = rest[rig.joints["mouth"]]
         chin = rest[rig.fp_vertex[rig.chin_fp]]
         angle = motion.arc_angle((chin - pivot)[1:], jaw_open * fapu.unit("MNS"))
-        offset = (thrust * fapu.unit("MNS") * motion.direction(14) + shift * fapu.unit("MW") * motion.direction(15))
+        offset = (thrust * fapu.unit("MNS") * motion.direction(_JAW_FAP["thrust"])
+                  + shift * fapu.unit("MW") * motion.direction(_JAW_FAP["shift"]))
         rows, w = rig.jaw_rows
         _rotate_rows(p, rows, w, pivot, motion.rotation_matrix(0, angle), offset)
 
@@ -94,13 +96,14 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[n
     for eye, joint in _EYE_JOINT.items():
         faps = {kind: f for f, (e, kind) in motion.EYE_ROTATION.items() if e == eye}
         yaw, pitch = v[faps["yaw"] - 1] * motion.ANGLE_UNIT_RAD, v[faps["pitch"] - 1] * motion.ANGLE_UNIT_RAD
-        push = v[next(f for f, e in motion.EYE_THRUST.items() if e == eye) - 1] * fapu.unit("ES")
+        thrust_fap = next(f for f, e in motion.EYE_THRUST.items() if e == eye)
+        push = v[thrust_fap - 1] * fapu.unit("ES")
         if yaw or pitch or push:
             s = rig.parts[eye]
             centre = rest[rig.joints[joint]]
             turn = motion.rotation_matrix(1, yaw) @ motion.rotation_matrix(0, pitch)
-            p[s] = centre + (p[s] - centre) @ turn.T + push * motion.direction(27)
-            p[rig.joints[joint]] = centre + push * motion.direction(27)
+            p[s] = centre + (p[s] - centre) @ turn.T + push * motion.direction(thrust_fap)
+            p[rig.joints[joint]] = centre + push * motion.direction(thrust_fap)
         dilate = v[next(f for f, e in motion.PUPIL.items() if e == eye) - 1]
         pupils[eye] = fapu.IRISD0 / 3.0 + dilate * fapu.unit("IRISD")
     return p, pupils
@@ -109,7 +112,8 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[n
 def apply_head_rotation(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
     """FAPs 48-50: turn the head (and fade the turn down the neck), in place."""
     rest = rig.rest
-    pitch, yaw, roll_h = (v[f - 1] * motion.ANGLE_UNIT_RAD for f in (48, 49, 50))
+    head = {kind: fap for fap, kind in motion.HEAD.items()}
+    pitch, yaw, roll_h = (v[head[k] - 1] * motion.ANGLE_UNIT_RAD for k in ("pitch", "yaw", "roll"))
     if pitch or yaw or roll_h:
         rows, w = rig.head_fade
         centre = rest[rig.fp_vertex[rig.head_fp]]

@@ -23,19 +23,28 @@ import numpy as np
 
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.spec import ANGLE_UNIT as ANGLE_UNIT_RAD  # noqa: F401  (part of this module's vocabulary)
-from mpeg4fa.spec import FAPS, N_FAPS
+from mpeg4fa.spec import FAP_BY_NAME, FAPS, N_FAPS
 
 DIRECTION = {
     "down": (0.0, -1.0, 0.0), "up": (0.0, 1.0, 0.0),
     "left": (1.0, 0.0, 0.0), "right": (-1.0, 0.0, 0.0), "forward": (0.0, 0.0, 1.0),
 }
-JAW = {3: "open", 14: "thrust", 15: "shift"}
-LIDS = {19: "eye_l", 20: "eye_r", 21: "eye_l", 22: "eye_r"}
-EYE_ROTATION = {23: ("eye_l", "yaw"), 24: ("eye_r", "yaw"), 25: ("eye_l", "pitch"), 26: ("eye_r", "pitch")}
-EYE_THRUST = {27: "eye_l", 28: "eye_r"}
-PUPIL = {29: "eye_l", 30: "eye_r"}
-TONGUE_ROLL = 47
-HEAD = {48: "pitch", 49: "yaw", 50: "roll"}
+
+
+def _numbers(table: dict[str, object]) -> dict[int, object]:
+    """The same table keyed by FAP number (the names are those of ``spec/faps.csv``)."""
+    return {FAP_BY_NAME[name].number: value for name, value in table.items()}
+
+
+JAW = _numbers({"open_jaw": "open", "thrust_jaw": "thrust", "shift_jaw": "shift"})
+LIDS = _numbers({"close_t_l_eyelid": "eye_l", "close_t_r_eyelid": "eye_r",
+                 "close_b_l_eyelid": "eye_l", "close_b_r_eyelid": "eye_r"})
+EYE_ROTATION = _numbers({"yaw_l_eyeball": ("eye_l", "yaw"), "yaw_r_eyeball": ("eye_r", "yaw"),
+                         "pitch_l_eyeball": ("eye_l", "pitch"), "pitch_r_eyeball": ("eye_r", "pitch")})
+EYE_THRUST = _numbers({"thrust_l_eyeball": "eye_l", "thrust_r_eyeball": "eye_r"})
+PUPIL = _numbers({"dilate_l_pupil": "eye_l", "dilate_r_pupil": "eye_r"})
+TONGUE_ROLL = FAP_BY_NAME["tongue_roll"].number
+HEAD = _numbers({"head_pitch": "pitch", "head_yaw": "yaw", "head_roll": "roll"})
 AXIS_OF = {"pitch": 0, "yaw": 1, "roll": 2}
 
 

@@ -179,7 +179,7 @@ class FieldCoder(_Coder):
     def start_intra(self, fap_quant: int) -> None:
         """Blend and intensity ranges become (63 + q/2) / q; with q = 0 they keep their last value."""
         if fap_quant:
-            top = (63 + fap_quant // 2) // fap_quant
+            top = (spec.FULL_INTENSITY + fap_quant // 2) // fap_quant
             self.i_max[self.quantised] = top
             self.p_max[self.quantised] = top
             self.pmin[self.quantised] = -top
