@@ -1,8 +1,13 @@
 """The ``mpeg4fa`` command: a thin shell over the Python API.
 
 Each group of subcommands lives in its own module and registers itself on the
-parser; errors of any layer become one line on stderr and exit status 1, and
-warnings one ``mpeg4fa COMMAND: warning: ...`` line each (no source lines).
+parser. The error contract: any layer's error (:class:`mpeg4fa.errors.MpegFaError`)
+or an operating-system error becomes one line ``mpeg4fa COMMAND: error: ...`` on
+stderr and exit status 1; options that do not go together (:class:`.UsageError`)
+exit 2, as argparse's own errors do; Ctrl-C exits 130. No traceback for any of them,
+and outputs are written under temporary names (:mod:`mpeg4fa.atomic`), so a failed
+or interrupted command leaves no partial file. Every warning, whatever its category
+or origin, is one ``mpeg4fa COMMAND: warning: ...`` line (no source lines).
 """
 from __future__ import annotations
 
@@ -11,13 +16,10 @@ import sys
 import warnings
 
 from .. import __version__
-from ..face import FaceError
-from ..fba import FbaError
-from ..formats import FormatError
-from ..render.errors import RenderError
-from ..speech.errors import MarkupError, TTSError
+from ..errors import MpegFaError
 from . import codec, model, play, speech, texture
 from .errors import UsageError
+from .media import one_line
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -38,36 +40,37 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
     with warnings.catch_warnings():
-        warnings.showwarning = _one_line_warnings(args.command)
+        warnings.showwarning = _one_line_warnings("mpeg4fa")
+        args = build_parser().parse_args(argv)
+        warnings.showwarning = _one_line_warnings(f"mpeg4fa {args.command}")
         return _run(args)
 
 
-def _one_line_warnings(command: str):
+def _one_line_warnings(prefix: str):
     def show(message, category, filename, lineno, file=None, line=None) -> None:
-        print(f"mpeg4fa {command}: warning: {message}", file=sys.stderr)
+        print(f"{prefix}: warning: {one_line(message)}", file=sys.stderr)
     return show
 
 
 def _run(args: argparse.Namespace) -> int:
+    command = f"mpeg4fa {args.command}"
     try:
         return int(args.run(args) or 0)
-    except (FbaError, FormatError, FaceError, RenderError, MarkupError, TTSError) as exc:
-        print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
-        return 1
     except UsageError as exc:
-        print(f"mpeg4fa {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{command}: error: {exc}", file=sys.stderr)
         return 2
+    except MpegFaError as exc:
+        print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
+        return 1
     except BrokenPipeError:  # output piped into head, less...: not an error
         sys.stderr.close()
         return 0
     except OSError as exc:
-        print(f"mpeg4fa {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
-              file=sys.stderr)
+        print(f"{command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
         return 1
     except KeyboardInterrupt:
+        print(f"\n{command}: interrupted", file=sys.stderr)
         return 130
 
 

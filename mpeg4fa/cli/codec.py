@@ -2,20 +2,22 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import sys
 from pathlib import Path
 
+from ..atomic import atomic_output
 from ..fba import EncodeOptions, FbaError, decode, demo_stream, describe, encode
 from ..formats import read_stream, write_fap
 from ..formats.sniff import sniff
-from ..spec import N_FAP_GROUPS
-from . import speech
+from . import speech, text_input
+from .coding import coding_flags, coding_options
+from .options import Commands
+from .paths import refuse_overlaps
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     p = commands.add_parser("info", help="show what a .fba or .fap stream holds",
                             description="Header, frames, frame rate, duration, masks, bits per frame and "
                                         "bit rate of a binary FBA stream or a text .fap file.")
@@ -37,26 +39,18 @@ def register(commands: argparse._SubParsersAction) -> None:
                     "encoder, unless options override them), or text with expression tags such as "
                     "'(joy, 40, 0.5) Hello there': spoken by a TTS engine, turned into visemes and "
                     "expressions and encoded with the speech as --audio. Text may also come from a file "
-                    "(INPUT names a file that is not a stream, or @FILE) or standard input (-).",
+                    "(INPUT names a file that is not a stream, or @FILE) or standard input (-); an INPUT that looks "
+                    "like a file name (a path separator or an extension, no spaces) must name a readable file, "
+                    "unless --text says it is text.",
         epilog='examples:\n  mpeg4fa encode "(joy, 40, 0.5) Hello there!" -o talk.fba --audio talk.wav '
                '--timings talk.json\n  mpeg4fa encode script.txt -o talk.fba --audio talk.wav --fdp-out face.fdp\n'
                '  echo "你好，世界" | mpeg4fa encode - -o nihao.fba --audio nihao.wav --level both\n'
                '  mpeg4fa encode received.fap -o received.fba --optimize',
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("input", help="a .fap or .fba file, tagged text, @FILE or - (text from standard input)")
+    p.add_argument("input", help="a .fap or .fba file, a text file, tagged text, @FILE or - (text from standard "
+                                 "input)")
     p.add_argument("-o", "--output", type=Path, required=True, help="the .fba stream to write")
-    p.add_argument("--quant", type=_quant, metavar="0-31", help="fap_quant: 0 = exact, larger = coarser (default 1)")
-    p.add_argument("--bap-quant", type=_quant, metavar="0-31", help="bap_quant for body data (default 1)")
-    p.add_argument("--intra-period", type=int, metavar="K", help="an intra frame every K frames (0 = first only)")
-    p.add_argument("--fps", type=float, help="frame rate to send (default: the input's)")
-    p.add_argument("--mask-types", type=_mask_types, metavar="T,T,...",
-                   help=f"{N_FAP_GROUPS} FAP group mask types: 0 none, 1 hold unsent, 2 interpolate unsent, 3 all")
-    p.add_argument("--start-codes", action=argparse.BooleanOptionalAction, default=None,
-                   help="send a plane start code before every intra plane")
-    p.add_argument("--skip-repeats", action="store_true", help="send repeated frames as skip counts")
-    p.add_argument("--time-codes", action="store_true", help="send a time code in every intra header")
-    p.add_argument("--optimize", action="store_true",
-                   help="smallest stream with the same decoded values (tight ranges, repeats skipped)")
+    coding_flags(p)
     speech.text_encoding_options(p)
     p.set_defaults(run=run_encode)
 
@@ -72,20 +66,6 @@ def register(commands: argparse._SubParsersAction) -> None:
                                         "low-level FAPs), decode it back and print its summary.")
     p.add_argument("-o", "--output", type=Path, default=Path("demo.fba"), help="where to write it (demo.fba)")
     p.set_defaults(run=run_demo)
-
-
-def _quant(text: str) -> int:
-    q = int(text)
-    if not 0 <= q <= 31:
-        raise argparse.ArgumentTypeError("the quantiser is 0..31")
-    return q
-
-
-def _mask_types(text: str) -> list[int]:
-    types = [int(t) for t in text.split(",")]
-    if len(types) != N_FAP_GROUPS or any(t not in (0, 1, 2, 3) for t in types):
-        raise argparse.ArgumentTypeError(f"give {N_FAP_GROUPS} comma-separated mask types, each 0..3")
-    return types
 
 
 def run_info(args: argparse.Namespace) -> int:
@@ -129,38 +109,30 @@ def _ranges(numbers: list[int]) -> str:
 
 
 def run_decode(args: argparse.Namespace) -> int:
+    refuse_overlaps({"input": args.input}, {"-o": args.output})
     stream = decode(args.input)
-    write_fap(stream, args.output, name=args.output.name)
+    with atomic_output(args.output) as partial:
+        write_fap(stream, partial, name=args.output.name)
     print(f"{args.input} -> {args.output}: {len(stream)} frames at {stream.fps:g} fps", file=sys.stderr)
     return 0
 
 
-def is_stream_file(arg: str) -> bool:
-    """Whether an encode INPUT names a .fba/.fap stream (else it is text, or names a text file)."""
-    path = Path(arg)
-    return speech.names_file(arg) and (path.suffix.lower() in (".fap", ".fba") or sniff(path) == "fba")
-
-
-def coding_options(args: argparse.Namespace, default: EncodeOptions | None) -> EncodeOptions | None:
-    """``default`` with the coding flags given on the command line put over it (None: none given)."""
-    chosen = {"fap_quant": args.quant, "bap_quant": args.bap_quant, "intra_period": args.intra_period,
-              "fps": args.fps, "mask_types": args.mask_types, "start_codes": args.start_codes,
-              "skip_repeats": args.skip_repeats or None, "time_codes": args.time_codes or None,
-              "optimize": args.optimize or None}
-    given = {k: v for k, v in chosen.items() if v is not None}
-    if not given:
-        return default
-    return dataclasses.replace(default, **given) if default is not None else EncodeOptions(**given)
+def is_stream_file(path: Path) -> bool:
+    """Whether an encode INPUT file is a .fba/.fap stream (else it holds text to speak)."""
+    return path.suffix.lower() in (".fap", ".fba") or sniff(path) == "fba"
 
 
 def run_encode(args: argparse.Namespace) -> int:
-    if not is_stream_file(args.input):
-        return speech.run_encode_text(args)
+    source = text_input.classify(args.input, as_text=args.as_text)
+    if source.path is None or source.argument.startswith("@") or not is_stream_file(source.path):
+        return speech.run_encode_text(args, source)
     speech.reject_text_options(args)
-    stream, kind = read_stream(args.input)
+    refuse_overlaps({"input": source.path}, {"-o": args.output})
+    stream, kind = read_stream(source.path)
     options = coding_options(args, EncodeOptions() if kind == "fap" else None)
     data = encode(stream, options)
-    args.output.write_bytes(data)
+    with atomic_output(args.output) as partial:
+        partial.write_bytes(data)
     print(f"{args.input} -> {args.output}: {len(stream)} frames, {len(data)} bytes", file=sys.stderr)
     return 0
 
@@ -179,7 +151,9 @@ def run_validate(args: argparse.Namespace) -> int:
 
 
 def run_demo(args: argparse.Namespace) -> int:
-    args.output.write_bytes(encode(demo_stream(), EncodeOptions(fap_quant=1)))
+    data = encode(demo_stream(), EncodeOptions(fap_quant=1))
+    with atomic_output(args.output) as partial:
+        partial.write_bytes(data)
     print(f"wrote {args.output}\n")
     args.stream, args.json = args.output, False
     return run_info(args)

@@ -1,4 +1,5 @@
-"""The CLI's own error: options that do not go together (exit status 2, like argparse's)."""
+"""The CLI's own errors: options that do not go together (exit status 2, like argparse's), and command-line
+input that names no usable file (exit status 1, like every other bad input)."""
 from __future__ import annotations
 
 from ..errors import MpegFaError
@@ -6,3 +7,7 @@ from ..errors import MpegFaError
 
 class UsageError(MpegFaError):
     """A combination of command-line options that cannot work; ``hint`` names one that does."""
+
+
+class InputError(MpegFaError):
+    """A command-line argument that should name a readable file and does not (``where``: the argument)."""

@@ -1,14 +1,17 @@
-"""What the rendering commands share: reading images, and rendering a stream with a progress bar."""
+"""What the rendering commands share: reading images, checking video sizes, and rendering with a progress bar."""
 from __future__ import annotations
 
+import contextlib
 import sys
 import warnings
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
 from ..errors import MpegFaWarning
 from ..render import RenderError
+from .errors import UsageError
 from .progress import ProgressBar
 
 
@@ -20,21 +23,53 @@ def read_image(path: Path, what: str) -> np.ndarray:
             return np.asarray(img.convert("RGB"))
     except FileNotFoundError:
         raise RenderError(f"no such {what}", where=str(path)) from None
-    except (OSError, UnidentifiedImageError) as exc:
+    except (OSError, UnidentifiedImageError, ValueError) as exc:
         raise RenderError(f"cannot read the {what} ({exc})", where=str(path)) from None
+
+
+def check_video_size(output: Path, size: tuple[int, int]) -> None:
+    """An MP4 needs even sides (H.264 yuv420p): say so before any work, not after the speech and the render."""
+    from ..render.video import VIDEO_SUFFIXES
+
+    width, height = size
+    if output.suffix.lower() in VIDEO_SUFFIXES and (width % 2 or height % 2):
+        raise UsageError(f"--size {width}x{height} is odd; an MP4 (H.264) needs even sizes",
+                         hint=f"use {width + width % 2}x{height + height % 2}, or a folder for PNG frames")
+
+
+@contextlib.contextmanager
+def rendering(command: str, output: Path) -> Iterator[ProgressBar]:
+    """A progress bar for rendering ``output``; the layers' warnings become ``command: warning:`` lines after it."""
+    bar = ProgressBar(f"rendering {output.name or output}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", MpegFaWarning)
+        try:
+            yield bar
+        finally:
+            bar.close()
+            for w in caught:
+                print(f"mpeg4fa {command}: warning: {one_line(w.message)}", file=sys.stderr)
 
 
 def render_with_progress(command: str, stream, output: Path, **play_options):
     """:func:`mpeg4fa.render.play` with a progress bar; its warnings become ``command: warning:`` lines."""
     from ..render import play
 
-    bar = ProgressBar(f"rendering {output.name}")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", MpegFaWarning)
-        try:
-            result = play(stream, output, progress=bar, **play_options)
-        finally:
-            bar.close()
-    for w in caught:
-        print(f"mpeg4fa {command}: warning: {w.message}", file=sys.stderr)
-    return result
+    with rendering(command, output) as bar:
+        return play(stream, output, progress=bar, **play_options)
+
+
+def one_line(message: object) -> str:
+    """A warning's text on one line (some libraries' warnings span several)."""
+    return " ".join(str(message).split())
+
+
+def save_image(image, path: Path) -> None:
+    """Save a PIL image whole or not at all (format from the name); RenderError naming the file otherwise."""
+    from ..atomic import atomic_output
+
+    try:
+        with atomic_output(path) as partial:
+            image.save(partial)
+    except (OSError, ValueError) as exc:
+        raise RenderError(f"cannot write the image ({exc})", where=str(path)) from None

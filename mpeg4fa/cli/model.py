@@ -11,9 +11,11 @@ import numpy as np
 from ..decoded import shown_values
 from ..face import FaceError, FaceModel, asset
 from ..spec import EXPRESSION_PROFILES, FAPS, FAPU_NAMES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
+from . import options
+from .options import Commands
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     model = commands.add_parser("model", help="build and inspect the decoder's 3D face",
                                 description="Build the generic head, and inspect what a face and its FAPs do.")
     sub = model.add_subparsers(dest="model_command", metavar="SUBCOMMAND", required=True)
@@ -42,7 +44,7 @@ def register(commands: argparse._SubParsersAction) -> None:
                    help="low-level FAP N (3..68) set to VALUE (in FAPU); repeat for more")
     p.add_argument("--viseme", metavar="NAME", help="add a viseme at full weight (MPEG-4: PP, AA, ou ...; "
                                                     "Chinese: zh:a, zh:bpm ...)")
-    p.add_argument("--expression", metavar="NAME[=I]",
+    p.add_argument("--expression", metavar="NAME[=I]", type=_expression,
                    help=f"add an expression at intensity I of {FULL_INTENSITY} (default {FULL_INTENSITY})")
     p.add_argument("--deformer", choices=("fap", "arkit"), default="fap",
                    help="fap: feature points and smooth weights (default); arkit: the sculpted CC0 face units, "
@@ -58,14 +60,22 @@ def face_options(p: argparse.ArgumentParser) -> None:
 
 
 def _fap_value(text: str) -> tuple[int, float]:
+    """N=VALUE: a low-level FAP and a finite value in its units."""
+    number, equals, value = text.partition("=")
+    if not equals:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected N=VALUE, e.g. 3=200")
     try:
-        number, value = text.split("=", 1)
-        fap, v = int(number), float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected N=VALUE, e.g. 3=200") from None
-    if not 3 <= fap <= N_FAPS:
-        raise argparse.ArgumentTypeError(f"FAP {fap}: low-level FAPs are 3..{N_FAPS} (use --viseme/--expression for 1, 2)")
-    return fap, v
+        fap = options.integer(3, N_FAPS)(number)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"FAP {number}: low-level FAPs are 3..{N_FAPS} "
+                                         "(use --viseme/--expression for 1, 2)") from None
+    return fap, options.finite(value)
+
+
+def _expression(text: str) -> tuple[str, int]:
+    """NAME[=I]: the intensity a whole number 0..FULL_INTENSITY, full when left out."""
+    name, equals, intensity = text.partition("=")
+    return name, options.integer(0, FULL_INTENSITY)(intensity) if equals else FULL_INTENSITY
 
 
 def face_from_args(args: argparse.Namespace) -> FaceModel:
@@ -136,15 +146,9 @@ def _pose_values(args: argparse.Namespace) -> np.ndarray:
                                  + " zh:".join(VISEME_PROFILES.get("zh", {})))
         viseme = (group, name)
     if args.expression:
-        name, _, intensity = args.expression.partition("=")
+        name, level = args.expression
         if name not in EXPRESSION_PROFILES:
             raise FaceError(f"unknown expression {name!r}", hint="one of " + ", ".join(EXPRESSION_PROFILES))
-        try:
-            level = int(intensity or FULL_INTENSITY)
-        except ValueError:
-            raise FaceError(f"expression intensity {intensity!r} is not an integer 0..{FULL_INTENSITY}") from None
-        if not 0 <= level <= FULL_INTENSITY:
-            raise FaceError(f"expression intensity {level} is outside 0..{FULL_INTENSITY}")
         expression = (name, level)
     return shown_values(dict(args.fap), viseme=viseme, expression=expression)
 

@@ -6,17 +6,20 @@ import json
 import sys
 from pathlib import Path
 
-
 from ..formats import read_stream
-from ..render import RenderError
 from ..render.camera import VIEWS
+from ..render.video import AUDIO_WAV, writes_folder
+from . import options
+from .errors import UsageError
+from .media import check_video_size, read_image, render_with_progress, save_image
 from .model import face_from_args, face_options
-from .media import read_image, render_with_progress
+from .options import Commands
+from .paths import refuse_overlaps
 
 AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     p = commands.add_parser(
         "play", help="render a .fba or .fap stream to MP4 (with its speech) or PNG frames",
         description="Decode a stream, animate the face (the generic head, or one calibrated to an FDP) and "
@@ -37,8 +40,8 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--fit", choices=("pad", "trim"), default="pad",
                    help="when stream and audio lengths differ by more than a frame: pad the shorter (default: "
                         "the video holds its last frame, the audio gets silence) or trim the longer")
-    p.add_argument("--fps", type=float, help="output frame rate (default: the stream's)")
-    p.add_argument("--crf", type=int, default=18, help="H.264 quality, 0 (lossless) to 51 (default 18)")
+    p.add_argument("--fps", type=options.fps, help="output frame rate, 0 < fps < 256 (default: the stream's)")
+    p.add_argument("--crf", type=options.crf, default=18, help="H.264 quality, 0 (lossless) to 51 (default 18)")
     p.add_argument("--show", action="store_true",
                    help="play in a window in real time (needs a display; late frames are dropped; no sound)")
     p.add_argument("--json", action="store_true", help="print a JSON summary when done")
@@ -50,8 +53,9 @@ def register(commands: argparse._SubParsersAction) -> None:
                             epilog="example: mpeg4fa snapshot talk.fba --frame 40 -o f40.png")
     p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) stream")
     at = p.add_mutually_exclusive_group()
-    at.add_argument("--frame", type=int, help="frame index (0 = first, -1 = last; default 0)")
-    at.add_argument("--time", type=float, metavar="SECONDS", help="presentation time in seconds from the first frame")
+    at.add_argument("--frame", type=options.frame, help="frame index (0 = first, -1 = last; default 0)")
+    at.add_argument("--time", type=options.seconds, metavar="SECONDS",
+                    help="presentation time in seconds from the first frame (>= 0)")
     p.add_argument("-o", "--output", type=Path, required=True, help="the PNG to write")
     _render_options(p)
     p.set_defaults(run=run_snapshot)
@@ -60,9 +64,10 @@ def register(commands: argparse._SubParsersAction) -> None:
 def _render_options(p: argparse.ArgumentParser) -> None:
     face_options(p)
     p.add_argument("--deformer", choices=("fap", "arkit"), default="fap", help="how FAPs move the mesh (default fap)")
-    p.add_argument("--size", type=_size, default=(512, 512), metavar="W[xH]", help="image size (default 512)")
-    p.add_argument("--aa", type=int, default=0, metavar="N",
-                   help="anti-aliasing samples (4 or 8 for final output; default 0 = off, fastest)")
+    p.add_argument("--size", type=options.size, default=(512, 512), metavar="W[xH]",
+                   help="image size, 16 to 8192 (default 512; even for MP4)")
+    p.add_argument("--aa", type=options.samples, default=0, metavar="N",
+                   help="anti-aliasing samples, 0 to 16 (4 or 8 for final output; default 0 = off, fastest)")
     p.add_argument("--view", default="front", choices=tuple(VIEWS), help="camera position (default front)")
     p.add_argument("--texture", type=Path, help="a UV texture image for the skin (e.g. from photos); wins over the "
                                                 "FDP's own texture")
@@ -70,24 +75,12 @@ def _render_options(p: argparse.ArgumentParser) -> None:
                    help="do not paint the skin with the texture the --fdp file carries (its front photo)")
 
 
-def _size(text: str) -> tuple[int, int]:
-    try:
-        parts = [int(v) for v in text.lower().split("x")]
-    except ValueError:
-        parts = []
-    if len(parts) == 1:
-        parts *= 2
-    if len(parts) != 2 or min(parts) < 16 or max(parts) > 8192:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected W or WxH, 16 to 8192, e.g. 512 or 640x480")
-    return parts[0], parts[1]
-
-
 def _renderer_options(args: argparse.Namespace, face) -> dict:
-    options = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
+    chosen = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
     texture = _skin_texture(args, face)
     if texture is not None:
-        options["texture"] = texture
-    return options
+        chosen["texture"] = texture
+    return chosen
 
 
 def _skin_texture(args: argparse.Namespace, face):
@@ -123,20 +116,26 @@ def run_play(args: argparse.Namespace) -> int:
     from ..render import Renderer, play_live
 
     if args.output is None and not args.show:
-        raise RenderError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
+        raise UsageError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
+    audio = _audio_for(args) if args.output is not None else None
+    if args.output is not None:
+        beside = args.output / AUDIO_WAV if audio is not None and writes_folder(args.output) else None
+        refuse_overlaps({"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture},
+                        {"-o": args.output, "the folder's audio": beside})
+        check_video_size(args.output, args.size)
     stream, _ = read_stream(args.stream)
     face = face_from_args(args).with_deformer(args.deformer)
-    options = _renderer_options(args, face)
+    render_options = _renderer_options(args, face)
     if args.show:
         from ..render.window import show
-        with Renderer(face, **options) as renderer:
+        with Renderer(face, **render_options) as renderer:
             show((f.image for f in play_live(iter(stream), renderer)), title=f"mpeg4fa: {args.stream.name}",
                  fps_hint=stream.fps)
         if args.output is None:
             return 0
-    audio = _audio_for(args)
     result = render_with_progress("play", stream, args.output, face=face, audio=audio, fps=args.fps, fit=args.fit,
-                                  writer_options={"crf": args.crf} if _is_video(args.output) else None, **options)
+                                  writer_options=None if writes_folder(args.output) else {"crf": args.crf},
+                                  **render_options)
     summary = {"output": str(args.output), "frames": result.n_frames, "rendered": result.rendered,
                "fps": result.fps, "duration": round(result.duration, 6),
                "audio": str(audio) if audio else None, "audio_duration": result.audio_duration,
@@ -150,21 +149,15 @@ def run_play(args: argparse.Namespace) -> int:
     return 0
 
 
-def _is_video(path: Path) -> bool:
-    return path.suffix.lower() in (".mp4", ".mov", ".m4v")
-
-
 def run_snapshot(args: argparse.Namespace) -> int:
     from PIL import Image
 
     from ..render import snapshot
 
+    refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture}, {"-o": args.output})
     stream, _ = read_stream(args.stream)
     face = face_from_args(args).with_deformer(args.deformer)
     image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args, face))
-    try:
-        Image.fromarray(image).save(args.output)
-    except (OSError, ValueError) as exc:
-        raise RenderError(f"cannot write the PNG ({exc})", where=str(args.output)) from None
+    save_image(Image.fromarray(image), args.output)
     print(f"{args.output}: {image.shape[1]}x{image.shape[0]}")
     return 0

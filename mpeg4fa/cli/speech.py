@@ -1,81 +1,107 @@
-"""``mpeg4fa say``: tagged text -> speech, FAPs and an MP4 of the default head saying it."""
+"""``mpeg4fa say`` and ``mpeg4fa encode TEXT``: tagged text -> speech, FAPs, and the face saying it."""
 from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
-from ..speech.encoder import ENGINES, LEVELS, encode_text
-from ..speech.errors import MarkupError
+from ..atomic import atomic_outputs
+from ..speech.encoder import ENGINES, LEVELS
+from . import options, text_input
+from .coding import coding_options
 from .errors import UsageError
-from .media import render_with_progress
+from .media import check_video_size, rendering
+from .options import Commands
+from .paths import refuse_overlaps
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     p = commands.add_parser(
         "say", help="speak tagged text and render the face saying it (MP4 with audio)",
         description="Speak TEXT with espeak-ng (phonemes with sample-exact times), turn phonemes into "
                     "visemes (English: the 14 MPEG-4 visemes; Chinese: 15 visemes from pinyin) and tags "
                     "like (joy, 40, 0.5) into expressions with Hermite transitions, encode the FAPs as an "
                     "FBA stream, decode it again and render the default head with the speech. TEXT may be "
-                    "'-' (read standard input) or @FILE (read a UTF-8 text file).",
+                    "a text file, '-' (read standard input) or @FILE (read a UTF-8 text file); a TEXT that "
+                    "looks like a file name (a path separator or an extension, no spaces) must name a "
+                    "readable file, unless --text says it is text.",
         epilog='examples:\n  mpeg4fa say "(joy, 40, 0.5) Hello there! (sadness, 30, 1) Goodbye." -o hello.mp4\n'
-               '  mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o nihao.mp4 --keep',
+               '  mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o nihao.mp4 --keep\n'
+               '  mpeg4fa say script.txt -o script.mp4',
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("text", help="the text with optional (expression, intensity 0-63, seconds) tags; - or @FILE")
+    p.add_argument("text", help="the text with optional (expression, intensity 0-63, seconds) tags; a text file, "
+                                "- or @FILE")
     p.add_argument("-o", "--output", type=Path, required=True, help="OUT.mp4, or a folder for PNG frames")
+    text_flag(p)
     speech_options(p)
-    p.add_argument("--fps", type=float, default=25.0, help="frame rate (default 25)")
+    p.add_argument("--fps", type=options.fps, default=25.0, help="frame rate, 0 < fps < 256 (default 25)")
     p.add_argument("--level", choices=LEVELS, default="low",
                    help="FAPs to send: high (FAP 1/2), low (3-68, the exact curves; default) or both")
-    p.add_argument("--size", type=int, default=512, help="square image size (default 512)")
-    p.add_argument("--aa", type=int, default=4, help="anti-aliasing samples (default 4; 0 = off)")
-    p.add_argument("--keep", action="store_true", help="also write OUT.fba, OUT.wav and OUT.timings.json beside it")
+    p.add_argument("--size", type=options.size, default=(512, 512), metavar="W[xH]",
+                   help="image size, 16 to 8192 (default 512; even for MP4)")
+    p.add_argument("--aa", type=options.samples, default=4, metavar="N",
+                   help="anti-aliasing samples, 0 (off) to 16 (default 4)")
+    p.add_argument("--keep", action="store_true",
+                   help="also write OUT.fba, OUT.wav and OUT.timings.json beside it")
     p.set_defaults(run=run_say)
+
+
+def text_flag(p: argparse.ArgumentParser) -> None:
+    """``--text``: the positional argument is the text itself, even when it looks like a file name."""
+    p.add_argument("--text", dest="as_text", action="store_true",
+                   help="take the argument as the text to speak, even if it looks like a file name")
 
 
 def text_encoding_options(p: argparse.ArgumentParser) -> None:
     """The options of ``encode`` when INPUT is text (speech, FAP timeline, FDP of the speaker)."""
-    first = len(p._actions)
+    text_flag(p)
     g = p.add_argument_group("text input: speech and FAPs")
-    g.add_argument("--audio", type=Path, metavar="WAV", help="write the speech here (16-bit mono WAV)")
-    g.add_argument("--timings", type=Path, metavar="JSON",
-                   help='write the timed visemes used: [{"phoneme", "viseme", "start", "end"}, ...] in seconds')
-    speech_options(g)
-    g.add_argument("--level", choices=LEVELS, default="high",
-                   help="FAPs to send: high (FAP 1 visemes + FAP 2 expressions; Chinese visemes and other "
-                        "expressions as low-level FAPs; default), low (FAPs 3-68) or both")
+    added = [g.add_argument("--audio", type=Path, metavar="WAV", help="write the speech here (16-bit mono WAV)"),
+             g.add_argument("--timings", type=Path, metavar="JSON",
+                            help='write the timed visemes used: [{"phoneme", "viseme", "start", "end"}, ...] in '
+                                 'seconds')]
+    added += speech_options(g)
+    added.append(g.add_argument(
+        "--level", choices=LEVELS, default="high",
+        help="FAPs to send: high (FAP 1 visemes + FAP 2 expressions; Chinese visemes and other expressions as "
+             "low-level FAPs; default), low (FAPs 3-68) or both"))
     g = p.add_argument_group("text input: the speaker's face (FDP)")
-    g.add_argument("--fdp-out", type=Path, metavar="FDP",
-                   help="write an FDP describing the face (.fdp binary, or .json): the default head unless "
-                        "--face-mesh or --front/--side say otherwise")
-    g.add_argument("--face-mesh", type=Path, metavar="OBJ", help="the speaker's face mesh (Wavefront OBJ)")
-    g.add_argument("--face-points", type=Path, metavar="JSON",
-                   help="its feature points: JSON label -> vertex index or [x, y, z]")
-    g.add_argument("--front", type=Path, metavar="IMAGE", help="a front photo of the speaker (sent as the texture)")
-    g.add_argument("--front-points", type=Path, metavar="JSON", help="the front photo's feature points, label -> [x, y]")
-    g.add_argument("--side", type=Path, metavar="IMAGE", help="a side photo of the speaker")
-    g.add_argument("--side-points", type=Path, metavar="JSON", help="the side photo's feature points, label -> [x, y]")
-    g.add_argument("--side-view", choices=("left", "right"), default="left",
-                   help="which side of the face the side photo shows (default left)")
-    # what these options default to, so a stream INPUT can tell which were given (argparse keeps
-    # no public list of a parser's actions; _actions has been stable since Python 3.2)
-    p.set_defaults(text_defaults={a.dest: a.default for a in p._actions[first:]})
+    added += [
+        g.add_argument("--fdp-out", type=Path, metavar="FDP",
+                       help="write an FDP describing the face (.fdp binary, or .json): the default head unless "
+                            "--face-mesh or --front/--side say otherwise"),
+        g.add_argument("--face-mesh", type=Path, metavar="OBJ", help="the speaker's face mesh (Wavefront OBJ)"),
+        g.add_argument("--face-points", type=Path, metavar="JSON",
+                       help="its feature points: JSON label -> vertex index or [x, y, z]"),
+        g.add_argument("--front", type=Path, metavar="IMAGE",
+                       help="a front photo of the speaker (sent as the texture)"),
+        g.add_argument("--front-points", type=Path, metavar="JSON",
+                       help="the front photo's feature points, label -> [x, y]"),
+        g.add_argument("--side", type=Path, metavar="IMAGE", help="a side photo of the speaker"),
+        g.add_argument("--side-points", type=Path, metavar="JSON",
+                       help="the side photo's feature points, label -> [x, y]"),
+        g.add_argument("--side-view", choices=("left", "right"), default="left",
+                       help="which side of the face the side photo shows (default left)"),
+    ]
+    # what these options default to, so that a stream INPUT can tell which of them were given
+    p.set_defaults(text_defaults={action.dest: action.default for action in added})
 
 
-def speech_options(g) -> None:
-    """Engine, language, voice, rate and idle motion: shared by ``encode`` (text) and ``say``."""
-    g.add_argument("--engine", choices=ENGINES, default="espeak",
-                   help="espeak (phoneme times; default), pyttsx3 (word boundaries, visemes estimated in "
-                        "between) or estimate (no audio: word times from a duration model)")
-    g.add_argument("--lang", choices=("auto", "en", "zh"), default="auto", help="language (default: by script)")
-    g.add_argument("--voice", help="English voice for latin text (default en-us)")
-    g.add_argument("--rate", type=int, help="speech rate in words per minute (default 175)")
-    g.add_argument("--idle", action="store_true", help="add blinks and small head motion")
+def speech_options(g) -> list[argparse.Action]:
+    """Engine, language, voice, rate and idle motion: shared by ``encode`` (text) and ``say``; the actions added."""
+    return [
+        g.add_argument("--engine", choices=ENGINES, default="espeak",
+                       help="espeak (phoneme times; default), pyttsx3 (word boundaries, visemes estimated in "
+                            "between) or estimate (no audio: word times from a duration model)"),
+        g.add_argument("--lang", choices=("auto", "en", "zh"), default="auto",
+                       help="language (default: by script); English and Mandarin are spoken, text in other "
+                            "scripts is refused"),
+        g.add_argument("--voice", help="English voice for latin text (default en-us)"),
+        g.add_argument("--rate", type=options.speech_rate, help="speech rate in words per minute, 80 to 450 "
+                                                                "(default 175)"),
+        g.add_argument("--idle", action="store_true", help="add blinks and small head motion"),
+    ]
 
 
 def reject_text_options(args: argparse.Namespace) -> None:
@@ -87,57 +113,42 @@ def reject_text_options(args: argparse.Namespace) -> None:
                          hint="drop them, or pass the text itself")
 
 
-def names_file(arg: str) -> bool:
-    """Whether ``arg`` is the path of an existing file (a long sentence is not: its name is too long)."""
-    try:
-        return Path(arg).is_file()
-    except (OSError, ValueError):
-        return False
-
-
-def read_text(arg: str) -> tuple[str, str]:
-    """The text and its name for messages: literal, '-' (stdin) or @FILE."""
-    if arg == "-":
-        return sys.stdin.read(), "<stdin>"
-    if arg.startswith("@") or names_file(arg):
-        path = Path(arg[1:] if arg.startswith("@") else arg)
-        try:
-            return path.read_text(encoding="utf-8"), str(path)
-        except UnicodeDecodeError as exc:
-            raise MarkupError(f"the text file is not UTF-8 ({exc.reason} at byte {exc.start})", 1, 1,
-                              hint="save it as UTF-8", source=str(path)) from None
-    return arg, "<text>"
-
-
-def run_encode_text(args: argparse.Namespace) -> int:
-    """``mpeg4fa encode TEXT``: speech -> FAP stream (+ WAV, timings, FDP)."""
+def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -> int:
+    """``mpeg4fa encode TEXT``: speech -> FAP stream (+ WAV, timings, FDP), all written or none."""
     from ..fba import encode
-    from .codec import coding_options
+    from ..say import write_timings
+    from ..speech.encoder import encode_text
 
     if args.engine == "estimate" and args.audio is not None:
         raise UsageError("the estimate engine makes no audio, so there is nothing for --audio",
                          hint="drop --audio, or use --engine espeak or pyttsx3")
+    refuse_overlaps({"input": source.path, "--face-mesh": args.face_mesh, "--face-points": args.face_points,
+                     "--front": args.front, "--front-points": args.front_points, "--side": args.side,
+                     "--side-points": args.side_points},
+                    {"-o": args.output, "--audio": args.audio, "--timings": args.timings, "--fdp-out": args.fdp_out})
     fdp = _speaker_fdp(args) if args.fdp_out is not None else None
-    text, name = read_text(args.input)
+    text, name = text_input.read_text(source)
+    fps = args.fps if args.fps is not None else 25.0
     encoded = encode_text(text, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate,
-                          fps=args.fps or 25.0, level=args.level, idle=args.idle, name=name)
+                          fps=fps, level=args.level, idle=args.idle, name=name)
     data = encode(encoded.stream, coding_options(args, encoded.coding()))
-    args.output.write_bytes(data)
     written = [f"{args.output} ({len(data)} bytes)"]
-    if args.audio is not None:
-        encoded.speech.write_wav(args.audio)
-        written.append(f"{args.audio} ({encoded.speech.duration:.2f} s)")
-    if args.timings is not None:
-        _write_timings(encoded, args.timings)
-        written.append(str(args.timings))
-    if fdp is not None:
-        from ..fdp import save_fdp
-        save_fdp(fdp, args.fdp_out)
-        written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points)")
+    with atomic_outputs(args.output, args.audio, args.timings, args.fdp_out) as (out, audio, timings, fdp_out):
+        out.write_bytes(data)
+        if audio is not None:
+            encoded.speech.write_wav(audio)
+            written.append(f"{args.audio} ({encoded.speech.duration:.2f} s)")
+        if timings is not None:
+            write_timings(encoded, timings)
+            written.append(str(args.timings))
+        if fdp is not None:
+            from ..fdp import save_fdp
+            save_fdp(fdp, fdp_out)
+            written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points)")
     frames = len(encoded.stream)
-    seconds = frames / (args.fps or 25.0)
+    seconds = frames / fps
     print(f"{name}: {encoded.speech.engine} speech {encoded.speech.duration:.2f} s, {frames} frames, "
-          f"{len(data) * 8 / max(frames, 1):.1f} bits/frame ({len(data) * 8 / seconds / 1000:.2f} kbit/s, "
+          f"{len(data) * 8 / max(frames, 1):.1f} bits/frame ({len(data) * 8 / max(seconds, 1e-9) / 1000:.2f} kbit/s, "
           f"{args.level}-level)", file=sys.stderr)
     print("wrote " + ", ".join(written), file=sys.stderr)
     return 0
@@ -179,31 +190,24 @@ def _located(path: str):
         raise FdpError.no_place(path, exc.message, hint="check the feature point annotations") from None
 
 
-def _write_timings(encoded, path: Path) -> None:
-    timings = [t.as_dict() for t in encoded.utterance.timings]
-    path.write_text(json.dumps(timings, ensure_ascii=False, indent=1) + "\n", encoding="utf-8")
-
-
 def run_say(args: argparse.Namespace) -> int:
-    from ..fba import decode, encode
-    from ..face import FaceModel
-    from ..render import Audio
+    """``mpeg4fa say``: :func:`mpeg4fa.say.say` with a progress bar, after checking what it would write."""
+    from ..say import kept_paths, say
 
-    text, name = read_text(args.text)
-    encoded = encode_text(text, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate, fps=args.fps,
-                          level=args.level, idle=args.idle, name=name)
-    data = encode(encoded.stream, encoded.coding())
-    stream = decode(data)  # the face plays what a receiver would decode
-    speech = encoded.speech
-    audio = Audio((speech.samples.astype(np.float32) / 32768.0)[:, None], speech.rate)
-    if args.keep:
-        base = args.output.with_suffix("")
-        base.with_suffix(".fba").write_bytes(data)
-        speech.write_wav(base.with_suffix(".wav"))
-        _write_timings(encoded, base.with_suffix(".timings.json"))
-    result = render_with_progress("say", stream, args.output, face=FaceModel.default(), audio=audio,
-                                  width=args.size, height=args.size, samples=args.aa)
+    source = text_input.classify(args.text, as_text=args.as_text)
+    kept = kept_paths(args.output) if args.keep else {}
+    refuse_overlaps({"text file": source.path}, {"-o": args.output, **{f"--keep ({what})": path
+                                                                        for what, path in kept.items()}})
+    check_video_size(args.output, args.size)
+    text, name = text_input.read_text(source)
+    width, height = args.size
+    with rendering("say", args.output) as progress:
+        said = say(text, args.output, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate,
+                   fps=args.fps, level=args.level, idle=args.idle, width=width, height=height, samples=args.aa,
+                   keep=args.keep, name=name, progress=progress)
+    result = said.result
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s), "
-          f"{len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs ({args.level}-level); "
-          f"rendered in {result.seconds:.1f} s")
+          f"{len(said.data) * 8 / max(len(said.stream), 1):.0f} bits/frame of FAPs ({args.level}-level); "
+          f"rendered in {result.seconds:.1f} s" + (f"; kept {', '.join(map(str, said.kept.values()))}"
+                                                   if said.kept else ""))
     return 0

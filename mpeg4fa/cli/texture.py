@@ -8,12 +8,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_outputs
 from ..render import RenderError
+from . import options
+from .errors import UsageError
 from .media import read_image
 from .model import face_from_args, face_options
+from .options import Commands
+from .paths import refuse_overlaps
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     p = commands.add_parser(
         "texture", help="texture the head from a front photo (and a side photo) with annotated feature points",
         description="Align the head's bounding box to each photo through its annotated feature points, project "
@@ -30,7 +35,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--side-points", type=Path, help="JSON: the side photo's feature points")
     p.add_argument("--side-view", choices=("left", "right"), default="left",
                    help="which side of the face the side photo shows (default left)")
-    p.add_argument("--size", type=int, default=1024, help="texture size in pixels (default 1024)")
+    p.add_argument("--size", type=options.side, default=1024, help="texture size in pixels, 16 to 8192 (default 1024)")
     p.add_argument("-o", "--output", type=Path, required=True, help="the texture image (.png)")
     p.add_argument("--preview", type=Path, help="also render the textured head (front and three-quarter) here")
     face_options(p)
@@ -57,29 +62,34 @@ def run_texture(args: argparse.Namespace) -> int:
     from ..render.texture import PhotoView, bake_texture
 
     if (args.side is None) != (args.side_points is None):
-        raise RenderError("--side and --side-points go together", hint="give both, or neither for front-only")
+        raise UsageError("--side and --side-points go together", hint="give both, or neither for front-only")
+    refuse_overlaps({"front photo": args.front, "--points": args.points, "--side": args.side,
+                     "--side-points": args.side_points, "--fdp": args.fdp},
+                    {"-o": args.output, "--preview": args.preview})
     face = face_from_args(args)
     front = PhotoView(read_image(args.front, "photo"), _points(args.points), "front")
     side = PhotoView(read_image(args.side, "photo"), _points(args.side_points), args.side_view) if args.side else None
     baked = bake_texture(face.mesh, front, side, size=args.size)
-    _save(Image.fromarray(baked.image), args.output)
+    preview = None
+    if args.preview is not None:
+        images = []
+        for view in ("front", "three-quarter"):
+            with Renderer(face, width=384, height=384, samples=4, view=view, texture=baked.image) as r:
+                images.append(r.render(face.neutral()))
+        preview = np.concatenate(images, axis=1)
+    try:  # the texture and its preview appear together, or neither
+        with atomic_outputs(args.output, args.preview) as (out, check):
+            Image.fromarray(baked.image).save(out)
+            if check is not None:
+                Image.fromarray(preview).save(check)
+    except (OSError, ValueError) as exc:
+        where = exc.filename if isinstance(exc, OSError) and exc.filename else args.output
+        raise RenderError(f"cannot write the image ({exc})", where=str(where)) from None
     for view, align in baked.alignments.items():
         print(f"{view} photo: {len(align.labels)} points, alignment residual {align.residual:.1f} px",
               file=sys.stderr)
     print(f"{args.output}: {args.size}x{args.size}, {baked.coverage[baked.skin].mean():.0%} of the skin seen "
           f"in a photo")
     if args.preview is not None:
-        images = []
-        for view in ("front", "three-quarter"):
-            with Renderer(face, width=384, height=384, samples=4, view=view, texture=baked.image) as r:
-                images.append(r.render(face.neutral()))
-        _save(Image.fromarray(np.concatenate(images, axis=1)), args.preview)
         print(f"{args.preview}: preview")
     return 0
-
-
-def _save(image, path: Path) -> None:
-    try:
-        image.save(path)
-    except (OSError, ValueError) as exc:
-        raise RenderError(f"cannot write the image ({exc})", where=str(path)) from None

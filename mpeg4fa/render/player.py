@@ -19,6 +19,7 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
+from mpeg4fa.atomic import atomic_output
 from mpeg4fa.decoded import FrameResolver, resolve
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba.stream import FapStream, Frame
@@ -29,7 +30,7 @@ from mpeg4fa.render.fdp_texture import fdp_skin_texture
 from mpeg4fa.render.realtime import LiveFrame, LiveStats, live
 from mpeg4fa.render.renderer import Renderer
 from mpeg4fa.render.timing import Schedule, schedule
-from mpeg4fa.render.video import open_writer
+from mpeg4fa.render.video import open_writer, writes_folder
 
 Progress = Callable[[int, int], None]
 FITS = ("pad", "trim")
@@ -137,8 +138,9 @@ def play(stream: FapStream, target: str | os.PathLike, *, face: FaceModel | None
     rend, owned = _renderer_for(face, renderer, render_options)
     image = np.empty((rend.height, rend.width, 3), np.uint8)
     rendered, shown = 0, -1
-    try:
-        with open_writer(target, rend.width, rend.height, plan.fps, audio_fit, **(writer_options or {})) as out:
+    try:  # under a temporary name until the last frame is in: a failed play leaves nothing behind
+        with atomic_output(target, directory=writes_folder(target)) as partial, \
+                open_writer(partial, rend.width, rend.height, plan.fps, audio_fit, **(writer_options or {})) as out:
             for j, k in enumerate(plan.source):
                 if k != shown:
                     rend.render(face.pose_values(values[k]), out=image)

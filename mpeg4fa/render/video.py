@@ -28,6 +28,7 @@ from types import TracebackType
 
 import numpy as np
 
+from mpeg4fa.atomic import atomic_output
 from mpeg4fa.render.audio import Audio
 from mpeg4fa.render.errors import RenderError, RenderWarning
 
@@ -356,8 +357,8 @@ def write_wav(path: str | os.PathLike, audio: Audio) -> None:
     """Save audio as a 16-bit PCM WAV (stdlib ``wave``), the format every tool reads."""
     samples = _check_audio(audio, str(path))
     pcm = np.round(samples * 32767.0).astype("<i2")
-    try:
-        with wave.open(str(path), "wb") as out:
+    try:  # our own file object (see Speech.write_wav), under a temporary name until complete
+        with atomic_output(path) as partial, open(partial, "wb") as handle, wave.open(handle, "wb") as out:
             out.setnchannels(samples.shape[1])
             out.setsampwidth(2)
             out.setframerate(int(audio.rate))
@@ -370,21 +371,26 @@ _MP4_OPTIONS = {"crf", "preset"}
 _PNG_OPTIONS = {"pattern", "compress_level"}
 
 
+def writes_folder(target: str | os.PathLike) -> bool:
+    """Whether ``target`` names a PNG folder (else an MP4 file); RenderError for a name that can be neither."""
+    path = Path(target)
+    suffix = path.suffix.lower()
+    if suffix in VIDEO_SUFFIXES:
+        return False
+    if suffix in OTHER_VIDEO_SUFFIXES:
+        raise RenderError(f"{suffix} video is not supported", where=str(path),
+                          hint="write .mp4, .m4v or .mov, or give a directory for PNG frames")
+    if path.exists() and not path.is_dir():
+        raise RenderError("exists and is a file, not a directory or a video name", where=str(path),
+                          hint="give a .mp4/.m4v/.mov file, or a directory for PNG frames")
+    return True
+
+
 def open_writer(target: str | os.PathLike, width: int, height: int, fps: float | Fraction,
                 audio: Audio | None = None, **options) -> Mp4Writer | PngWriter:
     """A writer chosen by the target's name: .mp4/.m4v/.mov -> MP4 file, anything else -> PNG directory."""
     path = Path(target)
-    suffix = path.suffix.lower()
-    if suffix in VIDEO_SUFFIXES:
-        kind, allowed = Mp4Writer, _MP4_OPTIONS
-    elif suffix in OTHER_VIDEO_SUFFIXES:
-        raise RenderError(f"{suffix} video is not supported", where=str(path),
-                          hint="write .mp4, .m4v or .mov, or give a directory for PNG frames")
-    else:
-        if path.exists() and not path.is_dir():
-            raise RenderError("exists and is a file, not a directory or a video name", where=str(path),
-                              hint="give a .mp4/.m4v/.mov file, or a directory for PNG frames")
-        kind, allowed = PngWriter, _PNG_OPTIONS
+    kind, allowed = (PngWriter, _PNG_OPTIONS) if writes_folder(path) else (Mp4Writer, _MP4_OPTIONS)
     unknown = sorted(set(options) - allowed)
     if unknown:
         raise RenderError(f"option(s) {', '.join(unknown)} do not apply to {kind.__name__}", where=str(path),

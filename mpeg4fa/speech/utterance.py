@@ -16,7 +16,6 @@ and resynchronised at every word or syllable boundary (:mod:`.wordsync`).
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +24,8 @@ from mpeg4fa.speech.errors import MarkupError, TTSError
 from mpeg4fa.speech.graphemes import SYLLABLE_UNIT, english_units, seconds_per_unit, syllable_units
 from mpeg4fa.speech.mandarin import FINAL_WEIGHT, Syllable, final_roles, syllables
 from mpeg4fa.speech.markup import Markup
+from mpeg4fa.speech.script import CHINESE as _ZH
+from mpeg4fa.speech.script import check_speakable
 from mpeg4fa.speech.timeline import ExpressionCue, VisemeSpan
 from mpeg4fa.speech.tts.base import Engine, Event, Speech, snap_to_tokens, word_tokens
 from mpeg4fa.speech.visemes import PAUSE, english_visemes
@@ -33,8 +34,6 @@ from mpeg4fa.speech.wordsync import resync
 ENGLISH_VOICE = "en-us"
 PINYIN_VOICE = "cmn-latn-pinyin"
 LANGS = ("auto", "en", "zh")
-_ZH = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\u3000-\u303f\uff00-\uffef]")
-_HAN = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
 _PUNCT = {"，": ", ", "、": ", ", "；": "; ", "：": ": ", "。": ". ", "！": "! ", "？": "? ", "…": "... "}
 
 
@@ -230,11 +229,7 @@ def speak(markup: Markup, engine: Engine, *, lang: str = "auto", voice: str | No
     text = markup.text
     if not text.strip():
         raise MarkupError("there is nothing to say", 1, 1, hint="give some text", source=markup.name)
-    han = _HAN.search(text)
-    if lang == "en" and han:
-        line = text.count("\n", 0, han.start()) + 1
-        raise MarkupError(f"{han.group()!r} is Chinese but --lang is en", line, han.start() + 1,
-                          hint="use --lang zh or auto", source=markup.name)
+    check_speakable(text, lang, markup.name)  # a script no voice here speaks: refused, not spoken as silence
     runs = _runs(text)
     names = {i: f"tag{i}" for i in range(len(markup.tags))}
     parts = []

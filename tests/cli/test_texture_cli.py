@@ -49,6 +49,6 @@ def test_texture_errors(cli, tmp_path, front_photo):
     code, _, err = cli("texture", photo, "--points", bad, "-o", tmp_path / "s.png")
     assert code == 1 and "bad.json:2:" in err
     code, _, err = cli("texture", photo, "--points", points, "--side", photo, "-o", tmp_path / "s.png")
-    assert code == 1 and "--side-points" in err
+    assert code == 2 and "--side-points" in err  # a usage clash: exit 2 like argparse
     code, _, err = cli("texture", tmp_path / "none.png", "--points", points, "-o", tmp_path / "s.png")
     assert code == 1 and "none.png" in err

@@ -15,6 +15,8 @@ from typing import Literal, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
+from mpeg4fa.atomic import atomic_output
+
 EventKind = Literal["phoneme", "word", "sentence", "mark", "end"]
 EVENT_KINDS: tuple[str, ...] = ("phoneme", "word", "sentence", "mark", "end")
 
@@ -73,7 +75,9 @@ class Speech:
     def write_wav(self, path: str | PathLike[str]) -> None:
         """Write a 16-bit mono PCM WAV file (the audio track to mux with the animation)."""
         data = self.samples.astype("<i2", copy=False).tobytes()
-        with wave.open(str(path), "wb") as out:
+        # our own file object: wave.open(name) leaves a half-made writer whose __del__ fails when open()
+        # fails; the temporary name makes the WAV appear whole or not at all
+        with atomic_output(path) as partial, open(partial, "wb") as handle, wave.open(handle, "wb") as out:
             out.setnchannels(1)
             out.setsampwidth(2)
             out.setframerate(int(self.rate))
