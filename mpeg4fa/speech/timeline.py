@@ -75,7 +75,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from mpeg4fa.spec import AU_PER_RADIAN, FAP_BY_NAME, FULL_INTENSITY, N_FAPS
+from mpeg4fa.spec import AU_PER_RADIAN, FAP_BY_NAME, FAPU, FULL_INTENSITY, N_FAPS
 from mpeg4fa.spec.profiles import EXPRESSION_PROFILES, VISEME_PROFILES
 
 __all__ = [
@@ -93,6 +93,8 @@ _HEAD_COLUMNS = (FAP_BY_NAME["head_pitch"].number - 1, FAP_BY_NAME["head_yaw"].n
                  FAP_BY_NAME["head_roll"].number - 1)
 _AU_PER_DEGREE = math.pi / 180.0 * AU_PER_RADIAN
 """Head angles are in AU (:data:`mpeg4fa.spec.ANGLE_UNIT` radians)."""
+_LID_SHUT = float(FAPU["IRISD"].divisor)
+"""An upper lid lowered by one IRISD0 (1024 IRISD units) covers the iris: the eye is shut."""
 
 
 @dataclass(frozen=True)
@@ -478,7 +480,7 @@ def _blink_onsets(rng: np.random.Generator, until: float, lo: float, hi: float) 
 
 def idle_track(times: npt.ArrayLike, seed: int, blinks: bool = True, head: bool = True, *,
                blink_every: tuple[float, float] = (2.0, 6.0), blink_seconds: float = 0.15,
-               blink_amplitude: float = 1024.0, head_degrees: tuple[float, float, float] = (1.5, 2.5, 1.0),
+               blink_amplitude: float = _LID_SHUT, head_degrees: tuple[float, float, float] = (1.5, 2.5, 1.0),
                fade_in: float = 1.0) -> np.ndarray:
     """Idle blinks and head motion (n, 68) for ``times`` (seconds from 0), the same for the same seed.
 
