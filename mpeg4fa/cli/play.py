@@ -119,9 +119,10 @@ def run_play(args: argparse.Namespace) -> int:
         raise UsageError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
     audio = _audio_for(args) if args.output is not None else None
     if args.output is not None:
-        beside = args.output / AUDIO_WAV if audio is not None and writes_folder(args.output) else None
-        refuse_overlaps({"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture},
-                        {"-o": args.output, "the folder's audio": beside})
+        inputs = {"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture}
+        refuse_overlaps(inputs, {"-o": args.output})
+        if audio is not None and writes_folder(args.output):  # PNG frames, and the audio beside them
+            refuse_overlaps(inputs, {f"-o {args.output}'s {AUDIO_WAV}": args.output / AUDIO_WAV})
         check_video_size(args.output, args.size)
     stream, _ = read_stream(args.stream)
     face = face_from_args(args).with_deformer(args.deformer)
