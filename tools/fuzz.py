@@ -1,0 +1,642 @@
+#!/usr/bin/env python3
+"""Fuzz every reader with mutated input: only the layer's own error may escape, never a crash or a hang.
+
+Why: the error contract (README, "Architecture") promises that bad input gives one
+located error of the layer's type, with what was decoded before the fault kept,
+in bounded time and memory. Hand-written bad-input tests cover the faults we
+thought of; this covers the ones we did not.
+
+How to run (on demand, one process, bounded in time and in count)::
+
+    .venv/bin/python tools/fuzz.py --cases 100000 --seconds 1800 --seed 0 \\
+        [--target fba,fap,fdp-binary,fdp-json,fdp-xface,markup] [--json out/fuzz.json]
+    .venv/bin/python tools/fuzz.py --replay out/fuzz/crashes/fap-1.bin --target fap
+
+Seeds: the real streams in ``../shared/vectors`` (``fba/``, ``fap/``, any FDP
+file there) when present, plus seeds made here with the library (encoded
+streams with several coding options, ``write_fap``, ``save_fdp`` in both forms,
+an Xface XML written here, markup strings). Each case applies 1-4 mutations
+(bit flips, byte sets, inserts, deletes, truncation, chunk duplication, splices
+of two seeds; for text formats number-token replacement, line duplication and
+deletion, encoding damage; XML and JSON damage; for the binary FDP, payload
+damage with the chunk CRC fixed so the reader gets past it) and runs the
+library's reader in-process, then, on success, the next layers: ``resolve``
+and an ``encode`` -> ``decode`` round trip for streams, a save/load round trip
+for FDPs.
+
+Each case is classified as *ok* (parsed), *rejected* (an ``MpegFaError`` or the
+layer's own error type), *crash* (anything else; deduplicated by target, stage,
+exception type and the traceback's last frame, the mutated bytes saved as
+``out/fuzz/crashes/TARGET-N.bin`` with a ``.txt`` beside it), *hang* (a stage
+ran past ``--case-seconds``, scaled up for large inputs), or *memory*
+(``MemoryError`` under an address-space limit ``--memory-gib`` above the start,
+or a peak RSS more than ``--peak-mib`` above the start). Also reported:
+rejections whose error names no location, round-trip mismatches, and warnings
+that are not ``MpegFaWarning``. A watchdog thread ends the run (keeping the
+results so far and the reproducer) if a case is stuck where the timer signal
+cannot interrupt it. Case ``i`` of a target is drawn from its own generator
+seeded by ``--seed``, the target and ``i``, so any case can be replayed.
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import random
+import re
+import resource
+import shutil
+import signal
+import sys
+import tempfile
+import threading
+import time
+import traceback
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fuzz_inputs import MAX_INPUT, ROOT, TARGETS, Seed, collect_seeds, draw  # noqa: E402
+
+from mpeg4fa.errors import MpegFaError, MpegFaWarning  # noqa: E402
+from mpeg4fa.fba import FapStream, FbaError, decode, encode, iter_decode  # noqa: E402
+from mpeg4fa.fdp import (Fdp, FdpError, fdp_from_bytes, fdp_from_json, fdp_to_bytes, fdp_to_json,  # noqa: E402
+                         load_fdp, read_xface_fdp, xface_from_xml)
+from mpeg4fa.formats import FormatError, iter_fap, read_fap, read_stream  # noqa: E402
+from mpeg4fa.speech.errors import MarkupError  # noqa: E402
+from mpeg4fa.speech.markup import parse_markup  # noqa: E402
+
+try:  # the one home of decoder output is moving to mpeg4fa.decoded (issue 12 item 1)
+    from mpeg4fa.decoded import resolve  # type: ignore[import-not-found]
+except ImportError:
+    from mpeg4fa.face.frames import resolve
+
+LAYER_ERRORS: dict[str, tuple[type[BaseException], ...]] = {
+    "fba": (MpegFaError, FbaError),
+    "fap": (MpegFaError, FormatError, FbaError),  # FbaError: the encode stage of `mpeg4fa encode x.fap`
+    "fdp-binary": (MpegFaError, FdpError),
+    "fdp-json": (MpegFaError, FdpError),
+    "fdp-xface": (MpegFaError, FdpError),
+    "markup": (MpegFaError, MarkupError),
+}
+"""What a target may raise on bad input: the base, plus the layer's type until it derives from the base."""
+VECTORS = ROOT.parent / "shared" / "vectors"
+_DIGITS = re.compile(r"[0-9]+")
+VALUE_FIELDS = ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values")
+
+
+# ---- the guards: time and memory -----------------------------------------------------------------------------
+
+
+class _Hang(BaseException):
+    """Raised by the timer inside a stage that ran too long (a BaseException: no `except Exception` eats it)."""
+
+
+class _Mismatch(Exception):
+    """A round trip gave different values: a finding, counted with the crashes."""
+
+
+def _on_alarm(signum, frame):
+    raise _Hang()
+
+
+class Guard:
+    """Per-stage time limit (a SIGALRM timer) and per-case peak memory (VmHWM, reset before each case)."""
+
+    def __init__(self, case_seconds: float) -> None:
+        self.case_seconds = case_seconds
+        self.stage = ""
+        self._previous = signal.signal(signal.SIGALRM, _on_alarm)
+        self.peak_ok = _reset_peak()
+
+    def close(self) -> None:
+        """Give the SIGALRM handler back (the tests run campaigns inside pytest)."""
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, self._previous)
+
+    def limit_for(self, size: int) -> float:
+        return self.case_seconds + size * 40e-6  # a 64 KB stream decodes, re-encodes and decodes in ~2.5 s
+
+    def run(self, stage: str, limit: float, call: Callable[[], object]) -> object:
+        self.stage = stage
+        signal.setitimer(signal.ITIMER_REAL, limit)
+        try:
+            return call()
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+
+
+def _reset_peak() -> bool:
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")
+        return True
+    except OSError:
+        return False
+
+
+def _status_bytes(key: str) -> int:
+    """A ``/proc/self/status`` size (``VmHWM``, ``VmSize``) in bytes; 0 where there is no /proc."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith(key + ":"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
+def _peak_bytes() -> int:
+    return _status_bytes("VmHWM") or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def limit_memory(extra_gib: float) -> int | None:
+    """Cap the address space at its current size + ``extra_gib``, so a runaway allocation is a MemoryError."""
+    base = _status_bytes("VmSize")
+    if not base or extra_gib <= 0:
+        return None
+    cap = base + int(extra_gib * (1 << 30))
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    if hard != resource.RLIM_INFINITY:
+        cap = min(cap, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
+    return cap
+
+
+# ---- the targets: what each case runs ------------------------------------------------------------------------
+
+
+@dataclass
+class Case:
+    """One case's input and what the target needs around it."""
+
+    data: bytes
+    rng: random.Random
+    guard: Guard
+    tmp: Path
+    limit: float
+    notes: list[str] = field(default_factory=list)
+    fault: tuple[str, BaseException] | None = None
+
+    def file(self, suffix: str) -> Path:
+        path = self.tmp / f"case{suffix}"
+        path.write_bytes(self.data)
+        return path
+
+    def stage(self, name: str, call: Callable[[], object]) -> object:
+        try:
+            return self.guard.run(name, self.limit, call)
+        except BaseException as exc:
+            self.fault = (name, exc)  # the stage an exception came from, even if later stages ran
+            raise
+
+    def stage_of(self, exc: BaseException | None) -> str:
+        return self.fault[0] if self.fault is not None and self.fault[1] is exc else self.guard.stage
+
+
+def _same_values(a: FapStream, b: FapStream) -> None:
+    """``b`` (decoded from ``encode(a)``) shows the same frames as ``a`` on the frame grid."""
+    ga, gb = _on_grid(a), _on_grid(b)
+    for name in VALUE_FIELDS:
+        if ga[name].shape != gb[name].shape or not np.array_equal(ga[name], gb[name]):
+            raise _Mismatch(f"encode -> decode changed {name} (frames {len(a)} -> {len(b)})")
+
+
+def _on_grid(s: FapStream) -> dict[str, np.ndarray]:
+    idx = np.repeat(np.arange(len(s)), np.asarray(s.skip, dtype=np.int64) + 1)
+    return {name: getattr(s, name)[idx] for name in VALUE_FIELDS}
+
+
+def _stream_layers(case: Case, stream: FapStream, errors: tuple[type[BaseException], ...], exact: bool,
+                   label: str = "") -> None:
+    """resolve, then encode -> decode; ``exact``: the re-decoded values must equal (a decoded FBA stream)."""
+    case.stage(label + "resolve", lambda: resolve(stream))
+    if not len(stream):
+        return
+    try:
+        data = case.stage(label + "encode", lambda: encode(stream))
+    except errors as exc:
+        case.notes.append(f"encode refused: {exc}")
+        return
+    try:
+        again = case.stage(label + "redecode", lambda: decode(data))
+    except FbaError as exc:
+        raise _Mismatch(f"decode refuses what encode wrote: {exc}") from exc
+    if exact:
+        _same_values(stream, again)
+
+
+def run_fba(case: Case) -> None:
+    errors = LAYER_ERRORS["fba"]
+    pick = case.rng.random()
+    if pick < 0.25:
+        frames = case.stage("iter_decode", lambda: sum(1 for _ in iter_decode(io.BytesIO(case.data))))
+        case.notes.append(f"{frames} frames")
+        return
+    if pick < 0.35:  # what `mpeg4fa info/encode FILE` does: the kind from the content
+        path = case.file(".fba")
+        case.stage("read_stream", lambda: read_stream(path))
+        return
+    try:
+        stream = case.stage("decode", lambda: decode(case.data))
+    except FbaError as exc:
+        partial = exc.partial
+        if partial is None:
+            raise _Mismatch("an FbaError from decode() without .partial (the frames before the fault)") from exc
+        if len(partial):  # what was decoded before the fault goes on through the next layers
+            _stream_layers(case, partial, errors, exact=True, label="partial ")
+        raise
+    _stream_layers(case, stream, errors, exact=True)
+
+
+def run_fap(case: Case) -> None:
+    pick = case.rng.random()
+    if pick < 0.15:  # a strict text stream: undecodable bytes reach the reader as UnicodeDecodeError
+        text = io.TextIOWrapper(io.BytesIO(case.data), encoding="utf-8", newline=None)
+        stream = case.stage("read_fap(stream)", lambda: read_fap(text, name="case.fap"))
+    elif pick < 0.25:
+        path = case.file(".fap")
+        case.stage("iter_fap", lambda: sum(1 for _ in iter_fap(path)))
+        return
+    elif pick < 0.35:
+        path = case.file(".fap")
+        stream, _ = case.stage("read_stream", lambda: read_stream(path))
+    else:
+        path = case.file(".fap")
+        stream = case.stage("read_fap", lambda: read_fap(path))
+    _stream_layers(case, stream, LAYER_ERRORS["fap"], exact=False)
+
+
+def _fdp_round_trip(case: Case, fdp: Fdp) -> None:
+    try:
+        again = case.stage("save-binary", lambda: fdp_from_bytes(fdp_to_bytes(fdp)))
+        if not again == fdp:
+            raise _Mismatch("binary save -> load changed the FDP")
+    except FdpError as exc:
+        case.notes.append(f"binary writer refused: {exc}")
+    try:
+        again = case.stage("save-json", lambda: fdp_from_json(fdp_to_json(fdp)))
+        if not again == fdp:
+            raise _Mismatch("JSON save -> load changed the FDP")
+    except FdpError as exc:
+        case.notes.append(f"JSON writer refused: {exc}")
+
+
+def run_fdp_file(case: Case) -> None:
+    path = case.file(".fdp")
+    fdp = case.stage("load_fdp", lambda: load_fdp(path))
+    _fdp_round_trip(case, fdp)
+
+
+def run_fdp_json(case: Case) -> None:
+    if case.rng.random() < 0.2:  # text in hand: no UTF-8 decoding step
+        text = case.data.decode("utf-8", "replace")
+        fdp = case.stage("fdp_from_json(str)", lambda: fdp_from_json(text, "case.json"))
+    else:
+        path = case.file(".json")
+        fdp = case.stage("load_fdp", lambda: load_fdp(path))
+    _fdp_round_trip(case, fdp)
+
+
+def run_fdp_xface(case: Case) -> None:
+    if case.rng.random() < 0.2:
+        text = case.data.decode("utf-8", "surrogateescape")
+        xface = case.stage("xface_from_xml(str)", lambda: xface_from_xml(text, "case.fdp"))
+    else:
+        path = case.file(".fdp")
+        xface = case.stage("read_xface_fdp", lambda: read_xface_fdp(path))
+    sizes = {}
+    for entry in xface.entries:
+        sizes[entry.submesh] = max(sizes.get(entry.submesh, 0), entry.index + 1)
+    meshes = {name: np.zeros((min(n, 4096) - (case.rng.random() < 0.2), 3)) for name, n in sizes.items()}
+    if meshes and case.rng.random() < 0.2:
+        meshes.pop(case.rng.choice(sorted(meshes)))
+    fdp = case.stage("to_fdp", lambda: xface.to_fdp(meshes))
+    _fdp_round_trip(case, fdp)
+
+
+def run_markup(case: Case) -> None:
+    text = case.data.decode("utf-8", case.rng.choice(("replace", "surrogateescape", "ignore")))
+    markup = case.stage("parse_markup", lambda: parse_markup(text, name="case.txt"))
+    for tag in markup.tags:  # what the encoder relies on
+        if not 0 <= tag.offset <= len(markup.text) or not 0 <= tag.intensity <= 63 or not tag.seconds >= 0:
+            raise _Mismatch(f"tag out of bounds: {tag}")
+
+
+RUNNERS: dict[str, Callable[[Case], None]] = {
+    "fba": run_fba, "fap": run_fap, "fdp-binary": run_fdp_file, "fdp-json": run_fdp_json,
+    "fdp-xface": run_fdp_xface, "markup": run_markup,
+}
+
+
+# ---- running and recording -----------------------------------------------------------------------------------
+
+
+def _chain(exc: BaseException) -> Iterable[BaseException]:
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        yield exc
+        exc = exc.__cause__ or exc.__context__  # type: ignore[assignment]
+
+
+def _last_frame(exc: BaseException) -> str:
+    frames = traceback.extract_tb(exc.__traceback__)
+    if not frames:
+        return "?"
+    last = frames[-1]
+    try:
+        where = Path(last.filename).resolve().relative_to(ROOT).as_posix()
+    except ValueError:
+        where = last.filename
+    return f"{where}:{last.lineno} in {last.name}"
+
+
+def _located(exc: BaseException) -> bool:
+    """Does the error say where (bit offset, line, byte, a place in ``where``)?"""
+    for name in ("bit_offset", "line", "offset", "where"):
+        if getattr(exc, name, None) not in (None, "", ()):
+            return True
+    return False
+
+
+@dataclass
+class Finding:
+    kind: str  # crash, hang, memory, peak, mismatch
+    key: str
+    target: str
+    stage: str
+    type: str
+    message: str
+    frame: str
+    count: int = 1
+    first_case: int = 0
+    reproducer: str = ""
+
+
+@dataclass
+class Tally:
+    cases: int = 0
+    ok: int = 0
+    rejected: int = 0
+    crashes: int = 0
+    hangs: int = 0
+    memory: int = 0
+    peak: int = 0
+    mismatches: int = 0
+    unlocated: int = 0
+    seconds: float = 0.0
+    slowest: float = 0.0
+    slowest_case: str = ""
+    peak_mib: float = 0.0
+
+
+class Campaign:
+    """Runs cases, classifies them, keeps the tallies and the distinct findings, saves reproducers."""
+
+    def __init__(self, seed: int, out: Path, guard: Guard, peak_limit: int, tmp: Path) -> None:
+        self.seed, self.out, self.guard, self.peak_limit, self.tmp = seed, out, guard, peak_limit, tmp
+        self.tallies: dict[str, Tally] = {}
+        self.findings: dict[str, Finding] = {}
+        self.unlocated: dict[str, str] = {}
+        self.warnings: dict[str, str] = {}
+        self.reasons: dict[str, int] = {}
+        self.current: tuple[str, int, bytes] | None = None
+        self.case_started = 0.0
+        self.baseline = _peak_bytes()
+
+    def case_rng(self, target: str, index: int) -> random.Random:
+        return random.Random((self.seed * 64 + TARGETS.index(target)) * (1 << 40) + index)
+
+    def run_case(self, target: str, index: int, seeds: list[Seed]) -> str:
+        rng = self.case_rng(target, index)
+        data, origin = draw(rng, target, seeds)
+        return self.run_input(target, index, data, rng, origin)
+
+    def run_input(self, target: str, index: int, data: bytes, rng: random.Random, origin: str) -> str:
+        tally = self.tallies.setdefault(target, Tally())
+        case = Case(data, rng, self.guard, self.tmp, self.guard.limit_for(len(data)))
+        self.current, self.case_started = (target, index, data), time.monotonic()
+        if self.guard.peak_ok:
+            _reset_peak()
+        outcome, exc = "ok", None
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                RUNNERS[target](case)
+            except _Hang as e:
+                outcome, exc = "hang", e
+            except LAYER_ERRORS[target] as e:
+                outcome, exc = ("memory" if any(isinstance(x, MemoryError) for x in _chain(e)) else "rejected"), e
+            except MemoryError as e:
+                outcome, exc = "memory", e
+            except _Mismatch as e:
+                outcome, exc = "mismatch", e
+            except RecursionError as e:
+                outcome, exc = "crash", e
+            except Exception as e:  # noqa: BLE001 - anything else escaping is what we are looking for
+                outcome, exc = "crash", e
+        elapsed = time.monotonic() - self.case_started
+        self.current = None
+        stage = case.stage_of(exc)
+        tally.cases += 1
+        tally.seconds += elapsed
+        if elapsed > tally.slowest:
+            tally.slowest, tally.slowest_case = elapsed, f"case {index}: {origin} ({len(data)} bytes, {outcome})"
+        for w in caught:
+            if not issubclass(w.category, MpegFaWarning):
+                key = f"{w.category.__name__} {Path(str(w.filename)).name}:{w.lineno}"
+                self.warnings.setdefault(key, f"{target}: {str(w.message)[:200]}")
+        peak = _peak_bytes() - self.baseline if self.guard.peak_ok else 0
+        tally.peak_mib = max(tally.peak_mib, peak / 2**20)
+        if outcome == "rejected":
+            tally.rejected += 1
+            reason = f"{target} {stage}: {type(exc).__name__}: " + _DIGITS.sub("N", getattr(exc, "message", None) or str(exc))[:90]
+            self.reasons[reason] = self.reasons.get(reason, 0) + 1
+            if not _located(exc):
+                tally.unlocated += 1
+                self.unlocated.setdefault(f"{target} {type(exc).__name__} {_last_frame(exc)}", str(exc)[:300])
+        elif outcome == "ok":
+            tally.ok += 1
+        else:
+            counter = {"hang": "hangs", "memory": "memory", "mismatch": "mismatches", "crash": "crashes"}[outcome]
+            setattr(tally, counter, getattr(tally, counter) + 1)
+            self._record(outcome, target, index, data, exc, origin, elapsed, stage)
+        if peak > self.peak_limit and outcome in ("ok", "rejected"):
+            tally.peak += 1
+            self._record("peak", target, index, data, None, origin, elapsed, stage, f"peak {peak / 2**20:.0f} MiB")
+        return outcome
+
+    def _record(self, kind: str, target: str, index: int, data: bytes, exc: BaseException | None, origin: str,
+                elapsed: float, stage: str, message: str = "") -> None:
+        if exc is not None and kind == "hang":
+            frame, etype, message = _last_frame(exc), "hang", f"stage {stage} ran past {self.guard.limit_for(len(data)):.1f} s"
+        elif exc is not None:
+            frame, etype, message = _last_frame(exc), type(exc).__name__, str(exc)[:300]
+        else:
+            frame, etype = "", kind
+        key = f"{kind}|{target}|{stage}|{etype}|{frame}"
+        found = self.findings.get(key)
+        if found is not None:
+            found.count += 1
+            return
+        number = sum(1 for f in self.findings.values() if f.target == target) + 1
+        path = self.out / "crashes" / f"{target}-{number}.bin"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(data)
+        tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
+        path.with_suffix(".txt").write_text(
+            f"kind: {kind}\ntarget: {target}\nstage: {stage}\ncase: {index} (--seed {self.seed})\n"
+            f"origin: {origin}\nseconds: {elapsed:.3f}\nreplay: .venv/bin/python tools/fuzz.py --replay {path} "
+            f"--target {target}\n\n{message}\n\n{tb}", encoding="utf-8")
+        self.findings[key] = Finding(kind, key, target, stage, etype, message, frame, 1, index,
+                                     path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else str(path))
+
+
+def _watchdog(campaign: Campaign, hard_limit: float, report: Callable[[str], None]) -> None:
+    """End the run when a case is stuck where SIGALRM cannot reach (C code): keep the reproducer and the tallies."""
+    while True:
+        time.sleep(0.5)
+        current = campaign.current
+        if current is not None and time.monotonic() - campaign.case_started > hard_limit:
+            target, index, data = current
+            path = campaign.out / "crashes" / f"{target}-stuck-{index}.bin"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
+            report(f"case {index} of {target} stuck in stage {campaign.guard.stage} for {hard_limit:.0f} s "
+                   f"(not interruptible); input saved to {path}")
+            os._exit(3)
+
+
+# ---- the command ---------------------------------------------------------------------------------------------
+
+
+def _table(campaign: Campaign, elapsed: float) -> str:
+    head = ("target", "cases", "ok", "rejected", "crashes", "hangs", "memory", "peak>lim", "mismatch",
+            "unlocated", "cases/s", "slowest s")
+    rows = []
+    total = Tally()
+    for target in TARGETS:
+        t = campaign.tallies.get(target)
+        if t is None:
+            continue
+        rows.append((target, t.cases, t.ok, t.rejected, t.crashes, t.hangs, t.memory, t.peak, t.mismatches,
+                     t.unlocated, f"{t.cases / max(t.seconds, 1e-9):.0f}", f"{t.slowest:.2f}"))
+        for name in ("cases", "ok", "rejected", "crashes", "hangs", "memory", "peak", "mismatches", "unlocated"):
+            setattr(total, name, getattr(total, name) + getattr(t, name))
+    rows.append(("total", total.cases, total.ok, total.rejected, total.crashes, total.hangs, total.memory, total.peak,
+                 total.mismatches, total.unlocated, f"{total.cases / max(elapsed, 1e-9):.0f}", ""))
+    widths = [max(len(str(r[k])) for r in rows + [head]) for k in range(len(head))]
+    lines = ["  ".join(str(c).rjust(w) if k else str(c).ljust(w) for k, (c, w) in enumerate(zip(r, widths)))
+             for r in [head] + rows]
+    return "\n".join(lines)
+
+
+def _summary(campaign: Campaign, args: argparse.Namespace, elapsed: float, seeds: dict[str, list[Seed]],
+             memory_cap: int | None) -> dict:
+    return {
+        "seed": args.seed, "seconds": round(elapsed, 1), "case_seconds": args.case_seconds,
+        "memory_cap_bytes": memory_cap, "peak_limit_mib": args.peak_mib,
+        "vectors": str(args.vectors) if args.vectors and args.vectors.is_dir() else None,
+        "seeds": {t: [s.name for s in seeds[t]] for t in campaign.tallies},
+        "targets": {t: vars(campaign.tallies[t]) for t in TARGETS if t in campaign.tallies},
+        "findings": [vars(f) for f in campaign.findings.values()],
+        "unlocated_errors": campaign.unlocated,
+        "stray_warnings": campaign.warnings,
+        "top_rejections": dict(sorted(campaign.reasons.items(), key=lambda kv: -kv[1])[:40]),
+        "python": sys.version.split()[0],
+    }
+
+
+def _replay(args: argparse.Namespace, guard: Guard, tmp: Path) -> int:
+    target = args.target[0]
+    data = Path(args.replay).read_bytes()
+    campaign = Campaign(args.seed, tmp / "replay", guard, args.peak_mib << 20, tmp)
+    outcome = campaign.run_input(target, 0, data, random.Random(0), str(args.replay))
+    print(f"{target}: {outcome}")
+    for finding in campaign.findings.values():
+        print(f"  {finding.type} at {finding.frame} (stage {finding.stage}): {finding.message}")
+        print((campaign.out / "crashes" / f"{target}-1.txt").read_text(encoding="utf-8").split("\n\n", 2)[-1])
+    return 0 if outcome in ("ok", "rejected") else 1
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--cases", type=int, default=100_000, help="total cases over all targets (default 100000)")
+    p.add_argument("--seconds", type=float, default=1800.0, help="total time budget (default 1800)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--target", default=",".join(TARGETS), help="comma-separated: " + ",".join(TARGETS))
+    p.add_argument("--json", type=Path, default=None, help="write the summary here (default out/fuzz/fuzz.json)")
+    p.add_argument("--out", type=Path, default=ROOT / "out" / "fuzz", help="reproducers go to OUT/crashes")
+    p.add_argument("--vectors", type=Path, default=VECTORS, help="real files to seed from (default ../shared/vectors)")
+    p.add_argument("--no-vectors", action="store_true", help="only the seeds made here")
+    p.add_argument("--case-seconds", type=float, default=2.0, help="per-stage time limit (scaled up for big inputs)")
+    p.add_argument("--memory-gib", type=float, default=2.0, help="address space allowed above the start")
+    p.add_argument("--peak-mib", type=int, default=256, help="a case whose peak RSS grows more than this is reported")
+    p.add_argument("--replay", type=Path, default=None, help="run one input file through --target and show the outcome")
+    p.add_argument("--quiet", action="store_true")
+    args = p.parse_args(argv)
+    args.target = [t.strip() for t in args.target.split(",") if t.strip()]
+    unknown = [t for t in args.target if t not in TARGETS]
+    if unknown:
+        p.error(f"unknown target {unknown[0]!r}; known: {', '.join(TARGETS)}")
+    if args.no_vectors:
+        args.vectors = None
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    say = (lambda *_: None) if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))
+    tmp = Path(tempfile.mkdtemp(prefix="mpeg4fa-fuzz-", dir="/dev/shm" if os.path.isdir("/dev/shm") else None))
+    guard = Guard(args.case_seconds)
+    try:
+        if args.replay is not None:
+            return _replay(args, guard, tmp)
+        seeds = collect_seeds(args.vectors)
+        memory_cap = limit_memory(args.memory_gib)
+        campaign = Campaign(args.seed, args.out, guard, args.peak_mib << 20, tmp)
+        hard = max(30.0, 10 * guard.limit_for(MAX_INPUT))
+        threading.Thread(target=_watchdog, args=(campaign, hard, say), daemon=True).start()
+        targets = [t for t in TARGETS if t in args.target]
+        start = time.monotonic()
+        for k, target in enumerate(targets):
+            left = len(targets) - k
+            done = sum(t.cases for t in campaign.tallies.values())
+            cases = (args.cases - done) // left
+            until = time.monotonic() + (args.seconds - (time.monotonic() - start)) / left
+            say(f"{target}: up to {cases} cases, {max(until - time.monotonic(), 0):.0f} s, {len(seeds[target])} seeds")
+            index = 0
+            while index < cases and time.monotonic() < until:
+                campaign.run_case(target, index, seeds[target])
+                index += 1
+        elapsed = time.monotonic() - start
+        summary = _summary(campaign, args, elapsed, seeds, memory_cap)
+        path = args.json or args.out / "fuzz.json"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
+        if not args.quiet:
+            print(_table(campaign, elapsed))
+            for f in campaign.findings.values():
+                print(f"{f.kind}: {f.target} {f.stage}: {f.type} x{f.count} at {f.frame}: {f.message[:160]} "
+                      f"-> {f.reproducer}")
+            for key, message in campaign.unlocated.items():
+                print(f"unlocated: {key}: {message[:160]}")
+            for key, message in campaign.warnings.items():
+                print(f"stray warning: {key}: {message[:160]}")
+            print(f"summary: {path}")
+        bad = sum(t.crashes + t.hangs + t.memory + t.peak + t.mismatches for t in campaign.tallies.values())
+        return 1 if bad else 0
+    finally:
+        guard.close()
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
