@@ -18,7 +18,13 @@ It measures, in one process pinned to one core where the platform allows it:
 3. peak Python allocation (tracemalloc) while decoding a 1500- and a 15000-frame
    synthetic stream from a file, streaming (``iter_decode``, frames dropped) and
    whole (``decode``); these streams carry FAP 1, FAP 2 and six FAPs only, because
-   tracing slows decoding about 20x (see :func:`memory_stream`).
+   tracing slows decoding about 20x (see :func:`memory_stream`);
+4. ``decode()`` peak bytes per frame of a full 68-FAP 25 fps stream of tiny frames
+   (``--decode-frames``, default 60,000, fap_quant 31, values held for 20 s so most
+   frames cost a few bits) and of the real ``headmotion_long.fba``: tracemalloc peak
+   and held bytes per frame, and the peak RSS growth of a fresh process decoding the
+   file whole and streaming (the streaming figure is the reader's fixed cost). Target:
+   <= 1 KB a frame for the long stream.
 
 It prints plain-text tables, marks the targets PASS/FAIL, and writes the same
 figures as JSON (``bench_codec.json`` in the current directory unless ``--json``).
@@ -32,6 +38,7 @@ import gc
 import json
 import os
 import platform
+import subprocess
 import sys
 import tempfile
 import time
@@ -56,6 +63,10 @@ MEMORY_FAPS = (3, 4, 5, 6, 48, 49)
 CHECKPOINTS = 10
 TARGET_X_REALTIME = 100.0
 FLAT_TOLERANCE = 1.10
+DECODE_FRAMES = 60000
+HELD_FRAMES = 500
+"""Frames each value of the decode-memory stream is held for (20 s at 25 fps): most frames send zero deltas."""
+TARGET_DECODE_BYTES_PER_FRAME = 1024
 """Streaming decode counts as flat when its peak over a whole stream is at most this times the
 peak it had reached at the stream's midpoint (a leak of ~30 bytes a frame fails this at 15000 frames)."""
 
@@ -445,6 +456,96 @@ def print_memory(m: dict) -> None:
                 ["frames", "file bytes", "iter_decode MiB", "left to gc MiB", "decode MiB"], rows, note))
 
 
+# ---- 4. decode() bytes per frame ----------------------------------------------------------
+def held_stream(n: int) -> FapStream:
+    """The synthetic full-mask stream with every value held for :data:`HELD_FRAMES` frames at a time."""
+    s = synthetic_stream(n)
+    runs = np.arange(n) // HELD_FRAMES * HELD_FRAMES
+    for name in ("fap_values", "viseme", "expression"):
+        getattr(s, name)[:] = getattr(s, name)[runs]
+    return s
+
+
+_RSS_CHILD = """
+import resource, sys
+from mpeg4fa.fba import decode, iter_decode
+
+
+def status(key):
+    with open("/proc/self/status") as fh:
+        return next(int(line.split()[1]) * 1024 for line in fh if line.startswith(key + ":"))
+
+
+path, whole = sys.argv[1], sys.argv[2] == "whole"
+try:  # Linux: reset the peak-RSS mark, so the import's own peak does not hide the decode's
+    with open("/proc/self/clear_refs", "w") as fh:
+        fh.write("5")
+    before, peak = status("VmRSS"), lambda: status("VmHWM")
+except OSError:
+    before, peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, \
+        lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+n = len(decode(path)) if whole else sum(1 for _ in iter_decode(path))
+print(n, peak() - before)
+"""
+
+
+def _rss_peak(path: Path, whole: bool) -> int:
+    """Peak RSS growth (bytes) of a fresh process that imports the codec, then decodes ``path`` whole or
+    streaming (no tracing, so it runs at full speed): VmHWM after minus VmRSS before, the mark reset first."""
+    out = subprocess.run([sys.executable, "-c", _RSS_CHILD, str(path), "whole" if whole else "stream"],
+                         capture_output=True, text=True, check=True, cwd=REPO,
+                         env={**os.environ, "PYTHONPATH": str(REPO)}).stdout.split()
+    return int(out[1])
+
+
+def _decode_bytes(name: str, path: Path) -> dict:
+    with _Traced() as traced:
+        stream = decode(path)
+        peak = traced.peak()
+        held = tracemalloc.get_traced_memory()[0] - traced.base
+    n = len(stream)
+    check(n > 0, f"{name}: decoded no frames")
+    row = {"name": name, "frames": n, "bytes": path.stat().st_size, "bits_per_frame": 8 * path.stat().st_size / n,
+           "faps_per_frame": float(stream.fap_mask.sum(axis=1).mean()), "body": bool(stream.bap_mask.any()),
+           "decode_peak_bytes": peak, "decode_peak_bytes_per_frame": peak / n,
+           "decode_held_bytes_per_frame": held / n}
+    del stream
+    rss_whole, rss_stream = _rss_peak(path, True), _rss_peak(path, False)
+    row.update({"rss_decode_bytes": rss_whole, "rss_iter_decode_bytes": rss_stream,
+                "rss_decode_bytes_per_frame": rss_whole / n,
+                "rss_decode_above_streaming_bytes_per_frame": (rss_whole - rss_stream) / n})
+    return row
+
+
+def bench_decode_bytes(frames: int, vectors: Path) -> dict:
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench_codec_") as tmp:
+        path = Path(tmp) / f"held_{frames}.fba"
+        path.write_bytes(encode(held_stream(frames), EncodeOptions(fap_quant=31)))
+        rows.append(_decode_bytes(f"synthetic full mask, {frames} frames, fap_quant 31", path))
+    real = vectors / "headmotion_long.fba"
+    if real.is_file():
+        rows.append(_decode_bytes("headmotion_long.fba", real))
+    long_ = rows[0]
+    return {"streams": rows, "target_bytes_per_frame": TARGET_DECODE_BYTES_PER_FRAME,
+            "target_pass": long_["decode_peak_bytes_per_frame"] <= TARGET_DECODE_BYTES_PER_FRAME,
+            "headmotion_long": "measured" if real.is_file() else f"skipped, not found at {real}"}
+
+
+def print_decode_bytes(m: dict) -> None:
+    rows = [[r["name"], r["frames"], r["bytes"], r["bits_per_frame"], r["decode_peak_bytes_per_frame"],
+             r["decode_held_bytes_per_frame"], r["rss_decode_bytes_per_frame"],
+             r["rss_decode_above_streaming_bytes_per_frame"]] for r in m["streams"]]
+    note = (f"decode() peak bytes/frame: tracemalloc peak while decoding the file whole, over its frames; "
+            f"held: what the FapStream keeps;\nRSS: peak resident growth of a fresh process decoding it "
+            f"(and that minus a streaming decode's: the reader's window is a fixed cost).\n"
+            f"headmotion_long: {m['headmotion_long']}. Target: <= {m['target_bytes_per_frame']} bytes/frame "
+            f"(tracemalloc peak) for the long stream: {verdict(m['target_pass'])}")
+    print(table("4. decode() memory per frame",
+                ["stream", "frames", "file bytes", "bits/frame", "peak B/frame", "held B/frame", "RSS B/frame",
+                 "RSS-stream B/frame"], rows, note))
+
+
 # ---- main ---------------------------------------------------------------------------------
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -454,16 +555,18 @@ def main(argv: list[str] | None = None) -> int:
                     help="where to write the figures as JSON (default ./bench_codec.json)")
     ap.add_argument("--frames", type=int, default=1500, help="frames of the synthetic stream (default 1500 = 60 s)")
     ap.add_argument("--repeat", type=int, default=3, help="timed runs per measurement; the best counts (default 3)")
+    ap.add_argument("--decode-frames", type=int, default=DECODE_FRAMES,
+                    help=f"frames of the decode-memory stream (default {DECODE_FRAMES:,}; traced, ~3 ms a frame)")
     args = ap.parse_args(argv)
-    if args.frames < 1 or args.repeat < 1:
-        ap.error("--frames and --repeat must be at least 1")
+    if args.frames < 1 or args.repeat < 1 or args.decode_frames < 1:
+        ap.error("--frames, --repeat and --decode-frames must be at least 1")
 
     started = time.perf_counter()
     info = machine_info(pin_one_core())
     print(f"mpeg4fa {info['mpeg4fa']} codec benchmark: Python {info['python']}, numpy {info['numpy']}, "
           f"{info['platform']}, {info['cpu_count']} CPUs ({info['process']})\n")
     report: dict = {"machine": info, "args": {"vectors": str(args.vectors), "frames": args.frames,
-                                              "repeat": args.repeat}}
+                                              "repeat": args.repeat, "decode_frames": args.decode_frames}}
     ok = True
     try:
         report["synthetic"] = syn = bench_synthetic(args.frames, args.repeat)
@@ -478,6 +581,9 @@ def main(argv: list[str] | None = None) -> int:
 
         report["memory"] = mem = bench_memory()
         print_memory(mem)
+
+        report["decode_memory"] = dm = bench_decode_bytes(args.decode_frames, args.vectors)
+        print_decode_bytes(dm)
     except CheckFailed as exc:
         ok = False
         report["check_failed"] = str(exc)
@@ -501,6 +607,11 @@ def main(argv: list[str] | None = None) -> int:
         targets.append(["streaming decode memory flat in length",
                         f"peak x{m['iter_decode_plateau_ratio']:.3f} from frame {m['streams'][-1]['frames'] // 2} "
                         f"to {m['streams'][-1]['frames']}", verdict(m["target_pass"])])
+    if "decode_memory" in report:
+        for r in report["decode_memory"]["streams"]:
+            targets.append([f"decode() peak bytes/frame, {r['name']}", f"{r['decode_peak_bytes_per_frame']:,.0f}",
+                            verdict(r["decode_peak_bytes_per_frame"] <= TARGET_DECODE_BYTES_PER_FRAME)
+                            if r is report["decode_memory"]["streams"][0] else "(fixed costs over few frames)"])
     report["targets"] = [{"target": t, "value": v, "result": r} for t, v, r in targets]
     report["elapsed_s"] = time.perf_counter() - started
     print(table("Targets", ["target", "measured", "result"], targets))

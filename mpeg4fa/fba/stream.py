@@ -204,25 +204,14 @@ class FapStream:
 
     @classmethod
     def from_frames(cls, frames: Iterable[Frame], object_start_code: int = OBJECT_START_CODE) -> "FapStream":
-        """Stack frames (e.g. from :func:`mpeg4fa.fba.iter_decode`) into one stream."""
-        frames = list(frames)
-        s = cls.empty(len(frames))
-        s.object_start_code = object_start_code
-        for k, f in enumerate(frames):
-            s.fap_mask[k] = f.fap_mask
-            s.fap_values[k] = f.fap_values
-            s.viseme[k] = f.viseme
-            s.expression[k] = f.expression
-            s.bap_mask[k] = f.bap_mask
-            s.bap_values[k] = f.bap_values
-            s.timestamps[k] = f.timestamp
-            s.object_mask[k] = f.object_mask
-            s.skip[k] = f.skip
-            s.start_code[k] = f.start_code
-            s.bits[k] = f.bits
-            if f.params is not None:
-                s.intra[k] = f.params
-        return s
+        """Stack frames (e.g. from :func:`mpeg4fa.fba.iter_decode`) into one stream.
+
+        Memory stays proportional to the stream's arrays (:mod:`mpeg4fa.fba.stacking`); when no frame
+        carries body data, ``bap_mask`` and ``bap_values`` are read-only zero rows shared by every frame.
+        """
+        from .stacking import stack_frames  # stacking builds on this module
+
+        return stack_frames(frames, object_start_code)
 
     # ---- views ---------------------------------------------------------------------
     def __len__(self) -> int:
@@ -280,12 +269,23 @@ class FapStream:
 
     def take(self, frames: list[int]) -> "FapStream":
         """The given frames as a new stream (intra parameters are not carried: re-plan them)."""
-        arrays = {name: getattr(self, name)[frames].copy() for name in ARRAY_FIELDS}
+        arrays = {name: _take(getattr(self, name), frames) for name in ARRAY_FIELDS}
         return replace(self, intra={}, **arrays)
 
     def copy(self) -> "FapStream":
-        arrays = {name: getattr(self, name).copy() for name in ARRAY_FIELDS}
+        """A stream with arrays of its own; read-only rows shared by every frame (no body data) stay shared."""
+        arrays = {name: _take(getattr(self, name), None) for name in ARRAY_FIELDS}
         return replace(self, intra=dict(self.intra), **arrays)
+
+
+def _take(array: np.ndarray, frames: list[int] | None) -> np.ndarray:
+    """``array[frames]`` (all of it for None) as a new array; one row shared by every frame (stride 0,
+    read-only, e.g. the body arrays of a stream without body) stays one shared row."""
+    if array.ndim > 1 and array.strides[0] == 0 and not array.flags.writeable:
+        n = len(array) if frames is None else len(frames)
+        return np.broadcast_to(array[0] if len(array) else np.zeros(array.shape[1:], array.dtype),
+                               (n, *array.shape[1:]))
+    return array.copy() if frames is None else array[frames].copy()
 
 
 CONTENT_FIELDS = ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values", "object_mask")

@@ -14,6 +14,7 @@ from mpeg4fa.fdp.model import Fdp
 from mpeg4fa.fdp.xface import xface_from_xml
 
 _BOM = b"\xef\xbb\xbf"
+_UTF16_BOMS = (b"\xff\xfe", b"\xfe\xff")
 
 
 def sniff_fdp(data: bytes) -> str | None:
@@ -25,8 +26,11 @@ def sniff_fdp(data: bytes) -> str | None:
     """
     if data[:4] == MAGIC[:4]:
         return "binary"
-    head = data[len(_BOM):] if data.startswith(_BOM) else data
-    head = head[:4096].lstrip(b" \t\r\n")
+    if data[:2] in _UTF16_BOMS:  # XML may be UTF-16 (expat reads it); JSON must not, and its reader says so
+        head = data[:4096].decode("utf-16", "replace").lstrip("\ufeff \t\r\n").encode("utf-8", "replace")
+    else:
+        head = data[len(_BOM):] if data.startswith(_BOM) else data
+        head = head[:4096].lstrip(b" \t\r\n")
     if head.startswith(b"{"):
         return "json"
     if head.startswith(b"<"):

@@ -21,7 +21,8 @@ Floats are written with ``repr`` precision, so a round trip is exact. Unknown
 keys are errors (a typo would otherwise be dropped silently), as are duplicate
 keys. Every error is an :class:`FdpError` at ``line:column``: a bad value is
 reported where the value starts, a bad key (unknown, duplicate, not a feature
-point label) where the key starts.
+point label) where the key starts. A document of more than :data:`MAX_JSON_CHARS`
+characters is refused before it is parsed: parsed JSON takes several times its text in memory.
 """
 from __future__ import annotations
 
@@ -42,6 +43,8 @@ from mpeg4fa.spec import N_FAPS
 
 FORMAT = "mpeg4fa-fdp"
 VERSION = 1
+MAX_JSON_CHARS = 32 << 20
+"""Longest JSON document read (32 Mi characters): a textured face with a 100,000-vertex mesh takes ~20 MB."""
 
 _TOP_KEYS = ("format", "version", "name", "feature_points", "texture_coords", "fapu", "textures", "mesh",
              "face_def_tables")
@@ -295,6 +298,9 @@ def _kind(value: Any) -> str:
 def fdp_from_json(text: str | bytes, path: str = "<string>") -> Fdp:
     """Parse the JSON form; any fault is an :class:`FdpError` at its line:column."""
     text = _decode(text, path)
+    if len(text) > MAX_JSON_CHARS:
+        raise FdpError.no_place(path, f"the JSON document has {len(text):,} characters, more than an FDP may "
+                                f"({MAX_JSON_CHARS:,})", "is this an FDP file?")
     root = _parse(text, path)
     doc = _Doc(text, path)
     top = doc.obj(root, (), "the FDP document", _TOP_KEYS, required=("format", "version"))
@@ -319,6 +325,8 @@ def fdp_from_json(text: str | bytes, path: str = "<string>") -> Fdp:
 def _decode(text: str | bytes, path: str) -> str:
     if isinstance(text, (bytes, bytearray, memoryview)):
         raw = bytes(text)
+        if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+            raise FdpError(path, 1, 1, "the file is UTF-16 text; FDP JSON is UTF-8", "save the file as UTF-8")
         try:
             text = raw.decode("utf-8")
         except UnicodeDecodeError as exc:

@@ -19,8 +19,10 @@ here. A label may have several ``<fdp>`` elements, one per submesh a FAP moves
 (Xface's alice gives 2.1 on the skin and on the lower teeth): the first one in
 the file is the feature point itself, the rest are kept in ``entries``.
 
-The parser is expat with DTDs refused (no entity expansion); every fault is an
-:class:`FdpError` at the line:column of the element, attribute value or token.
+The parser is expat with DTDs refused (no entity expansion) and at most
+:data:`MAX_ELEMENTS` elements (a real file has a few thousand; each element is a
+Python object, so a file of nothing but ``<a/>`` must not fill memory); every fault
+is an :class:`FdpError` at the line:column of the element, attribute value or token.
 """
 from __future__ import annotations
 
@@ -38,6 +40,8 @@ from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.model import FAPU_KEYS, LABEL_INDEX, Fdp, FdpValueError
 from mpeg4fa.spec import N_FAPS
 
+MAX_ELEMENTS = 200_000
+"""Most XML elements read; Xface's alice has about 1,000."""
 _INT = re.compile(r"[+-]?[0-9]{1,18}\Z")
 _FLOAT = re.compile(r"\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\s*\Z")
 
@@ -179,7 +183,14 @@ def _parse_tree(data: bytes, path: str, override_utf8: bool) -> _Node:
     stack: list[_Node] = []
     roots: list[_Node] = []
 
+    count = 0
+
     def start(tag: str, attrs: dict[str, str]) -> None:
+        nonlocal count
+        count += 1
+        if count > MAX_ELEMENTS:
+            raise FdpError(path, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1,
+                           f"more than {MAX_ELEMENTS:,} XML elements", "an Xface .fdp has a few thousand; is this one?")
         node = _Node(tag, attrs, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1, parser.CurrentByteIndex)
         (stack[-1].children if stack else roots).append(node)
         stack.append(node)

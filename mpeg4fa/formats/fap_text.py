@@ -33,6 +33,7 @@ import math
 import os
 import re
 import warnings
+from array import array
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Iterable, Iterator, NamedTuple, Union, cast
@@ -41,6 +42,7 @@ import numpy as np
 
 from mpeg4fa.decoded import explicit
 from mpeg4fa.fba.limits import MAX_SPAN_SECONDS, fps_problem, frame_limit
+from mpeg4fa.fba.stacking import StreamBuilder
 from mpeg4fa.fba.stream import N_FAPS, FapStream
 from mpeg4fa.formats.errors import FormatError
 from mpeg4fa.spec.profiles import first_high_level_fault, high_level_problem
@@ -364,21 +366,16 @@ def read_fap(source: Source, *, name: str | None = None) -> FapStream:
     """
     records = _parse(source, name)
     header = cast(FapHeader, next(records))
-    return _stack(header, cast("list[FapRecord]", list(records)))
-
-
-def _stack(header: FapHeader, records: list[FapRecord]) -> FapStream:
-    stream = FapStream.empty(len(records))
+    builder = StreamBuilder()
+    numbers = array("q")
+    for record in cast("Iterator[FapRecord]", records):  # one record at a time: memory is the stream's arrays
+        numbers.append(record.frame_number)
+        builder.add(fap_mask=record.mask, fap_values=record.values, viseme=record.viseme,
+                    expression=record.expression, timestamp=record.frame_number / header.fps)
+    stream = builder.build()
     stream.source_fps = header.fps
-    if not records:
-        return stream
-    numbers = np.array([r.frame_number for r in records], dtype=np.int64)
-    stream.fap_mask[:] = np.stack([r.mask for r in records])
-    stream.fap_values[:] = np.stack([r.values for r in records])
-    stream.viseme[:] = np.stack([r.viseme for r in records])
-    stream.expression[:] = np.stack([r.expression for r in records])
-    stream.timestamps[:] = numbers / header.fps
-    stream.skip[:-1] = np.diff(numbers) - 1
+    if len(numbers) > 1:
+        stream.skip[:-1] = np.diff(np.frombuffer(numbers, dtype=np.int64)) - 1
     return stream
 
 
