@@ -32,8 +32,12 @@ def fps_problem(fps: object) -> str | None:
 
 
 def frame_limit(fps: float) -> int:
-    """How many frames (coded and skipped) a stream at ``fps`` may span: :data:`MAX_SPAN_SECONDS` of them."""
-    return max(1, int(math.floor(MAX_SPAN_SECONDS * fps)))
+    """How many frames (coded and skipped) a stream at ``fps`` may span: :data:`MAX_SPAN_SECONDS` of them.
+
+    Counted at the rate the intra header will carry (``fps`` rounded to sixteenths), so that a ``.fap``
+    file, its planned stream and the stream written agree on the bound.
+    """
+    return max(1, int(math.floor(MAX_SPAN_SECONDS * FrameRate.from_fps(fps).fps)))
 
 
 def span_hint(fps: float) -> str:

@@ -273,14 +273,15 @@ def _value_count(mask: np.ndarray) -> int:
     return VISEME_WIDTH * int(mask[0]) + EXPRESSION_WIDTH * int(mask[1]) + int(mask[2:].sum())
 
 
-def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int, path: str, fps: float) -> FapRecord:
+def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int, path: str, fps: float,
+                 limit: int) -> FapRecord:
     number = _integer(line, 0, path, "frame number", 0, INT32_MAX,
                       "a frame line starts with its frame number, a whole number >= 0")
-    if number >= frame_limit(fps):
+    if number >= limit:
         raise FormatError(path, line.number, line.column(0),
                           f"frame number {number:,} lies {number / fps / 3600:,.1f} h into the stream at {fps:g} fps, "
                           f"past the {MAX_SPAN_SECONDS // 3600} h a stream may span",
-                          f"frame numbers run below {frame_limit(fps):,} at {fps:g} fps; renumber the frames or "
+                          f"frame numbers run below {limit:,} at {fps:g} fps; renumber the frames or "
                           "split the file")
     if number <= previous:
         raise FormatError(path, line.number, line.column(0),
@@ -331,6 +332,7 @@ def _parse(source: Source, name: str | None) -> Iterator[FapHeader | FapRecord]:
             raise lines.error_at_end("the file has no header",
                                      "start with '<version> <name> <fps> <number_of_frames>', e.g. '2.1 a.fap 25 0'")
         header = _parse_header(header_line, path)
+        limit = frame_limit(header.fps)
         yield header
         previous = -1
         while (mask_line := lines.next()) is not None:
@@ -340,7 +342,7 @@ def _parse(source: Source, name: str | None) -> Iterator[FapHeader | FapRecord]:
                 raise lines.error_at_end(f"the file ends after the mask line at line {mask_line.number}",
                                          "add its frame line (frame number, then the masked values) "
                                          "or delete the mask line")
-            record = _parse_frame(frame_line, mask, mask_line, previous, path, header.fps)
+            record = _parse_frame(frame_line, mask, mask_line, previous, path, header.fps, limit)
             previous = record.frame_number
             yield record
 
