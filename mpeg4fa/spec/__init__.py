@@ -209,6 +209,7 @@ from mpeg4fa.spec.profiles import (  # noqa: E402  (needs the tables above)
     CHINESE_VISEME_BY_PINYIN, CHINESE_VISEMES, EXPRESSION_PROFILES, VISEME_PROFILES, ChineseViseme,
     expand_high_level, expression_blend, viseme_blend,
 )
+from mpeg4fa.spec.errors import SpecError  # noqa: E402
 
 from mpeg4fa.spec.weights import (  # noqa: E402  (needs the Chinese visemes)
     MANDARIN_DEFAULT_INITIAL_WEIGHT, MANDARIN_INITIAL_WEIGHT, MANDARIN_PART_WEIGHT,
@@ -217,5 +218,5 @@ from mpeg4fa.spec.weights import (  # noqa: E402  (needs the Chinese visemes)
 __all__ += [
     "MANDARIN_PART_WEIGHT", "MANDARIN_INITIAL_WEIGHT", "MANDARIN_DEFAULT_INITIAL_WEIGHT",
     "ChineseViseme", "CHINESE_VISEMES", "CHINESE_VISEME_BY_PINYIN", "VISEME_PROFILES",
-    "EXPRESSION_PROFILES", "viseme_blend", "expression_blend", "expand_high_level",
+    "EXPRESSION_PROFILES", "viseme_blend", "expression_blend", "expand_high_level", "SpecError",
 ]
