@@ -3,7 +3,9 @@
 Layers, bottom up: ``bits`` (bit reader/writer, start codes) -> ``arith`` (adaptive
 arithmetic coder) -> ``syntax`` and ``params`` (headers, ranges, quantisation,
 prediction) -> ``decoder`` / ``encoder`` (planes and frames) -> ``stream`` (the
-data model). ``spec/SYNTAX.md`` describes the bitstream as implemented.
+data model; ``stacking`` builds one in bounded memory); ``limits`` says what a stream
+may ask for (frame rates an intra header carries, at most 24 h of frames).
+``spec/SYNTAX.md`` describes the bitstream as implemented.
 """
 from .decoder import decode, iter_decode
 from .encoder import EncodeOptions, encode, plan, write

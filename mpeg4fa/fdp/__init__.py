@@ -21,6 +21,9 @@ front photo going along as texture (:func:`texture_from_file`).
 
 Every reader reports malformed content as an :class:`FdpError` that says where:
 ``path:line:column`` for the text forms, ``path: byte N`` for the binary one.
+Work is bounded: a file is at most 256 MiB (:data:`mpeg4fa.fdp.errors.MAX_FILE_BYTES`;
+devices are refused), JSON at most 32 Mi characters, Xface XML at most 200,000
+elements, and every count in the binary form is checked against the bytes left.
 """
 from mpeg4fa.fdp.binary import fdp_from_bytes, fdp_to_bytes
 from mpeg4fa.fdp.build import (MIRROR_TWINS, fdp_from_mesh, fdp_from_photos, image_size, points_from_photos,

@@ -2,8 +2,9 @@
 :class:`~mpeg4fa.fba.stream.FapStream` objects and back.
 
 Every reader reports bad input as a :class:`FormatError` carrying the path, line
-and column to fix; nothing else (no bare ``ValueError``/``IndexError``) escapes
-for malformed content.
+and column to fix; nothing else (no bare ``ValueError``/``IndexError``, no
+``OSError`` for a missing file or a directory) escapes for malformed content.
+The limits a ``.fap`` file is read within are listed in :mod:`mpeg4fa.formats.fap_text`.
 
 * :func:`read_fap`, :func:`iter_fap`, :func:`write_fap`: plain-text ``.fap`` files
   (Xface, Greta, VREng, visage).
