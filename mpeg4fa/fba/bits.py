@@ -131,7 +131,7 @@ class BitWriter:
 
     def write(self, n: int, value: int) -> None:
         if value < 0 or value >> n:
-            raise ValueError(f"{value} does not fit in {n} bits")
+            raise FbaError(f"{value} does not fit in {n} bits", self.pos)
         self.buf.extend((value >> (n - 1 - i)) & 1 for i in range(n))
 
     def next_start_code(self) -> None:
@@ -147,5 +147,5 @@ class BitWriter:
 
     def getvalue(self) -> bytes:
         if self.pos % 8:
-            raise ValueError("the stream does not end on a byte boundary")
+            raise FbaError("the stream does not end on a byte boundary", self.pos)
         return np.packbits(np.frombuffer(bytes(self.buf), dtype=np.uint8)).tobytes()

@@ -285,7 +285,7 @@ class FaceDefMesh(_ValueEquality):
         the nearest border and is still zero at v = 0.
         """
         if not math.isfinite(float(fap_value)):
-            raise ValueError(f"FAP value must be finite, got {fap_value!r}")
+            raise FdpValueError(f"FAP value must be finite, got {fap_value!r}")
         return np.einsum("kmc,m->kc", self.displacements, self.weights(fap_value))
 
 
@@ -326,7 +326,7 @@ class FaceDefTransform(_ValueEquality):
         """
         v = float(fap_value)
         if not math.isfinite(v):
-            raise ValueError(f"FAP value must be finite, got {fap_value!r}")
+            raise FdpValueError(f"FAP value must be finite, got {fap_value!r}")
         identity = FaceDefTransform(self.field)
         if self.field == "rotation":
             return FaceDefTransform(self.field, rotation=np.append(self.rotation[:3], self.rotation[3] * v))
@@ -537,7 +537,7 @@ class Fdp(_ValueEquality):
     def head_height(self) -> float:
         """Extent of the feature points along y (max - min), a scale for tolerances."""
         if not len(self.points):
-            raise ValueError("an FDP without feature points has no head height")
+            raise FdpValueError("an FDP without feature points has no head height", ("feature_points",))
         return float(self.points[:, 1].max() - self.points[:, 1].min())
 
     def __repr__(self) -> str:

@@ -113,7 +113,8 @@ class XfaceFdp:
         for key, value in vertices_by_submesh.items():
             arr = np.asarray(value, dtype=np.float64)
             if arr.ndim != 2 or arr.shape[1] != 3:
-                raise ValueError(f"vertices of submesh {key!r} must have shape (V, 3), got {arr.shape}")
+                raise FdpValueError(f"vertices of submesh {key!r} must have shape (V, 3), got {arr.shape}",
+                                    ("vertices", key))
             arrays[key] = arr
         coords: dict[str, np.ndarray] = {}
         for label, (submesh, index) in self.points.items():
