@@ -9,33 +9,43 @@ thought of; this covers the ones we did not.
 How to run (on demand, one process, bounded in time and in count)::
 
     .venv/bin/python tools/fuzz.py --cases 100000 --seconds 1800 --seed 0 \\
-        [--target fba,fap,fdp-binary,fdp-json,fdp-xface,markup] [--json out/fuzz.json]
+        [--target fba,fap,fdp-binary,fdp-json,fdp-xface,markup] [--json out/fuzz/fuzz.json]
     .venv/bin/python tools/fuzz.py --replay out/fuzz/crashes/fap-1.bin --target fap
 
-Seeds: the real streams in ``../shared/vectors`` (``fba/``, ``fap/``, any FDP
-file there) when present, plus seeds made here with the library (encoded
-streams with several coding options, ``write_fap``, ``save_fdp`` in both forms,
-an Xface XML written here, markup strings). Each case applies 1-4 mutations
+Seeds and mutations live in ``tools/fuzz_inputs.py``: the real files in
+``../shared/vectors`` (``fba/``, ``fap/``, any FDP file there) when present
+(``--no-vectors`` leaves them out), plus seeds made with the library (streams
+encoded with several coding options, ``write_fap``, ``save_fdp`` in both forms,
+an Xface XML written there, markup strings). Each case applies 1-4 mutations
 (bit flips, byte sets, inserts, deletes, truncation, chunk duplication, splices
-of two seeds; for text formats number-token replacement, line duplication and
-deletion, encoding damage; XML and JSON damage; for the binary FDP, payload
-damage with the chunk CRC fixed so the reader gets past it) and runs the
-library's reader in-process, then, on success, the next layers: ``resolve``
-and an ``encode`` -> ``decode`` round trip for streams, a save/load round trip
-for FDPs.
+of two seeds, extreme 32-bit integers, FBA start codes; for text formats
+number-token replacement, line duplication and deletion, encoding damage; XML
+damage (encoding declarations, entity bombs, external entities, deep nesting);
+JSON damage (deep nesting, huge arrays, NaN, long numbers, valid JSON with wrong
+content); for the binary FDP, payload damage with the chunk CRC fixed so the
+reader looks inside) and calls the library in-process: ``decode`` /
+``iter_decode`` / ``read_stream``, ``read_fap`` / ``iter_fap``, ``load_fdp``,
+``read_xface_fdp`` + ``to_fdp``, ``parse_markup``. What parses goes on to the
+next layers: ``resolve`` and ``encode`` -> ``decode`` for streams (also for the
+frames an ``FbaError`` kept in ``.partial``; decoded FBA must come back with the
+same values), a binary and a JSON save -> load for FDPs, and for markup of up to
+``SPEECH_CHARS`` characters ``encode_text`` with the silent estimate engine.
 
-Each case is classified as *ok* (parsed), *rejected* (an ``MpegFaError`` or the
-layer's own error type), *crash* (anything else; deduplicated by target, stage,
-exception type and the traceback's last frame, the mutated bytes saved as
-``out/fuzz/crashes/TARGET-N.bin`` with a ``.txt`` beside it), *hang* (a stage
-ran past ``--case-seconds``, scaled up for large inputs), or *memory*
-(``MemoryError`` under an address-space limit ``--memory-gib`` above the start,
-or a peak RSS more than ``--peak-mib`` above the start). Also reported:
-rejections whose error names no location, round-trip mismatches, and warnings
-that are not ``MpegFaWarning``. A watchdog thread ends the run (keeping the
-results so far and the reproducer) if a case is stuck where the timer signal
-cannot interrupt it. Case ``i`` of a target is drawn from its own generator
-seeded by ``--seed``, the target and ``i``, so any case can be replayed.
+Each case is *ok* (parsed), *rejected* (an ``MpegFaError`` or the layer's own
+error type), *crash* (anything else; deduplicated by target, stage, exception
+type and the traceback's last frame; the input saved as
+``OUT/crashes/TARGET-N.bin`` with a ``.txt`` beside it saying how to replay it),
+*hang* (a stage ran past ``--case-seconds``, scaled up for large inputs),
+*memory* (``MemoryError`` anywhere in the exception chain, under an
+address-space cap ``--memory-gib`` above the start), *peak* (RSS grew more than
+``--peak-mib`` during the case) or *mismatch* (a round trip changed the values).
+Also counted: rejections whose error names no place, and warnings that are not
+an ``MpegFaWarning``. A watchdog thread ends the run (keeping the input) if a
+case is stuck where the timer signal cannot reach. Case ``i`` of a target is
+drawn from its own generator seeded by ``--seed``, the target and ``i``, so a
+run is reproducible. The targets run one after the other, each with an equal
+share of what is left of ``--cases`` and ``--seconds``. Exit status 1 when
+anything but ok/rejected was seen.
 """
 from __future__ import annotations
 
@@ -68,6 +78,7 @@ from mpeg4fa.fba import FapStream, FbaError, decode, encode, iter_decode  # noqa
 from mpeg4fa.fdp import (Fdp, FdpError, fdp_from_bytes, fdp_from_json, fdp_to_bytes, fdp_to_json,  # noqa: E402
                          load_fdp, read_xface_fdp, xface_from_xml)
 from mpeg4fa.formats import FormatError, iter_fap, read_fap, read_stream  # noqa: E402
+from mpeg4fa.speech.encoder import encode_text  # noqa: E402
 from mpeg4fa.speech.errors import MarkupError  # noqa: E402
 from mpeg4fa.speech.markup import parse_markup  # noqa: E402
 
@@ -87,6 +98,8 @@ LAYER_ERRORS: dict[str, tuple[type[BaseException], ...]] = {
 """What a target may raise on bad input: the base, plus the layer's type until it derives from the base."""
 VECTORS = ROOT.parent / "shared" / "vectors"
 _DIGITS = re.compile(r"[0-9]+")
+SPEECH_CHARS = 4000
+"""Longest markup also spoken (by the silent estimate engine) in a case."""
 VALUE_FIELDS = ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values")
 
 
@@ -327,6 +340,15 @@ def run_markup(case: Case) -> None:
     for tag in markup.tags:  # what the encoder relies on
         if not 0 <= tag.offset <= len(markup.text) or not 0 <= tag.intensity <= 63 or not tag.seconds >= 0:
             raise _Mismatch(f"tag out of bounds: {tag}")
+    # the next layer, `mpeg4fa encode TEXT --engine estimate`, on texts of a script's size: its work grows
+    # with the speech's length (1 MB of text is a day of speech), which is volume, not damage
+    if len(text) <= SPEECH_CHARS and case.rng.random() < 0.3:
+        encoded = case.stage("encode_text", lambda: encode_text(text, engine="estimate", name="case.txt"))
+        try:
+            data = case.stage("encode", lambda: encode(encoded.stream))
+            case.stage("redecode", lambda: decode(data))
+        except FbaError as exc:
+            raise _Mismatch(f"the codec refuses what encode_text made: {exc}") from exc
 
 
 RUNNERS: dict[str, Callable[[Case], None]] = {
@@ -409,7 +431,6 @@ class Campaign:
         self.reasons: dict[str, int] = {}
         self.current: tuple[str, int, bytes] | None = None
         self.case_started = 0.0
-        self.baseline = _peak_bytes()
 
     def case_rng(self, target: str, index: int) -> random.Random:
         return random.Random((self.seed * 64 + TARGETS.index(target)) * (1 << 40) + index)
@@ -424,7 +445,8 @@ class Campaign:
         case = Case(data, rng, self.guard, self.tmp, self.guard.limit_for(len(data)))
         self.current, self.case_started = (target, index, data), time.monotonic()
         if self.guard.peak_ok:
-            _reset_peak()
+            _reset_peak()  # VmHWM := VmRSS now, so the growth below is this case's own
+        before = _status_bytes("VmRSS")
         outcome, exc = "ok", None
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -453,11 +475,12 @@ class Campaign:
             if not issubclass(w.category, MpegFaWarning):
                 key = f"{w.category.__name__} {Path(str(w.filename)).name}:{w.lineno}"
                 self.warnings.setdefault(key, f"{target}: {str(w.message)[:200]}")
-        peak = _peak_bytes() - self.baseline if self.guard.peak_ok else 0
+        peak = _peak_bytes() - before if self.guard.peak_ok else 0
         tally.peak_mib = max(tally.peak_mib, peak / 2**20)
         if outcome == "rejected":
             tally.rejected += 1
-            reason = f"{target} {stage}: {type(exc).__name__}: " + _DIGITS.sub("N", getattr(exc, "message", None) or str(exc))[:90]
+            text = _DIGITS.sub("N", getattr(exc, "message", None) or str(exc))[:90]
+            reason = f"{target} {stage}: {type(exc).__name__}: {text}"
             self.reasons[reason] = self.reasons.get(reason, 0) + 1
             if not _located(exc):
                 tally.unlocated += 1
@@ -476,7 +499,8 @@ class Campaign:
     def _record(self, kind: str, target: str, index: int, data: bytes, exc: BaseException | None, origin: str,
                 elapsed: float, stage: str, message: str = "") -> None:
         if exc is not None and kind == "hang":
-            frame, etype, message = _last_frame(exc), "hang", f"stage {stage} ran past {self.guard.limit_for(len(data)):.1f} s"
+            limit = self.guard.limit_for(len(data))
+            frame, etype, message = _last_frame(exc), "hang", f"stage {stage} ran past {limit:.1f} s"
         elif exc is not None:
             frame, etype, message = _last_frame(exc), type(exc).__name__, str(exc)[:300]
         else:
@@ -605,19 +629,25 @@ def main(argv: list[str] | None = None) -> int:
         hard = max(30.0, 10 * guard.limit_for(MAX_INPUT))
         threading.Thread(target=_watchdog, args=(campaign, hard, say), daemon=True).start()
         targets = [t for t in TARGETS if t in args.target]
-        start = time.monotonic()
-        for k, target in enumerate(targets):
-            left = len(targets) - k
-            done = sum(t.cases for t in campaign.tallies.values())
-            cases = (args.cases - done) // left
-            until = time.monotonic() + (args.seconds - (time.monotonic() - start)) / left
-            say(f"{target}: up to {cases} cases, {max(until - time.monotonic(), 0):.0f} s, {len(seeds[target])} seeds")
-            index = 0
-            while index < cases and time.monotonic() < until:
-                campaign.run_case(target, index, seeds[target])
-                index += 1
+        start, interrupted = time.monotonic(), False
+        try:
+            for k, target in enumerate(targets):
+                left = len(targets) - k
+                done = sum(t.cases for t in campaign.tallies.values())
+                cases = (args.cases - done) // left
+                until = time.monotonic() + (args.seconds - (time.monotonic() - start)) / left
+                say(f"{target}: up to {cases} cases, {max(until - time.monotonic(), 0):.0f} s, "
+                    f"{len(seeds[target])} seeds")
+                index = 0
+                while index < cases and time.monotonic() < until:
+                    campaign.run_case(target, index, seeds[target])
+                    index += 1
+        except KeyboardInterrupt:  # Ctrl-C: keep what was found so far
+            interrupted = True
+            say("interrupted: writing what was found so far")
         elapsed = time.monotonic() - start
         summary = _summary(campaign, args, elapsed, seeds, memory_cap)
+        summary["interrupted"] = interrupted
         path = args.json or args.out / "fuzz.json"
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")

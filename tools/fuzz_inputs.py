@@ -300,7 +300,8 @@ def m_encoding(rng, data, seeds):
     if op == 5:
         return text.encode("latin-1", "replace")
     if op == 6:
-        return data[:i] + rng.choice(("é", "你", "\u0301", "\u200b", "\u2028", "\U0001F600", "\u202e")).encode() + data[i:]
+        odd = rng.choice(("é", "你", "\u0301", "\u200b", "\u2028", "\U0001F600", "\u202e"))
+        return data[:i] + odd.encode() + data[i:]
     return data.replace(b"\n", rng.choice((b"\r", b"\r\n", b"\x0b", b"\x85", b"\xe2\x80\xa8")))
 
 
@@ -347,7 +348,8 @@ def m_xml(rng, data, seeds):
         tags = list(re.finditer(rb"<(/?)(\w+)", body))
         if tags:
             m = rng.choice(tags)
-            return body[:m.start(2)] + rng.choice((b"xfdp", b"fdp", b"head", b"indices", b"q", b"x:y")) + body[m.end(2):]
+            tag = rng.choice((b"xfdp", b"fdp", b"head", b"indices", b"q", b"x:y"))
+            return body[:m.start(2)] + tag + body[m.end(2):]
         return body
     if op == 7:
         i = _pos(rng, body, end=True)
@@ -372,8 +374,9 @@ def m_json(rng, data, seeds):
             return data[:m.end()] + big + b"," + data[m.end():]
         return big
     if op == 2:
-        return data[:i] + rng.choice((b"NaN", b"Infinity", b"-Infinity", b"1e400", b"9" * 5000, b"-0",
-                                      b"\"\\ud800\"", b"\"\\u0000\"", b"null", b"true", b"{}", b"[]", b"\"\"")) + data[i:]
+        value = rng.choice((b"NaN", b"Infinity", b"-Infinity", b"1e400", b"9" * 5000, b"-0", b"\"\\ud800\"",
+                            b"\"\\u0000\"", b"null", b"true", b"{}", b"[]", b"\"\""))
+        return data[:i] + value + data[i:]
     if op == 3:  # duplicate a key/value pair
         pairs = list(re.finditer(rb'"\w+":\s*("[^"]*"|[-0-9.eE]+|null|true|false)', data))
         if pairs:
@@ -436,8 +439,8 @@ def m_json_tree(rng, data, seeds):
         parent.insert(key, node)
     elif op == 3 and isinstance(node, list) and node:
         parent[key] = node * rng.choice((2, 3, 50))
-    elif op == 4 and isinstance(node, (int, float)) and not isinstance(node, bool):
-        parent[key] = rng.choice((node + 1, node - 1, -node, node * 1000, int(node) if math.isfinite(node) else 0))
+    elif op == 4 and isinstance(node, (int, float)) and not isinstance(node, bool) and abs(node) < 1e300:
+        parent[key] = rng.choice((node + 1, node - 1, -node, node * 1000, int(node)))
     else:
         parent[key] = {"x": node} if rng.random() < 0.5 else [node]
     try:
@@ -496,8 +499,11 @@ def mutate(rng: random.Random, target: str, seed: bytes, pool: list[bytes]) -> t
     data, names = seed, []
     for _ in range(rng.choice((1, 1, 1, 2, 2, 3, 4))):
         mutator = rng.choice(MUTATORS[target])
-        data = mutator(rng, data, pool)[:MAX_INPUT]
-        names.append(mutator.__name__[2:])
+        try:
+            data = mutator(rng, data, pool)[:MAX_INPUT]
+            names.append(mutator.__name__[2:])
+        except (ArithmeticError, ValueError, RecursionError):  # cannot apply to this input: leave it as it is
+            names.append(mutator.__name__[2:] + " (not applicable)")
     return data, names
 
 

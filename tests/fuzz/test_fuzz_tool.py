@@ -120,3 +120,21 @@ def test_command_line(tmp_path):
     summary = json.loads(out.read_text(encoding="utf-8"))
     assert sum(t["cases"] for t in summary["targets"].values()) == 30
     assert summary["memory_cap_bytes"] and not summary["findings"]
+
+
+def test_a_case_that_grows_memory_is_reported(tmp_path, monkeypatch):
+    guard = fuzz.Guard(5.0)
+    if not guard.peak_ok:
+        guard.close()
+        pytest.skip("no /proc/self/clear_refs: peak memory per case is not measured here")
+    small = fuzz.Campaign(0, tmp_path / "out", guard, 32 << 20, tmp_path)
+    try:
+        _runner(monkeypatch, "markup", lambda case: case.stage("parse", lambda: bytearray(96 << 20)[::4096]))
+        assert small.run_input("markup", 0, b"x", None, "test") == "ok"
+        _runner(monkeypatch, "markup", lambda case: None)
+        assert small.run_input("markup", 1, b"y", None, "test") == "ok"  # the next case starts afresh
+    finally:
+        guard.close()
+    assert small.tallies["markup"].peak == 1
+    (finding,) = small.findings.values()
+    assert finding.kind == "peak" and finding.first_case == 0
