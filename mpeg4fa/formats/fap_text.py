@@ -29,7 +29,6 @@ UTF-16 text or NUL bytes are refused as "not a text .fap file".
 from __future__ import annotations
 
 import io
-import math
 import os
 import re
 import warnings
