@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 import os
-import wave
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
@@ -28,7 +27,7 @@ from types import TracebackType
 
 import numpy as np
 
-from mpeg4fa.atomic import atomic_output
+from mpeg4fa.wav import write_pcm16
 from mpeg4fa.render.audio import Audio
 from mpeg4fa.render.errors import RenderError, RenderWarning
 
@@ -357,12 +356,8 @@ def write_wav(path: str | os.PathLike, audio: Audio) -> None:
     """Save audio as a 16-bit PCM WAV (stdlib ``wave``), the format every tool reads."""
     samples = _check_audio(audio, str(path))
     pcm = np.round(samples * 32767.0).astype("<i2")
-    try:  # our own file object (see Speech.write_wav), under a temporary name until complete
-        with atomic_output(path) as partial, open(partial, "wb") as handle, wave.open(handle, "wb") as out:
-            out.setnchannels(samples.shape[1])
-            out.setsampwidth(2)
-            out.setframerate(int(audio.rate))
-            out.writeframes(pcm.tobytes())
+    try:
+        write_pcm16(path, pcm, audio.rate)
     except OSError as exc:
         raise RenderError(f"cannot write the audio: {exc}", where=str(path)) from None
 

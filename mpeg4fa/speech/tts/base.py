@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import bisect
 import re
-import wave
 from dataclasses import dataclass
 from os import PathLike
 from typing import Literal, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
-from mpeg4fa.atomic import atomic_output
+from mpeg4fa.wav import write_pcm16
 
 EventKind = Literal["phoneme", "word", "sentence", "mark", "end"]
 EVENT_KINDS: tuple[str, ...] = ("phoneme", "word", "sentence", "mark", "end")
@@ -74,14 +73,7 @@ class Speech:
 
     def write_wav(self, path: str | PathLike[str]) -> None:
         """Write a 16-bit mono PCM WAV file (the audio track to mux with the animation)."""
-        data = self.samples.astype("<i2", copy=False).tobytes()
-        # our own file object: wave.open(name) leaves a half-made writer whose __del__ fails when open()
-        # fails; the temporary name makes the WAV appear whole or not at all
-        with atomic_output(path) as partial, open(partial, "wb") as handle, wave.open(handle, "wb") as out:
-            out.setnchannels(1)
-            out.setsampwidth(2)
-            out.setframerate(int(self.rate))
-            out.writeframes(data)
+        write_pcm16(path, self.samples, self.rate)
 
     def _of(self, kind: str) -> tuple[Event, ...]:
         return tuple(e for e in self.events if e.kind == kind)
