@@ -104,6 +104,15 @@ class Markup:
     tags: tuple[Tag, ...]
     name: str = "<text>"
     """Where the text came from (a file name), as used in error messages."""
+    places: tuple[tuple[int, int], ...] = ()
+    """(line, column) in the source of each character of :attr:`text` (1-based), for errors about it."""
+
+    def place(self, index: int) -> tuple[int, int]:
+        """Source (line, column) of ``text[index]``; counted in ``text`` itself for a Markup made by hand."""
+        if 0 <= index < len(self.places):
+            return self.places[index]
+        from mpeg4fa.speech.script import line_column
+        return line_column(self.text, index)
 
 
 class _Positions:
@@ -128,6 +137,7 @@ class _Parser:
         self.source, self.known, self.name = source, known, name
         self.where = _Positions(source)
         self.out: list[str] = []
+        self.places: list[tuple[int, int]] = []  # source (line, column) of each character of out
         self.tags: list[Tag] = []
         self.pending: list[tuple[str, int, float, int]] = []
         """Tags of the current gap: (expression, intensity, seconds, source index)."""
@@ -139,27 +149,33 @@ class _Parser:
 
     # -- building the plain text ------------------------------------------------------------------
 
-    def emit(self, char: str, literal: bool = False) -> None:
+    def emit(self, char: str, index: int, literal: bool = False) -> None:
         space = not literal and char.isspace()
         if space and self.pending:
             self.gap_space = True
         elif space and not self.out:
             return  # leading whitespace is trimmed
         else:
-            self.flush(separate=True)
+            self.flush(separate=True, at=index)
             self.out.append(char)
+            self.places.append(self.where(index))
+
+    def pop_space(self) -> None:
+        self.out.pop()
+        self.places.pop()
 
     def add_tag(self, expression: str, intensity: int, seconds: float, index: int) -> None:
         while self.out and self.out[-1].isspace():
-            self.out.pop()
+            self.pop_space()
             self.gap_space = True
         self.pending.append((expression, intensity, seconds, index))
 
-    def flush(self, separate: bool) -> None:
+    def flush(self, separate: bool, at: int = 0) -> None:
         if not self.pending:
             return
         if separate and self.gap_space and self.out:
             self.out.append(" ")
+            self.places.append(self.where(at))
         offset = len(self.out)
         for expression, intensity, seconds, index in self.pending:
             line, column = self.where(index)
@@ -169,9 +185,9 @@ class _Parser:
 
     def finish(self) -> Markup:
         while self.out and self.out[-1].isspace():
-            self.out.pop()
+            self.pop_space()
         self.flush(separate=False)
-        return Markup("".join(self.out), tuple(self.tags), self.name)
+        return Markup("".join(self.out), tuple(self.tags), self.name, tuple(self.places))
 
     # -- reading the source -----------------------------------------------------------------------
 
@@ -180,14 +196,14 @@ class _Parser:
         while i < n:
             char = source[i]
             if char == "\\" and i + 1 < n and source[i + 1] in _ESCAPABLE:
-                self.emit(source[i + 1], literal=True)
+                self.emit(source[i + 1], i, literal=True)
                 i += 2
             elif char == "(" and _EMPTY.match(source, i):
                 raise self.error(i, "empty tag", f"write a tag as {_EXAMPLE}, or {_LITERAL_HINT}")
             elif char == "(" and (head := _HEAD.match(source, i)):
                 i = self.tag(i, head)
             else:
-                self.emit(char)
+                self.emit(char, i)
                 i += 1
         return self.finish()
 

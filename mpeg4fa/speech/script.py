@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import re
 import unicodedata
+from collections.abc import Callable
 from functools import lru_cache
 
 from mpeg4fa.speech.errors import MarkupError
@@ -73,17 +74,19 @@ def line_column(text: str, index: int) -> tuple[int, int]:
     return line, index - (text.rfind("\n", 0, index) + 1) + 1
 
 
-def check_speakable(text: str, lang: str = "auto", name: str = "<text>") -> None:
+def check_speakable(text: str, lang: str = "auto", name: str = "<text>",
+                    place: Callable[[int], tuple[int, int]] | None = None) -> None:
     """Raise :class:`MarkupError` at the first character no voice for ``lang`` speaks, quoting its run.
 
     With ``lang="en"`` hanzi are refused as well (they would need the Mandarin voice).
-    Line and column count in ``text`` as given (for :func:`.speak`, the text with the tags taken out).
+    ``place`` gives the source (line, column) of ``text[i]`` (:meth:`.Markup.place`: where the user wrote
+    it, tags included); without it they count in ``text`` as given.
     """
     for index, char in enumerate(text):
         if char < "\x80" or speakable(char, lang):
             continue
         script = script_of(char)
-        line, column = line_column(text, index)
+        line, column = place(index) if place is not None else line_column(text, index)
         if script == "Han" and HAN.match(char):
             raise MarkupError(f"{char!r} is Chinese but --lang is en", line, column,
                               hint="use --lang zh or auto", source=name)

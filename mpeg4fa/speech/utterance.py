@@ -229,7 +229,7 @@ def speak(markup: Markup, engine: Engine, *, lang: str = "auto", voice: str | No
     text = markup.text
     if not text.strip():
         raise MarkupError("there is nothing to say", 1, 1, hint="give some text", source=markup.name)
-    check_speakable(text, lang, markup.name)  # a script no voice here speaks: refused, not spoken as silence
+    check_speakable(text, lang, markup.name, markup.place)  # a script no voice here speaks: refused, not spoken as silence
     runs = _runs(text)
     names = {i: f"tag{i}" for i in range(len(markup.tags))}
     parts = []

@@ -54,3 +54,12 @@ def test_the_quote_is_short_for_a_long_run():
     with pytest.raises(MarkupError) as info:
         check_speakable("ش" * 500)
     assert len(info.value.message) < 120
+
+
+def test_a_script_error_points_into_the_source_past_the_tags():
+    """The place is where the user wrote the word, tags and leading spaces counted (was 1:1 for the stripped text)."""
+    from mpeg4fa.speech.encoder import encode_text
+
+    with pytest.raises(MarkupError) as info:
+        encode_text("(joy, 40, 0.5) Hello\n  (sadness, 20, 1) then مرحبا", engine="estimate")
+    assert (info.value.line, info.value.column) == (2, 25)
