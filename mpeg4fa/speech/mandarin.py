@@ -16,13 +16,12 @@ A syllable gives one viseme per articulation, in order:
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 from mpeg4fa.spec import CHINESE_VISEME_BY_PINYIN, MANDARIN_PART_WEIGHT
 from mpeg4fa.speech.errors import MarkupError
+from mpeg4fa.speech.script import HAN, HAN_RUN
 
-_HAN = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
 _WHOLE = {"z", "c", "s", "zh", "ch", "sh", "r"}
 _ENDINGS = {"ai": "-i", "ei": "-i", "uai": "-i", "uei": "-i", "ao": "-o", "iao": "-o", "ou": "-u", "iou": "-u"}
 _NO_GLIDE = {"in", "ing", "vn"}
@@ -112,13 +111,13 @@ def syllables(text: str) -> list[Syllable]:
     """Every hanzi of ``text`` as a :class:`Syllable` (other characters are skipped)."""
     from pypinyin import Style, lazy_pinyin
 
-    positions = [m.start() for m in _HAN.finditer(text)]
+    positions = [m.start() for m in HAN.finditer(text)]
     if not positions:
         return []
     chars = "".join(text[p] for p in positions)
     # phrase-aware readings need the characters in their words: read runs of adjacent hanzi together
     initials, finals = [], []
-    for run in re.finditer(r"(?:[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff])+", text):
+    for run in HAN_RUN.finditer(text):
         initials += lazy_pinyin(run.group(), style=Style.INITIALS, strict=True)
         finals += lazy_pinyin(run.group(), style=Style.FINALS_TONE3, strict=True, neutral_tone_with_five=True)
     out = []

@@ -23,6 +23,7 @@ from functools import lru_cache
 from mpeg4fa.speech.errors import MarkupError
 
 HAN = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff]")
+HAN_RUN = re.compile(HAN.pattern + "+")
 """Hanzi the pinyin reader knows (CJK unified ideographs, extension A, compatibility ideographs)."""
 CHINESE = re.compile(r"[\u3400-\u4dbf\u4e00-\u9fff\uf900-\ufaff\u3000-\u303f\uff00-\uffef]")
 """What a Chinese run is made of: hanzi, CJK punctuation and full-width forms."""
