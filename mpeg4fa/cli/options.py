@@ -38,14 +38,19 @@ def _short(text: str) -> str:
     return text if len(text) <= 24 else text[:24] + "..."
 
 
+def _check_range(value: float, shown: str, low: float | None, high: float | None) -> None:
+    """ArgumentTypeError unless ``low <= value <= high`` (either bound may be open-ended)."""
+    if (low is not None and value < low) or (high is not None and value > high):
+        span = f"{low:g}..{high:g}" if low is not None and high is not None else (
+            f">= {low:g}" if low is not None else f"<= {high:g}")
+        raise argparse.ArgumentTypeError(f"{shown} is out of range: give {span}")
+
+
 def integer(low: int | None = None, high: int | None = None) -> Callable[[str], int]:
     """A whole number in ``low..high`` (either bound may be open-ended)."""
     def parse(text: str) -> int:
         value = _whole(text)
-        if (low is not None and value < low) or (high is not None and value > high):
-            span = f"{low}..{high}" if low is not None and high is not None else (
-                f">= {low}" if low is not None else f"<= {high}")
-            raise argparse.ArgumentTypeError(f"{value} is out of range: give {span}")
+        _check_range(value, str(value), low, high)
         return value
     parse.__name__ = "integer"
     return parse
@@ -55,10 +60,7 @@ def real(low: float | None = None, high: float | None = None) -> Callable[[str],
     """A finite number in ``low..high`` (bounds included; either may be open-ended)."""
     def parse(text: str) -> float:
         value = _real(text)
-        if (low is not None and value < low) or (high is not None and value > high):
-            span = f"{low:g}..{high:g}" if low is not None and high is not None else (
-                f">= {low:g}" if low is not None else f"<= {high:g}")
-            raise argparse.ArgumentTypeError(f"{text.strip()} is out of range: give {span}")
+        _check_range(value, text.strip(), low, high)
         return value
     parse.__name__ = "number"
     return parse
