@@ -388,8 +388,9 @@ def write_fap(stream: FapStream, target: Target, *, name: str | None = None, ver
 
     Frame numbers start at 0 and grow by ``skip + 1``, so skipped frames show as
     gaps; FAPs the stream leaves to interpolation (mask type 2) are written as sent
-    (:func:`mpeg4fa.decoded.explicit`: the format has no mask types); timestamps are not written (readers rebuild them from fps). BAPs have
-    no place in the format: they are dropped with a warning. Everything is
+    (:func:`mpeg4fa.decoded.explicit`: the format has no mask types); timestamps are
+    not written (readers rebuild them from fps). BAPs have no place in the format:
+    they are dropped with a warning. Everything is
     checked before the first byte is written, so a bad stream leaves no partial file.
     """
     label = os.fsdecode(target) if isinstance(target, (str, bytes, os.PathLike)) else _stream_label(target)

@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bad_files import make_cases
+
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.fdp import Fdp, FdpError, FdpValueError, fdp_from_bytes, load_fdp, read_xface_fdp, save_fdp
 from mpeg4fa.fdp import errors as fdp_errors
@@ -30,25 +32,14 @@ def _stream(*chunks: bytes) -> bytes:
 
 
 def _cases(tmp_path: Path) -> dict[str, tuple[Path, str]]:
-    cases = {}
-
-    def add(name: str, data: bytes | None, words: str) -> None:
-        path = tmp_path / name
-        if data is not None:
-            path.write_bytes(data)
-        cases[name] = (path, words)
-
-    add("missing.fdp", None, "no such file")
-    (tmp_path / "folder.fdp").mkdir()
-    cases["folder.fdp"] = (tmp_path / "folder.fdp", "is a directory")
-    add("random.fdp", np.random.default_rng(3).integers(0, 256, 4096, dtype=np.uint8).tobytes(), "")
-    add("empty.fdp", b"", "")
-    add("utf16.json", '{"format": "mpeg4fa-fdp", "version": 1}'.encode("utf-16"), "UTF-16")
-    add("nul.json", b'{"format": \x00"mpeg4fa-fdp"}', "invalid JSON")
-    add("nul.xml", b"<xfdp>\x00</xfdp>", "invalid XML")
-    add("encoding.fdp", b'<?xml version="1.0" encoding="no-such-enc"?>\n<xfdp/>\n', "no-such-enc")
-    add("truncated.fdp", MAGIC[:5], "")
-    return cases
+    return make_cases(tmp_path, ".fdp", [
+        ("empty.fdp", b"", ""),
+        ("utf16.json", '{"format": "mpeg4fa-fdp", "version": 1}'.encode("utf-16"), "UTF-16"),
+        ("nul.json", b'{"format": \x00"mpeg4fa-fdp"}', "invalid JSON"),
+        ("nul.xml", b"<xfdp>\x00</xfdp>", "invalid XML"),
+        ("encoding.fdp", b'<?xml version="1.0" encoding="no-such-enc"?>\n<xfdp/>\n', "no-such-enc"),
+        ("truncated.fdp", MAGIC[:5], ""),
+    ], seed=3)
 
 
 @pytest.mark.parametrize("reader", ["load_fdp", "read_xface_fdp"])

@@ -7,8 +7,9 @@ import pickle
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
+
+from bad_files import make_cases
 
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.fba import encode
@@ -132,25 +133,14 @@ def test_a_line_without_end_is_bounded(tmp_path):
 
 
 def _cases(tmp_path: Path) -> dict[str, tuple[Path, str]]:
-    cases = {}
-
-    def add(name: str, data: bytes | None, words: str) -> None:
-        path = tmp_path / name
-        if data is not None:
-            path.write_bytes(data)
-        cases[name] = (path, words)
-
-    add("missing.fap", None, "no such file")
-    (tmp_path / "folder.fap").mkdir()
-    cases["folder.fap"] = (tmp_path / "folder.fap", "is a directory")
-    add("random.fap", np.random.default_rng(1).integers(0, 256, 4096, dtype=np.uint8).tobytes(), "")
-    add("empty.fap", b"", "no header")
-    add("utf16.fap", "2.1 a 25 0\n".encode("utf-16"), "UTF-16")
-    add("utf16be.fap", "2.1 a 25 0\n".encode("utf-16-be"), "NUL byte")          # no BOM: the NULs say it
-    add("nul.fap", b"2.1 a\x00 25 0\n", "NUL byte")
-    add("nul-late.fap", f"2.1 a 25 1\n{M3}\n0 1\x00\n".encode(), "NUL byte")
-    add("zeros.fap", b"\x00" * 100_000, "")                                        # no line end at all
-    return cases
+    return make_cases(tmp_path, ".fap", [
+        ("empty.fap", b"", "no header"),
+        ("utf16.fap", "2.1 a 25 0\n".encode("utf-16"), "UTF-16"),
+        ("utf16be.fap", "2.1 a 25 0\n".encode("utf-16-be"), "NUL byte"),          # no BOM: the NULs say it
+        ("nul.fap", b"2.1 a\x00 25 0\n", "NUL byte"),
+        ("nul-late.fap", f"2.1 a 25 1\n{M3}\n0 1\x00\n".encode(), "NUL byte"),
+        ("zeros.fap", b"\x00" * 100_000, ""),                                        # no line end at all
+    ], seed=1)
 
 
 def test_every_bad_path_is_one_format_error_naming_the_file(tmp_path):
