@@ -10,8 +10,8 @@ The limits a ``.fap`` file is read within are listed in :mod:`mpeg4fa.formats.fa
   (Xface, Greta, VREng, visage).
 * :func:`read_stream`, :func:`sniff`: open a ``.fba`` or ``.fap`` file by its content.
 """
-from mpeg4fa.formats.errors import FormatError
+from mpeg4fa.formats.errors import FormatError, FormatWarning
 from mpeg4fa.formats.fap_text import iter_fap, read_fap, write_fap
 from mpeg4fa.formats.sniff import read_stream, sniff
 
-__all__ = ["FormatError", "iter_fap", "read_fap", "write_fap", "read_stream", "sniff"]
+__all__ = ["FormatError", "FormatWarning", "iter_fap", "read_fap", "write_fap", "read_stream", "sniff"]

@@ -7,7 +7,7 @@ type (it is a :class:`~mpeg4fa.errors.MpegFaError` and a :class:`ValueError`).
 """
 from __future__ import annotations
 
-from mpeg4fa.errors import MpegFaError
+from mpeg4fa.errors import MpegFaError, MpegFaWarning
 
 
 class FormatError(MpegFaError, ValueError):
@@ -65,3 +65,7 @@ class FormatError(MpegFaError, ValueError):
 
     def __reduce__(self):  # keep the attributes when pickled (e.g. across processes)
         return (type(self), (self.path, self.line, self.column, self.problem, self.hint))
+
+
+class FormatWarning(MpegFaWarning):
+    """Something a file format cannot hold was left out (e.g. BAPs written to a .fap): said, not fatal."""

@@ -43,7 +43,7 @@ from mpeg4fa.decoded import explicit
 from mpeg4fa.fba.limits import MAX_SPAN_SECONDS, fps_problem, frame_limit
 from mpeg4fa.fba.stacking import StreamBuilder
 from mpeg4fa.fba.stream import N_FAPS, FapStream
-from mpeg4fa.formats.errors import FormatError
+from mpeg4fa.formats.errors import FormatError, FormatWarning
 from mpeg4fa.spec.profiles import first_high_level_fault, high_level_problem
 
 SUPPORTED_VERSIONS = ("1.1", "2.0", "2.1", "2.2")
@@ -405,7 +405,7 @@ def write_fap(stream: FapStream, target: Target, *, name: str | None = None, ver
     header = _format_header(label, _header_name(name, label), version, fps, n_frames)
     if stream.bap_mask.any():
         warnings.warn(f"{int(stream.bap_mask.any(axis=1).sum())} frames carry BAPs (body animation); "
-                      ".fap holds face parameters only, so the BAPs are dropped", UserWarning, stacklevel=2)
+                      ".fap holds face parameters only, so the BAPs are dropped", FormatWarning, stacklevel=2)
     lines = _format_lines(stream, header, numbers)
     if isinstance(target, (str, bytes, os.PathLike)):
         with open(target, "w", encoding="utf-8", newline="") as handle:

@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mpeg4fa.fba.stream import FapStream, FrameRate, CodingParams
-from mpeg4fa.formats import FormatError, iter_fap, read_fap, write_fap
+from mpeg4fa.formats import FormatError, FormatWarning, iter_fap, read_fap, write_fap
 
 VECTORS = Path(__file__).resolve().parents[2].parent / "shared" / "vectors"
 XFACE_NAME = r"C:\Users\balci\Work\FACE\exml2fap\files\TempFile"
@@ -228,7 +228,7 @@ def test_writer_defaults_and_fps(tmp_path: Path) -> None:
 def test_writer_warns_when_baps_are_dropped() -> None:
     s = small_stream()
     s.bap_mask[1, 5] = True
-    with pytest.warns(UserWarning, match="BAPs are dropped"):
+    with pytest.warns(FormatWarning, match="BAPs are dropped"):
         write_text(s)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
