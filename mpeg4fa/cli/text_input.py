@@ -15,10 +15,11 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..speech.markup import MAX_TEXT_CHARS
 from .errors import InputError
 
-TEXT_MAX = 1 << 20
-"""Most characters of text read from a file or standard input (1 Mi: hours of speech)."""
+TEXT_MAX = MAX_TEXT_CHARS
+"""Most characters of text read from a file or standard input (the speech layer's bound)."""
 _EXTENSION = re.compile(r"[^./\\][^/\\]*\.[A-Za-z][A-Za-z0-9]{0,7}")
 _SPEAK_IT = "use --text to speak it as text"
 

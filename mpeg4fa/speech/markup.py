@@ -60,6 +60,10 @@ INTENSITY_MIN: int = _INTENSITY.i_min
 INTENSITY_MAX: int = _INTENSITY.i_max
 """Highest tag intensity (63: the full expression)."""
 
+MAX_TEXT_CHARS = 200_000
+"""Longest text read (about 3 h of speech at 175 words a minute): the speech, its audio (silence too,
+for the estimate engine) and the frames grow with it, so a longer text is refused, not half-spoken."""
+
 _HEAD = re.compile(r"\(\s*([^\W\d]\w*)\s*,")
 """What makes a ``(`` a tag: a word, then a comma."""
 _EMPTY = re.compile(r"\(\s*\)")
@@ -295,6 +299,10 @@ def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name:
     ``name`` labels error messages. Raises :class:`MarkupError` (with line,
     column and a hint) for a malformed tag, and nothing else for any text.
     """
+    if len(source) > MAX_TEXT_CHARS:
+        line, column = _Positions(source)(MAX_TEXT_CHARS)
+        raise MarkupError(f"the text is {len(source):,} characters long, more than the {MAX_TEXT_CHARS:,} "
+                          "read at once", line, column, "split it and encode the parts one after another", name)
     names = EXPRESSION_PROFILES if expressions is None else expressions
     known = tuple(dict.fromkeys(str(n).lower() for n in names))
     return _Parser(source, known, name).run()

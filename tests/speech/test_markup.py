@@ -390,3 +390,13 @@ def test_words_and_tags_round_trip(items: list[str | tuple[str, int, str]], spac
     m = parse_markup(source)
     assert m.text == text
     assert summary(m) == expected
+
+
+def test_a_text_longer_than_the_bound_is_refused_before_any_work():
+    from mpeg4fa.speech.markup import MAX_TEXT_CHARS
+
+    text = "word " * (MAX_TEXT_CHARS // 5) + "\nmore"
+    with pytest.raises(MarkupError) as info:
+        parse_markup(text, name="long.txt")
+    assert (info.value.line, info.value.column) == (1, MAX_TEXT_CHARS + 1) and "200,000" in str(info.value)
+    parse_markup("word " * (MAX_TEXT_CHARS // 5))  # at the bound: read
