@@ -1,0 +1,324 @@
+"""The suite's reference model: hand-made frames with known answers, and agreement with the project's
+decoder (``mpeg4fa.decoded``) and face engine FAPU (``mpeg4fa.face.fapu``), which it must not import."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mpeg4fa.conformance import reference as ref
+from mpeg4fa.conformance.errors import ConformanceError
+from mpeg4fa.conformance.reference import (
+    TOLERANCE, feature_point_positions, feature_point_tolerance, fapu_from_points, fapu_units, rotations,
+    shown_values,
+)
+from mpeg4fa.spec import (
+    ANGLE_UNIT, EXPRESSION_PROFILES, FAP_BY_NAME, FAPS, FAPU_NAMES, N_FAP_GROUPS, N_FAPS, VISEME_PROFILES, VISEMES,
+    EXPRESSIONS,
+)
+
+HOLD, INTERP = 1, 2
+COL = {name: record.number - 1 for name, record in FAP_BY_NAME.items()}
+
+
+def frames(n: int, types: int | list[int] = HOLD):
+    """Empty arrays for n frames, every group governed by ``types``."""
+    t = np.broadcast_to(np.asarray(types), (N_FAP_GROUPS,))
+    return (np.zeros((n, N_FAPS), bool), np.zeros((n, N_FAPS), np.int64), np.zeros((n, 4), np.int64),
+            np.zeros((n, 6), np.int64), np.tile(t, (n, 1)))
+
+
+def send(arrays, k: int, fap: int, value: int) -> None:
+    mask, values = arrays[0], arrays[1]
+    mask[k, fap - 1], values[k, fap - 1] = True, value
+
+
+# ---- shown values: hold and interpolate ---------------------------------------------------------
+def test_hold_keeps_the_last_value_sent_and_zero_before():
+    a = frames(4)
+    send(a, 1, 3, 200)
+    send(a, 3, 3, 50)
+    out = shown_values(*a)
+    assert out[:, 2].tolist() == [0, 200, 200, 50]
+    assert not out[:, :2].any() and not out[:, 3:].any()
+
+
+def test_interpolate_copies_left_right_counterpart_sent_in_the_same_frame():
+    a = frames(2, INTERP)
+    send(a, 0, 19, 300)          # close_t_l_eyelid; close_t_r_eyelid (20) not sent
+    out = shown_values(*a)
+    assert out[0, 19] == 300 and out[1, 19] == 300     # copied, then held like a sent value
+    b = frames(1, HOLD)
+    send(b, 0, 19, 300)
+    assert shown_values(*b)[0, 19] == 0                 # mask type 1: no copy
+
+
+def test_interpolate_inner_outer_when_no_left_right_partner_is_sent():
+    a = frames(1, INTERP)
+    send(a, 0, 4, -120)          # lower_t_midlip (no left/right partner) -> 51 lower_t_midlip_o
+    send(a, 0, 59, 77)           # raise_l_cornerlip_o: 60 (its l/r partner) and 12 (inner) unsent
+    out = shown_values(*a)
+    assert out[0, 50] == -120    # 51 <- 4
+    assert out[0, 59] == 77      # 60 <- 59 (left/right wins)
+    assert out[0, 11] == 77      # 12 <- 59 (inner <- outer)
+    assert out[0, 12] == 0       # 13: partners 12 and 60 are not *sent*, so it holds 0
+
+
+def test_left_right_wins_over_inner_outer():
+    a = frames(1, INTERP)
+    send(a, 0, 7, 40)            # stretch_r_cornerlip: l/r partner of 6
+    send(a, 0, 53, 90)           # stretch_l_cornerlip_o: i/o partner of 6
+    assert shown_values(*a)[0, 5] == 40
+
+
+def test_interpolation_follows_the_group_type_of_the_unsent_fap():
+    types = [HOLD] * N_FAP_GROUPS
+    types[7] = INTERP            # group 8 (outer lip) interpolates, group 2 (inner lip) holds
+    a = frames(1, types)
+    send(a, 0, 4, 10)
+    send(a, 0, 52, 20)
+    out = shown_values(*a)
+    assert out[0, 50] == 10      # 51 <- 4
+    assert out[0, 4] == 0        # 5 does not copy 52: its group holds
+
+
+def test_interpolated_then_unsent_holds_the_copy_and_a_sent_value_replaces_it():
+    a = frames(3, INTERP)
+    send(a, 0, 19, 100)
+    send(a, 2, 20, -5)
+    out = shown_values(*a)
+    assert out[:, 19].tolist() == [100, 100, -5]
+    assert out[:, 18].tolist() == [100, 100, -5]     # unsent again: copies its partner sent now
+
+
+# ---- shown values: FAP 1 and FAP 2 ------------------------------------------------------------
+def _viseme(name: str) -> np.ndarray:
+    return np.asarray(VISEME_PROFILES["mpeg4"][name], dtype=np.float64)
+
+
+def _expression(name: str) -> np.ndarray:
+    return np.asarray(EXPRESSION_PROFILES[name], dtype=np.float64)
+
+
+@pytest.mark.parametrize("blend", [0, 31, 63])
+def test_viseme_blend(blend):
+    a = frames(1)
+    a[0][0, 0] = True
+    a[2][0] = [10, 1, blend, 0]  # AA with PP
+    got = shown_values(*a)[0]
+    want = _viseme(VISEMES[10].name) * blend / 63 + _viseme(VISEMES[1].name) * (1 - blend / 63)
+    want[:2] = 0
+    assert np.allclose(got, want, atol=1e-12, rtol=0)
+    if blend == 63:
+        assert np.allclose(got[2:], _viseme(VISEMES[10].name)[2:])
+    if blend == 0:
+        assert np.allclose(got[2:], _viseme(VISEMES[1].name)[2:])
+
+
+def test_blend_above_63_counts_as_63():
+    a = frames(1)
+    a[0][0, 0] = True
+    a[2][0] = [10, 1, 65, 0]
+    assert np.allclose(shown_values(*a)[0, 2:], _viseme(VISEMES[10].name)[2:])
+
+
+def test_two_expressions_add_with_their_own_intensities():
+    a = frames(2)
+    a[0][0, 1] = True
+    a[3][0] = [1, 40, 6, 21, 0, 0]   # joy 40, surprise 21: need not add up to 63
+    out = shown_values(*a)
+    want = _expression(EXPRESSIONS[1].name) * 40 / 63 + _expression(EXPRESSIONS[6].name) * 21 / 63
+    assert np.allclose(out[0, 2:], want[2:]) and np.allclose(out[1], out[0])   # held in frame 1
+    assert np.abs(want[2:]).max() > 0
+
+
+def test_sent_low_level_fap_overrides_the_high_level_value():
+    jaw = COL["open_jaw"]
+    name = next(n for n, p in VISEME_PROFILES["mpeg4"].items() if p[jaw] != 0)
+    select = next(v.number for v in VISEMES if v.name == name)
+    a = frames(3)
+    a[0][:, 0] = True
+    a[2][:] = [select, select, 63, 0]
+    send(a, 1, 3, 7)
+    out = shown_values(*a)
+    assert out[0, jaw] == _viseme(name)[jaw]
+    assert out[1, jaw] == 7 and out[2, jaw] == 7       # sent once, then held: still overrides
+    others = [c for c in range(2, N_FAPS) if c != jaw]
+    assert np.allclose(out[1, others], _viseme(name)[others])
+
+
+def test_bad_select_and_shapes_are_refused():
+    a = frames(1)
+    a[0][0, 0] = True
+    a[2][0] = [15, 0, 0, 0]
+    with pytest.raises(ConformanceError):
+        shown_values(*a)
+    with pytest.raises(ConformanceError):
+        shown_values(np.zeros((2, 68), bool), np.zeros((2, 67)), np.zeros((2, 4)), np.zeros((2, 6)),
+                     np.zeros((2, 10)))
+
+
+# ---- FAPU -------------------------------------------------------------------------------------
+def symmetric_face() -> dict[str, np.ndarray]:
+    """A hand-made neutral face: IRISD0 = 10, ES0 = 60, ENS0 = 40, MNS0 = 20, MW0 = 50 (x to the left)."""
+    p = {
+        "3.1": (30, 5, 10), "3.3": (30, -5, 10), "3.2": (-30, 5, 10), "3.4": (-30, -5, 10),
+        "3.5": (30, 0, 12), "3.6": (-30, 0, 12), "9.15": (0, -40, 20), "2.2": (0, -60, 18),
+        "8.3": (25, -62, 16), "8.4": (-25, -62, 16), "2.1": (0, -100, 10), "7.1": (0, -80, -60),
+    }
+    return {k: np.array(v, dtype=np.float64) for k, v in p.items()}
+
+
+def test_fapu_on_a_hand_made_symmetric_face():
+    units = fapu_from_points(symmetric_face())
+    assert tuple(units) == FAPU_NAMES
+    assert units == {"IRISD0": 10 / 1024, "ES0": 60 / 1024, "ENS0": 40 / 1024, "MNS0": 20 / 1024,
+                     "MW0": 50 / 1024}
+    per_fap = fapu_units(units)
+    assert per_fap[0] == per_fap[1] == 0
+    assert per_fap[COL["open_jaw"]] == 20 / 1024            # MNS
+    assert per_fap[COL["close_t_l_eyelid"]] == 10 / 1024    # IRISD, not MNS
+    assert per_fap[COL["head_yaw"]] == ANGLE_UNIT == 1e-5
+    assert per_fap[COL["stretch_l_cornerlip"]] == 50 / 1024
+    assert np.isfinite(per_fap).all()
+
+
+def test_subset_face_measures_what_it_can():
+    face = symmetric_face()
+    del face["3.1"], face["8.4"]
+    units = fapu_from_points(face)
+    assert "MW0" not in units
+    assert units["IRISD0"] == 10 / 1024      # from the right eye
+    assert np.isnan(fapu_units(units)[COL["shift_jaw"]])
+
+
+def test_mirrored_face_is_refused():
+    face = {k: v * np.array([-1, 1, 1]) for k, v in symmetric_face().items()}
+    with pytest.raises(ConformanceError):
+        fapu_from_points(face)
+
+
+def test_fapu_agrees_with_the_face_engine(procedural_face):
+    from mpeg4fa.face.fapu import measure_fapu
+
+    points = procedural_face.feature_points()
+    engine = measure_fapu(points).as_dict()
+    ours = fapu_from_points(points)
+    assert set(ours) == set(engine)
+    for name in FAPU_NAMES:
+        assert ours[name] == pytest.approx(engine[name] / 1024, rel=1e-12), name
+
+
+# ---- feature points ---------------------------------------------------------------------------
+def test_open_jaw_moves_2_1_down_by_value_times_mns():
+    face = symmetric_face()
+    a = frames(2)
+    send(a, 1, 3, 512)
+    pos = feature_point_positions(face, shown_values(*a))
+    assert np.allclose(pos["2.1"][0], face["2.1"])
+    assert np.allclose(pos["2.1"][1], face["2.1"] + [0, -512 * 20 / 1024, 0])    # 10 units down
+    assert np.allclose(pos["2.2"], face["2.2"])
+
+
+def test_close_t_l_eyelid_uses_irisd():
+    face = symmetric_face()
+    a = frames(1)
+    send(a, 0, 19, 1024)
+    pos = feature_point_positions(face, shown_values(*a))
+    assert np.allclose(pos["3.1"][0], face["3.1"] + [0, -10, 0])     # a full IRISD0 down: lid shut
+    assert np.allclose(pos["3.2"][0], face["3.2"])
+
+
+def test_faps_on_one_point_add_and_directions_follow_the_axes():
+    face = symmetric_face()
+    a = frames(1)
+    send(a, 0, 14, 1024)     # thrust_jaw: forward (+z), MNS
+    send(a, 0, 15, 1024)     # shift_jaw: toward the face's right (-x), MW
+    send(a, 0, 3, 1024)      # open_jaw: down
+    pos = feature_point_positions(face, shown_values(*a))
+    assert np.allclose(pos["2.1"][0], face["2.1"] + [-50, -20, 20])
+
+
+def test_missing_points_and_unmeasurable_fapu_are_left_out():
+    face = symmetric_face()
+    del face["8.4"]          # no MW
+    a = frames(1)
+    send(a, 0, 15, 1024)     # shift_jaw (MW): skipped
+    send(a, 0, 3, 1024)
+    send(a, 0, 27, 100)      # thrust_l_eyeball moves 3.5 (present); pupil dilation moves nothing
+    send(a, 0, 29, 100)
+    pos = feature_point_positions(face, shown_values(*a))
+    assert np.allclose(pos["2.1"][0], face["2.1"] + [0, -20, 0])
+    assert "8.4" not in pos and "4.1" not in pos
+    assert np.allclose(pos["3.5"][0], face["3.5"] + [0, 0, 100 * 60 / 1024])
+
+
+def test_rotations_are_in_radians_and_move_no_point():
+    face = symmetric_face()
+    a = frames(1)
+    send(a, 0, 49, 100000)   # head_yaw: one radian
+    send(a, 0, 23, -5000)
+    shown = shown_values(*a)
+    rot = rotations(shown)
+    assert set(rot) == {f.number for f in FAPS if f.fapu == "AU"}
+    assert rot[49][0] == pytest.approx(1.0) and rot[23][0] == pytest.approx(-0.05)
+    pos = feature_point_positions(face, shown)
+    assert all(np.allclose(pos[k][0], face[k]) for k in pos)
+
+
+def test_tolerances():
+    assert set(TOLERANCE) == {"shown", "feature_points"}
+    face = symmetric_face()
+    tol = feature_point_tolerance(face)
+    smallest_unit = min(fapu_from_points(face).values())
+    assert 0 < tol < smallest_unit / 10      # a one-FAPU error is always caught
+
+
+def test_reference_does_not_use_the_decoder_or_face_engine():
+    for name in ("reference.py", "reference_fapu.py"):
+        tree = ast.parse(Path(ref.__file__).with_name(name).read_text())
+        mods = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+        mods |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+        assert not any(m and (m.startswith("mpeg4fa.face") or m.startswith("mpeg4fa.decoded")) for m in mods)
+
+
+# ---- agreement with the project's decoder ------------------------------------------------------
+def random_stream(seed: int, n: int):
+    from mpeg4fa.fba import FapStream
+
+    rng = np.random.default_rng(seed)
+    s = FapStream.empty(n)
+    dens = rng.choice([0.2, 0.5, 0.9])
+    s.fap_mask[:] = rng.random((n, N_FAPS)) < dens
+    for k, record in enumerate(FAPS[2:], start=2):
+        big = 900 if record.fapu == "AU" else 300   # P differences stay inside 31*60 at fap_quant 0
+        lo = 0 if record.unidirectional else -big
+        s.fap_values[:, k] = rng.integers(lo, big + 1, n)
+    s.fap_values[~s.fap_mask] = 0
+    s.viseme[:] = np.column_stack([rng.integers(0, len(VISEMES), (n, 2)), rng.integers(0, 64, n),
+                                   np.zeros(n, int)])
+    s.expression[:] = np.column_stack([rng.integers(0, len(EXPRESSIONS), n), rng.integers(0, 64, n),
+                                       rng.integers(0, len(EXPRESSIONS), n), rng.integers(0, 64, n),
+                                       np.zeros((n, 2), int)])
+    s.viseme[~s.fap_mask[:, 0]] = 0
+    s.expression[~s.fap_mask[:, 1]] = 0
+    s.timestamps[:] = np.arange(n) / 25.0
+    return s, rng
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_agrees_with_the_project_decoder_on_random_streams(seed):
+    from mpeg4fa.decoded import resolve
+    from mpeg4fa.fba import EncodeOptions, decode, encode
+
+    s, rng = random_stream(seed, int(8 + seed % 5 * 4))
+    types = [int(t) for t in rng.choice([1, 2], N_FAP_GROUPS)]
+    options = EncodeOptions(fap_quant=int(rng.choice([0, 1, 2, 5])), intra_period=int(rng.choice([0, 4])),
+                            mask_types=types, fps=25.0)
+    d = decode(encode(s, options))
+    ours = shown_values(d.fap_mask, d.fap_values, d.viseme, d.expression, d.group_mask_types())
+    theirs = resolve(d)
+    bad = np.argwhere(np.abs(ours - theirs) > 1e-9)
+    assert not len(bad), f"first disagreements (frame, column): {bad[:5].tolist()}"
