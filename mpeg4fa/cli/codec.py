@@ -56,9 +56,14 @@ def register(commands: Commands) -> None:
 
     p = commands.add_parser("validate", help="check that a .fba stream decodes to its end code",
                             description="Exit status 0 when the stream is valid; 1 with one line naming the "
-                                        "error and its bit offset when it is not.")
+                                        "error and its bit offset when it is not. With --semantic (a .fba or "
+                                        ".fap), also what the values mean: one line per finding (frame, FAP, "
+                                        "rule), then a summary; exit 1 only for error findings.")
     p.add_argument("stream", type=Path)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--semantic", action="store_true",
+                   help="also check values, FAP 1/2 fields, masks, time and frame rate "
+                        "(rules: mpeg4fa/conformance/semantic.py)")
     p.set_defaults(run=run_validate)
 
     p = commands.add_parser("demo", help="encode a built-in synthetic FAP sequence and show what it holds",
@@ -138,6 +143,8 @@ def run_encode(args: argparse.Namespace) -> int:
 
 
 def run_validate(args: argparse.Namespace) -> int:
+    if args.semantic:
+        return _run_validate_semantic(args)
     try:
         stream = decode(args.stream)
     except FbaError as exc:
@@ -148,6 +155,30 @@ def run_validate(args: argparse.Namespace) -> int:
     result = {"valid": True, "frames": len(stream), "fps": stream.fps}
     print(json.dumps(result) if args.json else f"{args.stream}: valid: {len(stream)} frames at {stream.fps:g} fps")
     return 0
+
+
+def _run_validate_semantic(args: argparse.Namespace) -> int:
+    """Syntax as without --semantic (a .fap through its reader), then the semantic findings."""
+    from ..conformance.semantic import semantic_findings, summary
+
+    try:
+        stream, kind = read_stream(args.stream)
+    except FbaError as exc:
+        result = {"valid": False, "error": exc.message, "bit_offset": exc.bit_offset, "frame": exc.frame,
+                  "frames_decoded": len(exc.partial) if exc.partial is not None else 0}
+        print(json.dumps(result) if args.json else f"{args.stream}: invalid: {exc}")
+        return 1
+    findings = semantic_findings(stream)
+    counts = summary(findings)
+    if args.json:
+        print(json.dumps({"valid": True, "format": kind, "frames": len(stream), "fps": stream.fps,
+                          "semantic": counts, "findings": [f.as_dict() for f in findings]}))
+    else:
+        for finding in findings:
+            print(finding.line(str(args.stream)))
+        said = ", ".join(f"{n} {severity}{'s' * (n != 1 and severity != 'info')}" for severity, n in counts.items())
+        print(f"{args.stream}: valid syntax, {len(stream)} frames at {stream.fps:g} fps; semantic: {said}")
+    return 1 if counts["error"] else 0
 
 
 def run_demo(args: argparse.Namespace) -> int:
