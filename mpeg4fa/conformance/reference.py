@@ -5,47 +5,51 @@ A second, deliberately plain implementation of the rules, written from the facts
 not from ``mpeg4fa.decoded`` and without ``mpeg4fa.face``: expected results computed by the
 code under test would pass any bug it has. Loops per frame, so each rule can be read off.
 
-Rules and their confidence ([V] verified on real streams, [S] stated in a source, [M] unverified):
+Rules and their confidence ([V] verified on real streams, [S] stated in a source, [M] unverified;
+the same as data in :data:`RULES`, so a vector can carry the weakest rule it rests on):
 
 ==  =====================================================================  ====  ========================
 #   rule                                                                   conf  source
 ==  =====================================================================  ====  ========================
-1   a FAP not sent keeps its previous value; 0 before it is first sent     S     facts §5.3 (mask types)
-2   mask type 1 (and 0, 3): unsent FAPs hold (rule 1)                      M     facts §5.3, §8.4
+1   a FAP never sent shows 0: the neutral face                             S     facts §1 (values move
+                                                                                 from the neutral face)
+2   an unsent FAP keeps its previous value (mask types 0, 1, 3; type 2     M     facts §5.3, §8.4 (hold
+    with no counterpart sent)                                                    vs interpolate: memory)
 3   mask type 2: an unsent FAP copies its left/right counterpart sent in   M     facts §2 "Interpolation
     the same frame, else its inner/outer lip counterpart (FAPs 4-13 <->          conventions", §8.4;
-    51-60), else holds; the copied value is then the FAP's previous              spec FAP_PARTNERS
-    value (it holds like a sent one)
-4   FAP 1 and FAP 2 hold like the others (last fields sent)                S     facts §4, SYNTAX.md
+    51-60), else holds; the copy is then the FAP's previous value                spec FAP_PARTNERS
+4   FAP 1 and FAP 2 hold like the others (the fields last sent)            M     as rule 2
 5   viseme: v1 * blend/63 + v2 * (1 - blend/63)                            S     facts §4.1 (Xface)
 6   expression: e1 * i1/63 + e2 * i2/63                                    M     facts §4.2
-7   blend/intensity decoded above 63 (quantisation rounding) count as 63   S     SYNTAX.md ranges
-8   viseme/expression FAP values: the project's profiles (``spec/``)       M     spec/profiles.py: the
-                                                                                 standard leaves them
-9   a low-level FAP that has a value (sent, or copied by rule 3, now or    M     facts §4 (init/def
-    earlier) overrides the value FAP 1/2 give it                                 semantics [M])
-10  no clamping: a decoder shows what was sent                             S     the suite's choice
-11  FAPU = key distance on the neutral face / 1024 (``spec/fapu.csv``)     S     facts §1
-12  IRISD0 from the right eye (3.2 - 3.4) when 3.1/3.3 are missing         S     facts §1 ("= 3.2.y -
+7   blend/intensity decoded above 63 (quantisation rounding) count as 63   S     SYNTAX.md (ranges)
+8   what a viseme/expression is in FAPs: the project's ``spec/`` profiles  M     spec/profiles.py: the
+                                                                                 standard leaves it open
+9   a low-level FAP that has a value (sent, or copied by rule 3, now or    M     facts §4 (semantics
+    earlier) overrides the value FAP 1/2 give it                                 of FAP 1/2 are [M])
+10  viseme_def, init_face, expression_def change nothing shown             M     facts §4.1, §4.2
+11  no clamping: a decoder shows what was sent                             S     README (the codec
+                                                                                 decodes what was sent)
+12  FAPU = key distance on the neutral face / 1024 (``spec/fapu.csv``)     S     facts §1
+13  IRISD0 from the right eye (3.2 - 3.4) when 3.1/3.3 are missing         S     facts §1 ("= 3.2.y -
                                                                                  3.4.y")
-13  AU = 1e-5 rad, not measured                                            S     facts §1
-14  translational FAP: its feature point moves value x FAPU along the      S     facts §1, §2 table
+14  AU = 1e-5 rad, not measured                                            S     facts §1
+15  translational FAP: its feature point moves value x FAPU along the      S     facts §1, §2 table
     FAP's direction; FAPs on one point add up
-15  axes: +x the face's left, +y up, +z forward (out of the face)          S     facts, "Terminology"
-16  dilate_l/r_pupil (29/30, "growing"): the pupil grows, its centre       S     facts §2 (IRISD,
-    3.5/3.6 does not move                                                        "growing")
-17  eyeball rotations 23-26: centre not given; points not moved            M     facts §2 note [M]
-18  head rotations 48-50 about 7.1 (top of spine); points not moved here   S     facts §2, §3 (7.1)
-19  tongue_roll 47 (6.3/6.4, "concave upward"): no centre; not moved       M     facts §2
+16  axes: +x the face's left, +y up, +z forward (out of the face)          S     facts "Terminology"
+17  dilate_l/r_pupil (29/30, "growing"): the pupil grows, its centre       S     facts §2 (IRISD,
+    3.5/3.6 does not move                                                        "Dilation of pupil")
+18  eyeball rotations 23-26: centre not given; points not moved            M     facts §2 note [M]
+19  head rotations 48-50 about 7.1 (top of spine); points not moved here   S     facts §2, §3 (7.1)
+20  tongue_roll 47 (6.3/6.4, "concave upward"): no centre; not moved       M     facts §2
 ==  =====================================================================  ====  ========================
 
 Real decoders realise some FAPs as motions the table does not spell out (open_jaw as a rotation
 of the jaw that drops 2.1 by value x MNS, eyelids on an arc over the eyeball): the component
-along the FAP's direction is what rule 14 pins down; the others are the decoder's.
+along the FAP's direction is what rule 15 pins down; the others are the decoder's.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
@@ -56,8 +60,40 @@ from mpeg4fa.spec import (
     VISEME_PROFILES, VISEMES,
 )
 
-__all__ = ["shown_values", "fapu_from_points", "fapu_units", "feature_point_positions", "rotations",
+__all__ = ["RULES", "weakest", "shown_values", "fapu_from_points", "fapu_units", "feature_point_positions", "rotations",
            "feature_point_tolerance", "TOLERANCE", "DIRECTIONS", "INTERPOLATE"]
+
+RULES: dict[int, tuple[str, str]] = {
+    1: ("a FAP never sent shows 0", "S"),
+    2: ("an unsent FAP keeps its previous value", "M"),
+    3: ("mask type 2 copies the left/right, else inner/outer counterpart sent in the frame", "M"),
+    4: ("FAP 1 and FAP 2 hold like the others", "M"),
+    5: ("viseme = v1 * blend/63 + v2 * (1 - blend/63)", "S"),
+    6: ("expression = e1 * i1/63 + e2 * i2/63", "M"),
+    7: ("blend/intensity above 63 count as 63", "S"),
+    8: ("viseme/expression FAP values are the spec/ profiles", "M"),
+    9: ("a low-level FAP with a value overrides FAP 1/2", "M"),
+    10: ("viseme_def, init_face, expression_def change nothing shown", "M"),
+    11: ("no clamping", "S"),
+    12: ("FAPU = key distance / 1024 (spec/fapu.csv)", "S"),
+    13: ("IRISD0 from the right eye when the left is missing", "S"),
+    14: ("AU = 1e-5 rad", "S"),
+    15: ("a translational FAP moves its point value x FAPU along its direction; FAPs add", "S"),
+    16: ("axes: +x the face's left, +y up, +z forward", "S"),
+    17: ("pupil dilation moves no point", "S"),
+    18: ("eyeball rotations move no point here (no centre given)", "M"),
+    19: ("head rotations (about 7.1) move no point here", "S"),
+    20: ("tongue_roll moves no point here (no centre given)", "M"),
+}
+"""Rule number -> (short text, confidence V/S/M), as in the module docstring's table."""
+
+
+def weakest(rules: Iterable[int]) -> str:
+    """The confidence of a result that rests on all of ``rules``: the weakest of theirs (V > S > M)."""
+    order = "VSM"
+    found = [RULES[r][1] for r in rules]
+    return max(found, key=order.index) if found else "V"
+
 
 INTERPOLATE = 2
 """fap_mask_type 2 (binary 10): unsent FAPs of the group are interpolated (rule 3)."""
@@ -79,9 +115,13 @@ DIRECTIONS: dict[str, tuple[float, float, float]] = {
     "up": (0.0, 1.0, 0.0), "down": (0.0, -1.0, 0.0),
     "forward": (0.0, 0.0, 1.0),
 }
-"""Unit vector of each direction word of ``spec/faps.csv`` that moves a point (rule 15). The others
-(``growing``: pupil dilation; ``concave upward``: tongue roll) move no point (rules 16, 19)."""
+"""Unit vector of each direction word of ``spec/faps.csv`` that moves a point (rule 16). The others
+(``growing``: pupil dilation; ``concave upward``: tongue roll) move no point (rules 17, 20)."""
 
+_GROUP_INDEX = tuple(int(g) - 1 for g in FAP_GROUP)
+"""0-based FAP group of each column."""
+_PARTNERS = tuple(tuple(int(p) for p in row if p >= 0) for row in FAP_PARTNERS)
+"""Each column's counterparts in the order rule 3 tries them (left/right, then inner/outer)."""
 _VISEME_NAMES = tuple(v.name for v in VISEMES)
 _EXPRESSION_NAMES = tuple(e.name for e in EXPRESSIONS)
 
@@ -111,7 +151,7 @@ def _profile(table: Mapping[str, np.ndarray], names: tuple[str, ...], select: in
 
 
 def _high_level(vis: np.ndarray, exp: np.ndarray, frame: int) -> np.ndarray:
-    """The 68 values FAP 1 plus FAP 2 stand for (rules 5-8)."""
+    """The 68 values FAP 1 plus FAP 2 stand for (rules 5-8, 10)."""
     visemes = VISEME_PROFILES["mpeg4"]
     v1 = _profile(visemes, _VISEME_NAMES, int(vis[0]), "viseme_select1", frame)
     v2 = _profile(visemes, _VISEME_NAMES, int(vis[1]), "viseme_select2", frame)
@@ -135,29 +175,35 @@ def shown_values(mask: np.ndarray, values: np.ndarray, viseme: np.ndarray, expre
     values, viseme, expression = np.asarray(values), np.asarray(viseme), np.asarray(expression)
     group_types = np.asarray(group_types)
     n = _check_shapes(mask, values, viseme, expression, group_types)
+    bad = ~np.isin(group_types, (0, 1, 2, 3))
+    if bad.any():
+        k, g = (int(x) for x in np.argwhere(bad)[0])
+        raise ConformanceError(f"group {g + 1} mask type {group_types[k, g]} is not 0..3", where=f"frame {k}")
     out = np.zeros((n, N_FAPS), dtype=np.float64)
-    current = np.zeros(N_FAPS, dtype=np.float64)   # each FAP's value so far (rule 1: 0 before)
-    has_value = np.zeros(N_FAPS, dtype=bool)        # sent or copied at some frame so far (rule 9)
-    vis = np.zeros(4, dtype=np.int64)               # FAP 1 fields last sent (rule 4)
-    exp = np.zeros(6, dtype=np.int64)               # FAP 2 fields last sent
+    current = [0.0] * N_FAPS       # each FAP's value so far (rule 1: 0 before)
+    has_value = [False] * N_FAPS   # sent or copied at some frame so far (rule 9)
+    vis = (0, 0, 0, 0)             # FAP 1 fields last sent (rule 4)
+    exp = (0, 0, 0, 0, 0, 0)       # FAP 2 fields last sent
+    high_of: dict[tuple, np.ndarray] = {}
     for k in range(n):
+        sent, row, types = mask[k].tolist(), values[k].tolist(), group_types[k].tolist()
         for col in range(2, N_FAPS):
-            if mask[k, col]:
-                current[col] = float(values[k, col])
-                has_value[col] = True
+            if sent[col]:
+                current[col], has_value[col] = float(row[col]), True
                 continue
-            if group_types[k, FAP_GROUP[col] - 1] != INTERPOLATE:
+            if types[_GROUP_INDEX[col]] != INTERPOLATE:
                 continue  # rule 2: hold
-            for partner in FAP_PARTNERS[col]:  # left/right first, then inner/outer; sent ones only (rule 3)
-                if partner >= 0 and mask[k, partner]:
-                    current[col] = float(values[k, partner])
-                    has_value[col] = True
+            for partner in _PARTNERS[col]:  # left/right first, then inner/outer; sent ones only (rule 3)
+                if sent[partner]:
+                    current[col], has_value[col] = float(row[partner]), True
                     break
-        if mask[k, 0]:
-            vis = viseme[k].astype(np.int64)
-        if mask[k, 1]:
-            exp = expression[k].astype(np.int64)
-        high = _high_level(vis, exp, k)
+        if sent[0]:
+            vis = tuple(int(x) for x in viseme[k])
+        if sent[1]:
+            exp = tuple(int(x) for x in expression[k])
+        if (vis, exp) not in high_of:
+            high_of[(vis, exp)] = _high_level(np.array(vis), np.array(exp), k)
+        high = high_of[(vis, exp)]
         for col in range(2, N_FAPS):
             out[k, col] = current[col] if has_value[col] else high[col]
     return out
@@ -174,7 +220,7 @@ def feature_point_tolerance(neutral: Mapping[str, np.ndarray]) -> float:
 
 
 def _translational() -> tuple[tuple[int, str, np.ndarray], ...]:
-    """(column, feature point, direction) of every FAP that moves a point (rules 14-16)."""
+    """(column, feature point, direction) of every FAP that moves a point (rules 15-17)."""
     rows = []
     for k, record in enumerate(FAPS):
         if record.fapu is None or record.fapu == "AU" or record.direction not in DIRECTIONS:
@@ -192,8 +238,8 @@ def feature_point_positions(neutral: Mapping[str, np.ndarray], shown: np.ndarray
 
     ``neutral`` maps labels to neutral positions (FDP coordinates), ``shown`` is
     :func:`shown_values`' output. A point moves by value x FAPU unit along each translational
-    FAP's direction that drives it (rule 14). Points the face lacks are absent; FAPs whose
-    FAPU cannot be measured on this face are skipped; rotations move nothing here (rules 17-19).
+    FAP's direction that drives it (rule 15). Points the face lacks are absent; FAPs whose
+    FAPU cannot be measured on this face are skipped; rotations move nothing here (rules 18-20).
     """
     shown = np.asarray(shown, dtype=np.float64)
     if shown.ndim != 2 or shown.shape[1] != N_FAPS:
@@ -206,8 +252,7 @@ def feature_point_positions(neutral: Mapping[str, np.ndarray], shown: np.ndarray
         if label not in result:
             start = np.asarray(neutral[label], dtype=np.float64).reshape(3)
             result[label] = np.repeat(start[None, :], len(shown), axis=0)
-        for k in range(len(shown)):
-            result[label][k] += shown[k, col] * units[col] * direction
+        result[label] += (shown[:, col] * units[col])[:, None] * direction[None, :]  # every frame at once
     return result
 
 
