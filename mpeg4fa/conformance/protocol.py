@@ -1,0 +1,247 @@
+"""The decoder protocol: how the runner asks any FBA decoder to decode one vector and reads its answer.
+
+Why a protocol: the suite tests decoders written in any language, so the contract is a command
+line and a file, nothing Python-specific (``conformance/README.md`` shows wrappers)::
+
+    DECODER STREAM OUT [--fdp FDP]
+
+``OUT`` ends in ``.json``; the decoder writes there (or to the same name ending ``.csv``)::
+
+    {"timestamps": [n seconds], "shown": [[68 floats] per frame],
+     "sent": {"mask": [[68 0/1]], "values": [[68 int]], "viseme": [[4 int]], "expression": [[6 int]]},  # optional
+     "feature_points": {"labels": ["2.1", ...], "positions": [[[x, y, z], ...] per frame]}}          # optional
+
+CSV: a header ``t,FAP1,...,FAP68`` then one row per frame of shown values. Exit status 0: decoded;
+1: rejected the stream (stderr may say ``bit N``: where the fault was found); anything else, or a
+signal: crash; no exit within the timeout: timeout.
+
+:class:`CommandDecoder` runs such a command; :class:`InProcessDecoder` gives the same results from
+a Python callable without a subprocess (this project's adapter, and the self-test's faults).
+"""
+from __future__ import annotations
+
+import csv
+import json
+import re
+import shlex
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from mpeg4fa.conformance.errors import ConformanceError
+from mpeg4fa.spec import N_FAPS
+
+DECODED, REJECTED, CRASH, TIMEOUT = "decoded", "rejected", "crash", "timeout"
+DEFAULT_TIMEOUT = 20.0
+"""Seconds a decoder may take on one vector (the suite's vectors are a few seconds of frames)."""
+_BIT = re.compile(r"\bbit\s+(\d+)", re.IGNORECASE)
+
+
+@dataclass
+class DecoderOutput:
+    """What a decoder said a stream shows, as arrays (``sent`` and ``feature_points`` optional)."""
+
+    timestamps: np.ndarray                      # (n,)
+    shown: np.ndarray                           # (n, 68)
+    sent: dict[str, np.ndarray] | None = None   # mask (n,68) bool, values (n,68), viseme (n,4), expression (n,6)
+    fp_labels: tuple[str, ...] | None = None
+    fp_positions: np.ndarray | None = None      # (n, k, 3)
+
+    def __len__(self) -> int:
+        return len(self.timestamps)
+
+    def to_json(self) -> dict[str, Any]:
+        """The protocol's JSON document for this output."""
+        doc: dict[str, Any] = {"timestamps": self.timestamps.tolist(), "shown": self.shown.tolist()}
+        if self.sent is not None:
+            doc["sent"] = {k: np.asarray(v).astype(int).tolist() for k, v in self.sent.items()}
+        if self.fp_labels is not None and self.fp_positions is not None:
+            doc["feature_points"] = {"labels": list(self.fp_labels), "positions": self.fp_positions.tolist()}
+        return doc
+
+
+class Rejected(Exception):
+    """Raised by an in-process decoder that refuses a stream (exit status 1 of a command)."""
+
+    def __init__(self, message: str, bit_offset: int | None = None, partial: DecoderOutput | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.bit_offset = bit_offset
+        self.partial = partial
+
+
+@dataclass
+class DecoderResult:
+    """One run of a decoder on one stream: its status, its output (decoded) or fault place (rejected)."""
+
+    status: str                         # DECODED, REJECTED, CRASH or TIMEOUT
+    output: DecoderOutput | None = None  # decoded; for rejected, the frames before the fault if given
+    bit_offset: int | None = None
+    message: str = ""
+    seconds: float = 0.0
+
+
+# ---- reading a decoder's output ----------------------------------------------------------
+
+def _array(value: Any, shape_tail: tuple[int, ...], what: str, where: str, dtype=np.float64) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=dtype)
+    except (TypeError, ValueError):
+        raise ConformanceError(f"{what} is not an array of numbers", where=where) from None
+    if array.size == 0:
+        array = array.reshape((0, *shape_tail))
+    if array.shape[1:] != shape_tail or (dtype is np.float64 and not np.isfinite(array).all()):
+        raise ConformanceError(f"{what} has shape {array.shape} (or values not finite); expected (n, "
+                               f"{', '.join(map(str, shape_tail))})", where=where)
+    return array
+
+
+def output_from_json(doc: Any, where: str = "decoder output") -> DecoderOutput:
+    """A :class:`DecoderOutput` from the protocol's JSON document; ConformanceError naming what is wrong."""
+    if not isinstance(doc, dict) or "shown" not in doc or "timestamps" not in doc:
+        raise ConformanceError('expected an object with "timestamps" and "shown"', where=where)
+    shown = _array(doc["shown"], (N_FAPS,), '"shown"', where)
+    timestamps = _array(doc["timestamps"], (), '"timestamps"', where)
+    if len(timestamps) != len(shown):
+        raise ConformanceError(f'{len(timestamps)} timestamps for {len(shown)} frames of "shown"', where=where)
+    sent = None
+    if doc.get("sent") is not None:
+        given = doc["sent"]
+        widths = {"mask": N_FAPS, "values": N_FAPS, "viseme": 4, "expression": 6}
+        if not isinstance(given, dict) or set(widths) - set(given):
+            raise ConformanceError('"sent" needs "mask", "values", "viseme" and "expression"', where=where)
+        sent = {k: _array(given[k], (w,), f'"sent.{k}"', where, dtype=np.int64) for k, w in widths.items()}
+        if any(len(v) != len(shown) for v in sent.values()):
+            raise ConformanceError('"sent" has a different number of frames than "shown"', where=where)
+    labels = positions = None
+    if doc.get("feature_points") is not None:
+        fp = doc["feature_points"]
+        if not isinstance(fp, dict) or not isinstance(fp.get("labels"), list):
+            raise ConformanceError('"feature_points" needs "labels" and "positions"', where=where)
+        labels = tuple(str(label) for label in fp["labels"])
+        positions = _array(fp.get("positions"), (len(labels), 3), '"feature_points.positions"', where)
+        if len(positions) != len(shown):
+            raise ConformanceError('"feature_points" has a different number of frames than "shown"', where=where)
+    return DecoderOutput(timestamps, shown, sent, labels, positions)
+
+
+def output_from_csv(text: str, where: str = "decoder output") -> DecoderOutput:
+    """A :class:`DecoderOutput` from the CSV form (``t,FAP1..FAP68`` per frame: shown values only)."""
+    rows = [row for row in csv.reader(text.splitlines()) if row and any(cell.strip() for cell in row)]
+    if not rows:
+        raise ConformanceError("empty CSV", where=where)
+    header = [cell.strip().lower() for cell in rows[0]]
+    if header != ["t"] + [f"fap{i}" for i in range(1, N_FAPS + 1)]:
+        raise ConformanceError("the CSV header must be t,FAP1,...,FAP68", where=where)
+    table = _array([[cell.strip() for cell in row] for row in rows[1:]] or np.zeros((0, N_FAPS + 1)),
+                   (N_FAPS + 1,), "the CSV rows", where)
+    return DecoderOutput(table[:, 0].copy(), table[:, 1:].copy())
+
+
+def read_output(out: Path) -> DecoderOutput | None:
+    """The output a decoder wrote at ``out`` (``.json``) or beside it (``.csv``); None if it wrote neither."""
+    csv_path = out.with_suffix(".csv")
+    try:
+        if out.is_file():
+            try:
+                doc = json.loads(out.read_text(encoding="utf-8"))
+            except ValueError as exc:
+                raise ConformanceError(f"not JSON: {exc}", where=str(out)) from None
+            return output_from_json(doc, str(out))
+        if csv_path.is_file():
+            return output_from_csv(csv_path.read_text(encoding="utf-8"), str(csv_path))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConformanceError(f"cannot read the decoder's output: {exc}", where=str(out)) from None
+    return None
+
+
+def write_output(output: DecoderOutput, out: Path) -> None:
+    """Write ``output`` in the protocol's form chosen by ``out``'s suffix (``.json`` or ``.csv``)."""
+    out = Path(out)
+    if out.suffix.lower() == ".csv":
+        header = ["t"] + [f"FAP{i}" for i in range(1, N_FAPS + 1)]
+        lines = [",".join(header)] + [",".join(repr(float(x)) for x in (t, *row))
+                                      for t, row in zip(output.timestamps, output.shown)]
+        out.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    else:
+        out.write_text(json.dumps(output.to_json()), encoding="utf-8")
+
+
+def bit_from_text(text: str) -> int | None:
+    """The fault's bit offset a decoder printed (``bit N`` anywhere in its message), or None."""
+    match = _BIT.search(text or "")
+    return int(match.group(1)) if match else None
+
+
+# ---- decoders -----------------------------------------------------------------------------
+
+class CommandDecoder:
+    """An external decoder: ``command STREAM OUT [--fdp FDP]`` run as a subprocess with a timeout."""
+
+    def __init__(self, command: str) -> None:
+        self.argv = shlex.split(command)
+        if not self.argv:
+            raise ConformanceError("the decoder command is empty")
+        self.name = command
+
+    def __call__(self, stream: Path, fdp: Path | None, timeout: float = DEFAULT_TIMEOUT) -> DecoderResult:
+        with tempfile.TemporaryDirectory(prefix="mpeg4fa-conform-") as tmp:
+            out = Path(tmp) / "out.json"
+            argv = [*self.argv, str(stream), str(out)] + (["--fdp", str(fdp)] if fdp is not None else [])
+            started = time.perf_counter()
+            try:
+                done = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, timeout=timeout)
+            except subprocess.TimeoutExpired:
+                return DecoderResult(TIMEOUT, message=f"no answer within {timeout:g} s", seconds=timeout)
+            except OSError as exc:
+                return DecoderResult(CRASH, message=f"cannot run {self.argv[0]}: {exc.strerror or exc}")
+            seconds = time.perf_counter() - started
+            stderr = done.stderr.decode("utf-8", "replace").strip()
+            tail = stderr.splitlines()[-1] if stderr else ""
+            if done.returncode not in (0, 1):
+                how = f"signal {-done.returncode}" if done.returncode < 0 else f"exit status {done.returncode}"
+                return DecoderResult(CRASH, message=f"{how}{': ' + tail if tail else ''}", seconds=seconds)
+            try:
+                output = read_output(out)
+            except ConformanceError as exc:
+                if done.returncode == 1:
+                    output = None
+                else:
+                    return DecoderResult(CRASH, message=f"unreadable output: {exc}", seconds=seconds)
+            if done.returncode == 1:
+                return DecoderResult(REJECTED, output, bit_from_text(stderr), tail, seconds)
+            if output is None:
+                return DecoderResult(CRASH, message="exit status 0 but no output written", seconds=seconds)
+            return DecoderResult(DECODED, output, seconds=seconds)
+
+
+class InProcessDecoder:
+    """A Python decoder with the protocol's meaning and no subprocess: ``decode(stream, fdp) -> DecoderOutput``
+    returns the output, raises :class:`Rejected` to refuse the stream; any other exception is a crash.
+    The timeout is judged after the call (it cannot be interrupted)."""
+
+    def __init__(self, decode: Callable[[Path, Path | None], DecoderOutput], name: str = "in-process") -> None:
+        self.decode = decode
+        self.name = name
+
+    def __call__(self, stream: Path, fdp: Path | None, timeout: float = DEFAULT_TIMEOUT) -> DecoderResult:
+        started = time.perf_counter()
+        try:
+            output = self.decode(stream, fdp)
+        except Rejected as exc:
+            return DecoderResult(REJECTED, exc.partial, exc.bit_offset, exc.message, time.perf_counter() - started)
+        except Exception as exc:  # noqa: BLE001 - a crash of the decoder under test is a result, not an error
+            return DecoderResult(CRASH, message=f"{type(exc).__name__}: {exc}", seconds=time.perf_counter() - started)
+        seconds = time.perf_counter() - started
+        if seconds > timeout:
+            return DecoderResult(TIMEOUT, message=f"took {seconds:.1f} s (limit {timeout:g} s)", seconds=seconds)
+        return DecoderResult(DECODED, output, seconds=seconds)
+
+
+Decoder = Callable[[Path, "Path | None", float], DecoderResult]
+"""What the runner calls: ``decoder(stream, fdp, timeout) -> DecoderResult`` (either class above)."""
