@@ -41,6 +41,8 @@ the same as data in :data:`RULES`, so a vector can carry the weakest rule it res
 18  eyeball rotations 23-26: centre not given; points not moved            M     facts §2 note [M]
 19  head rotations 48-50 about 7.1 (top of spine); points not moved here   S     facts §2, §3 (7.1)
 20  tongue_roll 47 (6.3/6.4, "concave upward"): no centre; not moved       M     facts §2
+21  the suite checks only a driven point's component along the FAP's      S     the suite's choice: the
+    direction, when no other FAP acts (:func:`checkable`)                        table fixes no more
 ==  =====================================================================  ====  ========================
 
 Real decoders realise some FAPs as motions the table does not spell out (open_jaw as a rotation
@@ -60,7 +62,7 @@ from mpeg4fa.spec import (
     VISEME_PROFILES, VISEMES,
 )
 
-__all__ = ["RULES", "weakest", "shown_values", "fapu_from_points", "fapu_units", "feature_point_positions", "rotations",
+__all__ = ["RULES", "weakest", "shown_values", "checkable", "fapu_from_points", "fapu_units", "feature_point_positions", "rotations",
            "feature_point_tolerance", "TOLERANCE", "DIRECTIONS", "INTERPOLATE"]
 
 RULES: dict[int, tuple[str, str]] = {
@@ -84,6 +86,7 @@ RULES: dict[int, tuple[str, str]] = {
     18: ("eyeball rotations move no point here (no centre given)", "M"),
     19: ("head rotations (about 7.1) move no point here", "S"),
     20: ("tongue_roll moves no point here (no centre given)", "M"),
+    21: ("only the driven point's component along the FAP's direction is checked", "S"),
 }
 """Rule number -> (short text, confidence V/S/M), as in the module docstring's table."""
 
@@ -253,6 +256,40 @@ def feature_point_positions(neutral: Mapping[str, np.ndarray], shown: np.ndarray
             start = np.asarray(neutral[label], dtype=np.float64).reshape(3)
             result[label] = np.repeat(start[None, :], len(shown), axis=0)
         result[label] += (shown[:, col] * units[col])[:, None] * direction[None, :]  # every frame at once
+    return result
+
+
+def checkable(neutral: Mapping[str, np.ndarray], shown: np.ndarray) -> dict[str, np.ndarray]:
+    """Which components of :func:`feature_point_positions` the standard pins down: ``(n, 3)`` bool per point.
+
+    A component (x, y or z) of a point is checkable in a frame when every FAP that is non-zero in
+    it is a translational FAP that drives this point along that axis (rule 15): the single-FAP
+    streams of the semantics group. Everything else is a decoder's own realisation, which the
+    table does not fix (rule 21): how a jaw carries the lips, an eyelid's arc over the eyeball
+    (its z), skin following a moved point, and every point under a rotation.
+    """
+    shown = np.asarray(shown, dtype=np.float64)
+    positions = feature_point_positions(neutral, shown)
+    units = fapu_units(fapu_from_points(neutral))
+    axis_of = {}  # column -> (label, axis) for the FAPs whose FAPU this face has
+    for col, label, direction in _MOVES:
+        if np.isfinite(units[col]):
+            axis_of.setdefault(col, set()).add((label, int(np.flatnonzero(direction)[0])))
+    result = {label: np.zeros((len(shown), 3), dtype=bool) for label in positions}
+    for k in range(len(shown)):
+        active = [col for col in range(2, N_FAPS) if shown[k, col] != 0]
+        if not active or any(col not in axis_of for col in active):
+            continue  # nothing moves, or a rotation, a pupil or an unmeasurable FAP is in play
+        for label in result:
+            axes = set()
+            for col in active:
+                here = {axis for lab, axis in axis_of[col] if lab == label}
+                if not here:
+                    axes = set()
+                    break
+                axes |= here
+            if len(axes) == 1:
+                result[label][k, axes.pop()] = True
     return result
 
 

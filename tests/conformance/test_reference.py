@@ -346,3 +346,35 @@ def test_rules_table_in_the_docstring_matches_the_data():
     rows = re.findall(r"^(\d+)\s{2,}.*?\s([VSM])\s{2,}", ref.__doc__, flags=re.M)
     assert {int(n): c for n, c in rows} == {n: c for n, (_, c) in ref.RULES.items()}
     assert ref.weakest([1, 5]) == "S" and ref.weakest([1, 3]) == "M" and ref.weakest([]) == "V"
+
+
+def test_checkable_pins_only_the_driven_axis_of_a_lone_fap():
+    face = symmetric_face()
+    a = frames(4)
+    send(a, 0, 3, 100)                        # open_jaw alone: 2.1's y
+    send(a, 1, 3, 100)
+    send(a, 1, 14, 100)                       # with thrust_jaw: two axes on 2.1, nothing pinned
+    send(a, 2, 49, 1000)                      # a rotation: nothing pinned
+    pin = ref.checkable(face, shown_values(*a))
+    assert pin["2.1"][0].tolist() == [False, True, False]
+    assert not pin["2.1"][1].any() and not pin["2.1"][2].any() and not pin["2.1"][3].any()
+    assert not any(pin[k][0].any() for k in pin if k != "2.1")
+
+
+def test_checkable_components_agree_with_the_face_engine(procedural_face):
+    from mpeg4fa.spec import FEATURE_POINTS
+
+    neutral = procedural_face.feature_points()
+    tol = feature_point_tolerance(neutral)
+    labels = [f.label for f in FEATURE_POINTS]
+    checked = 0
+    for number in (3, 4, 6, 19, 21, 27, 31, 39, 44, 53, 61, 65):
+        values = np.zeros((1, N_FAPS))
+        values[0, number - 1] = 300
+        got = dict(zip(labels, procedural_face.pose_values(values[0]).feature_points))
+        want, pin = feature_point_positions(neutral, values), ref.checkable(neutral, values)
+        for label, rows in pin.items():
+            for c in np.flatnonzero(rows[0]):
+                checked += 1
+                assert abs(got[label][c] - want[label][0, c]) <= tol, (number, label, "xyz"[c])
+    assert checked >= 12
