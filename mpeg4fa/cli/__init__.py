@@ -17,7 +17,7 @@ import warnings
 
 from .. import __version__
 from ..errors import MpegFaError
-from . import codec, model, play, speech, texture
+from . import codec, conform, model, play, speech, texture
 from .errors import UsageError
 from .media import one_line
 
@@ -36,6 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     play.register(commands)
     texture.register(commands)
     speech.register(commands)
+    conform.register(commands)
     return parser
 
 

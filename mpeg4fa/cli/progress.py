@@ -9,8 +9,9 @@ from typing import TextIO
 class ProgressBar:
     """``bar(done, total)`` redraws at most ten times a second; ``close()`` ends the line."""
 
-    def __init__(self, label: str, stream: TextIO | None = None, width: int = 30) -> None:
+    def __init__(self, label: str, stream: TextIO | None = None, width: int = 30, unit: str = "frames") -> None:
         self.label = label
+        self.unit = unit
         self.stream = stream or sys.stderr
         self.width = width
         self.enabled = hasattr(self.stream, "isatty") and self.stream.isatty()
@@ -29,7 +30,7 @@ class ProgressBar:
         rate = done / elapsed if elapsed > 0 else 0.0
         eta = (total - done) / rate if rate > 0 else 0.0
         self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (self.width - filled)}] {done}/{total} "
-                          f"{rate:5.1f} frames/s, {eta:4.0f} s left ")
+                          f"{rate:5.1f} {self.unit}/s, {eta:4.0f} s left ")
         self.stream.flush()
         self._drawn = True
 
