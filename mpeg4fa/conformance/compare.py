@@ -8,7 +8,8 @@ Checks, and why each is or is not optional:
 * ``sent`` (optional): the bitstream-level fields, exact; a decoder need not report them;
 * ``feature_points`` (optional): positions in the FDP's units within ``tolerance.feature_points``;
   only for vectors with a face, and a decoder without a face model reports none. An expected file
-  may pin only some coordinates per point (``feature_points.axes``: per label three 0/1 flags, x y z):
+  may pin only some coordinates (``feature_points.axes`` or ``checkable``: 0/1 per x y z, per label or per
+  frame and label, :func:`pinned_axes`):
   the standard fixes a FAP's motion along its direction, a jaw or eyelid arc is the decoder's;
 * ``reject`` (required): a malformed stream is refused; ``reject_offset`` (optional) the bit where
   the decoder says it found the fault is within :data:`REJECT_BIT_SLACK` bits of the expected one,
@@ -128,14 +129,24 @@ def check_feature_points(expected: dict, output: DecoderOutput) -> Check:
     want = np.asarray(fp["positions"], dtype=np.float64).reshape(len(output), len(labels), 3)
     got = output.fp_positions[:, [index[label] for label in labels]]
     tol = _tolerance(expected, "feature_points")
-    axes = np.asarray(fp.get("axes", np.ones((len(labels), 3))), dtype=np.float64).reshape(len(labels), 3)
-    dist = np.linalg.norm((got - want) * axes[None], axis=2)
+    dist = np.linalg.norm((got - want) * pinned_axes(fp, len(output)), axis=2)
     if not dist.size or dist.max() <= tol:
         return Check("feature_points", PASS)
     k, j = _worst(dist)
     return Check("feature_points", FAIL, f"{labels[j]} at frame {k} is {dist[k, j]:.4g} from where expected "
                  f"(tolerance {tol:g})", {"frame": k, "label": labels[j], "expected": want[k, j].tolist(),
                                           "got": got[k, j].tolist(), "error": float(dist[k, j]), "tolerance": tol})
+
+
+def pinned_axes(fp: dict, frames: int) -> np.ndarray:
+    """``(n, k, 3)`` 0/1: which coordinates of each expected point are checked (all, unless the expected
+    file says: ``axes`` or ``checkable``, per label ``(k, 3)`` or per frame and label ``(n, k, 3)``)."""
+    k = len(fp["labels"])
+    given = fp.get("axes", fp.get("checkable"))
+    if given is None:
+        return np.ones((frames, k, 3))
+    axes = np.asarray(given, dtype=np.float64)
+    return np.broadcast_to(axes.reshape(k, 3)[None] if axes.ndim == 2 else axes.reshape(frames, k, 3), (frames, k, 3))
 
 
 def compare_decoded(expected: dict, output: DecoderOutput) -> list[Check]:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mpeg4fa.conformance.compare import FAIL, STATUSES, Check
+from mpeg4fa.conformance.compare import FAIL, STATUSES, Check, pinned_axes
 from mpeg4fa.conformance.runner import SuiteResult, VectorResult
 
 MAX_PLOTS = 200
@@ -42,7 +42,7 @@ def _trajectories(v: VectorResult, check: Check) -> tuple[str, np.ndarray, dict[
         j = list(fp["labels"]).index(label)
         want = np.asarray(fp["positions"], dtype=np.float64)[:, j]
         got = out.fp_positions[:, list(out.fp_labels).index(label)]
-        axes = np.asarray(fp.get("axes", [[1, 1, 1]] * len(fp["labels"])))[j]
+        axes = pinned_axes(fp, len(out))[:, j].any(axis=0)
         curves = {f"{label}.{name}": (want[:, i], got[:, i]) for i, name in enumerate("xyz") if axes[i]}
         return "position (FDP units)", t, curves
     return None
