@@ -1,0 +1,99 @@
+"""The committed suite: reproducible, intact, and what our decoder reads from it is what was sent."""
+from __future__ import annotations
+
+import json
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mpeg4fa.conformance.faces import FACES, read_template
+from mpeg4fa.conformance.generate import generate
+from mpeg4fa.conformance.manifest import default_root, load_manifest, sha256
+from mpeg4fa.conformance.reference import fapu_from_points
+from mpeg4fa.fba import FbaError, decode
+from mpeg4fa.fdp import load_fdp
+
+ROOT = default_root()
+MANIFEST = load_manifest(ROOT)
+DECODE = [v for v in MANIFEST.vectors if v.expect == "decode"]
+REJECT = [v for v in MANIFEST.vectors if v.expect == "reject"]
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*")
+            if p.is_file() and p.name != "README.md"}
+
+
+def test_regenerating_gives_the_same_bytes(tmp_path: Path) -> None:
+    generate(tmp_path)
+    committed, fresh = _files(ROOT), _files(tmp_path)
+    assert sorted(committed) == sorted(fresh)
+    different = [name for name in committed if committed[name] != fresh[name]]
+    assert not different
+
+
+def test_every_sha256_matches() -> None:
+    for face in MANIFEST.faces.values():
+        assert sha256(MANIFEST.path(face.fdp)) == face.sha256, face.name
+    for v in MANIFEST.vectors:
+        assert sha256(MANIFEST.path(v.stream)) == v.sha256, v.id
+        assert sha256(MANIFEST.path(v.expected)) == v.expected_sha256, v.id
+
+
+@pytest.mark.parametrize("vector", DECODE, ids=lambda v: v.id)
+def test_decode_vector_gives_what_was_sent(vector) -> None:
+    expected = MANIFEST.expected(vector)
+    got = decode(MANIFEST.path(vector.stream))
+    assert len(got) == expected["frames"]
+    assert got.fps == pytest.approx(expected["fps"], abs=0)
+    assert np.array_equal(got.timestamps, np.asarray(expected["timestamps"], dtype=np.float64))
+    sent = expected["sent"]
+    mask = np.asarray(sent["mask"], dtype=bool)
+    assert np.array_equal(got.fap_mask, mask)
+    assert np.array_equal(np.where(mask, got.fap_values, 0), np.asarray(sent["values"]))
+    assert np.array_equal(np.where(mask[:, :1], got.viseme, 0), np.asarray(sent["viseme"]))
+    assert np.array_equal(np.where(mask[:, 1:2], got.expression, 0), np.asarray(sent["expression"]))
+    assert np.asarray(expected["shown"]).shape == (expected["frames"], 68)
+
+
+@pytest.mark.parametrize("vector", REJECT, ids=lambda v: v.id)
+def test_reject_vector_is_rejected_where_argued(vector) -> None:
+    expected = MANIFEST.expected(vector)
+    assert expected["reject"] is True
+    with pytest.raises(FbaError) as info:
+        decode(MANIFEST.path(vector.stream))
+    assert info.value.bit_offset == expected["bit_offset"]
+    partial = info.value.partial
+    assert (len(partial) if partial is not None else 0) == expected["frames_before"]
+
+
+def test_faces_round_trip_and_differ() -> None:
+    template = read_template(ROOT / "faces" / "template.csv")
+    units = {}
+    for spec in FACES:
+        fdp = load_fdp(MANIFEST.path(MANIFEST.faces[spec.name].fdp))
+        points = fdp.as_dict()
+        assert set(points) == set(spec.labels or template)
+        units[spec.name] = fapu_from_points(points)
+    ratios = {name: (round(u["MW0"] / u["ES0"], 3), round(u["ENS0"] / u["ES0"], 3)) for name, u in units.items()}
+    assert len(set(ratios.values())) == len(FACES), ratios  # proportions differ, not only sizes
+    assert len({round(u["ES0"], 6) for u in units.values()}) == len(FACES)
+    assert len(load_fdp(MANIFEST.path(MANIFEST.faces["subset"].fdp)).labels) < 84
+
+
+def test_suite_shape() -> None:
+    groups = Counter(v.group for v in MANIFEST.vectors)
+    assert set(groups) == {"syntax", "semantics", "reject", "informative"}
+    for v in MANIFEST.vectors:
+        assert (v.confidence == "M") == (v.group == "informative"), v.id
+        assert v.id.startswith(v.group + "/")
+    ids = {v.id for v in MANIFEST.vectors}
+    assert all(f"semantics/fap-{fap:02d}" in ids for fap in range(3, 69))
+    assert all(v.face for v in MANIFEST.vectors if v.group == "semantics")
+    for v in DECODE:
+        doc = json.loads(MANIFEST.path(v.expected).read_text())
+        if v.face and "feature_points" in doc:
+            fp = doc["feature_points"]
+            assert np.asarray(fp["positions"]).shape == (doc["frames"], len(fp["labels"]), 3)
