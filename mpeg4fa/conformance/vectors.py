@@ -98,7 +98,12 @@ def _wave(n: int, amplitude: int, phase: int = 0) -> list[int]:
 
 
 def _low_level(n: int, faps: Sequence[int], quant: int = 1, scale: int = 3) -> dict[int, list[int]]:
-    return {f: _wave(n, levels(f, quant, scale), phase=f) for f in faps}
+    """A wave per FAP; never negative on the five unidirectional FAPs (a value no face can show)."""
+    out = {}
+    for f in faps:
+        wave = _wave(n, levels(f, quant, scale), phase=f)
+        out[f] = [abs(x) for x in wave] if FAPS[f - 1].unidirectional else wave
+    return out
 
 
 def _closed_subset(faps: Sequence[int]) -> list[int]:
@@ -203,6 +208,10 @@ def _no_ranges(s: FapStream) -> None:
             p.face.ranges = RangeSet.none(len(p.face.mask))
 
 
+_BEYOND_A_FACE = (47, 48, 49, 50)
+"""FAPs whose largest level (1860 steps: 512 or 170 AU each) is more than half a turn: a decoder may clamp them."""
+
+
 def _range_vectors() -> Iterator[VectorDef]:
     def defaults() -> Built:
         n = 8
@@ -261,11 +270,12 @@ def _range_vectors() -> Iterator[VectorDef]:
         # Every low-level FAP at its I maximum: the last symbol of each model takes the bottom of the
         # interval and codes as zeros, long runs that need the coder's stuffing '1' after 22 zeros.
         n = 2
-        s = face_stream(n, {f: [levels(f, 1, 1860)] * n for f in range(3, 69)})
+        shown_ok = [f for f in range(3, 69) if f not in _BEYOND_A_FACE]
+        s = face_stream(n, {f: [levels(f, 1, 1860)] * n for f in shown_ok})
         return encoded(s, tweak=lambda p: p.intra[0].face.ranges.codes.__setitem__(slice(None), 31))
     yield VectorDef("syntax/arith-stuffing", "syntax", "V",
-                    "all 66 low-level FAPs at their I maximum (+1860 levels, code 31): the segment holds zero runs "
-                    "with stuffing '1's after 22 zeros",
+                    "62 low-level FAPs at their I maximum (+1860 levels, code 31; not FAPs 47-50, where 1860 steps "
+                    "exceed half a turn): the segment holds zero runs with stuffing '1's after 22 zeros",
                     stuffing, ("SYNTAX.md 9 get_bit stuffing",))
 
 
@@ -447,6 +457,20 @@ def _start_code_vectors() -> Iterator[VectorDef]:
     yield VectorDef("syntax/start-code-1bb", "syntax", "S",
                     "plane start code 0x000001BB, after next_start_code() stuffing, before every intra plane",
                     plane_codes, ("SYNTAX.md 2 next_start_code",))
+
+    def aligned() -> Built:
+        # The first _basic(n) whose last plane ends on a byte boundary: the writer puts a whole 0x7F
+        # byte before the end code; this vector leaves it out, so the end code follows at once.
+        for n in range(2, 64):
+            built = encoded(_basic(n))
+            end = _plane_starts(built.data)[-1]
+            if end % 8 == 0:
+                return Built(built.stream, built.data[: end // 8] + built.data[-4:])
+        raise AssertionError("no stream of 2..63 frames ends aligned")
+    yield VectorDef("syntax/aligned-end-code", "syntax", "S",
+                    "the last plane ends on a byte boundary and the end code follows with no stuffing byte "
+                    "(the writer would send 0x7F): a decoder must also look for the code at the current position",
+                    aligned, ("SYNTAX.md 2 look-ahead",))
 
     def hidden() -> Built:
         # FAP 3 at 0 in three frames: the last P plane is a few bits inside one byte before the end
