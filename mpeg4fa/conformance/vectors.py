@@ -685,7 +685,8 @@ def _reject() -> Iterator[VectorDef]:
     def marker() -> Broken:
         return Broken(_bits_put(_base(), HEADER + 5, 1, 0), HEADER + 5, 0)
     yield VectorDef("reject/marker-group-mask", "reject", "S",
-                    f"marker bit of FAP group 1 is 0: bit {HEADER + 5} (header bits listed in vectors.HEADER, then fap_quant 5)",
+                    f"marker bit of FAP group 1 is 0: bit {HEADER + 5} = start code 32 + is_intra 1 + fba_object_mask 2 + "
+                    "is_frame_rate 1 + frame rate 8+4+1 + is_time_code 1 + skip_frames 1 + fap_quant 5",
                     marker, ("SYNTAX.md 3 marker bits", "SYNTAX.md 5"))
 
     def marker_minmax() -> Broken:
