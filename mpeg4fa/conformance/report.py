@@ -58,17 +58,17 @@ def plot(v: VectorResult, check: Check, path: Path) -> bool:
     from matplotlib.figure import Figure
 
     ylabel, t, curves = series
-    fig = Figure(figsize=(6.4, 3.2), dpi=100)
-    ax = fig.add_subplot()
-    for i, (name, (want, got)) in enumerate(curves.items()):
+    fig = Figure(figsize=(6.4, 1.2 + 2.0 * len(curves)), dpi=100)
+    axes = fig.subplots(len(curves), 1, sharex=True, squeeze=False)[:, 0]  # one panel each: own scale
+    for i, (ax, (name, (want, got))) in enumerate(zip(axes, curves.items())):
         colour = f"C{i}"
         ax.plot(t[:len(want)], want, "--", color=colour, linewidth=2.2, alpha=0.6, label=f"{name} expected")
         ax.plot(t[:len(got)], got, "-", color=colour, linewidth=1.2, marker=".", label=f"{name} decoder")
-    ax.set_xlabel("frame" if check.name == "timestamps" else "time (s)")
-    ax.set_ylabel(ylabel)
-    ax.set_title(f"{v.vector.id}: {check.name}", fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+        ax.set_ylabel(ylabel, fontsize=8)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    axes[-1].set_xlabel("frame" if check.name == "timestamps" else "time (s)")
+    axes[0].set_title(f"{v.vector.id}: {check.name}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path)
     return True
