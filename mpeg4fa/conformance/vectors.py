@@ -19,7 +19,7 @@ from mpeg4fa.fba import EncodeOptions, FapStream, FbaError, decode, plan, write
 from mpeg4fa.fba.stream import (BODY, FACE, OBJECT_START_CODE_OLD, PLANE_START_CODE_OLD,
                                 FrameRate, RangeSet, TimeCode)
 from mpeg4fa.spec import (BAP_PRED_SCALE, BAP_QUANT_STEP, FAP_GROUP_SLICES, FAP_PARTNERS, FAPS,
-                          FULL_INTENSITY, N_FAP_GROUPS, QUANT_STEP)
+                          FULL_INTENSITY, N_FAP_GROUPS, N_FAPS, QUANT_STEP)
 
 SEMANTIC_FACES = ("adult", "child", "long", "subset")
 
@@ -239,7 +239,7 @@ def _range_vectors() -> Iterator[VectorDef]:
     def carry() -> Built:
         def tweak(s: FapStream) -> None:
             for k in sorted(s.intra)[1:]:
-                s.intra[k].face.ranges = RangeSet.none(68)
+                s.intra[k].face.ranges = RangeSet.none(N_FAPS)
         return encoded(_basic(12), EncodeOptions(fps=25, intra_period=4), tweak)
     yield VectorDef("syntax/ranges-carry", "syntax", "S",
                     "three intra planes; only the first sends ranges, the later ones keep them (defaults applied once)",
@@ -349,13 +349,13 @@ def _high_level_vectors() -> Iterator[VectorDef]:
 
     def viseme_def() -> Built:
         n = 6
-        return encoded(face_stream(n, _low_level(n, (4, 5)), viseme=[[k + 1, k + 2, 63 - k, k % 2] for k in range(n)]))
+        return encoded(face_stream(n, _low_level(n, (4, 5)), viseme=[[k + 1, k + 2, FULL_INTENSITY - k, k % 2] for k in range(n)]))
     yield VectorDef("informative/syntax-fap1-viseme-def", "informative", "M", "FAP 1 with viseme_def 1 on odd frames, beside FAPs 4 and 5" + HIGH_LEVEL_NOTE,
                     viseme_def, ("SYNTAX.md 10 viseme_def",))
 
     def expressions() -> Built:
         n = 8
-        return encoded(face_stream(n, expression=[[1 + k % 6, 9 * k % 64, (k + 3) % 7, 63 - 5 * k, 0, 0] for k in range(n)]))
+        return encoded(face_stream(n, expression=[[1 + k % 6, 9 * k % 64, (k + 3) % 7, FULL_INTENSITY - 5 * k, 0, 0] for k in range(n)]))
     yield VectorDef("informative/syntax-fap2-only", "informative", "M", "FAP 2 alone, nonzero selects and intensities" + HIGH_LEVEL_NOTE,
                     expressions, ("SYNTAX.md 10 expression order",))
 
