@@ -179,3 +179,14 @@ def test_cli_missing_suite_is_one_line(cli, tmp_path):
     with pytest.raises(SystemExit) as exc:  # an argparse error: exit status 2 before any work
         cli("conform", "--suite", tmp_path, "--timeout", "0")
     assert exc.value.code == 2
+
+
+def test_this_decoder_passes_the_committed_suite(cli):
+    """`mpeg4fa conform` on the suite committed with the project: every required check passes."""
+    from mpeg4fa.conformance.manifest import default_root
+
+    code, out, err = cli("conform", "--json")
+    doc = json.loads(out)
+    assert code == 0 and doc["passed"], err
+    assert set(doc["summary"]) >= {"syntax", "semantics", "reject"}
+    assert (default_root() / "manifest.json").is_file()
