@@ -116,5 +116,11 @@ def load_manifest(path: str | Path) -> Manifest:
 
 
 def default_root() -> Path:
-    """The suite committed with the project (``conformance/`` at the top of the checkout or in the wheel)."""
-    return Path(__file__).resolve().parents[2] / "conformance"
+    """The suite committed with the project: ``conformance/`` at the top of a checkout, else the copy
+    installed with the package (``mpeg4fa.conformance_data``)."""
+    checkout = Path(__file__).resolve().parents[2] / "conformance"
+    if (checkout / "manifest.json").is_file():
+        return checkout
+    from importlib import resources
+
+    return Path(str(resources.files("mpeg4fa.conformance_data")))

@@ -1,0 +1,1 @@
+"""The conformance suite's data (manifest, vectors, faces), shipped as mpeg4fa.conformance_data."""
