@@ -1,7 +1,7 @@
 """The suite's own reference model of the standard's semantics: what a conforming decoder shows.
 
 A second, deliberately plain implementation of the rules, written from the facts file
-(``/work/shared/reference/mpeg4-fba-facts.md``, cited as "facts §n") and ``spec/SYNTAX.md``,
+(``../shared/reference/mpeg4-fba-facts.md`` beside the checkout, cited as "facts §n") and ``spec/SYNTAX.md``,
 not from ``mpeg4fa.decoded`` and without ``mpeg4fa.face``: expected results computed by the
 code under test would pass any bug it has. Loops per frame, so each rule can be read off.
 
