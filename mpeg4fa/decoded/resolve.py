@@ -203,18 +203,23 @@ def shown_values(faps: "Mapping[int, float] | np.ndarray | None" = None, *, vise
         sent = low != 0
     check_finite(low)
     high = np.zeros(N_FAPS)
-    try:
-        if viseme is not None:
-            set_name, name = viseme
-            high += viseme_blend(name, name, 0, set=set_name)  # one viseme: the blend does not matter
-        if expression is not None:
-            name, intensity = expression
-            high += expression_blend(name, intensity, "neutral", 0)
-    except ValueError as exc:
-        raise FapValueError(str(exc), where="viseme" if viseme and "isem" in str(exc) else "expression") from None
+    if viseme is not None:
+        set_name, name = viseme
+        high += _profile("viseme", viseme_blend, name, name, 0, set=set_name)  # one viseme: any blend
+    if expression is not None:
+        name, intensity = expression
+        high += _profile("expression", expression_blend, name, intensity, "neutral", 0)
     values = _over_high_level(low, sent, high)
     values[:2] = 0.0
     return clamp_and_warn(values, None, stacklevel=3)
+
+
+def _profile(what: str, blend, *args, **kwargs) -> np.ndarray:
+    """A spec profile blend; the spec's complaint about a name or level said as this layer's error."""
+    try:
+        return blend(*args, **kwargs)
+    except ValueError as exc:
+        raise FapValueError(str(exc), where=what) from None
 
 
 class FrameResolver:
