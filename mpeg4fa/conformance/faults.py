@@ -95,6 +95,16 @@ def _ntsc_as_zero(stream: FapStream) -> FapStream:
     return out
 
 
+def _ntsc_ignored(stream: FapStream) -> FapStream:
+    """The frequency_offset flag ignored: frames timed at the nominal rate (30, not 30000/1001)."""
+    rates = [p.frame_rate for p in stream.intra.values() if p.frame_rate is not None]
+    if not any(r.frequency_offset for r in rates):
+        return stream
+    out = stream.copy()
+    out.timestamps = stream.timestamps * (1000 / 1001)
+    return out
+
+
 def _flip_sign(values: np.ndarray) -> np.ndarray:
     out = values.copy()
     out[:, SIGN_FLIPPED_FAP - 1] *= -1
@@ -126,6 +136,7 @@ FAULTS: dict[str, Fault] = {f.name: f for f in (
     Fault("fap19-mns", "FAP 19 scaled with MNS instead of IRISD",
           geometry=_scale(np.array([18]), _ratio("MNS0", "IRISD0"))),
     Fault("ntsc-zero", "1000/1001 computed as 0 (timestamps of 29.97-type rates)", stream=_ntsc_as_zero),
+    Fault("ntsc-ignored", "the 1000/1001 frequency offset left out (29.97 timed as 30)", stream=_ntsc_ignored),
     Fault("hold-not-interpolate", "mask type 2 (interpolate) read as hold", stream=_hold_not_interpolate),
 )}
 

@@ -20,11 +20,11 @@ import numpy as np
 from mpeg4fa.conformance import reference
 from mpeg4fa.conformance.errors import ConformanceError
 from mpeg4fa.conformance.faces import TEMPLATE, read_template, write_faces
-from mpeg4fa.conformance.manifest import Face, Manifest, Vector, default_root, sha256
+from mpeg4fa.conformance.manifest import Face, Manifest, Vector, compact, default_root, sha256
 from mpeg4fa.conformance.vectors import Broken, Built, VectorDef, all_vectors
 from mpeg4fa.fba import FbaError, FapStream, decode
 from mpeg4fa.fba.stream import DEFAULT_FPS
-from mpeg4fa.spec import BAP_PRED_SCALE, BAP_QUANT_STEP, FAPS, QUANT_STEP
+from mpeg4fa.spec import BAP_PRED_SCALE, BAP_QUANT_STEP, QUANT_STEP
 
 DIGITS = 9
 """Decimal places kept for floats in expected files (shown values, positions, tolerances)."""
@@ -92,21 +92,21 @@ def _sent(s: FapStream) -> dict[str, np.ndarray]:
 
 
 def _feature_points(neutral: dict[str, np.ndarray], shown: np.ndarray) -> dict[str, Any] | None:
-    """Expected positions of the points a moving translational FAP drives, with the axes its direction pins
-    (a decoder may move a point off that axis too, e.g. open_jaw as a rotation: only the axis is checked)."""
+    """Expected positions of every point the shown values drive, with the components the standard pins per
+    frame (:func:`reference.checkable`: a decoder may move a point off a FAP's axis, e.g. open_jaw as a
+    rotation, so only the axis is checked); None when no component of any frame is pinned."""
     moved = reference.feature_point_positions(neutral, shown)
-    axes: dict[str, np.ndarray] = {}
-    for col, record in enumerate(FAPS):
-        if record.direction not in reference.DIRECTIONS or record.fapu in (None, "AU") or not np.any(shown[:, col]):
-            continue
-        for label in record.feature_point:
-            if label in moved:
-                axes[label] = np.maximum(axes.get(label, np.zeros(3)), np.abs(reference.DIRECTIONS[record.direction]))
-    labels = [label for label in moved if label in axes]
+    pinned = reference.checkable(neutral, shown)
+    labels = [label for label in moved if pinned[label].any()]
     if not labels:
         return None
-    return {"labels": labels, "axes": _ints(np.stack([axes[label] for label in labels])),
+    return {"labels": labels, "checkable": _ints(np.stack([pinned[label] for label in labels], axis=1)),
             "positions": _numbers(np.stack([moved[label] for label in labels], axis=1))}
+
+
+def _used_columns(sent: dict[str, np.ndarray], shown: np.ndarray) -> list[int]:
+    """FAP columns the vector sends or shows anything in (the others are stored implicitly, :func:`compact`)."""
+    return np.flatnonzero(sent["mask"].any(axis=0) | (shown != 0).any(axis=0)).tolist()
 
 
 def expected_decode(v: VectorDef, built: Built, neutral: dict[str, np.ndarray] | None) -> dict[str, Any]:
@@ -124,7 +124,7 @@ def expected_decode(v: VectorDef, built: Built, neutral: dict[str, np.ndarray] |
             doc["feature_points"] = fp
             doc["tolerance"]["feature_points"] = _number(reference.feature_point_tolerance(neutral))
     _verify_decode(v, built.data, doc)
-    return doc
+    return compact(doc, _used_columns(sent, shown))
 
 
 def _verify_decode(v: VectorDef, data: bytes, doc: dict[str, Any]) -> None:

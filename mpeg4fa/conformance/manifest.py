@@ -16,10 +16,17 @@ A vector whose confidence is M is *informative*: reported, never failed (see :at
 An expected file (JSON) for ``expect == "decode"``::
 
     {"frames": n, "fps": 25.0, "timestamps": [n seconds],
+     "columns": [c, ...],                        # optional: the FAP columns (0-based, 0 = FAP 1) stored below
      "sent":  {"mask": [[68 0/1]], "values": [[68 int]], "viseme": [[4 int]], "expression": [[6 int]]},
      "shown": [[68 float]],                      # what a decoder shows: hold/interpolate, FAP 1/2 expanded
-     "feature_points": {"labels": ["2.1", ...], "positions": [[[x, y, z], ...] per frame]},   # with a face
+     "feature_points": {"labels": ["2.1", ...], "positions": [[[x, y, z], ...] per frame],   # with a face
+                        "checkable": [[[0/1 x, y, z] per label] per frame]},   # or "axes": per label
      "tolerance": {"shown": float, "feature_points": float}}      # FAPU units / the FDP's length units
+
+With ``columns``, rows of ``mask``, ``values`` and ``shown`` hold only those columns (every other
+column is never sent and shows 0), and ``viseme`` / ``expression`` are left out unless column 0 /
+1 is listed (they are then all 0): a long stream that moves one FAP stays small.
+:meth:`Manifest.expected` (and :func:`full_width`) give the file with all 68 columns back.
 
 and for ``expect == "reject"``: ``{"reject": true, "bit_offset": N, "frames_before": k}`` (the bit where
 the fault is detectable, and how many frames decode before it).
@@ -30,9 +37,11 @@ import hashlib
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 from mpeg4fa.conformance.errors import ConformanceError
+from mpeg4fa.spec import N_FAPS
 
 SUITE = "mpeg4fa-fba-conformance"
 VERSION = 1
@@ -78,7 +87,8 @@ class Manifest:
         return self.root / relative
 
     def expected(self, vector: Vector) -> dict[str, Any]:
-        return json.loads(self.path(vector.expected).read_text(encoding="utf-8"))
+        """The vector's expected file, with all 68 columns (:func:`full_width`)."""
+        return full_width(json.loads(self.path(vector.expected).read_text(encoding="utf-8")))
 
     def groups(self) -> list[str]:
         return sorted({v.group for v in self.vectors}, key=lambda g: (GROUPS + (g,)).index(g))
@@ -91,6 +101,52 @@ class Manifest:
         target = self.root / "manifest.json"
         target.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
         return target
+
+
+_WIDTHS = {"viseme": 4, "expression": 6}
+_HIGH_LEVEL_COLUMN = {"viseme": 0, "expression": 1}
+
+
+def compact(doc: dict[str, Any], columns: Sequence[int]) -> dict[str, Any]:
+    """An expected decode file in the compact form: only ``columns`` of mask, values and shown."""
+    cols = sorted(int(c) for c in columns)
+    out = {**doc, "columns": cols, "shown": [[row[c] for c in cols] for row in doc["shown"]]}
+    sent = {key: [[row[c] for c in cols] for row in doc["sent"][key]] for key in ("mask", "values")}
+    for key, col in _HIGH_LEVEL_COLUMN.items():
+        if col in cols:
+            sent[key] = doc["sent"][key]
+    out["sent"] = sent
+    return out
+
+
+def full_width(doc: dict[str, Any]) -> dict[str, Any]:
+    """An expected decode file with every column, whether or not it was stored compact (see the module)."""
+    if "columns" not in doc:
+        return doc
+    try:
+        cols = [int(c) for c in doc["columns"]]
+        n = int(doc["frames"])
+        out = {key: value for key, value in doc.items() if key != "columns"}
+
+        def widen(rows, fill=0):
+            full = [[fill] * N_FAPS for _ in range(n)]
+            for k, row in enumerate(rows):
+                for c, x in zip(cols, row, strict=True):
+                    full[k][c] = x
+            return full
+
+        out["shown"] = widen(doc["shown"], 0)
+        sent = dict(doc.get("sent", {}))
+        for key in ("mask", "values"):
+            if key in sent:
+                sent[key] = widen(sent[key])
+        for key, col in _HIGH_LEVEL_COLUMN.items():
+            if col not in cols:
+                sent[key] = [[0] * _WIDTHS[key] for _ in range(n)]
+        out["sent"] = sent
+    except (TypeError, ValueError, IndexError, KeyError) as exc:
+        raise ConformanceError(f"a compact expected file does not match its columns: {exc}") from None
+    return out
 
 
 def sha256(path: Path) -> str:

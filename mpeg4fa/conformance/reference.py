@@ -39,15 +39,24 @@ the same as data in :data:`RULES`, so a vector can carry the weakest rule it res
 17  dilate_l/r_pupil (29/30, "growing"): the pupil grows, its centre       S     facts §2 (IRISD,
     3.5/3.6 does not move                                                        "Dilation of pupil")
 18  eyeball rotations 23-26: centre not given; points not moved            M     facts §2 note [M]
-19  head rotations 48-50 about 7.1 (top of spine); points not moved here   S     facts §2, §3 (7.1)
+19  head rotations 48-50 turn every feature point rigidly about 7.1 (top   S     facts §2, §3 (7.1
+    of spine), right-handed about +x (pitch), +y (yaw), +z (roll): the           "center of head
+    sense that moves a point in front of 7.1 (above it, for roll) toward         rotation"); the sense
+    the FAP's direction word (down, left, right)                                 from spec/faps.csv
 20  tongue_roll 47 (6.3/6.4, "concave upward"): no centre; not moved       M     facts §2
 21  the suite checks only a driven point's component along the FAP's      S     the suite's choice: the
-    direction, when no other FAP acts (:func:`checkable`)                        table fixes no more
+    direction, when no other FAP acts (:func:`checkable`); under a lone          table fixes no more
+    head rotation, every component of every point
+22  several head rotations at once: roll, then pitch, then yaw; the head   M     not given by any source
+    turns after the face has moved (local FAPs in the head's frame)              (never checked)
 ==  =====================================================================  ====  ========================
 
 Real decoders realise some FAPs as motions the table does not spell out (open_jaw as a rotation
 of the jaw that drops 2.1 by value x MNS, eyelids on an arc over the eyeball): the component
-along the FAP's direction is what rule 15 pins down; the others are the decoder's.
+along the FAP's direction is what rule 15 pins down; the others are the decoder's. A head
+rotation is different: the whole head turns about a point the FDP gives (7.1), so a lone one
+pins every point (rule 19). The eyeballs' centres are not feature points (3.5/3.6 are on the
+pupils) and the tongue has no axis in the tables, so those rotations are left unchecked (18, 20).
 """
 from __future__ import annotations
 
@@ -63,7 +72,7 @@ from mpeg4fa.spec import (
 )
 
 __all__ = ["RULES", "weakest", "shown_values", "checkable", "fapu_from_points", "fapu_units", "feature_point_positions", "rotations",
-           "feature_point_tolerance", "TOLERANCE", "DIRECTIONS", "INTERPOLATE"]
+           "head_orientation", "HEAD_CENTRE", "feature_point_tolerance", "TOLERANCE", "DIRECTIONS", "INTERPOLATE"]
 
 RULES: dict[int, tuple[str, str]] = {
     1: ("a FAP never sent shows 0", "S"),
@@ -84,9 +93,10 @@ RULES: dict[int, tuple[str, str]] = {
     16: ("axes: +x the face's left, +y up, +z forward", "S"),
     17: ("pupil dilation moves no point", "S"),
     18: ("eyeball rotations move no point here (no centre given)", "M"),
-    19: ("head rotations (about 7.1) move no point here", "S"),
+    19: ("head rotations turn every point rigidly about 7.1, right-handed, sense from the direction word", "S"),
     20: ("tongue_roll moves no point here (no centre given)", "M"),
-    21: ("only the driven point's component along the FAP's direction is checked", "S"),
+    21: ("only the driven point's component along the FAP's direction is checked; a lone head rotation: all", "S"),
+    22: ("several head rotations: roll, pitch, yaw; after the local FAPs", "M"),
 }
 """Rule number -> (short text, confidence V/S/M), as in the module docstring's table."""
 
@@ -235,27 +245,90 @@ def _translational() -> tuple[tuple[int, str, np.ndarray], ...]:
 
 _MOVES = _translational()
 
+HEAD_CENTRE = "7.1"
+"""The feature point head rotations turn about (rule 19: "top of spine, center of head rotation")."""
+_HEAD_AXES = {"pitch": 0, "yaw": 1, "roll": 2}
+"""Head rotation FAPs by the word their name carries (head_pitch, ...) -> the coordinate axis they turn about."""
+_PROBE = {0: (0.0, 0.0, 1.0), 1: (0.0, 0.0, 1.0), 2: (0.0, 1.0, 0.0)}
+"""A point in front of the centre (pitch, yaw) or above it (roll): where the direction word is read."""
+
+
+def _head_rotations() -> tuple[tuple[int, int, float], ...]:
+    """(column, axis, sense) of FAPs 48-50, in the order rule 22 applies them (roll, pitch, yaw).
+
+    The sense is +1 when a right-handed turn about +axis moves the probe point toward the FAP's
+    direction word (its velocity is axis x probe), else -1: read off ``spec/faps.csv``, not assumed.
+    """
+    rows = []
+    for k, record in enumerate(FAPS):
+        word = record.name.split("_")[-1]
+        if record.fapu != "AU" or not record.name.startswith("head_") or word not in _HEAD_AXES:
+            continue
+        axis = _HEAD_AXES[word]
+        velocity = np.cross(np.eye(3)[axis], _PROBE[axis])
+        rows.append((k, axis, 1.0 if float(velocity @ np.array(DIRECTIONS[record.direction])) > 0 else -1.0))
+    order = {2: 0, 0: 1, 1: 2}
+    return tuple(sorted(rows, key=lambda row: order[row[1]]))
+
+
+_HEAD = _head_rotations()
+assert len(_HEAD) == 3, "spec/faps.csv must name head_pitch, head_yaw and head_roll"
+_HEAD_COLUMNS = frozenset(col for col, _, _ in _HEAD)
+
+
+def _turn(axis: int, angle: float) -> np.ndarray:
+    """Right-handed rotation matrix by ``angle`` radians about coordinate ``axis``."""
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = ((1, 2), (2, 0), (0, 1))[axis]
+    m = np.eye(3)
+    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
+    return m
+
+
+def head_orientation(angles: Mapping[int, float]) -> np.ndarray:
+    """The head's rotation matrix for head FAP angles in radians, keyed by FAP number (rules 19, 22)."""
+    m = np.eye(3)
+    for col, axis, sense in _HEAD:
+        m = _turn(axis, sense * float(angles.get(col + 1, 0.0))) @ m
+    return m
+
 
 def feature_point_positions(neutral: Mapping[str, np.ndarray], shown: np.ndarray) -> dict[str, np.ndarray]:
     """Expected ``(n, 3)`` position per frame of every FAP-driven feature point the face has.
 
     ``neutral`` maps labels to neutral positions (FDP coordinates), ``shown`` is
     :func:`shown_values`' output. A point moves by value x FAPU unit along each translational
-    FAP's direction that drives it (rule 15). Points the face lacks are absent; FAPs whose
-    FAPU cannot be measured on this face are skipped; rotations move nothing here (rules 18-20).
+    FAP's direction that drives it (rule 15); then, when a head rotation is sent, every point
+    turns with the head about 7.1 (rules 19, 22), so every point is driven. Points the face lacks
+    are absent; FAPs whose FAPU cannot be measured on this face are skipped; eyeball and tongue
+    rotations move nothing here (rules 18, 20).
     """
     shown = np.asarray(shown, dtype=np.float64)
     if shown.ndim != 2 or shown.shape[1] != N_FAPS:
         raise ConformanceError(f"shown must be (n, {N_FAPS}), got {shown.shape}")
     units = fapu_units(fapu_from_points(neutral))
+    turning = HEAD_CENTRE in neutral and bool(np.any(shown[:, sorted(_HEAD_COLUMNS)]))
     result: dict[str, np.ndarray] = {}
-    for col, label, direction in _MOVES:
-        if label not in neutral or not np.isfinite(units[col]):
-            continue
+
+    def track(label: str) -> np.ndarray:
         if label not in result:
             start = np.asarray(neutral[label], dtype=np.float64).reshape(3)
             result[label] = np.repeat(start[None, :], len(shown), axis=0)
-        result[label] += (shown[:, col] * units[col])[:, None] * direction[None, :]  # every frame at once
+        return result[label]
+
+    for col, label, direction in _MOVES:
+        if label in neutral and np.isfinite(units[col]):
+            track(label)[:] += (shown[:, col] * units[col])[:, None] * direction[None, :]  # every frame at once
+    if turning:
+        for label in neutral:
+            track(label)
+        centre = np.asarray(neutral[HEAD_CENTRE], dtype=np.float64).reshape(3)
+        for k in range(len(shown)):
+            angles = {col + 1: shown[k, col] * units[col] for col in _HEAD_COLUMNS}
+            if any(angles.values()):
+                turn = head_orientation(angles)
+                for track_k in result.values():
+                    track_k[k] = centre + turn @ (track_k[k] - centre)
     return result
 
 
@@ -264,9 +337,10 @@ def checkable(neutral: Mapping[str, np.ndarray], shown: np.ndarray) -> dict[str,
 
     A component (x, y or z) of a point is checkable in a frame when every FAP that is non-zero in
     it is a translational FAP that drives this point along that axis (rule 15): the single-FAP
-    streams of the semantics group. Everything else is a decoder's own realisation, which the
-    table does not fix (rule 21): how a jaw carries the lips, an eyelid's arc over the eyeball
-    (its z), skin following a moved point, and every point under a rotation.
+    streams of the semantics group. Under a head rotation that is the only non-zero FAP, every
+    component of every point is (rule 21). Everything else is a decoder's own realisation, which
+    the table does not fix: how a jaw carries the lips, an eyelid's arc over the eyeball (its z),
+    skin following a moved point, and every point under an eyeball or tongue rotation.
     """
     shown = np.asarray(shown, dtype=np.float64)
     positions = feature_point_positions(neutral, shown)
@@ -278,6 +352,10 @@ def checkable(neutral: Mapping[str, np.ndarray], shown: np.ndarray) -> dict[str,
     result = {label: np.zeros((len(shown), 3), dtype=bool) for label in positions}
     for k in range(len(shown)):
         active = [col for col in range(2, N_FAPS) if shown[k, col] != 0]
+        if len(active) == 1 and active[0] in _HEAD_COLUMNS and HEAD_CENTRE in neutral:
+            for label in result:
+                result[label][k] = True
+            continue
         if not active or any(col not in axis_of for col in active):
             continue  # nothing moves, or a rotation, a pupil or an unmeasurable FAP is in play
         for label in result:

@@ -15,13 +15,21 @@ from typing import Callable, Iterator, Sequence
 
 import numpy as np
 
+from mpeg4fa.conformance.faces import FACES
+from mpeg4fa.conformance.reference import DIRECTIONS
 from mpeg4fa.fba import EncodeOptions, FapStream, FbaError, decode, plan, write
 from mpeg4fa.fba.stream import (BODY, FACE, OBJECT_START_CODE_OLD, PLANE_START_CODE_OLD,
                                 FrameRate, RangeSet, TimeCode)
 from mpeg4fa.spec import (BAP_PRED_SCALE, BAP_QUANT_STEP, FAP_GROUP_SLICES, FAP_PARTNERS, FAPS,
                           FULL_INTENSITY, N_FAP_GROUPS, N_FAPS, QUANT_STEP)
 
-SEMANTIC_FACES = ("adult", "child", "long", "subset")
+
+def semantic_face(fap: int) -> str:
+    """The face FAP ``fap``'s semantics vector uses: the faces in turn, among those that have every
+    point the FAP moves (a subset face would leave the FAP's motion unchecked)."""
+    points = FAPS[fap - 1].feature_point
+    usable = [f.name for f in FACES if f.labels is None or all(p in f.labels for p in points)]
+    return usable[(fap - 3) % len(usable)]
 
 
 @dataclass
@@ -279,14 +287,22 @@ def _range_vectors() -> Iterator[VectorDef]:
                     stuffing, ("SYNTAX.md 9 get_bit stuffing",))
 
 
+RATE_FRAMES = 100
+"""Frames of each frame-rate vector: enough that leaving out the 1000/1001 factor puts the last frame
+3 ms off (at 30000/1001 fps), six times the timestamp tolerance."""
+
+
 def _temporal_vectors() -> Iterator[VectorDef]:
     for fps, conf in ((25, "V"), (30, "V"), (30000 / 1001, "S"), (12.5, "S"), (24000 / 1001, "S")):
         name = {25: "25", 30: "30", 12.5: "12.5"}.get(fps, f"{fps:.3f}")
         yield VectorDef(f"syntax/fps-{name}", "syntax", conf,
                         f"frame rate {name} (frame_rate {FrameRate.from_fps(fps).frame_rate}, seconds "
                         f"{FrameRate.from_fps(fps).seconds}, frequency_offset {FrameRate.from_fps(fps).frequency_offset})"
-                        + ("; fps = (frame_rate + seconds/16) x 1000/1001 in real arithmetic, not 0" if FrameRate.from_fps(fps).frequency_offset else ""),
-                        lambda fps=fps: encoded(_basic(10), EncodeOptions(fps=fps)), ("SYNTAX.md 3 fps", "SYNTAX.md 4"))
+                        + ("; fps = (frame_rate + seconds/16) x 1000/1001 in real arithmetic, not 0 and not left out "
+                           f"({RATE_FRAMES} frames: the last is {(RATE_FRAMES - 1) / fps:.4f} s, "
+                           f"{(RATE_FRAMES - 1) / fps - (RATE_FRAMES - 1) / round(fps):.4f} s later than without the factor)"
+                           if FrameRate.from_fps(fps).frequency_offset else f" ({RATE_FRAMES} frames)"),
+                        lambda fps=fps: encoded(_basic(RATE_FRAMES), EncodeOptions(fps=fps)), ("SYNTAX.md 3 fps", "SYNTAX.md 4"))
 
     def no_rate() -> Built:
         def tweak(s: FapStream) -> None:
@@ -514,17 +530,29 @@ def _semantic_stream(fap: int) -> FapStream:
     return face_stream(len(vals), {fap: vals})
 
 
+def _motion(fap: int) -> str:
+    """What FAP ``fap`` does to the face's points, as the reference model checks it (its rules 15-20)."""
+    f = FAPS[fap - 1]
+    points = ", ".join(f.feature_point) or "no point"
+    if f.fapu == "AU" and f.name.startswith("head_"):
+        return f"turns the head, every point, about 7.1 ({f.direction}: right-handed about its axis)"
+    if f.fapu == "AU":
+        return f"rotates {points} ({f.direction}); no source gives the centre, so no point is checked"
+    if f.direction not in DIRECTIONS:
+        return f"{f.direction} at {points}; no point moves"
+    return f"moves {points} {f.direction} by value x {f.fapu}"
+
+
 def _semantics() -> Iterator[VectorDef]:
     for fap in range(3, 69):
         f = FAPS[fap - 1]
-        face = SEMANTIC_FACES[(fap - 3) % len(SEMANTIC_FACES)]
+        face = semantic_face(fap)
         v = semantic_value(fap)
         sign = "+v only (unidirectional)" if f.unidirectional else "+v and -v"
         yield VectorDef(
             f"semantics/fap-{fap:02d}", "semantics", "S",
             f"FAP {fap} {f.name} alone, v = {v} {f.fapu} ({sign}), frames v, v, {'v/2' if f.unidirectional else '-v'}, "
-            f"{'v' if f.unidirectional else '-v'}, 0, v/2 with intra planes at 0 and 3; moves {', '.join(f.feature_point) or 'no point'} "
-            f"{f.direction} by value x FAPU on face '{face}'",
+            f"{'v' if f.unidirectional else '-v'}, 0, v/2 with intra planes at 0 and 3; {_motion(fap)} on face '{face}'",
             lambda fap=fap: encoded(_semantic_stream(fap), EncodeOptions(fps=25, intra_period=3)),
             ("facts 1 FAPU", "facts 2 direction", "SYNTAX.md 8"), face)
     yield from _high_level_semantics()

@@ -255,17 +255,64 @@ def test_missing_points_and_unmeasurable_fapu_are_left_out():
     assert np.allclose(pos["3.5"][0], face["3.5"] + [0, 0, 100 * 60 / 1024])
 
 
-def test_rotations_are_in_radians_and_move_no_point():
+def test_rotations_are_in_radians_and_eyeballs_move_no_point():
     face = symmetric_face()
     a = frames(1)
-    send(a, 0, 49, 100000)   # head_yaw: one radian
-    send(a, 0, 23, -5000)
+    send(a, 0, 23, -5000)    # yaw_l_eyeball: no centre given (rule 18)
+    send(a, 0, 47, 3000)     # tongue_roll (rule 20)
     shown = shown_values(*a)
     rot = rotations(shown)
     assert set(rot) == {f.number for f in FAPS if f.fapu == "AU"}
-    assert rot[49][0] == pytest.approx(1.0) and rot[23][0] == pytest.approx(-0.05)
+    assert rot[23][0] == pytest.approx(-0.05)
     pos = feature_point_positions(face, shown)
     assert all(np.allclose(pos[k][0], face[k]) for k in pos)
+    assert not any(p.any() for p in ref.checkable(face, shown).values())
+
+
+@pytest.mark.parametrize("fap, probe, toward", [
+    (48, (0, -80, 40), (0, -1, 0)),    # head_pitch "down": a point in front of 7.1 goes down
+    (49, (0, -80, 40), (1, 0, 0)),     # head_yaw "left": it goes to the face's left (+x)
+    (50, (0, 20, -60), (-1, 0, 0)),    # head_roll "right": a point above 7.1 goes to the face's right
+])
+def test_a_head_rotation_turns_every_point_about_7_1(fap, probe, toward):
+    face = symmetric_face()
+    face["probe"] = np.array(probe, dtype=np.float64)
+    a = frames(2)
+    send(a, 1, fap, 100000)  # one radian
+    shown = shown_values(*a)
+    pos = feature_point_positions(face, shown)
+    centre = face["7.1"]
+    assert set(pos) == set(face)                       # under a head rotation every point is driven
+    assert np.allclose(pos["7.1"][1], centre)
+    for label, start in face.items():
+        assert np.allclose(pos[label][0], start)
+        assert np.linalg.norm(pos[label][1] - centre) == pytest.approx(np.linalg.norm(start - centre))
+    offset = face["probe"] - centre
+    moved = pos["probe"][1] - centre
+    assert np.dot(moved - offset, toward) > 0.5 * np.linalg.norm(offset)
+    assert np.degrees(np.arccos(np.dot(moved, offset) / np.dot(offset, offset))) == pytest.approx(np.degrees(1.0))
+    pin = ref.checkable(face, shown)
+    assert all(pin[k][1].all() and not pin[k][0].any() for k in pin)
+
+
+def test_head_rotations_combine_roll_then_pitch_then_yaw_and_pin_nothing():
+    face = symmetric_face()
+    a = frames(2)
+    send(a, 0, 48, 20000)
+    send(a, 0, 49, 30000)
+    send(a, 0, 50, 10000)
+    send(a, 1, 49, 30000)
+    send(a, 1, 3, 512)       # a jaw drop turned with the head: in the head's frame first
+    shown = shown_values(*a)
+    pos = feature_point_positions(face, shown)
+    c = face["7.1"]
+    turn = ref.head_orientation({48: 0.2, 49: 0.3, 50: 0.1})
+    yaw, pitch, roll = (ref.head_orientation({n: x}) for n, x in ((49, 0.3), (48, 0.2), (50, 0.1)))
+    assert np.allclose(turn, yaw @ pitch @ roll)
+    assert np.allclose(pos["2.2"][0], c + turn @ (face["2.2"] - c))
+    assert np.allclose(pos["2.1"][1], c + turn @ (face["2.1"] + [0, -10, 0] - c))  # 48, 50 held (rule 2)
+    assert not any(p.any() for p in ref.checkable(face, shown).values())
+    assert ref.RULES[22][1] == "M"
 
 
 def test_tolerances():
@@ -368,13 +415,13 @@ def test_checkable_components_agree_with_the_face_engine(procedural_face):
     tol = feature_point_tolerance(neutral)
     labels = [f.label for f in FEATURE_POINTS]
     checked = 0
-    for number in (3, 4, 6, 19, 21, 27, 31, 39, 44, 53, 61, 65):
+    for number in (3, 4, 6, 19, 21, 27, 31, 39, 44, 53, 61, 65, 48, 49, 50):
         values = np.zeros((1, N_FAPS))
-        values[0, number - 1] = 300
+        values[0, number - 1] = 15000 if number in (48, 49, 50) else 300
         got = dict(zip(labels, procedural_face.pose_values(values[0]).feature_points))
         want, pin = feature_point_positions(neutral, values), ref.checkable(neutral, values)
         for label, rows in pin.items():
             for c in np.flatnonzero(rows[0]):
                 checked += 1
                 assert abs(got[label][c] - want[label][0, c]) <= tol, (number, label, "xyz"[c])
-    assert checked >= 12
+    assert checked >= 12 + 3 * 3 * 84

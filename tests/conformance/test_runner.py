@@ -39,7 +39,7 @@ def test_this_decoder_passes_the_small_suite(passed):
     assert statuses <= {PASS, NOT_SUPPORTED}
     summary = passed.summary()
     assert list(summary) == ["syntax", "semantics", "reject", "informative"]
-    assert summary["reject"]["pass"] == 2 and summary["semantics"]["vectors"] == 6
+    assert summary["reject"]["pass"] == 2 and summary["semantics"]["vectors"] == 7
     assert "all" in summary_table(passed)
 
 
@@ -47,7 +47,7 @@ def test_without_feature_points_the_checks_are_not_supported_and_the_suite_passe
     decoder = InProcessDecoder(lambda s, f: decode_for_suite(s, f, feature_points=False))
     result = run_suite(suite, decoder, only=["semantics"])
     fp = [c for v in result.vectors for c in v.checks if c.name == "feature_points"]
-    assert len(fp) == 5 and {c.status for c in fp} == {NOT_SUPPORTED}
+    assert len(fp) == 6 and {c.status for c in fp} == {NOT_SUPPORTED}
     assert result.passed
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mpeg4fa.conformance.errors import ConformanceError
 from mpeg4fa.conformance.faces import FACES, read_template
 from mpeg4fa.conformance.generate import generate
 from mpeg4fa.conformance.manifest import default_root, load_manifest, sha256
@@ -97,3 +98,46 @@ def test_suite_shape() -> None:
         if v.face and "feature_points" in doc:
             fp = doc["feature_points"]
             assert np.asarray(fp["positions"]).shape == (doc["frames"], len(fp["labels"]), 3)
+
+
+def test_every_moving_fap_has_its_feature_points_checked() -> None:
+    """Each FAP whose motion the reference pins (translations, head rotations) is checked on a face with its points."""
+    from mpeg4fa.conformance.reference import DIRECTIONS
+    from mpeg4fa.spec import FAPS
+
+    by_id = {v.id: v for v in MANIFEST.vectors}
+    for f in FAPS[2:]:
+        v = by_id[f"semantics/fap-{f.number:02d}"]
+        doc = MANIFEST.expected(v)
+        pinned = f.direction in DIRECTIONS and (f.fapu != "AU" or f.name.startswith("head_"))
+        assert ("feature_points" in doc) == pinned, v.id
+        if pinned:
+            fp = doc["feature_points"]
+            checked = {label for label, rows in zip(fp["labels"], np.asarray(fp["checkable"]).transpose(1, 0, 2))
+                       if rows.any()}
+            want = {label for label in f.feature_point} if f.fapu != "AU" else set(fp["labels"])
+            assert want <= checked, (v.id, want - checked)
+            if f.fapu == "AU":
+                assert len(checked) == len(load_fdp(MANIFEST.path(MANIFEST.faces[v.face].fdp)).labels)
+
+
+def test_expected_files_are_compact_and_widen_to_68_columns() -> None:
+    from mpeg4fa.conformance.manifest import compact, full_width
+
+    halving = next(v for v in DECODE if v.id == "syntax/adaptation-halving")
+    assert MANIFEST.path(halving.expected).stat().st_size < 500_000       # 12,700 frames of one FAP
+    stored = json.loads(MANIFEST.path(halving.expected).read_text())
+    assert stored["columns"] == [2] and "viseme" not in stored["sent"]
+    full = MANIFEST.expected(halving)
+    assert np.asarray(full["shown"]).shape == (12_700, 68) and np.asarray(full["sent"]["viseme"]).shape == (12_700, 4)
+    doc = {"frames": 2, "shown": [[0.0] * 68, [0.0] * 68],
+           "sent": {"mask": [[0] * 68, [0] * 68], "values": [[0] * 68, [0] * 68],
+                    "viseme": [[3, 0, 63, 0], [0] * 4], "expression": [[0] * 6, [0] * 6]}}
+    doc["sent"]["mask"][0][0] = doc["sent"]["mask"][1][40] = 1
+    doc["sent"]["values"][1][40], doc["shown"][1][40] = -7, -7.0
+    small = compact(doc, [0, 40])
+    assert "expression" not in small["sent"] and small["shown"] == [[0.0, 0.0], [0.0, -7.0]]
+    assert full_width(small) == doc
+    broken = {**small, "shown": [[0.0, 0.0, 1.0], [0.0, 0.0]]}
+    with pytest.raises(ConformanceError, match="columns"):
+        full_width(broken)
