@@ -28,6 +28,8 @@ Q3 = 49152
 MAX_FREQUENCY = 16383
 MAX_ZERO_RUN = 22
 REWIND_BITS = 14
+SEGMENT_ENDS = "stream ends inside an arithmetic-coded segment"
+STUFFING_EXPECTED = "stuffing '1' expected after 22 zero bits"
 
 
 class AdaptiveModel:
@@ -71,13 +73,13 @@ def decode_segment(reader: BitReader, models: Sequence[Model], adapt: bool) -> l
             if p >= nbuf:
                 reader.p = p
                 if not reader.available(1):
-                    raise FbaError("stream ends inside an arithmetic-coded segment", reader.pos)
+                    raise FbaError(SEGMENT_ENDS, reader.pos)
                 buf, p, nbuf = reader.buf, reader.p, len(reader.buf)
             bit = buf[p]
             p += 1
             if zerorun == MAX_ZERO_RUN:
                 if not bit:
-                    raise FbaError("stuffing '1' expected after 22 zero bits", reader.base + p - 1)
+                    raise FbaError(STUFFING_EXPECTED, reader.base + p - 1)
                 zerorun = 0
                 continue  # the stuffed '1' carries no information
             zerorun = zerorun + 1 if bit == 0 else 0

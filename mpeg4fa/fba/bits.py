@@ -16,6 +16,17 @@ START_CODE_PREFIX = 0x000001
 _KEEP_BEHIND = 256  # bits kept before the read position when the window slides (rewinds are <= 14)
 
 
+def truncated(what: str, n: int, left: int) -> str:
+    """The message for a field the stream ends inside (both decoder paths word it so)."""
+    return f"stream ends inside {what} (needs {n} bits, {left} left)"
+
+
+def bad_stuffing(bits: int, nbits: int) -> str:
+    """The message for next_start_code() stuffing that is not a '0' then '1's."""
+    return (f"stuffing bits {bits:0{nbits}b} before a start code should be "
+            f"{(1 << (nbits - 1)) - 1:0{nbits}b} (a '0' then '1's)")
+
+
 def unpack(data: bytes) -> bytes:
     """One byte (0 or 1) per bit, most significant bit first."""
     return np.unpackbits(np.frombuffer(data, dtype=np.uint8)).tobytes()
@@ -64,7 +75,7 @@ class BitReader:
 
     def require(self, n: int, what: str) -> None:
         if not self.available(n):
-            raise FbaError(f"stream ends inside {what} (needs {n} bits, {len(self.buf) - self.p} left)", self.pos)
+            raise FbaError(truncated(what, n, len(self.buf) - self.p), self.pos)
 
     def read(self, n: int, what: str = "a field") -> int:
         """Read an ``n``-bit unsigned field."""
@@ -113,10 +124,8 @@ class BitReader:
             return
         start = self.pos
         bits = self.read(nbits, "next_start_code() stuffing")
-        expected = (1 << (nbits - 1)) - 1
-        if bits != expected:
-            raise FbaError(f"stuffing bits {bits:0{nbits}b} before a start code should be "
-                           f"{expected:0{nbits}b} (a '0' then '1's)", start)
+        if bits != (1 << (nbits - 1)) - 1:
+            raise FbaError(bad_stuffing(bits, nbits), start)
 
 
 class BitWriter:

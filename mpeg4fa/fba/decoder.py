@@ -20,6 +20,17 @@ from .stream import (BODY as BODY_BIT, DEFAULT_FPS, END_CODE, FACE as FACE_BIT, 
 
 Source = bytes | bytearray | memoryview | str | os.PathLike | BinaryIO
 
+NO_END_CODE = "stream ends without the end code 0x000001B1 (truncated?)"
+OBJECT_MASK_ZERO = "fba_object_mask is 0: the plane carries neither face nor body data"
+
+
+def unexpected_start_code(code: int) -> str:
+    return f"unexpected start code 0x{code:08X} between planes"
+
+
+def no_intra(part: str) -> str:
+    return f"a predicted plane carries {part} data but no intra plane has set up the {part}"
+
 
 @contextmanager
 def _opened(source: Source) -> Iterator[bytes | BinaryIO]:
@@ -51,7 +62,8 @@ class _Decoder:
         self.next_pts = 0.0
         self.object_start_code = OBJECT_START_CODE
 
-    def frames(self) -> Iterator[Frame]:
+    def object_start(self) -> None:
+        """Read the fba_object_start_code."""
         r = self.bits
         if not r.available(32):
             raise FbaError("stream is shorter than a start code: not an FBA stream", 0)
@@ -60,20 +72,32 @@ class _Decoder:
             raise FbaError(f"not an FBA stream: starts with 0x{code:08X}, expected the "
                            f"fba_object_start_code 0x{OBJECT_START_CODE:08X}", 0)
         self.object_start_code = code
+
+    def items(self) -> Iterator[Frame]:
+        """Every frame, in order (the compiled path's decoder yields blocks of frames too)."""
+        return self.frames()
+
+    def frames(self) -> Iterator[Frame]:
+        self.object_start()
         k = 0
         while True:
             try:
                 plane_code = self.between_planes()
                 if plane_code is None:
                     return
-                start = r.pos
-                frame = self.plane(k, plane_code)
+                frame = self.framed_plane(k, plane_code)
             except FbaError as exc:
                 exc.frame = k if exc.frame is None else exc.frame
                 raise
-            frame.bits = r.pos - start
             yield frame
             k += 1
+
+    def framed_plane(self, k: int, plane_code: int) -> Frame:
+        """Plane ``k`` as a frame, with the bits it took (after its start code)."""
+        start = self.bits.pos
+        frame = self.plane(k, plane_code)
+        frame.bits = self.bits.pos - start
+        return frame
 
     def between_planes(self) -> int | None:
         """Consume a plane start code (returned, 0 if none) or the end code (None)."""
@@ -81,11 +105,11 @@ class _Decoder:
         found = r.peek_start_code()
         if found is None:
             if not r.available(8):
-                raise FbaError("stream ends without the end code 0x000001B1 (truncated?)", r.pos)
+                raise FbaError(NO_END_CODE, r.pos)
             return 0
         code, stuffing = found
         if code not in (END_CODE, PLANE_START_CODE, PLANE_START_CODE_OLD):
-            raise FbaError(f"unexpected start code 0x{code:08X} between planes", r.pos + stuffing)
+            raise FbaError(unexpected_start_code(code), r.pos + stuffing)
         r.skip_stuffing(stuffing)
         r.read(32)
         return None if code == END_CODE else code
@@ -96,7 +120,7 @@ class _Decoder:
         is_intra = io.flag(False, "is_intra")
         mask = io.u(2, 0, "fba_object_mask")
         if mask == 0:
-            raise FbaError("fba_object_mask is 0: the plane carries neither face nor body data", pos + 1)
+            raise FbaError(OBJECT_MASK_ZERO, pos + 1)
         fr, tc, skip = syntax.temporal_header(io, is_intra, None, None, 0)
         params = CodingParams(frame_rate=fr, time_code=tc) if is_intra else None
         if fr is not None:
@@ -125,7 +149,7 @@ class _Decoder:
             self.viseme.start_intra(self.face.quant)
             self.expression.start_intra(self.face.quant)
         elif self.face is None:
-            raise FbaError("a predicted plane carries face data but no intra plane has set up the face", r.pos)
+            raise FbaError(no_intra("face"), r.pos)
         mask = self.face.mask
         for fap, coder, out, raw_bits in ((0, self.viseme, frame.viseme, ("viseme_def",)),
                                           (1, self.expression, frame.expression, ("init_face", "expression_def"))):
@@ -148,42 +172,63 @@ class _Decoder:
             frame.params.body = self.body
             self.baps.start_intra(self.body)
         elif self.body is None:
-            raise FbaError("a predicted plane carries body data but no intra plane has set up the body", r.pos)
+            raise FbaError(no_intra("body"), r.pos)
         values = self.baps.decode(decode_segment(r, self.baps.models(intra), not intra), intra)
         frame.bap_values[self.baps.idx] = values
         frame.bap_mask[:] = self.body.mask
 
 
-def iter_decode(source: Source) -> Iterator[Frame]:
-    """Decode frame by frame without holding the whole stream; raises :class:`FbaError` at a fault."""
+def _decoder(reader: BitReader, backend: str) -> _Decoder:
+    from .compiled import use_compiled
+
+    if use_compiled(backend):
+        from .fastpath import FastDecoder
+
+        return FastDecoder(reader)
+    return _Decoder(reader)
+
+
+def iter_decode(source: Source, *, backend: str = "auto") -> Iterator[Frame]:
+    """Decode frame by frame without holding the whole stream; raises :class:`FbaError` at a fault.
+
+    ``backend``: ``"auto"`` (compiled when numba is there, see :mod:`mpeg4fa.fba.compiled`),
+    ``"compiled"`` or ``"python"`` (the reference); both give the same frames and the same errors.
+    """
     with _opened(source) as src:
-        yield from _guarded(_Decoder(BitReader(src)))
+        for item in _guarded(_decoder(BitReader(src), backend)):
+            if isinstance(item, Frame):
+                yield item
+            else:
+                yield from item.frames()
 
 
-def _guarded(decoder: _Decoder) -> Iterator[Frame]:
-    """The decoder's frames, with any stray low-level exception turned into an FbaError."""
+def _guarded(decoder: _Decoder) -> Iterator:
+    """The decoder's items, with any stray low-level exception turned into an FbaError."""
     try:
-        yield from decoder.frames()
+        yield from decoder.items()
     except FbaError:
         raise
     except (IndexError, ValueError, OverflowError, MemoryError) as exc:  # a guard, not an expected path
         raise FbaError(f"malformed stream ({type(exc).__name__}: {exc})", decoder.bits.pos) from exc
 
 
-def decode(source: Source) -> FapStream:
+def decode(source: Source, *, backend: str = "auto") -> FapStream:
     """Decode a whole FBA stream (bytes, a path or a binary file) into a :class:`FapStream`.
 
     On a fault the :class:`FbaError` carries the frames decoded before it in ``.partial``.
     Memory is that of the stream's arrays (:mod:`mpeg4fa.fba.stacking`): about 400 bytes a
     frame for a face stream; a stream without body data shares one read-only zero row for its
-    ``bap_mask``/``bap_values``.
+    ``bap_mask``/``bap_values``. ``backend`` as for :func:`iter_decode`.
     """
     with _opened(source) as src:
-        decoder = _Decoder(BitReader(src))
+        decoder = _decoder(BitReader(src), backend)
         builder = StreamBuilder()
         try:
-            for frame in _guarded(decoder):
-                builder.append(frame)
+            for item in _guarded(decoder):
+                if isinstance(item, Frame):
+                    builder.append(item)
+                else:
+                    builder.extend(item.arrays, item.bap_mask, item.bap_values)
         except FbaError as exc:
             builder.object_start_code = decoder.object_start_code
             exc.partial = builder.build()

@@ -192,6 +192,12 @@ class FieldCoder(_Coder):
         """Selects must name a viseme 0..14 / expression 0..6."""
         for k in np.flatnonzero(~self.quantised):
             v = int(values[k])
-            if not 0 <= v <= int(_FIELDS[self.fields[k]].i_max):
-                raise FbaError(f"{self.label(int(k))} decodes to {v}, outside 0..{_FIELDS[self.fields[k]].i_max}",
-                               bit_offset, frame)
+            if not 0 <= v <= self.select_max(int(k)):
+                raise FbaError(self.select_message(int(k), v), bit_offset, frame)
+
+    def select_max(self, k: int) -> int:
+        """The largest value field ``k`` may decode to: 14 (viseme) / 6 (expression) for a select, -1 otherwise."""
+        return -1 if self.quantised[k] else int(_FIELDS[self.fields[k]].i_max)
+
+    def select_message(self, k: int, value: int) -> str:
+        return f"{self.label(k)} decodes to {value}, outside 0..{self.select_max(k)}"

@@ -55,13 +55,16 @@ class StreamBuilder:
     def __len__(self) -> int:
         return self.n
 
+    def _open_block(self) -> None:
+        block: dict[str, np.ndarray | None] = {
+            name: np.zeros((BLOCK, *shape), dtype=dtype) for name, (shape, dtype) in _ROWS.items()}
+        block.update(dict.fromkeys(_BODY))
+        self._blocks.append(block)
+        self._fill = 0
+
     def _row(self) -> tuple[dict[str, np.ndarray | None], int]:
         if self._fill == BLOCK:
-            block: dict[str, np.ndarray | None] = {
-                name: np.zeros((BLOCK, *shape), dtype=dtype) for name, (shape, dtype) in _ROWS.items()}
-            block.update(dict.fromkeys(_BODY))
-            self._blocks.append(block)
-            self._fill = 0
+            self._open_block()
         row = self._fill
         self._fill += 1
         self.n += 1
@@ -90,6 +93,31 @@ class StreamBuilder:
                     block[name][k] = value  # type: ignore[index]
         if params is not None:
             self.intra[self.n - 1] = params
+
+    def extend(self, rows: dict[str, np.ndarray], bap_mask: np.ndarray | None = None,
+               bap_values: np.ndarray | None = None) -> None:
+        """Append many frames given as arrays (the fields of ``_ROWS``, one row per frame), as :meth:`add`
+        would one by one: a block gets body arrays only when one of its frames carries body data."""
+        n = len(rows["timestamps"])
+        body = None
+        if bap_mask is not None and bap_values is not None:
+            body = bap_mask.any(axis=1) | bap_values.any(axis=1)
+        done = 0
+        while done < n:
+            if self._fill == BLOCK:
+                self._open_block()
+            block, start = self._blocks[-1], self._fill
+            take = min(BLOCK - start, n - done)
+            for name in _ROWS:
+                block[name][start:start + take] = rows[name][done:done + take]  # type: ignore[index]
+            if body is not None and body[done:done + take].any():
+                for name, value in (("bap_mask", bap_mask), ("bap_values", bap_values)):
+                    if block[name] is None:
+                        block[name] = np.zeros((BLOCK, N_BAPS), dtype=_BODY[name])
+                    block[name][start:start + take] = value[done:done + take]  # type: ignore[index]
+            self._fill += take
+            self.n += take
+            done += take
 
     def append(self, frame: Frame) -> None:
         """Append a decoded (or hand-made) :class:`Frame`."""

@@ -1,0 +1,215 @@
+"""The decoder on the compiled path: intra planes in Python, runs of P planes in one compiled call.
+
+Intra planes are rare and carry the headers, so :class:`FastDecoder` reads them with the
+reference code it inherits; after each it lays the fresh models out as flat Fenwick tables
+(:mod:`.compiled.model`) and hands every P plane up to the next intra plane to
+:func:`.compiled.planes.decode_planes`, which writes whole blocks of frames into arrays.
+Faults are reported with the reference's words and bit offsets, so the two paths cannot be
+told apart by their output or their errors (the tests decode every vector and fuzzed stream
+both ways).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterator
+
+import numpy as np
+
+from . import bits as bit_messages
+from .arith import SEGMENT_ENDS, STUFFING_EXPECTED
+from .bits import BitReader
+from .compiled import arith as k_arith, planes as kernel
+from .compiled.model import highest_power_of_two, uniform_bank
+from .decoder import NO_END_CODE, OBJECT_MASK_ZERO, _Decoder, no_intra, unexpected_start_code
+from .errors import FbaError
+from .params import FieldCoder, ValueCoder
+from .stacking import BLOCK
+from .stream import BODY as BODY_BIT, FACE as FACE_BIT, N_BAPS, N_FAPS, Frame
+
+_PREV_BASE = {k_arith.VISEME: 0, k_arith.EXPRESSION: 3, k_arith.FAP: 7}
+
+
+@dataclass
+class _Bank:
+    """One part's P models as the kernel reads them."""
+
+    meta: np.ndarray
+    total: np.ndarray
+    freq: np.ndarray
+    tree: np.ndarray
+
+    @classmethod
+    def empty(cls) -> "_Bank":
+        z = np.zeros(0, dtype=np.int64)
+        return cls(np.zeros((0, k_arith.META_COLUMNS), dtype=np.int64), z, z.copy(), z.copy())
+
+
+def _rows(bank: int, coder: FieldCoder | ValueCoder, prev_base: int) -> np.ndarray:
+    """Model-table rows (see :mod:`.compiled.arith`) for the P models of ``coder``'s masked parameters."""
+    n = len(coder.idx)
+    meta = np.zeros((n, k_arith.META_COLUMNS), dtype=np.int64)
+    meta[:, k_arith.BANK] = bank
+    meta[:, k_arith.COL] = coder.idx
+    meta[:, k_arith.PREV] = prev_base + np.asarray(coder.idx, dtype=np.int64)
+    meta[:, k_arith.QSTEP] = coder.qstep
+    meta[:, k_arith.PMIN] = coder.pmin
+    meta[:, k_arith.SIZE] = coder.psize
+    meta[:, k_arith.TOPSTEP] = [highest_power_of_two(int(s)) for s in coder.psize]
+    meta[:, k_arith.SELMAX] = [coder.select_max(j) for j in range(n)] if isinstance(coder, FieldCoder) else -1
+    return meta
+
+
+def _bank(meta: np.ndarray) -> _Bank:
+    foff, toff, freq, tree, total = uniform_bank(meta[:, k_arith.SIZE])
+    meta[:, k_arith.FOFF], meta[:, k_arith.TOFF] = foff, toff
+    return _Bank(meta, total, freq, tree)
+
+
+@dataclass
+class Rows:
+    """P frames the kernel decoded: one row per frame, in :class:`~mpeg4fa.fba.stacking.StreamBuilder` layout."""
+
+    first: int
+    arrays: dict[str, np.ndarray]
+    bap_mask: np.ndarray | None
+    bap_values: np.ndarray | None
+
+    def __len__(self) -> int:
+        return len(self.arrays["timestamps"])
+
+    def frames(self) -> Iterator[Frame]:
+        """The rows as :class:`Frame` objects (copies), for :func:`~mpeg4fa.fba.iter_decode`."""
+        a = self.arrays
+        for j in range(len(self)):
+            body = self.bap_mask is not None and bool(a["object_mask"][j] & BODY_BIT)
+            yield Frame(index=self.first + j, timestamp=float(a["timestamps"][j]), object_mask=int(a["object_mask"][j]),
+                        fap_mask=a["fap_mask"][j].copy(), fap_values=a["fap_values"][j].copy(),
+                        viseme=a["viseme"][j].copy(), expression=a["expression"][j].copy(),
+                        bap_mask=self.bap_mask[j].copy() if body else np.zeros(N_BAPS, dtype=bool),
+                        bap_values=self.bap_values[j].copy() if body else np.zeros(N_BAPS, dtype=np.int32),
+                        skip=int(a["skip"][j]), start_code=int(a["start_code"][j]), bits=int(a["bits"][j]))
+
+
+class FastDecoder(_Decoder):
+    """:class:`~mpeg4fa.fba.decoder._Decoder` with P planes on the compiled path."""
+
+    def __init__(self, reader: BitReader, block: int = BLOCK) -> None:
+        super().__init__(reader)
+        self.block = block
+        self.fprev = np.zeros(3 + 4 + N_FAPS, dtype=np.int64)  # viseme, expression, FAP 1..68 previous values
+        self.viseme.prev, self.expression.prev = self.fprev[0:3], self.fprev[3:7]
+        self.faps.prev = self.fprev[7:]
+        self.fbank, self.bbank = _Bank.empty(), _Bank.empty()
+        self.eof = reader._file is None  # noqa: SLF001 - the reader is ours
+        self.res = np.zeros(kernel.RESULT_SIZE, dtype=np.int64)
+        self.times = np.zeros(1, dtype=np.float64)
+        self.scratch = np.zeros(max(N_BAPS, N_FAPS) + 8, dtype=np.int64)
+
+    # ---- after an intra plane: the models it set up, as flat tables ----
+    def _reset_face(self) -> None:
+        parts = []
+        if self.face.mask[0]:
+            parts.append(_rows(k_arith.VISEME, self.viseme, _PREV_BASE[k_arith.VISEME]))
+        if self.face.mask[1]:
+            parts.append(_rows(k_arith.EXPRESSION, self.expression, _PREV_BASE[k_arith.EXPRESSION]))
+        parts.append(_rows(k_arith.FAP, self.faps, _PREV_BASE[k_arith.FAP]))
+        self.fbank = _bank(np.concatenate(parts))
+
+    def _reset_body(self) -> None:
+        self.bbank = _bank(_rows(k_arith.BAP, self.baps, 0))
+
+    # ---- the loop ----
+    def items(self) -> Iterator[Frame | Rows]:
+        """Frames in order: intra planes as :class:`Frame`, runs of P planes as :class:`Rows`."""
+        self.object_start()
+        r, res = self.bits, self.res
+        k = 0
+        while True:
+            rows = self._run(k)
+            status = int(res[kernel.STATUS])
+            if rows is not None:
+                yield rows
+                k += len(rows)
+            r.p = int(res[kernel.POS])  # where to go on (ERROR: where the fault is)
+            if status == kernel.FULL:
+                continue
+            if status == kernel.NEED_MORE:
+                if not r.more():
+                    self.eof = True
+                continue
+            if status == kernel.END:
+                return
+            if status == kernel.ERROR:
+                raise self._fault(k)
+            try:  # INTRA: the reference reads it, then its models become tables
+                frame = self.framed_plane(k, int(res[kernel.CODE]))
+            except FbaError as exc:
+                exc.frame = k if exc.frame is None else exc.frame
+                raise
+            if frame.params.face is not None:
+                self._reset_face()
+            if frame.params.body is not None:
+                self._reset_body()
+            yield frame
+            k += 1
+
+    def _run(self, first: int) -> Rows | None:
+        r, fb, bb = self.bits, self.fbank, self.bbank
+        n = self.block
+        a = {"object_mask": np.empty(n, np.uint8), "skip": np.empty(n, np.int32), "start_code": np.empty(n, np.uint32),
+             "timestamps": np.empty(n, np.float64), "bits": np.empty(n, np.int32), "viseme": np.empty((n, 4), np.int32),
+             "expression": np.empty((n, 6), np.int32), "fap_values": np.empty((n, N_FAPS), np.int32)}
+        bap = np.empty((n if self.body is not None else 0, N_BAPS), np.int32)
+        self.times[0] = self.next_pts
+        buf = np.frombuffer(r.buf, dtype=np.uint8)
+        face = self.face
+        kernel.decode_planes(buf, r.base, r.p, len(buf), self.eof,
+                             fb.meta, fb.total, fb.freq, fb.tree, self.fprev, face is not None,
+                             bool(face is not None and face.mask[0]), bool(face is not None and face.mask[1]),
+                             bb.meta, bb.total, bb.freq, bb.tree, self.baps.prev, self.body is not None,
+                             float(self.fps), self.times,
+                             a["object_mask"], a["skip"], a["start_code"], a["timestamps"], a["bits"],
+                             a["viseme"], a["expression"], a["fap_values"], bap, n, self.res, self.scratch)
+        self.next_pts = float(self.times[0])
+        m = int(self.res[kernel.ROWS])
+        if m == 0:
+            return None
+        a = {name: value[:m] for name, value in a.items()}
+        has_face = (a["object_mask"] & FACE_BIT) != 0
+        a["fap_mask"] = has_face[:, None] & face.mask[None, :] if face is not None else np.zeros((m, N_FAPS), bool)
+        bap_mask = bap_values = None
+        if self.body is not None:
+            has_body = (a["object_mask"] & BODY_BIT) != 0
+            bap_mask, bap_values = has_body[:, None] & self.body.mask[None, :], bap[:m]
+        return Rows(first, a, bap_mask, bap_values)
+
+    def _fault(self, k: int) -> FbaError:
+        """The kernel's fault as the reference path words it."""
+        res = self.res
+        fault, a0, a1, a2 = (int(res[i]) for i in (kernel.FAULT, kernel.ARG0, kernel.ARG1, kernel.ARG2))
+        pos = self.bits.base + int(res[kernel.POS])
+        if fault == kernel.TRUNCATED_FIELD:
+            message = bit_messages.truncated(kernel.FIELD_NAMES[a0], a1, a2)
+        elif fault == kernel.NO_END_CODE:
+            message = NO_END_CODE
+        elif fault == kernel.BAD_START_CODE:
+            message = unexpected_start_code(a0)
+        elif fault == kernel.BAD_STUFFING_BITS:
+            message = bit_messages.bad_stuffing(a0, a1)
+        elif fault == kernel.OBJECT_MASK_ZERO:
+            message = OBJECT_MASK_ZERO
+        elif fault == kernel.NO_FACE_INTRA:
+            message = no_intra("face")
+        elif fault == kernel.NO_BODY_INTRA:
+            message = no_intra("body")
+        elif fault == kernel.SEGMENT_TRUNCATED:
+            message = SEGMENT_ENDS
+        elif fault == kernel.SEGMENT_STUFFING:
+            message = STUFFING_EXPECTED
+        elif fault == kernel.SELECT_OUT_OF_RANGE:
+            row = self.fbank.meta[a0]
+            coder = self.viseme if row[k_arith.BANK] == k_arith.VISEME else self.expression
+            message = coder.select_message(int(row[k_arith.COL]), a1)
+        else:  # pragma: no cover - every fault code is named above
+            message = f"compiled decoder fault {fault}"
+        return FbaError(message, pos, k)
