@@ -13,6 +13,8 @@ import numpy as np
 from .errors import FbaError
 
 START_CODE_PREFIX = 0x000001
+_DIGITS = bytes.maketrans(b"\x00\x01", b"01")
+"""Unpacked bits (bytes 0 and 1) as the digits '0' and '1', so a field reads with one int(..., 2)."""
 _KEEP_BEHIND = 256  # bits kept before the read position when the window slides (rewinds are <= 14)
 
 
@@ -80,12 +82,15 @@ class BitReader:
     def read(self, n: int, what: str = "a field") -> int:
         """Read an ``n``-bit unsigned field."""
         self.require(n, what)
-        value = 0
-        buf, p = self.buf, self.p
-        for i in range(p, p + n):
-            value = (value << 1) | buf[i]
+        p = self.p
         self.p = p + n
-        return value
+        return int(self.buf[p:p + n].translate(_DIGITS), 2) if n else 0
+
+    def digits(self, n: int) -> bytes:
+        """The next ``n`` bits as ASCII '0'/'1' digits (consumed; the caller made sure they are there)."""
+        p = self.p
+        self.p = p + n
+        return self.buf[p:p + n].translate(_DIGITS)
 
     def rewind(self, n: int) -> None:
         if n > self.p:

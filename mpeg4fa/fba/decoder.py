@@ -92,6 +92,10 @@ class _Decoder:
             yield frame
             k += 1
 
+    def segment(self, models: list, adapt: bool) -> list[int]:
+        """One arithmetic-coded segment's symbols."""
+        return decode_segment(self.bits, models, adapt)
+
     def framed_plane(self, k: int, plane_code: int) -> Frame:
         """Plane ``k`` as a frame, with the bits it took (after its start code)."""
         start = self.bits.pos
@@ -155,12 +159,12 @@ class _Decoder:
                                           (1, self.expression, frame.expression, ("init_face", "expression_def"))):
             if mask[fap]:
                 pos = r.pos
-                values = coder.decode(decode_segment(r, coder.models(intra), not intra), intra)
+                values = coder.decode(self.segment(coder.models(intra), not intra), intra)
                 coder.check_selects(values, pos, frame.index)
                 out[:len(values)] = values
                 for j, name in enumerate(raw_bits):
                     out[len(values) + j] = io.u(1, 0, name)
-        values = self.faps.decode(decode_segment(r, self.faps.models(intra), not intra), intra)
+        values = self.faps.decode(self.segment(self.faps.models(intra), not intra), intra)
         frame.fap_values[self.faps.idx] = values
         frame.fap_mask[:] = mask
 
@@ -173,7 +177,7 @@ class _Decoder:
             self.baps.start_intra(self.body)
         elif self.body is None:
             raise FbaError(no_intra("body"), r.pos)
-        values = self.baps.decode(decode_segment(r, self.baps.models(intra), not intra), intra)
+        values = self.baps.decode(self.segment(self.baps.models(intra), not intra), intra)
         frame.bap_values[self.baps.idx] = values
         frame.bap_mask[:] = self.body.mask
 

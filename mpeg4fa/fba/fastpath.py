@@ -2,8 +2,8 @@
 
 Intra planes are rare and carry the headers, so :class:`FastDecoder` reads them with the
 reference code it inherits; after each it lays the fresh models out as flat Fenwick tables
-(:mod:`.compiled.model`) and hands every P plane up to the next intra plane to
-:func:`.compiled.planes.decode_planes`, which writes whole blocks of frames into arrays.
+(:mod:`.compiled.kernels`) and hands every P plane up to the next intra plane to
+:func:`.compiled.kernels.decode_planes`, which writes whole blocks of frames into arrays.
 Faults are reported with the reference's words and bit offsets, so the two paths cannot be
 told apart by their output or their errors (the tests decode every vector and fuzzed stream
 both ways).
@@ -18,15 +18,15 @@ import numpy as np
 from . import bits as bit_messages
 from .arith import SEGMENT_ENDS, STUFFING_EXPECTED
 from .bits import BitReader
-from .compiled import arith as k_arith, planes as kernel
-from .compiled.model import highest_power_of_two, uniform_bank
+from .compiled import kernels as kernel
+from .compiled.kernels import highest_power_of_two, uniform_bank
 from .decoder import NO_END_CODE, OBJECT_MASK_ZERO, _Decoder, no_intra, unexpected_start_code
 from .errors import FbaError
 from .params import FieldCoder, ValueCoder
 from .stacking import BLOCK
 from .stream import BODY as BODY_BIT, FACE as FACE_BIT, N_BAPS, N_FAPS, Frame
 
-_PREV_BASE = {k_arith.VISEME: 0, k_arith.EXPRESSION: 3, k_arith.FAP: 7}
+_PREV_BASE = {kernel.VISEME: 0, kernel.EXPRESSION: 3, kernel.FAP: 7}
 
 
 @dataclass
@@ -41,27 +41,27 @@ class _Bank:
     @classmethod
     def empty(cls) -> "_Bank":
         z = np.zeros(0, dtype=np.int64)
-        return cls(np.zeros((0, k_arith.META_COLUMNS), dtype=np.int64), z, z.copy(), z.copy())
+        return cls(np.zeros((0, kernel.META_COLUMNS), dtype=np.int64), z, z.copy(), z.copy())
 
 
 def _rows(bank: int, coder: FieldCoder | ValueCoder, prev_base: int) -> np.ndarray:
-    """Model-table rows (see :mod:`.compiled.arith`) for the P models of ``coder``'s masked parameters."""
+    """Model-table rows (see :mod:`.compiled.kernels`) for the P models of ``coder``'s masked parameters."""
     n = len(coder.idx)
-    meta = np.zeros((n, k_arith.META_COLUMNS), dtype=np.int64)
-    meta[:, k_arith.BANK] = bank
-    meta[:, k_arith.COL] = coder.idx
-    meta[:, k_arith.PREV] = prev_base + np.asarray(coder.idx, dtype=np.int64)
-    meta[:, k_arith.QSTEP] = coder.qstep
-    meta[:, k_arith.PMIN] = coder.pmin
-    meta[:, k_arith.SIZE] = coder.psize
-    meta[:, k_arith.TOPSTEP] = [highest_power_of_two(int(s)) for s in coder.psize]
-    meta[:, k_arith.SELMAX] = [coder.select_max(j) for j in range(n)] if isinstance(coder, FieldCoder) else -1
+    meta = np.zeros((n, kernel.META_COLUMNS), dtype=np.int64)
+    meta[:, kernel.BANK] = bank
+    meta[:, kernel.COL] = coder.idx
+    meta[:, kernel.PREV] = prev_base + np.asarray(coder.idx, dtype=np.int64)
+    meta[:, kernel.QSTEP] = coder.qstep
+    meta[:, kernel.PMIN] = coder.pmin
+    meta[:, kernel.SIZE] = coder.psize
+    meta[:, kernel.TOPSTEP] = highest_power_of_two(meta[:, kernel.SIZE])
+    meta[:, kernel.SELMAX] = [coder.select_max(j) for j in range(n)] if isinstance(coder, FieldCoder) else -1
     return meta
 
 
 def _bank(meta: np.ndarray) -> _Bank:
-    foff, toff, freq, tree, total = uniform_bank(meta[:, k_arith.SIZE])
-    meta[:, k_arith.FOFF], meta[:, k_arith.TOFF] = foff, toff
+    foff, toff, freq, tree, total = uniform_bank(meta[:, kernel.SIZE])
+    meta[:, kernel.FOFF], meta[:, kernel.TOFF] = foff, toff
     return _Bank(meta, total, freq, tree)
 
 
@@ -105,18 +105,34 @@ class FastDecoder(_Decoder):
         self.times = np.zeros(1, dtype=np.float64)
         self.scratch = np.zeros(max(N_BAPS, N_FAPS) + 8, dtype=np.int64)
 
+    def segment(self, models: list, adapt: bool) -> list[int]:
+        """Intra segments (uniform models) compiled too; P segments never come here but stay correct."""
+        if adapt:
+            return super().segment(models, adapt)
+        r = self.bits
+        r.available(64 + kernel.SYMBOL_BITS * len(models))  # load the window far enough, if the stream goes on
+        buf = np.frombuffer(r.buf, dtype=np.uint8)
+        symbols = np.empty(len(models), dtype=np.int64)
+        p, err = kernel.uniform_segment(buf, r.p, len(buf), np.asarray(models, dtype=np.int64), symbols)
+        if err == kernel.BAD_STUFFING:
+            raise FbaError(STUFFING_EXPECTED, r.base + p - 1)
+        if err:
+            raise FbaError(SEGMENT_ENDS, r.base + p)
+        r.p = p
+        return symbols.tolist()
+
     # ---- after an intra plane: the models it set up, as flat tables ----
     def _reset_face(self) -> None:
         parts = []
         if self.face.mask[0]:
-            parts.append(_rows(k_arith.VISEME, self.viseme, _PREV_BASE[k_arith.VISEME]))
+            parts.append(_rows(kernel.VISEME, self.viseme, _PREV_BASE[kernel.VISEME]))
         if self.face.mask[1]:
-            parts.append(_rows(k_arith.EXPRESSION, self.expression, _PREV_BASE[k_arith.EXPRESSION]))
-        parts.append(_rows(k_arith.FAP, self.faps, _PREV_BASE[k_arith.FAP]))
+            parts.append(_rows(kernel.EXPRESSION, self.expression, _PREV_BASE[kernel.EXPRESSION]))
+        parts.append(_rows(kernel.FAP, self.faps, _PREV_BASE[kernel.FAP]))
         self.fbank = _bank(np.concatenate(parts))
 
     def _reset_body(self) -> None:
-        self.bbank = _bank(_rows(k_arith.BAP, self.baps, 0))
+        self.bbank = _bank(_rows(kernel.BAP, self.baps, 0))
 
     # ---- the loop ----
     def items(self) -> Iterator[Frame | Rows]:
@@ -208,8 +224,8 @@ class FastDecoder(_Decoder):
             message = STUFFING_EXPECTED
         elif fault == kernel.SELECT_OUT_OF_RANGE:
             row = self.fbank.meta[a0]
-            coder = self.viseme if row[k_arith.BANK] == k_arith.VISEME else self.expression
-            message = coder.select_message(int(row[k_arith.COL]), a1)
+            coder = self.viseme if row[kernel.BANK] == kernel.VISEME else self.expression
+            message = coder.select_message(int(row[kernel.COL]), a1)
         else:  # pragma: no cover - every fault code is named above
             message = f"compiled decoder fault {fault}"
         return FbaError(message, pos, k)

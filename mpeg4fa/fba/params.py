@@ -87,10 +87,14 @@ class _Coder:
 
     def _models(self) -> None:
         self.intra_models = [int(s) for s in self.isize]
-        self.p_models = [AdaptiveModel(int(s)) for s in self.psize]
+        self.p_models = None  # made when a P plane first needs them (the compiled path never does)
 
     def models(self, intra: bool) -> list:
-        return self.intra_models if intra else self.p_models
+        if intra:
+            return self.intra_models
+        if self.p_models is None:
+            self.p_models = [AdaptiveModel(int(s)) for s in self.psize]
+        return self.p_models
 
     def decode(self, symbols: Sequence[int], intra: bool) -> np.ndarray:
         level = np.asarray(symbols, dtype=np.int64) + (self.imin if intra else self.pmin)

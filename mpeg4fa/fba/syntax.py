@@ -8,7 +8,7 @@ order or width of a field (the idea of FFmpeg's coded-bitstream templates).
 """
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -38,6 +38,27 @@ class Reading:
         if self.bits.read(1, what) != 1:
             raise FbaError(f"marker bit of {what} is 0", pos)
 
+    def fields(self, widths: Sequence[int], values, what: Callable[[int], str], markers: Sequence[bool]) -> list[int]:
+        """Many fixed-width fields at once (``markers[f]``: field f is a marker bit, which must be 1);
+        faults are those :meth:`u` and :meth:`marker` would raise, field by field."""
+        r = self.bits
+        total = sum(widths)
+        if not r.available(total):
+            for f, n in enumerate(widths):  # the field the stream ends inside
+                r.require(n, what(f))
+                r.p += n
+        start = r.pos
+        bits = np.frombuffer(r.digits(total), dtype=np.uint8).astype(np.int64) - ord("0")
+        w = np.asarray(widths, dtype=np.int64)
+        starts = np.cumsum(w) - w
+        place = np.repeat(starts + w - 1, w) - np.arange(total)  # each bit's place value in its field
+        values = np.add.reduceat(bits << place, starts) if total else np.zeros(0, dtype=np.int64)
+        bad = np.flatnonzero(np.asarray(markers, dtype=bool) & (values != 1))
+        if bad.size:
+            f = int(bad[0])
+            raise FbaError(f"marker bit of {what(f)} is 0", start + int(starts[f]))
+        return values.tolist()
+
 
 class Writing:
     writing = True
@@ -57,6 +78,17 @@ class Writing:
 
     def marker(self, what: str) -> None:
         self.bits.write(1, 1)
+
+    def fields(self, widths: Sequence[int], values, what: Callable[[int], str], markers: Sequence[bool]) -> list[int]:
+        """Many fixed-width fields at once (markers are written as 1)."""
+        out = []
+        for f, (n, value, is_marker) in enumerate(zip(widths, values, markers)):
+            if is_marker:
+                self.marker(what(f))
+                out.append(1)
+            else:
+                out.append(self.u(n, value, what(f)))
+        return out
 
 
 def frame_rate(io, fr: FrameRate | None) -> FrameRate | None:
@@ -112,11 +144,24 @@ def group_masks(io, groups: Sequence[Sequence[int]], mask_types: Sequence[int], 
         t = io.u(2, mask_types[g] if io.writing else 0, f"mask type of {label} group {g + 1}")
         types.append(t)
         if t in (MASK_HOLD, MASK_INTERPOLATE):
-            for i in members:
-                out[i] = io.flag(bool(mask[i]) if io.writing else False, f"mask bit of {label} {i + 1}")
+            sent = [int(mask[i]) for i in members] if io.writing else None
+            out[list(members)] = io.fields([1] * len(members), sent, lambda f: f"mask bit of {label} {members[f] + 1}",
+                                           markers=[False] * len(members))
         elif t == MASK_ALL:
             out[list(members)] = True
     return tuple(types), out
+
+
+def _minmax_layout(groups: Sequence[Sequence[int]], mask: np.ndarray) -> list[int | None]:
+    """The fields of one new-range set in order: None for a marker bit, i for parameter i's 5-bit code."""
+    layout: list[int | None] = []
+    for members in groups:
+        for j, i in enumerate(members):
+            if j % 4 == 0:
+                layout.append(None)
+            if mask[i]:
+                layout.append(i)
+    return layout
 
 
 def new_minmax(io, groups: Sequence[Sequence[int]], mask: np.ndarray, ranges: RangeSet,
@@ -124,15 +169,18 @@ def new_minmax(io, groups: Sequence[Sequence[int]], mask: np.ndarray, ranges: Ra
     """The four new-range sets: a marker every 4 parameters of a group, 5 bits per masked one."""
     flags = tuple(io.flag(ranges.flags[k], f"is_{name}_new") for k, name in enumerate(RANGE_SET_NAMES))
     codes = np.zeros_like(ranges.codes)
+    layout = _minmax_layout(groups, mask)
+    markers = [i is None for i in layout]
+    widths = [1 if m else 5 for m in markers]
+    coded = np.array([i for i in layout if i is not None], dtype=np.int64)
+    is_code = ~np.array(markers, dtype=bool)
     for k, name in enumerate(RANGE_SET_NAMES):
         if not flags[k]:
             continue
-        for members in groups:
-            for j, i in enumerate(members):
-                if j % 4 == 0:
-                    io.marker(f"new {name} ranges")
-                if mask[i]:
-                    codes[k, i] = io.u(5, ranges.codes[k, i], f"new {name} of {label} {i + 1}")
+        sent = [1 if i is None else int(ranges.codes[k, i]) for i in layout] if io.writing else None
+        got = io.fields(widths, sent, lambda f, name=name: f"new {name} ranges" if layout[f] is None
+                        else f"new {name} of {label} {layout[f] + 1}", markers=markers)
+        codes[k, coded] = np.asarray(got, dtype=np.int64)[is_code]
     return RangeSet(flags, codes)
 
 

@@ -65,11 +65,11 @@ def assert_same(source):
        skew=st.booleans())
 def test_fenwick_models_match_the_reference_model(n, symbols, skew):
     """Search and cumulative counts agree with the reference table, through halvings."""
-    from mpeg4fa.fba.compiled import model
+    from mpeg4fa.fba.compiled import kernels as model
 
     ref = AdaptiveModel(n)
     foff, toff, freq, tree, total = model.uniform_bank(np.array([n]))
-    top = model.highest_power_of_two(n)
+    top = int(model.highest_power_of_two(n))
     sequence = [(s % 3 if skew else s) % n for s in symbols] * (60 if skew else 1)
     for s in sequence:
         cum = ref.cum()
