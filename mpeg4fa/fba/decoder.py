@@ -96,6 +96,10 @@ class _Decoder:
         """One arithmetic-coded segment's symbols."""
         return decode_segment(self.bits, models, adapt)
 
+    def decoded(self, part: str, coder: FieldCoder | ValueCoder, values: np.ndarray) -> None:
+        """Hook called with each segment's reconstructed values (``part``: viseme, expression, face
+        or body), so that the syntax trace (:mod:`mpeg4fa.fba.trace`) can name them; a no-op here."""
+
     def framed_plane(self, k: int, plane_code: int) -> Frame:
         """Plane ``k`` as a frame, with the bits it took (after its start code)."""
         start = self.bits.pos
@@ -160,11 +164,13 @@ class _Decoder:
             if mask[fap]:
                 pos = r.pos
                 values = coder.decode(self.segment(coder.models(intra), not intra), intra)
+                self.decoded(("viseme", "expression")[fap], coder, values)
                 coder.check_selects(values, pos, frame.index)
                 out[:len(values)] = values
                 for j, name in enumerate(raw_bits):
                     out[len(values) + j] = io.u(1, 0, name)
         values = self.faps.decode(self.segment(self.faps.models(intra), not intra), intra)
+        self.decoded("face", self.faps, values)
         frame.fap_values[self.faps.idx] = values
         frame.fap_mask[:] = mask
 
@@ -178,6 +184,7 @@ class _Decoder:
         elif self.body is None:
             raise FbaError(no_intra("body"), r.pos)
         values = self.baps.decode(self.segment(self.baps.models(intra), not intra), intra)
+        self.decoded("body", self.baps, values)
         frame.bap_values[self.baps.idx] = values
         frame.bap_mask[:] = self.body.mask
 

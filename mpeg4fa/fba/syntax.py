@@ -60,6 +60,69 @@ class Reading:
         return values.tolist()
 
 
+Record = Callable[[int, int, str, str, int], None]
+"""A tracer's sink: (bit offset, width, kind, name, value) of one element read."""
+
+
+class Tracing(Reading):
+    """:class:`Reading` that also reports every element it reads, with its bit offset and width.
+
+    The syntax trace (:mod:`mpeg4fa.fba.trace`) runs the decoder's own syntax functions
+    through this, so the trace cannot disagree with the decoder about a field. An element
+    is reported only once it was read whole; a fault inside it is the decoder's error.
+    """
+
+    def __init__(self, reader: BitReader, record: Record) -> None:
+        super().__init__(reader)
+        self.record = record
+
+    def u(self, n: int, value: int, what: str) -> int:
+        pos = self.bits.pos
+        got = super().u(n, value, what)
+        self.record(pos, n, "field", what, got)
+        return got
+
+    def flag(self, value: bool, what: str) -> bool:
+        pos = self.bits.pos
+        got = super().flag(value, what)
+        self.record(pos, 1, "field", what, int(got))
+        return got
+
+    def marker(self, what: str) -> None:
+        pos = self.bits.pos
+        super().marker(what)
+        self.record(pos, 1, "marker", f"marker bit of {what}", 1)
+
+    def fields(self, widths: Sequence[int], values, what: Callable[[int], str], markers: Sequence[bool]) -> list[int]:
+        """Field by field: a fault names the first bad field after the good ones were reported."""
+        pos = self.bits.pos
+        try:
+            got = super().fields(widths, values, what, markers)
+        except FbaError as exc:
+            got, fault = None, exc
+        else:
+            fault = None
+        for f, n in enumerate(widths):
+            if fault is not None and fault.bit_offset is not None and pos + n > fault.bit_offset:
+                break
+            value = got[f] if got is not None else None
+            if value is None:  # the batch failed: read this good field again for its value
+                value = int(self._bits_at(pos, n), 2) if n else 0
+            name = what(f)
+            self.record(pos, n, "marker" if markers[f] else "field",
+                        f"marker bit of {name}" if markers[f] else name, int(value))
+            pos += n
+        if fault is not None:
+            raise fault
+        return got
+
+    def _bits_at(self, pos: int, n: int) -> str:
+        """``n`` bits at absolute offset ``pos`` (within the reader's window) as '0'/'1' text."""
+        r = self.bits
+        i = pos - r.base
+        return bytes(r.buf[i:i + n]).translate(bytes.maketrans(b"\x00\x01", b"01")).decode()
+
+
 class Writing:
     writing = True
 
