@@ -11,8 +11,9 @@ from ..atomic import atomic_output
 from ..fba import EncodeOptions, FbaError, decode, demo_stream, describe, encode
 from ..formats import read_stream, write_fap
 from ..formats.sniff import sniff
-from . import speech, text_input
+from . import speech, text_input, tracing
 from .coding import coding_flags, coding_options
+from .errors import UsageError
 from .options import Commands
 from .paths import refuse_overlaps
 
@@ -22,7 +23,16 @@ def register(commands: Commands) -> None:
                             description="Header, frames, frame rate, duration, masks, bits per frame and "
                                         "bit rate of a binary FBA stream or a text .fap file.")
     p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) file; the kind is read from the content")
-    p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object instead of text (with --trace: one JSON object per element, "
+                        "a line each, and at a fault a last {\"error\", \"bit_offset\", \"frame\"} line)")
+    p.add_argument("--trace", action="store_true",
+                   help="list every syntax element of a .fba stream (start codes, stuffing, header fields, "
+                        "arithmetic-coded segments with their symbols and values) with its bit offset, width "
+                        "and value, frame by frame; a damaged stream is listed up to the fault, then the "
+                        "error (exit 1)")
+    p.add_argument("--frames", type=tracing.frame_range, metavar="A:B",
+                   help="with --trace: only frames A to B-1 (A:, :B or one frame A)")
     p.set_defaults(run=run_info)
 
     p = commands.add_parser("decode", help="decode a .fba stream to a .fap text file",
@@ -74,6 +84,10 @@ def register(commands: Commands) -> None:
 
 
 def run_info(args: argparse.Namespace) -> int:
+    if getattr(args, "trace", False):  # demo calls this with its own arguments
+        return tracing.run_trace(args)
+    if getattr(args, "frames", None) is not None:
+        raise UsageError("--frames limits a trace", hint="add --trace")
     stream, kind = read_stream(args.stream)
     info = {"file": str(args.stream), "format": kind,
             **describe(stream, os.path.getsize(args.stream) if kind == "fba" else None)}

@@ -194,8 +194,11 @@ def value_text(e: Element) -> str:
     if e.kind == "trailing":
         return f"{e.width // 8} bytes" + (f" {e.width % 8} bits" if e.width % 8 else "")
     if e.kind == "segment":
+        models = "intra" if e.intra else "P"
+        if not e.value:
+            return f"{models}, no values (the coder's flush alone)"
         pairs = " ".join(f"{_short(label)}={v}" for label, v in zip(e.labels, e.value))
-        return f"{'I' if e.intra else 'P'} {len(e.value)}: {pairs}; symbols {' '.join(map(str, e.symbols))}"
+        return f"{models}, {len(e.value)} values: {pairs}; symbols {' '.join(map(str, e.symbols))}"
     return str(e.value)
 
 
