@@ -19,7 +19,7 @@ from .bits import BitWriter
 from .errors import FbaError
 from .limits import check_span, fps_problem
 from .params import BODY, FACE, RANGE_DELTA, FieldCoder, PartSpec, ValueCoder, dequantise, quantise
-from .stream import (BODY as BODY_BIT, CONTENT_FIELDS, END_CODE, FACE as FACE_BIT, PLANE_START_CODE,
+from .stream import (BODY as BODY_BIT, CONTENT_FIELDS, END_CODE, FACE as FACE_BIT, N_BAPS, PLANE_START_CODE,
                      CodingParams, FapStream, FrameRate, PartParams, RangeSet, TimeCode)
 
 MAX_REPAIRS = 32
@@ -64,16 +64,24 @@ def _is_int(value: object) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
-def encode(stream: FapStream, options: EncodeOptions | None = None) -> bytes:
-    """Encode a stream; with no options a decoded stream re-encodes with its own parameters."""
+def encode(stream: FapStream, options: EncodeOptions | None = None, *, backend: str = "auto") -> bytes:
+    """Encode a stream; with no options a decoded stream re-encodes with its own parameters.
+
+    ``backend``: ``"auto"`` (compiled when numba is there), ``"compiled"`` or ``"python"`` (the
+    reference); both write the same bytes and raise the same errors.
+    """
     if options is None and 0 in stream.intra:
-        return write(stream)
-    return write(plan(stream, options or EncodeOptions()))
+        return write(stream, backend=backend)
+    return write(plan(stream, options or EncodeOptions(), backend=backend), backend=backend)
 
 
 # ---- planning -----------------------------------------------------------------------------
-def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
-    """Fill in intra headers, skips and start codes for ``stream`` according to ``options``."""
+def plan(stream: FapStream, options: EncodeOptions, *, backend: str = "auto") -> FapStream:
+    """Fill in intra headers, skips and start codes for ``stream`` according to ``options``
+    (``backend`` as for :func:`encode`: who runs the closed-loop range search)."""
+    from .compiled import use_compiled
+
+    compiled = use_compiled(backend)
     if not len(stream):
         raise FbaError("cannot encode a stream with no frames")
     first = stream.first_params
@@ -89,13 +97,14 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
     use_start_codes = _pick(options.start_codes, bool(stream.start_code.any()), False)
 
     intended = stream.group_mask_types()  # how unsent FAPs read in the source: kept, unless options say otherwise
+    changed = np.zeros(len(out), dtype=bool)  # frames whose masks differ from the frame before
+    changed[1:] = ((out.object_mask[1:] != out.object_mask[:-1]) | (out.fap_mask[1:] != out.fap_mask[:-1]).any(axis=1)
+                   | (out.bap_mask[1:] != out.bap_mask[:-1]).any(axis=1))
+    if options.mask_types is None:
+        changed[1:] |= (intended[1:] != intended[:-1]).any(axis=1)
     intra_frames = [0]
-    for k in range(1, len(out)):
-        changed = (out.object_mask[k] != out.object_mask[k - 1]
-                   or not np.array_equal(out.fap_mask[k], out.fap_mask[k - 1])
-                   or not np.array_equal(out.bap_mask[k], out.bap_mask[k - 1])
-                   or (options.mask_types is None and not np.array_equal(intended[k], intended[k - 1])))
-        if changed or (period and k - intra_frames[-1] >= period):
+    for k, new_masks in enumerate(changed.tolist()):
+        if k and (new_masks or (period and k - intra_frames[-1] >= period)):
             intra_frames.append(k)
     source = list(range(len(out)))  # the source frame of each frame of out
     if options.skip_repeats or options.optimize:  # after choosing intra frames, so they stay where they were
@@ -105,19 +114,19 @@ def plan(stream: FapStream, options: EncodeOptions) -> FapStream:
 
     wide = {}
     if not options.optimize:  # one set of ranges, wide enough for the whole stream
-        wide["face"] = _range_codes(out, FACE, face_quant, intra_frames, bounds)
-        wide["body"] = _range_codes(out, BODY, body_quant, intra_frames, bounds)
+        wide["face"] = _range_codes(out, FACE, face_quant, intra_frames, bounds, compiled)
+        wide["body"] = _range_codes(out, BODY, body_quant, intra_frames, bounds, compiled)
     for g, (k, stop) in enumerate(zip(intra_frames, bounds)):
         params = CodingParams(frame_rate=frame_rate)
         if options.time_codes and float(out.timestamps[k]).is_integer():
             params.time_code = TimeCode.from_seconds(out.timestamps[k])
         if out.object_mask[k] & FACE_BIT:
-            codes = wide["face"] if wide else _range_codes(out, FACE, face_quant, [k], [stop])
+            codes = wide["face"] if wide else _range_codes(out, FACE, face_quant, [k], [stop], compiled)
             params.face = PartParams(face_quant, _mask_types(out.fap_mask[k], FACE, options.mask_types,
                                                              intended[source[k]]),
                                      out.fap_mask[k].copy(), ranges=RangeSet((True,) * 4, codes))
         if out.object_mask[k] & BODY_BIT:
-            codes = wide["body"] if wide else _range_codes(out, BODY, body_quant, [k], [stop])
+            codes = wide["body"] if wide else _range_codes(out, BODY, body_quant, [k], [stop], compiled)
             params.body = PartParams(body_quant, _mask_types(out.bap_mask[k], BODY, None, None),
                                      out.bap_mask[k].copy(), ranges=RangeSet((True,) * 4, codes))
         out.intra[k] = params
@@ -182,7 +191,30 @@ def _mask_types(mask: np.ndarray, part: PartSpec, requested, carried) -> tuple[i
     return tuple(types)
 
 
-def _range_codes(s: FapStream, part: PartSpec, quant: int, starts: Sequence[int], stops: Sequence[int]) -> np.ndarray:
+def _period_levels(values: np.ndarray, qstep: np.ndarray, a: int, b: int, compiled: bool = False) -> np.ndarray:
+    """(4, n): the intra level, its negation, and the largest P level up and down over frames a+1..b-1,
+    each against the closed-loop reconstruction the decoder will have."""
+    gop = np.zeros((4, values.shape[1]), dtype=np.int64)
+    if compiled:
+        from .compiled.kernels import closed_loop_extremes
+
+        raw = np.zeros_like(gop)
+        closed_loop_extremes(np.ascontiguousarray(values), np.ascontiguousarray(qstep, dtype=np.int64), a, b, raw)
+        gop[0], gop[1], gop[2], gop[3] = raw[2], raw[3], raw[0], raw[1]
+        return gop
+    level = quantise(values[a], qstep)
+    recon = dequantise(level, qstep)
+    gop[0], gop[1] = level, -level
+    for k in range(a + 1, b):
+        level = quantise(values[k] - recon, qstep)
+        recon = recon + dequantise(level, qstep)
+        gop[2] = np.maximum(gop[2], level)
+        gop[3] = np.maximum(gop[3], -level)
+    return gop
+
+
+def _range_codes(s: FapStream, part: PartSpec, quant: int, starts: Sequence[int], stops: Sequence[int],
+                 compiled: bool = False) -> np.ndarray:
     """The smallest 5-bit range codes that cover every level coded in frames starts[i]..stops[i]."""
     values, masks = (s.fap_values, s.fap_mask) if part is FACE else (s.bap_values, s.bap_mask)
     step = part.step_multiplier(quant)
@@ -190,15 +222,7 @@ def _range_codes(s: FapStream, part: PartSpec, quant: int, starts: Sequence[int]
     scaler = step or 1
     extremes = np.zeros((4, part.n), dtype=np.int64)  # max I, -min I, max P, -min P (all >= 0)
     for a, b in zip(starts, stops):
-        gop = np.zeros_like(extremes)
-        level = quantise(values[a], qstep)
-        recon = dequantise(level, qstep)
-        gop[0], gop[1] = level, -level
-        for k in range(a + 1, b):
-            level = quantise(values[k] - recon, qstep)
-            recon = recon + dequantise(level, qstep)
-            gop[2] = np.maximum(gop[2], level)
-            gop[3] = np.maximum(gop[3], -level)
+        gop = _period_levels(values, qstep, int(a), int(b), compiled)
         extremes = np.maximum(extremes, gop * masks[a][None, :])  # only what this intra period sends
     codes = -(-extremes * scaler // RANGE_DELTA)         # first guess, then fix C rounding below
     codes = np.minimum(codes, 31)
@@ -217,8 +241,12 @@ def _range_codes(s: FapStream, part: PartSpec, quant: int, starts: Sequence[int]
 
 
 # ---- writing ------------------------------------------------------------------------------
+NO_FACE_INTRA = "face data in a predicted frame before any face intra frame"
+NO_BODY_INTRA = "body data in a predicted frame before any body intra frame"
+
+
 class _Writer:
-    def __init__(self, stream: FapStream, pads: set[int]) -> None:
+    def __init__(self, stream: FapStream, pads: set[int], compiled: bool = False) -> None:
         self.s = stream
         self.pads = pads
         self.w = BitWriter()
@@ -229,11 +257,19 @@ class _Writer:
         self.body: PartParams | None = None
         self.spans: list[tuple[int, int]] = []
         self.ends: list[tuple[int, SegmentEnd, bool]] = []  # (frame, end, last segment of the frame)
+        self.compiled = _CompiledPlanes(self) if compiled else None
 
     def run(self) -> None:
         s, w = self.s, self.w
         w.start_code(s.object_start_code)
-        for k in range(len(s)):
+        intra = sorted(s.intra)
+        k = 0
+        while k < len(s):
+            if self.compiled is not None and k not in s.intra:  # P frames up to the next intra frame
+                stop = next((j for j in intra if j > k), len(s))
+                self.compiled.write(k, stop)
+                k = stop
+                continue
             if s.start_code[k]:
                 w.next_start_code()
                 w.start_code(int(s.start_code[k]))
@@ -248,6 +284,9 @@ class _Writer:
             if self.ends and self.ends[-1][0] == k:
                 f, end, _ = self.ends[-1]
                 self.ends[-1] = (f, end, True)
+            if self.compiled is not None:
+                self.compiled.after_intra(k)
+            k += 1
         w.next_start_code()
         w.start_code(END_CODE)
 
@@ -273,7 +312,7 @@ class _Writer:
                 self.viseme.start_intra(self.face.quant)
                 self.expression.start_intra(self.face.quant)
             elif self.face is None:
-                raise FbaError("face data in a predicted frame before any face intra frame")
+                raise FbaError(NO_FACE_INTRA)
             for fap, coder, fields, raw_bits in ((0, self.viseme, s.viseme[k], ("viseme_def",)),
                                                  (1, self.expression, s.expression[k], ("init_face", "expression_def"))):
                 if self.face.mask[fap]:
@@ -289,7 +328,7 @@ class _Writer:
                 self.body = syntax.part_intra_header(io, params.body, BODY)
                 self.baps.start_intra(self.body)
             elif self.body is None:
-                raise FbaError("body data in a predicted frame before any body intra frame")
+                raise FbaError(NO_BODY_INTRA)
             self.segment(k, self.baps, s.bap_values[k], intra)
 
     def hazards(self) -> list[tuple[int, str]]:
@@ -315,6 +354,78 @@ class _Writer:
         return found
 
 
+class _CompiledPlanes:
+    """The writer's P frames on the compiled path (:func:`mpeg4fa.fba.compiled.kernels.encode_planes`):
+    the reference writes the intra frames and sets up the coders; their P models become Fenwick
+    tables here, and runs of P frames are coded in one call, with the same bits, spans, segment ends
+    and faults as :meth:`_Writer.plane` would give."""
+
+    def __init__(self, writer: "_Writer") -> None:
+        from .compiled import kernels, tables
+
+        self.k, self.t, self.writer = kernels, tables, writer
+        self.fprev = tables.share_face_predictions(writer.viseme, writer.expression, writer.faps)
+        self.fbank, self.bbank = tables.Bank.empty(), tables.Bank.empty()
+        s = writer.s
+        self.pads = np.zeros(len(s), dtype=np.bool_)
+        self.pads[[k for k in writer.pads if 0 <= k < len(s)]] = True
+        self.res = np.zeros(kernels.RESULT_SIZE, dtype=np.int64)
+        self.scratch = np.zeros(N_BAPS + 8, dtype=np.int64)
+        self.arrays = tuple(np.ascontiguousarray(a) for a in (s.object_mask, s.skip, s.start_code, self.pads, s.viseme,
+                                                              s.expression, s.fap_values))
+        self.baps: np.ndarray | None = None  # the body's values, made contiguous when a body part is coded
+
+    def after_intra(self, k: int) -> None:
+        """Intra frame ``k`` was written: the models it set up, as tables."""
+        w, params = self.writer, self.writer.s.intra[k]
+        if params.face is not None and w.face is not None and self.writer.s.object_mask[k] & FACE_BIT:
+            self.fbank = self.t.face_bank(w.viseme, w.expression, w.faps, w.face.mask)
+        if params.body is not None and w.body is not None and self.writer.s.object_mask[k] & BODY_BIT:
+            self.bbank = self.t.body_bank(w.baps)
+
+    def write(self, first: int, stop: int) -> None:
+        w, k, fb, bb = self.writer, self.k, self.fbank, self.bbank
+        obj, skip, codes, pads, vis, exp, faps = self.arrays
+        symbols = len(fb.meta) + len(bb.meta)
+        capacity = int(((skip[first:stop].astype(np.int64).clip(0) // 15 + 1) * 4).sum()) + (stop - first) * (
+            80 + 3 * 64 + k.SYMBOL_BITS * symbols)
+        out = np.empty(capacity, dtype=np.uint8)
+        spans = np.empty((stop - first, 2), dtype=np.int64)
+        ends = np.empty(((stop - first) * 4, 4), dtype=np.int64)
+        if self.baps is None and bb.meta.shape[0]:
+            self.baps = np.ascontiguousarray(w.s.bap_values)
+        baps = self.baps if self.baps is not None else np.zeros((1, 1), dtype=np.int32)
+        face = w.face
+        written, segments = k.encode_planes(
+            out, w.w.pos, first, stop, obj, skip, codes, pads, vis, exp, faps, baps,
+            fb.meta, fb.total, fb.freq, fb.tree, self.fprev, face is not None,
+            bool(face is not None and face.mask[0]), bool(face is not None and face.mask[1]),
+            bb.meta, bb.total, bb.freq, bb.tree, w.baps.prev, w.body is not None, spans, ends, self.res, self.scratch)
+        w.w.buf.extend(out[:written].tobytes())
+        res = self.res
+        done = (int(res[k.ROWS]) if res[k.STATUS] == k.ERROR else stop) - first
+        w.spans.extend(map(tuple, spans[:done].tolist()))
+        w.ends.extend((f, SegmentEnd(pos, zeros), bool(last)) for f, pos, zeros, last in ends[:segments].tolist())
+        if res[k.STATUS] == k.ERROR:
+            raise self._fault()
+
+    def _fault(self) -> FbaError:
+        """The kernel's fault as the reference words it."""
+        k, res, w = self.k, self.res, self.writer
+        fault, a0, a1, a2 = (int(res[i]) for i in (k.FAULT, k.ARG0, k.ARG1, k.ARG2))
+        if fault == k.RANGE_ERROR:  # res[CODE]: 0 a face model, 1 a body model
+            row = (self.bbank if res[k.CODE] else self.fbank).meta[a0]
+            coder, j = self.t.coder_of(row, w.viseme, w.expression, w.faps, w.baps)
+            message = coder.range_message(j, a1, a2, intra=False)
+        elif fault == k.NO_FACE_BEFORE:
+            message = NO_FACE_INTRA
+        elif fault == k.NO_BODY_BEFORE:
+            message = NO_BODY_INTRA
+        else:  # FIELD_TOO_WIDE
+            message = syntax.does_not_fit(k.ENCODE_FIELD_NAMES[a0], a1, a2)
+        return FbaError(message, int(res[k.POS]), int(res[k.ROWS]))
+
+
 def _start_code_at(buf: bytearray, pos: int) -> bool:
     """Would a decoder peeking for a start code before the plane at ``pos`` find a prefix 0x000001?"""
     skips = ([0] if pos % 8 == 0 else []) + [8 - pos % 8]
@@ -322,7 +433,7 @@ def _start_code_at(buf: bytearray, pos: int) -> bool:
                for skip in skips)
 
 
-def write(stream: FapStream) -> bytes:
+def write(stream: FapStream, *, backend: str = "auto") -> bytes:
     """Encode a fully planned stream (every intra frame has its :class:`CodingParams`).
 
     A stream that some decoder would misread (see :meth:`_Writer.hazards`) is
@@ -332,9 +443,12 @@ def write(stream: FapStream) -> bytes:
     if 0 not in stream.intra:
         raise FbaError("the first frame must be an intra frame with coding parameters", frame=0)
     check_span(stream, stream.fps)
+    from .compiled import use_compiled
+
+    compiled = use_compiled(backend)
     pads: set[int] = set()
     for _ in range(MAX_REPAIRS):
-        writer = _Writer(stream, pads)
+        writer = _Writer(stream, pads, compiled)
         writer.run()
         found = writer.hazards()
         if not found:
@@ -357,13 +471,13 @@ def write(stream: FapStream) -> bytes:
             pads = set()
             stream = stream.copy()
             for k in sorted(extra_intra):
-                stream.intra[k] = _repeat_params(stream, k)
+                stream.intra[k] = _repeat_params(stream, k, compiled)
         else:
             pads |= new_pads
     raise FbaError("could not place frames so that every decoder reads them; please report this stream")
 
 
-def _repeat_params(s: FapStream, k: int) -> CodingParams:
+def _repeat_params(s: FapStream, k: int, compiled: bool = False) -> CodingParams:
     """Parameters for an extra intra frame at k: those of the intra frame before it, with ranges
     recomputed for the frames it now governs (up to the next intra frame)."""
     prev = s.intra[max(j for j in s.intra if j < k)]
@@ -372,6 +486,6 @@ def _repeat_params(s: FapStream, k: int) -> CodingParams:
     for name, part in (("face", FACE), ("body", BODY)):
         old = getattr(prev, name)
         if old is not None:
-            codes = _range_codes(s, part, old.quant, [k], [stop])
+            codes = _range_codes(s, part, old.quant, [k], [stop], compiled)
             parts[name] = replace(old, mask=old.mask.copy(), ranges=RangeSet((True,) * 4, codes))
     return replace(prev, time_code=None, **parts)

@@ -19,51 +19,11 @@ from . import bits as bit_messages
 from .arith import SEGMENT_ENDS, STUFFING_EXPECTED
 from .bits import BitReader
 from .compiled import kernels as kernel
-from .compiled.kernels import highest_power_of_two, uniform_bank
+from .compiled.tables import Bank, body_bank, coder_of, face_bank, share_face_predictions
 from .decoder import NO_END_CODE, OBJECT_MASK_ZERO, _Decoder, no_intra, unexpected_start_code
 from .errors import FbaError
-from .params import FieldCoder, ValueCoder
 from .stacking import BLOCK
 from .stream import BODY as BODY_BIT, FACE as FACE_BIT, N_BAPS, N_FAPS, Frame
-
-_PREV_BASE = {kernel.VISEME: 0, kernel.EXPRESSION: 3, kernel.FAP: 7}
-
-
-@dataclass
-class _Bank:
-    """One part's P models as the kernel reads them."""
-
-    meta: np.ndarray
-    total: np.ndarray
-    freq: np.ndarray
-    tree: np.ndarray
-
-    @classmethod
-    def empty(cls) -> "_Bank":
-        z = np.zeros(0, dtype=np.int64)
-        return cls(np.zeros((0, kernel.META_COLUMNS), dtype=np.int64), z, z.copy(), z.copy())
-
-
-def _rows(bank: int, coder: FieldCoder | ValueCoder, prev_base: int) -> np.ndarray:
-    """Model-table rows (see :mod:`.compiled.kernels`) for the P models of ``coder``'s masked parameters."""
-    n = len(coder.idx)
-    meta = np.zeros((n, kernel.META_COLUMNS), dtype=np.int64)
-    meta[:, kernel.BANK] = bank
-    meta[:, kernel.COL] = coder.idx
-    meta[:, kernel.PREV] = prev_base + np.asarray(coder.idx, dtype=np.int64)
-    meta[:, kernel.QSTEP] = coder.qstep
-    meta[:, kernel.PMIN] = coder.pmin
-    meta[:, kernel.SIZE] = coder.psize
-    meta[:, kernel.TOPSTEP] = highest_power_of_two(meta[:, kernel.SIZE])
-    meta[:, kernel.SELMAX] = [coder.select_max(j) for j in range(n)] if isinstance(coder, FieldCoder) else -1
-    return meta
-
-
-def _bank(meta: np.ndarray) -> _Bank:
-    foff, toff, freq, tree, total = uniform_bank(meta[:, kernel.SIZE])
-    meta[:, kernel.FOFF], meta[:, kernel.TOFF] = foff, toff
-    return _Bank(meta, total, freq, tree)
-
 
 @dataclass
 class Rows:
@@ -96,10 +56,8 @@ class FastDecoder(_Decoder):
     def __init__(self, reader: BitReader, block: int = BLOCK) -> None:
         super().__init__(reader)
         self.block = block
-        self.fprev = np.zeros(3 + 4 + N_FAPS, dtype=np.int64)  # viseme, expression, FAP 1..68 previous values
-        self.viseme.prev, self.expression.prev = self.fprev[0:3], self.fprev[3:7]
-        self.faps.prev = self.fprev[7:]
-        self.fbank, self.bbank = _Bank.empty(), _Bank.empty()
+        self.fprev = share_face_predictions(self.viseme, self.expression, self.faps)
+        self.fbank, self.bbank = Bank.empty(), Bank.empty()
         self.eof = reader._file is None  # noqa: SLF001 - the reader is ours
         self.res = np.zeros(kernel.RESULT_SIZE, dtype=np.int64)
         self.times = np.zeros(1, dtype=np.float64)
@@ -123,16 +81,10 @@ class FastDecoder(_Decoder):
 
     # ---- after an intra plane: the models it set up, as flat tables ----
     def _reset_face(self) -> None:
-        parts = []
-        if self.face.mask[0]:
-            parts.append(_rows(kernel.VISEME, self.viseme, _PREV_BASE[kernel.VISEME]))
-        if self.face.mask[1]:
-            parts.append(_rows(kernel.EXPRESSION, self.expression, _PREV_BASE[kernel.EXPRESSION]))
-        parts.append(_rows(kernel.FAP, self.faps, _PREV_BASE[kernel.FAP]))
-        self.fbank = _bank(np.concatenate(parts))
+        self.fbank = face_bank(self.viseme, self.expression, self.faps, self.face.mask)
 
     def _reset_body(self) -> None:
-        self.bbank = _bank(_rows(kernel.BAP, self.baps, 0))
+        self.bbank = body_bank(self.baps)
 
     # ---- the loop ----
     def items(self) -> Iterator[Frame | Rows]:
@@ -223,9 +175,8 @@ class FastDecoder(_Decoder):
         elif fault == kernel.SEGMENT_STUFFING:
             message = STUFFING_EXPECTED
         elif fault == kernel.SELECT_OUT_OF_RANGE:
-            row = self.fbank.meta[a0]
-            coder = self.viseme if row[kernel.BANK] == kernel.VISEME else self.expression
-            message = coder.select_message(int(row[kernel.COL]), a1)
+            coder, j = coder_of(self.fbank.meta[a0], self.viseme, self.expression, self.faps, self.baps)
+            message = coder.select_message(j, a1)
         else:  # pragma: no cover - every fault code is named above
             message = f"compiled decoder fault {fault}"
         return FbaError(message, pos, k)

@@ -113,14 +113,19 @@ class _Coder:
         bad = np.flatnonzero((symbols < 0) | (symbols >= size))
         if bad.size:
             k = int(bad[0])
-            low = int(self.imin[k] if intra else self.pmin[k])
-            kind = "intra value" if intra else "change from the previous frame"
-            raise FbaError(f"{self.label(int(self.idx[k]))}: {kind} {int(diff[k])} quantises to level "
-                           f"{int(level[k])}, outside its coded range {low}..{low + int(size[k]) - 1}; "
-                           f"use a coarser quantiser, wider ranges or more intra frames", frame=frame)
+            raise FbaError(self.range_message(k, int(diff[k]), int(level[k]), intra), frame=frame)
         recon = dequantise(level, self.qstep)
         self.prev[self.idx] = recon if intra else self.prev[self.idx] + recon
         return symbols.tolist()
+
+
+    def range_message(self, k: int, diff: int, level: int, intra: bool) -> str:
+        """Why parameter ``k`` (in coding order) cannot be coded: its level is outside its model."""
+        low = int(self.imin[k] if intra else self.pmin[k])
+        size = int(self.isize[k] if intra else self.psize[k])
+        kind = "intra value" if intra else "change from the previous frame"
+        return (f"{self.label(int(self.idx[k]))}: {kind} {diff} quantises to level {level}, outside its coded "
+                f"range {low}..{low + size - 1}; use a coarser quantiser, wider ranges or more intra frames")
 
 
 class ValueCoder(_Coder):

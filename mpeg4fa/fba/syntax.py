@@ -21,6 +21,10 @@ MASK_NONE, MASK_HOLD, MASK_INTERPOLATE, MASK_ALL = 0, 1, 2, 3
 RANGE_SET_NAMES = ("i_max", "i_min", "p_max", "p_min")
 
 
+def does_not_fit(what: str, value: int, n: int) -> str:
+    return f"{what} = {value} does not fit in {n} bits"
+
+
 class Reading:
     writing = False
 
@@ -131,7 +135,7 @@ class Writing:
 
     def u(self, n: int, value: int, what: str) -> int:
         if not 0 <= int(value) < (1 << n):
-            raise FbaError(f"{what} = {value} does not fit in {n} bits", self.bits.pos)
+            raise FbaError(does_not_fit(what, value, n), self.bits.pos)
         self.bits.write(n, int(value))
         return int(value)
 

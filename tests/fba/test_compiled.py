@@ -187,3 +187,82 @@ def test_backend_choice(monkeypatch):
     with pytest.raises(FbaError, match="cannot run here"):
         decode(data, backend="compiled")
     assert len(decode(data)) == 3  # auto falls back to the reference
+
+
+# ---- the encoder ---------------------------------------------------------------------------
+def encode_both(stream, options=None):
+    out = []
+    for backend in ("python", "compiled"):
+        try:
+            out.append(encode(stream, options, backend=backend))
+        except FbaError as exc:
+            out.append(exc)
+    a, b = out
+    assert type(a) is type(b), (a, b)
+    if isinstance(a, FbaError):
+        assert (a.message, a.bit_offset, a.frame) == (b.message, b.bit_offset, b.frame)
+    else:
+        assert a == b
+    return a
+
+
+@pytest.mark.parametrize("vector", [v for v in MANIFEST.vectors if v.expect == "decode"], ids=lambda v: v.id)
+def test_conformance_vectors_encode_the_same(vector):
+    s = decode(MANIFEST.path(vector.stream))
+    encode_both(s)  # (hand-made vectors, e.g. an end code with no stuffing, need not re-encode to their bytes)
+    encode_both(s, EncodeOptions(optimize=True))
+    encode_both(s, EncodeOptions(fap_quant=2, intra_period=5, start_codes=True))
+
+
+@pytest.mark.parametrize("path", real_vector_paths(), ids=vector_id)
+def test_real_vectors_encode_the_same(path):
+    s = decode(path)
+    assert encode_both(s) == path.read_bytes()
+    encode_both(s, EncodeOptions(optimize=True, skip_repeats=True))
+
+
+@hyp_settings(40)
+@given(seed=seeds, n=st.integers(1, 50), quant=st.integers(0, 31), period=st.sampled_from([None, 0, 1, 3, 11]),
+       body=st.booleans(), high=st.booleans(), optimize=st.booleans(), repeats=st.booleans())
+def test_random_streams_encode_the_same(seed, n, quant, period, body, high, optimize, repeats):
+    rng = np.random.default_rng(seed)
+    fap_mask = rng.random(68) < rng.choice([0.1, 0.5, 1.0])
+    if not high:
+        fap_mask[:2] = False
+    s = make_stream(seed, n, fap_mask=fap_mask, bap_mask=rng.random(296) < 0.2 if body else None, fap_quant=quant)
+    encode_both(s, EncodeOptions(fap_quant=quant, intra_period=period, optimize=optimize, skip_repeats=repeats,
+                                 start_codes=bool(seed % 2), time_codes=bool(seed % 3)))
+
+
+def test_encoder_faults_are_the_same():
+    """A change outside the coded range, a raw bit that is not a bit, a P frame with a part no intra set up."""
+    s = decode(encode(make_stream(3, 12, fap_mask=np.ones(68, dtype=bool), bap_mask=np.ones(296, dtype=bool)),
+                      EncodeOptions(intra_period=0)))
+    wide = s.copy()
+    wide.fap_values[7, 40] += 5000                      # FAP 41 jumps beyond its P range
+    assert "FAP 41: change from the previous frame" in encode_both(wide).message
+    body = s.copy()
+    body.bap_values[5, 3] += 10 ** 6
+    assert "BAP" in encode_both(body).message
+    raw = s.copy()
+    raw.viseme[4, 3] = 2                                # viseme_def is one bit
+    assert encode_both(raw).message == "viseme_def = 2 does not fit in 1 bits"
+    mask = s.copy()
+    mask.object_mask[6] = 5
+    assert "fba_object_mask = 5" in encode_both(mask).message
+    face_only = decode(encode(make_stream(4, 6, fap_mask=np.ones(68, dtype=bool)), EncodeOptions(intra_period=0)))
+    face_only.object_mask[3] = 3                         # body data in a P frame, no body intra
+    assert "body data in a predicted frame" in encode_both(face_only).message
+
+
+@hyp_settings(40)
+@given(seed=seeds, n=st.integers(2, 80), q=st.integers(0, 8))
+def test_closed_loop_levels_match_the_reference(seed, n, q):
+    from mpeg4fa.fba.encoder import _period_levels
+
+    rng = np.random.default_rng(seed)
+    values = rng.integers(-3000, 3000, (n, 68)).astype(np.int32)
+    qstep = np.asarray(rng.integers(0, 5, 68), dtype=np.int64) * q
+    a, b = int(rng.integers(0, n - 1)), n
+    np.testing.assert_array_equal(_period_levels(values, qstep, a, b, compiled=True),
+                                  _period_levels(values, qstep, a, b, compiled=False))

@@ -517,3 +517,243 @@ def decode_planes(buf, base, p, nbuf, eof,
         o_bits[rows] = p - start
         times[0] = t + (skip + 1) / fps
         rows += 1
+
+
+# ==== the encoder: segments and runs of P planes ================================================
+# The mirror of the above for the encoder (``mpeg4fa.fba.encoder``): quantise against the
+# closed-loop prediction, code one segment with the same models, and write runs of P planes
+# into an unpacked bit array, recording each frame's bit span and each segment's end (for the
+# writer's hazard checks). Faults stop the run and are worded by the driver as the reference does.
+
+(RANGE_ERROR,          # model row, the change, its level
+ NO_FACE_BEFORE,       # -
+ NO_BODY_BEFORE,       # -
+ FIELD_TOO_WIDE,       # field id (ENCODE_FIELD_NAMES), value, width
+ ) = range(4)
+ENCODE_FIELD_NAMES = ("fba_object_mask", "viseme_def", "init_face", "expression_def", "number_of_frames_to_skip")
+(E_OBJECT_MASK, E_VISEME_DEF, E_INIT_FACE, E_EXPRESSION_DEF, E_SKIP_CHUNK) = range(5)
+
+
+@jit
+def quantise(x, q):
+    """The reference quantiser (SYNTAX.md 8): 0 when |x| <= q/2, else round(|x|/q) half up; sign kept."""
+    if q == 0:
+        return x
+    a = -x if x < 0 else x
+    level = 0 if a <= q // 2 else (a + q // 2) // q
+    return -level if x < 0 else level
+
+
+@jit
+def _put(out, o, bit, pending, zeros):
+    """Emit ``bit`` then ``pending`` opposite bits, stuffing a '1' after 22 zeros: (o, zeros)."""
+    for j in range(pending + 1):
+        b = bit if j == 0 else 1 - bit
+        if zeros == MAX_ZERO_RUN:
+            out[o] = 1
+            o += 1
+            zeros = 0
+        out[o] = b
+        o += 1
+        zeros = zeros + 1 if b == 0 else 0
+    return o, zeros
+
+
+@jit
+def encode_segment(out, o, meta, lo, hi, total, freq, tree, symbols):
+    """Code ``symbols[m - lo]`` with models ``lo..hi-1``, adapting them, and flush: (o, trailing zeros)."""
+    low = 0
+    high = TOP
+    pending = 0
+    zeros = 0
+    for m in range(lo, hi):
+        s = symbols[m - lo]
+        t = total[m]
+        foff = meta[m, FOFF]
+        toff = meta[m, TOFF]
+        before = prefix(tree, toff, s)
+        cum_hi = t - before
+        cum_lo = cum_hi - freq[foff + s]
+        length = high - low + 1
+        high = low - 1 + (length * cum_hi) // t
+        low = low + (length * cum_lo) // t
+        while True:
+            if high < Q2:
+                o, zeros = _put(out, o, 0, pending, zeros)
+                pending = 0
+            elif low >= Q2:
+                o, zeros = _put(out, o, 1, pending, zeros)
+                pending = 0
+                low -= Q2
+                high -= Q2
+            elif low >= Q1 and high < Q3:
+                pending += 1
+                low -= Q1
+                high -= Q1
+            else:
+                break
+            low <<= 1
+            high = (high << 1) | 1
+        count(freq, foff, tree, toff, meta[m, SIZE], total, m, s)
+    o, zeros = _put(out, o, 0 if low < Q1 else 1, pending + 1, zeros)  # the flush (SYNTAX.md 9)
+    return o, zeros
+
+
+@jit
+def _symbols(meta, lo, hi, prev, values, symbols, res):
+    """P-frame symbols of models ``lo..hi-1`` for ``values`` (indexed by column), the prediction updated;
+    False (and a RANGE_ERROR in ``res``) when a change falls outside its model."""
+    for m in range(lo, hi):
+        j = meta[m, PREV]
+        q = meta[m, QSTEP]
+        diff = values[meta[m, COL]] - prev[j]
+        level = quantise(diff, q)
+        s = level - meta[m, PMIN]
+        if s < 0 or s >= meta[m, SIZE]:
+            res[FAULT] = RANGE_ERROR
+            res[ARG0] = m
+            res[ARG1] = diff
+            res[ARG2] = level
+            return False
+        symbols[m - lo] = s
+        prev[j] += level * q if q != 0 else level
+    return True
+
+
+@jit
+def _bits(out, o, value, n):
+    for i in range(n - 1, -1, -1):
+        out[o] = (value >> i) & 1
+        o += 1
+    return o
+
+
+@jit
+def encode_planes(out, base, first, stop, obj, skip, codes, pads, vis, exp, faps, baps,
+                  fmeta, ftotal, ffreq, ftree, fprev, face_ready, vis_on, exp_on,
+                  bmeta, btotal, bfreq, btree, bprev, body_ready,
+                  spans, ends, res, scratch):
+    """Write P frames ``first..stop-1`` from ``out[0]`` on (``base``: the stream bits before it).
+
+    ``spans[r] = (start, end)`` of frame ``first + r`` (absolute, after its start code), ``ends[e] =
+    (frame, end, trailing zeros, last-in-frame)`` per segment. ``res[STATUS]`` FULL when every frame
+    was written, ERROR with ``res[ROWS]`` the frame and ``res[POS]`` the bit of the fault.
+    Returns the bits written and the segments recorded.
+    """
+    o = 0
+    e = 0
+    nf = fmeta.shape[0]
+    vis_lo, vis_hi, exp_lo, exp_hi, fap_lo = 0, 0, 0, 0, 0
+    for m in range(nf):
+        b = fmeta[m, BANK]
+        if b == VISEME:
+            vis_hi = m + 1
+            exp_lo = m + 1
+            exp_hi = m + 1
+            fap_lo = m + 1
+        elif b == EXPRESSION:
+            exp_hi = m + 1
+            fap_lo = m + 1
+    nb = bmeta.shape[0]
+    res[STATUS] = FULL
+    for k in range(first, stop):
+        res[ROWS] = k
+        if codes[k] != 0:  # next_start_code() then the plane start code (SYNTAX.md 2)
+            n = 8 - (base + o) % 8
+            o = _bits(out, o, (1 << (n - 1)) - 1, n)
+            o = _bits(out, o, codes[k], 32)
+        start = o
+        mask = obj[k]
+        o = _bits(out, o, 0, 1)  # is_intra
+        if mask > 3:
+            _fail(res, FIELD_TOO_WIDE, base + o, E_OBJECT_MASK, mask, 2)
+            return o, e
+        o = _bits(out, o, mask, 2)
+        count_skip = skip[k]
+        if count_skip > 0 or pads[k]:  # skip_frames: 4-bit chunks while a chunk is 15 (SYNTAX.md 3)
+            o = _bits(out, o, 1, 1)
+            remaining = count_skip
+            while True:
+                chunk = remaining if remaining < 15 else 15
+                if chunk < 0:
+                    _fail(res, FIELD_TOO_WIDE, base + o, E_SKIP_CHUNK, chunk, 4)
+                    return o, e
+                o = _bits(out, o, chunk, 4)
+                remaining -= chunk
+                if chunk != 15:
+                    break
+        else:
+            o = _bits(out, o, 0, 1)
+        last = -1
+        if mask & 1:
+            if not face_ready:
+                _fail(res, NO_FACE_BEFORE, base + o, 0, 0, 0)
+                return o, e
+            for part in range(2):
+                on = vis_on if part == 0 else exp_on
+                if not on:
+                    continue
+                lo = vis_lo if part == 0 else exp_lo
+                hi = vis_hi if part == 0 else exp_hi
+                row = vis[k] if part == 0 else exp[k]
+                if not _symbols(fmeta, lo, hi, fprev, row, scratch, res):
+                    res[STATUS], res[POS], res[CODE] = ERROR, base + o, 0
+                    return o, e
+                o, z = encode_segment(out, o, fmeta, lo, hi, ftotal, ffreq, ftree, scratch)
+                ends[e, 0], ends[e, 1], ends[e, 2], ends[e, 3] = k, base + o, z, 0
+                last = e
+                e += 1
+                for j in range(1 if part == 0 else 2):
+                    v = row[hi - lo + j]
+                    if v < 0 or v > 1:
+                        _fail(res, FIELD_TOO_WIDE, base + o, (E_VISEME_DEF if part == 0 else E_INIT_FACE) + j, v, 1)
+                        return o, e
+                    o = _bits(out, o, v, 1)
+            if not _symbols(fmeta, fap_lo, nf, fprev, faps[k], scratch, res):
+                res[STATUS], res[POS], res[CODE] = ERROR, base + o, 0
+                return o, e
+            o, z = encode_segment(out, o, fmeta, fap_lo, nf, ftotal, ffreq, ftree, scratch)
+            ends[e, 0], ends[e, 1], ends[e, 2], ends[e, 3] = k, base + o, z, 0
+            last = e
+            e += 1
+        if mask & 2:
+            if not body_ready:
+                _fail(res, NO_BODY_BEFORE, base + o, 0, 0, 0)
+                return o, e
+            if not _symbols(bmeta, 0, nb, bprev, baps[k], scratch, res):
+                res[STATUS], res[POS], res[CODE] = ERROR, base + o, 1
+                return o, e
+            o, z = encode_segment(out, o, bmeta, 0, nb, btotal, bfreq, btree, scratch)
+            ends[e, 0], ends[e, 1], ends[e, 2], ends[e, 3] = k, base + o, z, 0
+            last = e
+            e += 1
+        if last >= 0:
+            ends[last, 3] = 1
+        spans[k - first, 0] = base + start
+        spans[k - first, 1] = base + o
+    return o, e
+
+
+@jit
+def closed_loop_extremes(values, qstep, a, b, out):
+    """Largest P level up and down of each parameter over frames a+1..b-1 of an intra period starting
+    at a, against the closed-loop reconstruction (what ``_range_codes`` needs), into ``out[0:2]``; the
+    intra levels into ``out[2:4]``."""
+    n = values.shape[1]
+    for i in range(n):
+        q = qstep[i]
+        level = quantise(values[a, i], q)
+        recon = level * q if q != 0 else level
+        out[2, i] = level
+        out[3, i] = -level
+        up = 0
+        down = 0
+        for k in range(a + 1, b):
+            level = quantise(values[k, i] - recon, q)
+            recon += level * q if q != 0 else level
+            if level > up:
+                up = level
+            if -level > down:
+                down = -level
+        out[0, i] = up
+        out[1, i] = down
