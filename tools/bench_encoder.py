@@ -3,22 +3,28 @@
 
 A script run on demand, not a test::
 
-    .venv/bin/python tools/bench_encoder.py [--seconds 60] [--json OUT] [--engine espeak]
+    .venv/bin/python tools/bench_encoder.py [--seconds 60] [--json OUT] [--engine espeak] [--before OLD.json]
 
-For about ``--seconds`` of English and of Chinese speech (original sample sentences with
-expression tags, cycled until the speech is long enough) at 25 fps it measures:
+1. per sentence (issue 14): each of the English sentences (``ENGLISH``: 3-10 s each, some with
+   expression tags, some without, among them the sentence visage|SDK's encoder wrote at 18.3
+   bits/frame) and the Chinese ones (``CHINESE``) encoded on its own at the high level at 25 fps,
+   with the encoder's coding options for text (``TEXT_CODING``): bits per frame, mean and range.
+   ``--before OLD.json`` (this script's JSON from an earlier version of the encoder) adds a
+   before/after table;
+2. speed, for about ``--seconds`` of English and of Chinese speech (the sentences cycled): TTS
+   time, the rest of the encoder (visemes, timeline, FAP stream, bitstream) and the whole, each as
+   x real time (audio seconds per wall second);
+3. size of that long speech: bits per frame and kbit/s at the high level (FAP 1 + FAP 2; Chinese
+   visemes go out as low-level FAPs, see mpeg4fa.speech.encoder), the low level (every moving FAP
+   3-68) and the low level restricted to the lip, jaw and brow groups (2, 4, 8), each with
+   ``TEXT_CODING`` and with the codec's plain defaults.
 
-1. speed: TTS time, the rest of the encoder (visemes, timeline, FAP stream, bitstream) and the
-   whole, each as x real time (audio seconds per wall second);
-2. size: bits per frame and kbit/s at the high level (FAP 1 + FAP 2; Chinese visemes go out
-   as low-level FAPs, see mpeg4fa.speech.encoder), the low level (every moving FAP 3-68) and
-   the low level restricted to the lip, jaw and brow groups (2, 4, 8), each with the encoder's
-   coding options for text (``TEXT_CODING``) and with the codec's plain defaults.
-
-Targets (issue 5): high level <= 30 bits/frame; low-level lip, jaw and brow FAPs <= 60
-bits/frame (< 1.5 kbit/s). It prints tables, marks targets PASS/FAIL and writes JSON
-(``bench_encoder.json`` unless ``--json``).
+Targets: English high level <= 17 bits/frame on average over the sentences (issue 14; issue 5's
+target was <= 30 on the long speech); low-level lip, jaw and brow FAPs <= 60 bits/frame
+(< 1.5 kbit/s). It prints tables, marks targets PASS/FAIL and writes JSON (``bench_encoder.json``
+unless ``--json``).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,24 +42,45 @@ import numpy as np  # noqa: E402
 
 from mpeg4fa import __version__ as MPEG4FA_VERSION  # noqa: E402
 from mpeg4fa.fba import EncodeOptions, FapStream, decode, encode  # noqa: E402
-from mpeg4fa.face.frames import resolve  # noqa: E402
+from mpeg4fa.decoded import resolve  # noqa: E402
 from mpeg4fa.spec import FAP_GROUP  # noqa: E402
 from mpeg4fa.speech.encoder import TEXT_CODING, encode_text, make_engine  # noqa: E402
 
 FPS = 25.0
+TARGET_SENTENCES = 17.0
+"""English high level, mean bits/frame over ``ENGLISH`` each encoded on its own (issue 14)."""
 TARGET_HIGH = 30.0
+"""English high level on the long speech (issue 5): kept as a note, it is no longer the goal."""
 TARGET_LIPS = 60.0
 LIP_JAW_BROW_GROUPS = (2, 4, 8)
 
 ENGLISH = [
-    "(joy, 30, 0.6) Good morning, and welcome to the station.",
+    "Would you want me to tell you the latest info about hotels and book reservations?",  # visage: 18.3
+    "(joy, 30, 0.6) Good morning, and welcome to the central station on this bright spring day.",
     "The next train to the harbour leaves from platform four in about ten minutes.",
     "(surprise, 35, 0.3) Oh, the bridge is closed today because of the strong wind!",
-    "(joy, 0, 0.5) Please take the bus from the main square instead.",
+    "(joy, 0, 0.5) Please take the bus from the main square instead, it leaves every ten minutes.",
     "It stops near the old market, the museum and the public library.",
-    "(sadness, 25, 0.8) We are sorry for the trouble this may cause on your journey.",
+    "(sadness, 25, 0.8) We are very sorry for the trouble this may cause on your journey today.",
     "(joy, 40, 0.5) Tickets for the evening concert are still available at the front desk.",
     "Remember to keep your bags with you, and have a pleasant trip.",
+    "My grandmother grew tomatoes, beans and sweet peppers behind her little yellow house.",
+    "Could you send me the report by Friday afternoon, so that I can read it over the weekend?",
+    "The library opens at nine in the morning and closes at half past six in the evening.",
+    "When the rain finally stopped, the children ran outside to jump in every puddle they could find.",
+    "A cup of hot tea and a good book make a cold winter evening feel much shorter.",
+    "Turn left at the second traffic light, then follow the river until you see the blue bridge.",
+    "(fear, 30, 0.4) Did you hear that noise coming from the basement just now?",
+    "The weather forecast says it will be sunny tomorrow, with a light breeze from the west.",
+    "(anger, 35, 0.5) I have asked you three times to close the door behind you!",
+    "Our team finished the project two weeks early, and the client was very pleased with it.",
+    "Please switch off your phone before the film starts, and enjoy the show.",
+    "(joy, 45, 0.4) Congratulations on your new job, we are all so proud of you! (joy, 0, 1) Now, let us "
+    "talk about the details.",
+    "The museum shows paintings, old maps and a large collection of coins from many countries.",
+    "He packed a sandwich, an apple and a bottle of water for the long walk over the hills.",
+    "(disgust, 30, 0.5) This soup has been sitting in the fridge for far too long, please throw it away.",
+    "If you need any help with the new software, just call the support line at any time.",
 ]
 CHINESE = [
     "(joy, 30, 0.6)大家早上好，欢迎来到火车站。",
@@ -148,6 +175,60 @@ def bench_language(name: str, sentences: list[str], seconds: float, engine_name:
     return result
 
 
+def bench_sentences(name: str, sentences: list[str], engine_name: str) -> dict:
+    """Each sentence encoded on its own at the high level: bits per frame with the text coding."""
+    engine = make_engine(engine_name)
+    rows = []
+    for text in sentences:
+        enc = encode_text(text, engine=engine, level="high", fps=FPS)
+        data = encode(enc.stream, enc.coding())
+        n = len(enc.stream)
+        rows.append({"text": text, "audio_s": enc.speech.duration, "frames": n, "bits": len(data) * 8,
+                     "bits_per_frame": len(data) * 8 / n, "tagged": bool(enc.utterance.cues)})
+    per = np.array([r["bits_per_frame"] for r in rows])
+    return {"language": name, "sentences": rows, "mean": float(per.mean()), "min": float(per.min()),
+            "max": float(per.max()),
+            "pooled": sum(r["bits"] for r in rows) / sum(r["frames"] for r in rows)}
+
+
+def _sentence_tables(results: list[dict], before: dict | None) -> bool:
+    """Per-sentence tables; True when the English mean meets its target."""
+    old = {}
+    if before is not None:
+        old = {row["text"]: row for r in before.get("sentences", []) for row in r["sentences"]}
+    print("| language | sentences | audio s (min-max) | mean bits/frame | range | pooled | target |")
+    print("|---|---|---|---|---|---|---|")
+    ok = True
+    for r in results:
+        audio = [row["audio_s"] for row in r["sentences"]]
+        verdict = ""
+        if r["language"] == "English":
+            ok = r["mean"] <= TARGET_SENTENCES
+            verdict = f"<= {TARGET_SENTENCES:g} {'PASS' if ok else 'FAIL'}"
+        print(f"| {r['language']} | {len(audio)} | {min(audio):.1f}-{max(audio):.1f} | {r['mean']:.1f} | "
+              f"{r['min']:.1f}-{r['max']:.1f} | {r['pooled']:.1f} | {verdict} |")
+    print("\n| language | sentence | tags | audio s | bits/frame" + (" | before | change |" if old else " |"))
+    print("|---|---|---|---|---|" + ("---|---|" if old else ""))
+    for r in results:
+        for row in r["sentences"]:
+            line = (f"| {r['language']} | {row['text'][:48]} | {'yes' if row['tagged'] else 'no'} | "
+                    f"{row['audio_s']:.2f} | {row['bits_per_frame']:.1f} |")
+            if old:
+                was = old.get(row["text"])
+                line += (f" {was['bits_per_frame']:.1f} | {row['bits_per_frame'] / was['bits_per_frame'] - 1:+.0%} |"
+                         if was else " n/a | |")
+            print(line)
+    if old:
+        print("\n| language | before: mean (range) | after: mean (range) |")
+        print("|---|---|---|")
+        for r in results:
+            prev = next((b for b in before["sentences"] if b["language"] == r["language"]), None)
+            if prev:
+                print(f"| {r['language']} | {prev['mean']:.1f} ({prev['min']:.1f}-{prev['max']:.1f}) | "
+                      f"{r['mean']:.1f} ({r['min']:.1f}-{r['max']:.1f}) |")
+    return ok
+
+
 class _Timed:
     """An engine wrapper that adds up the time spent synthesizing."""
 
@@ -168,12 +249,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=60.0, help="speech length per language (default 60)")
     ap.add_argument("--engine", default="espeak", help="espeak (default), pyttsx3 or estimate")
     ap.add_argument("--json", type=Path, default=Path("bench_encoder.json"))
+    ap.add_argument("--before", type=Path, help="this script's JSON from an earlier encoder: a before/after table")
     args = ap.parse_args(argv)
+    before = json.loads(args.before.read_text()) if args.before else None
+
+    sentences = [bench_sentences("English", ENGLISH, args.engine), bench_sentences("Chinese", CHINESE, args.engine)]
 
     results = [bench_language("English", ENGLISH, args.seconds, args.engine),
                bench_language("Chinese", CHINESE, args.seconds, args.engine)]
     print(f"mpeg4fa {MPEG4FA_VERSION}, {platform.python_implementation()} {platform.python_version()}, "
           f"{platform.machine()}, engine {args.engine}, {FPS:g} fps, coding for text: {TEXT_CODING}\n")
+    ok = _sentence_tables(sentences, before)
+    print()
     print("| language | level | audio s | TTS s | encoder s | x real time (no TTS) | x real time (with TTS) |")
     print("|---|---|---|---|---|---|---|")
     for r in results:
@@ -183,15 +270,17 @@ def main(argv: list[str] | None = None) -> int:
                   f"{x['x_realtime_without_tts']:.0f} | {x['x_realtime_with_tts']:.0f} |")
     print("\n| language | stream | coding | bits/frame | kbit/s | target |")
     print("|---|---|---|---|---|---|")
-    ok = True
     for r in results:
         for key, target in (("high", TARGET_HIGH), ("low", None), ("low_lips", TARGET_LIPS)):
             for coding, s in r[key]["sizes"].items():
                 verdict = ""
                 if target is not None and coding == "text coding":
                     passed = s["bits_per_frame"] <= target
-                    ok &= passed
-                    verdict = f"<= {target:g} {'PASS' if passed else 'FAIL'}"
+                    if key == "high":  # issue 5's target, a note now
+                        verdict = f"(was <= {target:g}: {'met' if passed else 'not met'})"
+                    else:
+                        ok &= passed
+                        verdict = f"<= {target:g} {'PASS' if passed else 'FAIL'}"
                 label = {"high": "high level", "low": "low level (all moving FAPs)",
                          "low_lips": "low level, lip/jaw/brow groups"}[key]
                 print(f"| {r['language']} | {label} | {coding} | {s['bits_per_frame']:.1f} | {s['kbit_s']:.2f} | "
@@ -205,7 +294,8 @@ def main(argv: list[str] | None = None) -> int:
             mm = f"{e['max'] * mns:.2f} (MNS0/1024 = {mns:.4f} mm)" if mns else "n/a (no default head)"
             print(f"| {r['language']} | {level} | {r[level]['mask_types']} | {e['max']:.0f} | {e['mean']:.2f} | {mm} |")
     args.json.write_text(json.dumps({"version": MPEG4FA_VERSION, "engine": args.engine, "fps": FPS,
-                                     "text_coding": TEXT_CODING, "results": results, "targets_met": ok},
+                                     "text_coding": TEXT_CODING, "sentences": sentences, "results": results,
+                                     "targets_met": ok},
                                     indent=1))
     print(f"\nwrote {args.json}")
     return 0

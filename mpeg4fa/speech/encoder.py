@@ -26,6 +26,7 @@ from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
 from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, FULL_INTENSITY, VISEMES
 from mpeg4fa.speech.closures import stop_closures
+from mpeg4fa.speech.compact import compact_expressions, compact_visemes, plan_expression_mask
 from mpeg4fa.speech.markup import parse_markup
 from mpeg4fa.speech.timeline import (CLOSURE_HOLD, expression_fields, expression_track, frame_times, idle_track,
                                      merge_tracks, viseme_fields, viseme_track)
@@ -94,11 +95,13 @@ def make_engine(name: str) -> Engine:
 
 def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto", voice: str | None = None,
                 rate: int | None = None, fps: float = 25.0, level: str = "high", idle: bool = False,
-                seed: int = 0, name: str = "<text>", fold: bool = True) -> Encoded:
+                seed: int = 0, name: str = "<text>", fold: bool = True, compact: bool = True) -> Encoded:
     """Speak tagged text and turn it into a FapStream at ``fps`` (see the module docstring for levels).
 
     ``fold`` leaves out the FAPs the decoder copies from their counterparts (:func:`fold_symmetric`);
     the stream's :attr:`~mpeg4fa.fba.stream.FapStream.mask_types` say so to any encoding of it.
+    ``compact`` writes FAP 1 and FAP 2 in the fields cheapest to code and sends FAP 2 only where
+    that makes the stream smaller (:mod:`.compact`); the decoded face is the same either way.
     """
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
@@ -122,9 +125,11 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
         stream.fap_mask[:, used] = True
         stream.fap_values[:, used] = values[:, used]
     if level in ("high", "both"):
-        _high_level(stream, utterance, times, values, level, hold)
+        _high_level(stream, utterance, times, values, level, hold, compact)
     if fold:
         fold_symmetric(stream)
+    if compact and level in ("high", "both"):  # last: the choice is made on the stream as it will be coded
+        stream = plan_expression_mask(stream, stream.expression.copy(), EncodeOptions(**TEXT_CODING))
     return Encoded(stream, utterance, values, level)
 
 
@@ -135,10 +140,13 @@ def closure_hold(fps: float) -> float:
 
 
 def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, values: np.ndarray, level: str,
-                hold: float) -> None:
+                hold: float, compact: bool = True) -> None:
     """FAP 1 and 2 fields; frames whose visemes or expressions they cannot name get low-level FAPs.
 
-    FAP 1 comes from the same moves as the low-level track (same spans, same closure hold)."""
+    FAP 1 comes from the same moves as the low-level track (same spans, same closure hold).
+    With ``compact`` the fields are rewritten to the cheapest equivalent ones (:mod:`.compact`)."""
+    same = lambda rows: rows  # noqa: E731
+    visemes, expressions = (compact_visemes, compact_expressions) if compact else (same, same)
     vis = viseme_fields(utterance.spans(), times, closure_hold=hold)
     exp = expression_fields(list(utterance.cues), times)
     n = len(times)
@@ -148,12 +156,13 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
     names = {s[1] for s, ok in zip(vis.select1 + vis.select2, np.r_[standard_vis, standard_vis]) if ok}
     if names - {"none"}:  # all-Chinese speech leaves FAP 1 nothing to name
         stream.fap_mask[:, 0] = True
-        stream.viseme[:] = np.c_[select1, select2, np.where(standard_vis, vis.blend, FULL_INTENSITY), np.zeros(n)]
+        stream.viseme[:] = visemes(
+            np.c_[select1, select2, np.where(standard_vis, vis.blend, FULL_INTENSITY), np.zeros(n)])
     known = np.array([[s in _EXPRESSION_CODE for s in col] for col in (exp.select1, exp.select2)]).all(axis=0)
-    stream.fap_mask[:, 1] = True
-    stream.expression[:] = np.c_[
+    stream.fap_mask[:, 1] = True  # in every frame until encode_text plans where FAP 2 must go
+    stream.expression[:] = expressions(np.c_[
         [_EXPRESSION_CODE.get(s, 0) for s in exp.select1], np.where(known, exp.intensity1, 0),
-        [_EXPRESSION_CODE.get(s, 0) for s in exp.select2], np.where(known, exp.intensity2, 0), np.zeros((n, 2))]
+        [_EXPRESSION_CODE.get(s, 0) for s in exp.select2], np.where(known, exp.intensity2, 0), np.zeros((n, 2))])
     if level == "high":
         low = ~standard_vis | ~known
         if low.any():  # what those frames need, sent in every frame: a change of FAP mask costs an intra frame

@@ -53,9 +53,10 @@ def test_a_stream_from_text_keeps_its_meaning_under_any_coding(text, options):
 def test_high_level_english_names_visemes_and_expressions():
     enc = encode_text(EN, level="high")
     stream = decode(encode(enc.stream, enc.coding()))
-    assert stream.fap_mask[:, :2].all() and not stream.fap_mask[:, 2:].any()
-    assert {NAMES[k] for k in stream.viseme[:, 0]} >= {"kk", "E", "nn", "oh", "TH", "PP", "AA"}
-    assert set(stream.expression[:, 0]) >= {1, 2}  # joy, then sadness
+    assert stream.fap_mask[:, 0].all() and stream.fap_mask[:, 1].any() and not stream.fap_mask[:, 2:].any()
+    # either select may name the viseme reached (the encoder keeps the one being left in its slot)
+    assert {NAMES[k] for k in stream.viseme[:, :2].ravel()} >= {"kk", "E", "nn", "oh", "TH", "PP", "AA"}
+    assert set(stream.expression[:, [0, 2]].ravel()) >= {1, 2}  # joy, then sadness
 
 
 def test_fap1_shows_each_viseme_near_its_onset_not_at_its_end():

@@ -1,0 +1,216 @@
+"""Fewer bits for the same face: FAP 1 and FAP 2 fields chosen for the codec, FAP 2 sent only when needed.
+
+A high-level stream says *which mixture* of visemes and expressions each frame shows; many field
+values say the same mixture, and P frames code each field as a difference from the previous frame
+through an adaptive arithmetic model, so a field that keeps its value is nearly free and a frame
+that repeats the previous one folds into its skip count. So:
+
+* FAP 1 ``(select1, select2, blend)`` shows ``v1 x blend/63 + v2 x (1 - blend/63)``: with one viseme
+  shown (``select1 == select2``, blend 63 or blend 0) the field that does not matter repeats its last
+  value, and a two-viseme frame may be written either way round, ``(a, b, x)`` or ``(b, a, 63 - x)``
+  (63 is a multiple of the text coding's ``fap_quant`` 3, so both decode alike). Written so, the
+  viseme left keeps its slot, one select changes per move, and the blend ramps up and down without
+  the jump back to 0 at every move (:func:`compact_visemes`).
+* FAP 2 ``(select1, intensity1, select2, intensity2)`` shows ``e1 x i1/63 + e2 x i2/63``: a slot with
+  intensity 0 or the neutral expression shows nothing whatever its other field, and the two slots
+  may swap (:func:`compact_expressions`).
+* FAP 1 and FAP 2 that a frame does not send hold their last values at the decoder
+  (:mod:`mpeg4fa.decoded.resolve`), so FAP 2 need only be sent where it changes; but the FAP mask
+  travels only in intra headers, and an intra frame (header, ranges, models reset) costs far more
+  than a few frames of unchanged FAP 2. :func:`plan_expression_mask` tries a few masks, from "every
+  frame" to "only the runs of change", and keeps the one that encodes smallest.
+
+Both field choices are a cheapest path (dynamic programming over the equivalent ways of writing
+each frame) under a simple bit model: a changed field costs a few bits, an unchanged one about
+nothing, a frame equal to the one before costs almost nothing (it is folded into a skip count).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+
+import numpy as np
+
+from mpeg4fa.fba import EncodeOptions, encode
+from mpeg4fa.fba.stream import FapStream
+from mpeg4fa.spec import FULL_INTENSITY
+
+FRAME_BITS = 10.0
+"""About what a P frame costs beyond its changed fields: the plane header and three segment flushes."""
+REPEAT_BITS = 1.0
+"""A frame equal to the one before: folded into the previous frame's skip count."""
+SELECT_BITS = 4.5
+"""A select that changes (an adaptive model of 29 or 13 differences, a handful of them in use)."""
+LEVEL_BITS = 4.0
+"""A blend or intensity that changes, plus :data:`LEVEL_SPREAD` bits per full-scale change."""
+LEVEL_SPREAD = 1.0
+BEAM = 48
+"""States kept per frame: enough for the few ways of writing a frame that differ in what they hold."""
+
+State = tuple[int, ...]
+
+
+def _cheapest(n: int, start: State, options: Callable[[int, State], Iterable[State]],
+              field_bits: Sequence[float], level_fields: Sequence[int]) -> list[State]:
+    """The sequence of states (one per frame) of least modelled bit cost; ties keep the first option."""
+    frames: list[dict[State, tuple[float, State | None]]] = []
+    current: dict[State, tuple[float, State | None]] = {start: (0.0, None)}
+    for k in range(n):
+        nxt: dict[State, tuple[float, State | None]] = {}
+        for prev, (cost, _) in current.items():
+            for cand in options(k, prev):
+                if cand == prev:
+                    step = REPEAT_BITS
+                else:
+                    step = FRAME_BITS + sum(b for b, a, p in zip(field_bits, cand, prev) if a != p)
+                    step += sum(LEVEL_SPREAD * abs(cand[j] - prev[j]) / FULL_INTENSITY for j in level_fields)
+                total = cost + step
+                if cand not in nxt or total < nxt[cand][0]:
+                    nxt[cand] = (total, prev)
+        if len(nxt) > BEAM:
+            nxt = dict(sorted(nxt.items(), key=lambda item: item[1][0])[:BEAM])
+        frames.append(nxt)
+        current = nxt
+    state = min(current, key=lambda s: current[s][0])
+    path = [state]
+    for k in range(n - 1, 0, -1):
+        state = frames[k][state][1]
+        path.append(state)
+    return path[::-1]
+
+
+def compact_visemes(viseme: np.ndarray) -> np.ndarray:
+    """FAP 1 rows ``(n, 4)`` rewritten to show the same mixtures in the fields cheapest to code.
+
+    A row showing one viseme ``x`` may be ``(x, any, 63)``, ``(any, x, 0)`` or ``(x, x, any)``, "any"
+    repeating the previous value; a two-viseme row ``(a, b, w)`` may also be ``(b, a, 63 - w)``.
+    ``viseme_def`` (column 3) is kept as is.
+    """
+    rows = np.asarray(viseme)
+    n = len(rows)
+    if n == 0:
+        return rows.copy()
+    s1, s2, blend = (rows[:, j].astype(np.int64) for j in range(3))
+    full = FULL_INTENSITY
+
+    def options(k: int, prev: State) -> list[State]:
+        a, b, w = int(s1[k]), int(s2[k]), int(blend[k])
+        if a == b or w >= full or w <= 0:
+            x = b if (w <= 0 and a != b) else a
+            return [(x, prev[1], full), (prev[0], x, 0), (x, x, prev[2])]
+        return [(a, b, w), (b, a, full - w)]
+
+    path = _cheapest(n, (0, 0, 0), options, (SELECT_BITS, SELECT_BITS, LEVEL_BITS), (2,))
+    out = rows.copy()
+    out[:, :3] = np.array(path, dtype=out.dtype)
+    return out
+
+
+def compact_expressions(expression: np.ndarray) -> np.ndarray:
+    """FAP 2 rows ``(n, 6)`` rewritten to show the same expression mixtures in the fields cheapest to code.
+
+    A slot ``(select, intensity)`` with intensity 0 or select 0 (neutral, an all-zero profile) shows
+    nothing, whatever the other field holds; the two slots add, so they may swap. ``init_face`` and
+    ``expression_def`` (columns 4, 5) are kept as is.
+    """
+    rows = np.asarray(expression)
+    n = len(rows)
+    if n == 0:
+        return rows.copy()
+    fields = rows[:, :4].astype(np.int64)
+
+    def empty(prev_slot: tuple[int, int]) -> list[tuple[int, int]]:
+        s, i = prev_slot
+        return [prev_slot] if s == 0 or i == 0 else [(s, 0), (0, i)]
+
+    def options(k: int, prev: State) -> list[State]:
+        shown = [(int(fields[k, 0]), int(fields[k, 1])), (int(fields[k, 2]), int(fields[k, 3]))]
+        shown = [slot for slot in shown if slot[0] != 0 and slot[1] != 0]
+        slots = ((prev[0], prev[1]), (prev[2], prev[3]))
+        out: list[State] = []
+        if len(shown) == 2:
+            for first, second in (shown, shown[::-1]):
+                out.append(first + second)
+        elif len(shown) == 1:
+            for one in empty(slots[1]):
+                out.append(shown[0] + one)
+            for one in empty(slots[0]):
+                out.append(one + shown[0])
+        else:
+            out.extend(a + b for a in empty(slots[0]) for b in empty(slots[1]))
+        return out
+
+    path = _cheapest(n, (0, 0, 0, 0), options, (SELECT_BITS, LEVEL_BITS, SELECT_BITS, LEVEL_BITS), (1, 3))
+    out = rows.copy()
+    out[:, :4] = np.array(path, dtype=out.dtype)
+    return out
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """``[start, stop)`` of each run of True."""
+    padded = np.r_[False, flags, False].astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
+
+
+def expression_masks(expression: np.ndarray, gaps: Sequence[int] = (0, 12, 25, 50)) -> list[np.ndarray]:
+    """Candidate per-frame FAP 2 masks that keep every frame's expression: each sends FAP 2 at least
+    where its fields change (before the first sent frame the decoder holds all zeros, neutral).
+
+    Runs of change closer than a gap are joined (a mask change costs an intra frame), and each
+    set of runs is also tried reaching back to frame 0 and on to the end (no mask change there).
+    The last candidate sends FAP 2 in every frame; an empty list means FAP 2 is never needed.
+    """
+    rows = np.asarray(expression)[:, :4]
+    n = len(rows)
+    changes = np.r_[(rows[:1] != 0).any(axis=1), (rows[1:] != rows[:-1]).any(axis=1)] if n else np.zeros(0, bool)
+    if not changes.any():
+        return []
+    masks: list[np.ndarray] = []
+    seen: set[bytes] = set()
+
+    def add(mask: np.ndarray) -> None:
+        key = np.packbits(mask).tobytes()
+        if key not in seen:
+            seen.add(key)
+            masks.append(mask)
+
+    runs = _runs(changes)
+    for gap in gaps:
+        joined = [list(runs[0])]
+        for a, b in runs[1:]:
+            if a - joined[-1][1] <= gap:
+                joined[-1][1] = b
+            else:
+                joined.append([a, b])
+        for from_start in (False, True):
+            for to_end in (False, True):
+                mask = np.zeros(n, dtype=bool)
+                for a, b in joined:
+                    mask[a:b] = True
+                if from_start:
+                    mask[:joined[0][1]] = True
+                if to_end:
+                    mask[joined[-1][0]:] = True
+                add(mask)
+    add(np.ones(n, dtype=bool))
+    return masks
+
+
+def with_expression_mask(stream: FapStream, expression: np.ndarray, mask: np.ndarray) -> FapStream:
+    """``stream`` sending FAP 2 ``expression`` in the frames of ``mask`` (rows not sent are zero, as
+    a decoder reads them back), everything else as it is."""
+    out = stream.copy()
+    out.fap_mask[:, 1] = mask
+    out.expression[:] = np.where(mask[:, None], expression, 0)
+    return out
+
+
+def plan_expression_mask(stream: FapStream, expression: np.ndarray, options: EncodeOptions) -> FapStream:
+    """The stream with FAP 2 sent in the frames that encode smallest under ``options`` (see
+    :func:`expression_masks`); FAP 2 is left out of the mask when no frame needs it."""
+    masks = expression_masks(expression)
+    if not masks:
+        return with_expression_mask(stream, expression, np.zeros(len(stream), dtype=bool))
+    trials = [with_expression_mask(stream, expression, mask) for mask in masks]
+    sizes = [len(encode(trial, options)) for trial in trials]
+    return trials[int(np.argmin(sizes))]
