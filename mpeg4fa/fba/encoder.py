@@ -106,10 +106,13 @@ def plan(stream: FapStream, options: EncodeOptions, *, backend: str = "auto") ->
     for k, new_masks in enumerate(changed.tolist()):
         if k and (new_masks or (period and k - intra_frames[-1] >= period)):
             intra_frames.append(k)
+    required = {0, *np.flatnonzero(changed).tolist()}  # the first frame and mask changes: fixed places
     source = list(range(len(out)))  # the source frame of each frame of out
     if options.skip_repeats or options.optimize:  # after choosing intra frames, so they stay where they were
         out, source = _fold_repeats(out, protect=intra_frames)
         intra_frames = [source.index(k) for k in intra_frames]
+        required = {source.index(k) for k in required}
+    intra_frames = _fit_intra_frames(out, intra_frames, required, face_quant, body_quant, compiled)
     bounds = intra_frames[1:] + [len(out)]
 
     wide = {}
@@ -134,6 +137,99 @@ def plan(stream: FapStream, options: EncodeOptions, *, backend: str = "auto") ->
     if use_start_codes:
         out.start_code[intra_frames] = PLANE_START_CODE
     out.timestamps = _grid_times(out, fps)
+    return out
+
+
+def _limits(part: PartSpec, quant: int) -> tuple[np.ndarray, int]:
+    """Quantiser steps of ``part`` at ``quant`` and the largest level a 5-bit range code covers (31 x 60 / scaler)."""
+    step = part.step_multiplier(quant)
+    return part.quant_step * step, 31 * RANGE_DELTA // (step or 1)
+
+
+def _intra_overflow(s: FapStream, part: PartSpec, quant: int, k: int) -> tuple[int, int] | None:
+    """(column, level) of the first parameter frame ``k`` cannot send as an intra value, or None."""
+    values, masks = (s.fap_values, s.fap_mask) if part is FACE else (s.bap_values, s.bap_mask)
+    if not s.object_mask[k] & (FACE_BIT if part is FACE else BODY_BIT):
+        return None
+    qstep, limit = _limits(part, quant)
+    level = quantise(values[k], qstep)
+    bad = np.flatnonzero(masks[k] & (np.abs(level) > limit))
+    return (int(bad[0]), int(level[bad[0]])) if bad.size else None
+
+
+def _p_overflow(s: FapStream, part: PartSpec, quant: int, a: int, b: int, compiled: bool) -> tuple[int, int, int] | None:
+    """(frame, column, level) of the first P change in a+1..b-1 beyond every range code, or None."""
+    values, masks = (s.fap_values, s.fap_mask) if part is FACE else (s.bap_values, s.bap_mask)
+    if b - a < 2 or not s.object_mask[a] & (FACE_BIT if part is FACE else BODY_BIT) or not masks[a].any():
+        return None
+    qstep, limit = _limits(part, quant)
+    if compiled:
+        from .compiled.kernels import first_overflow
+
+        k, i, level = first_overflow(values, np.ascontiguousarray(qstep, dtype=np.int64),
+                                     np.ascontiguousarray(masks[a]), limit, a, b)
+        return None if k < 0 else (int(k), int(i), int(level))
+    recon = dequantise(quantise(values[a], qstep), qstep)
+    for k in range(a + 1, b):
+        level = quantise(values[k] - recon, qstep)
+        bad = np.flatnonzero(masks[a] & (np.abs(level) > limit))
+        if bad.size:
+            return k, int(bad[0]), int(level[bad[0]])
+        recon = recon + dequantise(level, qstep)
+    return None
+
+
+def _cannot_send(s: FapStream, part: PartSpec, quant: int, k: int, i: int, level: int, why: str) -> FbaError:
+    """The error for a value no stream with these options can carry, saying which, why and what would."""
+    qstep, limit = _limits(part, quant)
+    values = s.fap_values if part is FACE else s.bap_values
+    label, name = ("FAP", "fap_quant") if part is FACE else ("BAP", "bap_quant")
+    step = int(qstep[i])
+    if quant == 0:
+        hint = f"{name} 0 sends values unquantised, so a level is the value itself; use {name} 1 or more"
+    else:
+        hint = f"ranges reach {limit} levels of step {step}; a coarser {name} or a shorter intra period"
+    return FbaError(f"{label} {i + 1} = {int(values[k, i])}: {why} needs level {level}, beyond the "
+                    f"largest range 31*60/{part.step_multiplier(quant) or 1} = {limit}", frame=k, hint=hint)
+
+
+def _fit_intra_frames(s: FapStream, intra: Sequence[int], required: set[int], face_quant: int, body_quant: int,
+                      compiled: bool) -> list[int]:
+    """Intra frames where every level fits a 5-bit range code (SYNTAX.md 6-8), moving or adding them as needed.
+
+    An intra frame the period asked for moves to the next frame that can carry its values; where a
+    P change would need a level beyond every range code, an intra frame is added there. Frames that
+    must be intra (the first, mask changes) and values no frame can carry are errors that say so.
+    """
+    parts = ((FACE, face_quant), (BODY, body_quant))
+    frames = sorted(set(intra))
+    out: list[int] = []
+    i = 0
+    while i < len(frames):
+        k = frames[i]
+        stop = frames[i + 1] if i + 1 < len(frames) else len(s)
+        problem = next(((part, q, hit) for part, q in parts if (hit := _intra_overflow(s, part, q, k))), None)
+        if problem is not None:
+            part, q, (col, level) = problem
+            if k in required:
+                raise _cannot_send(s, part, q, k, col, level, "an intra value")
+            if k + 1 < stop:
+                frames[i] = k + 1  # try the next frame of the period
+            else:
+                del frames[i]      # the period before runs on
+            if out:                # so check the period before again, now that it is longer
+                out.pop()          # (out mirrors frames[:i])
+                i -= 1
+            continue
+        hit = next(((part, q, found) for part, q in parts if (found := _p_overflow(s, part, q, k, stop, compiled))), None)
+        out.append(k)
+        if hit is not None:
+            part, q, (j, col, level) = hit
+            if _intra_overflow(s, part, q, j) is not None or any(_intra_overflow(s, p, qq, j) for p, qq in parts):
+                raise _cannot_send(s, part, q, j, col, level, "the change from the previous frame")
+            frames.insert(i + 1, j)
+            required.add(j)
+        i += 1
     return out
 
 

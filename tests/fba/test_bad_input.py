@@ -476,7 +476,7 @@ def _bad_stream(kind: str) -> FapStream:
         s.fap_values[:, 2] = 10**6
     elif kind == "fap-jump-too-big":
         s.fap_mask[:, 2] = True
-        s.fap_values[:, 2] = [-7000, 7000]  # FAP 3, step 4: a change of 3500 levels
+        s.fap_values[:, 2] = [0, 8000]  # FAP 3, step 4: 2000 levels, beyond any range, as a change or an intra value
     elif kind == "viseme-select":
         s.fap_mask[:, 0] = True
         s.viseme[:, 0] = 15
@@ -504,6 +504,16 @@ def _bad_stream(kind: str) -> FapStream:
 def test_encoder_rejects_out_of_range_values(kind):
     with pytest.raises(FbaError):
         encode(_bad_stream(kind))
+
+
+def test_a_jump_beyond_the_p_range_gets_an_intra_frame():
+    """-7000 -> 7000 on FAP 3 (step 4) is a change of 3500 levels, beyond any P range; as an intra value
+    7000 is 1750 levels, which fits, so the encoder sends frame 1 as an intra frame."""
+    s = FapStream.empty(2)
+    s.fap_mask[:, 2] = True
+    s.fap_values[:, 2] = [-7000, 7000]
+    d = decode(encode(s))
+    assert sorted(d.intra) == [0, 1] and d.fap_values[:, 2].tolist() == [-7000, 7000]
 
 
 def test_encoder_rejects_empty_stream():

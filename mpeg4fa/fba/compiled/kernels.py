@@ -757,3 +757,25 @@ def closed_loop_extremes(values, qstep, a, b, out):
                 down = -level
         out[0, i] = up
         out[1, i] = down
+
+
+@jit
+def first_overflow(values, qstep, mask, limit, a, b):
+    """The first frame in a+1..b-1 whose closed-loop P level of a masked parameter is beyond
+    +-``limit``, with that column and level; (-1, -1, 0) when the whole period fits."""
+    n = values.shape[1]
+    recon = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        q = qstep[i]
+        level = quantise(values[a, i], q)
+        recon[i] = level * q if q != 0 else level
+    for k in range(a + 1, b):
+        for i in range(n):
+            if not mask[i]:
+                continue
+            q = qstep[i]
+            level = quantise(values[k, i] - recon[i], q)
+            if level > limit or level < -limit:
+                return k, i, level
+            recon[i] += level * q if q != 0 else level
+    return -1, -1, 0
