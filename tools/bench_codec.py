@@ -7,6 +7,11 @@ A script run on demand, not a test::
 
 It measures, in one process pinned to one core where the platform allows it:
 
+0. the reference (pure Python) and the compiled (numba) paths side by side: decode and encode
+   frames/s of the 60 s full-mask stream with tight ranges (target >= 120,000 frames/s decoded)
+   and of the real ``headmotion_long.fba`` (>= 15,000 frames/s), the compiled encoder against the
+   encoder before it (>= 10x), and the first call's compile time in a fresh process, with an
+   empty numba cache and once cached (issue 14); both paths must give the same bytes and frames;
 1. a synthetic full-mask stream (FAP 1, FAP 2 and all 66 low-level FAPs on every
    frame, 25 fps, fap_quant 1, one intra frame per 10 s): encode and decode wall
    time (best of R), frames/s, arithmetic-coded symbols/s, x real time, bits per
@@ -293,6 +298,98 @@ def print_synthetic(r: dict, repeat: int) -> None:
                 rows, note))
 
 
+# ---- 0. the two paths ---------------------------------------------------------------------
+TARGET_HEADMOTION_FPS = 15_000
+TARGET_FULL_MASK_FPS = 120_000
+TARGET_ENCODE_SPEEDUP = 10.0
+REFERENCE_ENCODE_FPS_BEFORE = 2_095
+"""frames/s of ``encode`` on the 60 s full-mask stream before the compiled path (commit 6403353, this machine)."""
+
+_COMPILE_CHILD = """
+import sys, time
+t0 = time.perf_counter()
+from mpeg4fa.fba import decode, encode, EncodeOptions, FapStream
+import numpy as np
+s = FapStream.empty(30)
+s.fap_mask[:] = True
+s.fap_values[:, 2:] = np.arange(30)[:, None] * 4
+s.bap_mask[:, :8] = True
+s.object_mask[:] = 3
+t1 = time.perf_counter()
+data = encode(s, EncodeOptions(intra_period=10), backend="compiled")
+decode(data, backend="compiled")
+print(t1 - t0, time.perf_counter() - t1)
+"""
+
+
+def _first_call(cache: Path) -> tuple[float, float]:
+    """(import seconds, first encode + decode seconds) in a fresh process using numba cache folder ``cache``."""
+    out = subprocess.run([sys.executable, "-c", _COMPILE_CHILD], capture_output=True, text=True, check=True, cwd=REPO,
+                         env={**os.environ, "PYTHONPATH": str(REPO), "NUMBA_CACHE_DIR": str(cache)}).stdout.split()
+    return float(out[0]), float(out[1])
+
+
+def bench_paths(frames: int, repeat: int, vectors: Path) -> dict:
+    """Decode and encode frames/s on the reference (Python) and compiled paths; first-call compile time."""
+    from mpeg4fa.fba import compiled
+
+    if not compiled.available():
+        return {"available": False, "why_not": compiled.why_not()}
+    cases = []
+    full = synthetic_stream(frames)
+    tight = EncodeOptions(fap_quant=1, intra_period=int(round(INTRA_SECONDS * FPS)), optimize=True)
+    cases.append((f"full mask, 66 FAPs + FAP 1/2, {frames / FPS:g} s, tight ranges", full, tight, TARGET_FULL_MASK_FPS))
+    head = vectors / "headmotion_long.fba"
+    if head.is_file():
+        cases.append(("headmotion_long.fba (real)", decode(head), None, TARGET_HEADMOTION_FPS))
+    rows = []
+    for name, stream, options, target in cases:
+        data = encode(stream, options, backend="python")
+        check(encode(stream, options, backend="compiled") == data, f"{name}: the two paths encode differently")
+        row = {"name": name, "frames": len(stream), "bytes": len(data), "decode_target_fps": target}
+        for backend in ("python", "compiled"):
+            reps = repeat if backend == "python" else max(repeat, 15)  # quick runs are noisy on a shared machine
+            dec_s, decoded = best_time(lambda: decode(data, backend=backend), reps)
+            enc_s, again = best_time(lambda: encode(decoded if options is None else stream, options, backend=backend),
+                                     reps)
+            check(again == data, f"{name}: {backend} re-encode differs")
+            row[backend] = {"decode_fps": len(stream) / dec_s, "encode_fps": len(stream) / enc_s}
+        check(same_on_grid(decode(data, backend="python"), decode(data, backend="compiled")),
+              f"{name}: the two paths decode differently")
+        row["decode_speedup"] = row["compiled"]["decode_fps"] / row["python"]["decode_fps"]
+        row["encode_speedup"] = row["compiled"]["encode_fps"] / row["python"]["encode_fps"]
+        row["decode_pass"] = row["compiled"]["decode_fps"] >= target
+        rows.append(row)
+    full_row = rows[0]
+    full_row["encode_speedup_vs_before"] = full_row["compiled"]["encode_fps"] / REFERENCE_ENCODE_FPS_BEFORE
+    full_row["encode_pass"] = full_row["encode_speedup_vs_before"] >= TARGET_ENCODE_SPEEDUP
+    with tempfile.TemporaryDirectory(prefix="bench_numba_") as tmp:
+        cold = _first_call(Path(tmp))
+        warm = _first_call(Path(tmp))
+    return {"available": True, "cases": rows, "compile_s": cold[1], "cached_first_call_s": warm[1],
+            "import_s": cold[0]}
+
+
+def print_paths(r: dict, repeat: int) -> None:
+    if not r.get("available"):
+        print(f"0. Reference and compiled paths: compiled path off ({r.get('why_not')})\n")
+        return
+    rows = []
+    for c in r["cases"]:
+        rows.append([c["name"], c["frames"], c["python"]["decode_fps"], c["compiled"]["decode_fps"],
+                     f"{c['decode_speedup']:.0f}x", f">= {c['decode_target_fps']:,}", verdict(c["decode_pass"]),
+                     c["python"]["encode_fps"], c["compiled"]["encode_fps"], f"{c['encode_speedup']:.0f}x"])
+    full = r["cases"][0]
+    note = (f"frames/s, one core, best of {repeat} (compiled: best of >= 15). Encode target: >= {TARGET_ENCODE_SPEEDUP:g}x "
+            f"the encoder before this path ({REFERENCE_ENCODE_FPS_BEFORE:,} frames/s on the full-mask stream): "
+            f"{full['encode_speedup_vs_before']:.1f}x {verdict(full['encode_pass'])}.\n"
+            f"First call in a fresh process: compile {r['compile_s']:.1f} s with an empty numba cache, "
+            f"{r['cached_first_call_s']:.2f} s once cached (import {r['import_s']:.2f} s).")
+    print(table("0. Reference (Python) and compiled (numba) paths",
+                ["stream", "frames", "dec py", "dec compiled", "x", "target", "result", "enc py", "enc compiled", "x"],
+                rows, note))
+
+
 # ---- 2. real vectors ----------------------------------------------------------------------
 def find_vectors(root: Path) -> list[Path]:
     return sorted((p for p in root.rglob("*") if p.is_file() and p.suffix.lower() == ".fba"),
@@ -569,6 +666,9 @@ def main(argv: list[str] | None = None) -> int:
                                               "repeat": args.repeat, "decode_frames": args.decode_frames}}
     ok = True
     try:
+        report["paths"] = paths = bench_paths(args.frames, args.repeat, args.vectors)
+        print_paths(paths, args.repeat)
+
         report["synthetic"] = syn = bench_synthetic(args.frames, args.repeat)
         print_synthetic(syn, args.repeat)
 
@@ -590,6 +690,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"CHECK FAILED: {exc}\n")
 
     targets = []
+    if report.get("paths", {}).get("available"):
+        for c in report["paths"]["cases"]:
+            targets.append([f"compiled decode >= {c['decode_target_fps']:,} frames/s, {c['name']}",
+                            f"{c['compiled']['decode_fps']:,.0f}", verdict(c["decode_pass"])])
+        full = report["paths"]["cases"][0]
+        targets.append([f"compiled encode >= {TARGET_ENCODE_SPEEDUP:g}x the encoder before",
+                        f"{full['encode_speedup_vs_before']:.1f}x", verdict(full["encode_pass"])])
     if "synthetic" in report:
         for op in ("decode", "encode"):
             m = report["synthetic"][op]

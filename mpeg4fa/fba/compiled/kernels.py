@@ -95,16 +95,27 @@ def highest_power_of_two(n: np.ndarray) -> np.ndarray:
 
 
 def uniform_bank(sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Fresh models of the given sizes (every count 1): ``foff``, ``toff``, ``freq``, ``tree``, ``total``."""
+    """Fresh models of the given sizes (every count 1): ``foff``, ``toff``, ``freq``, ``tree``, ``total``.
+
+    Counts and sums stay below 2**15 (a model halves at 16383), so the tables are int32: a face with
+    every range at its widest holds 66 models of 3,721 symbols, 2 MB of tables rather than 4.
+    """
     sizes = np.asarray(sizes, dtype=np.int64)
     ends = np.cumsum(sizes)
     foff = ends - sizes
     toff = foff + np.arange(len(sizes), dtype=np.int64)  # each tree takes n + 1 slots
-    freq = np.ones(int(ends[-1]) if len(sizes) else 0, dtype=np.int64)
-    j = np.arange(len(freq), dtype=np.int64) - np.repeat(foff, sizes) + 1  # 1..n within each model
-    tree = np.zeros(len(freq) + len(sizes), dtype=np.int64)
-    tree[np.repeat(toff, sizes) + j] = j & -j  # a uniform Fenwick tree: tree[j] = lowbit(j)
+    freq = np.ones(int(ends[-1]) if len(sizes) else 0, dtype=np.int32)
+    tree = np.zeros(len(freq) + len(sizes), dtype=np.int32)
+    _uniform_trees(sizes, toff, tree)
     return foff, toff, freq, tree, sizes.copy()
+
+
+@jit
+def _uniform_trees(sizes, toff, tree):
+    """A uniform Fenwick tree per model: tree[j] = lowbit(j), the count of 1s it sums."""
+    for m in range(sizes.shape[0]):
+        for j in range(1, sizes[m] + 1):
+            tree[toff[m] + j] = j & -j
 
 
 # ==== the arithmetic decoder of one segment =====================================================
@@ -145,16 +156,51 @@ def _bit(buf, p, nbuf, zeros):
 
 
 @jit
-def segment(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, values):
-    """Decode models ``lo..hi-1`` of ``meta`` from ``buf[p:]``; return (position after the rewind, 0)
-    or (fault position, END_OF_DATA / BAD_STUFFING). Values land in ``prev`` and ``values[m - lo]``."""
+def _look_ahead(buf, p, nbuf):
+    """A segment's first 16 bits: (code, p, zeros, 0), or (0, fault position, zeros, error)."""
     zeros = 0
     code = 0
     for _ in range(16):
         bit, p, zeros = _bit(buf, p, nbuf, zeros)
         if bit < 0:
-            return p, bit
+            return 0, p, zeros, bit
         code = (code << 1) | bit
+    return code, p, zeros, 0
+
+
+@jit
+def _renormalise(buf, p, nbuf, zeros, low, high, code):
+    """Double the interval while it lies in one half or the middle half, reading a bit each time:
+    (low, high, code, p, zeros, 0), or a fault as the last item."""
+    while True:
+        if high < Q2:
+            pass
+        elif low >= Q2:
+            code -= Q2
+            low -= Q2
+            high -= Q2
+        elif low >= Q1 and high < Q3:
+            code -= Q1
+            low -= Q1
+            high -= Q1
+        else:
+            break
+        low <<= 1
+        high = (high << 1) | 1
+        bit, p, zeros = _bit(buf, p, nbuf, zeros)
+        if bit < 0:
+            return low, high, code, p, zeros, bit
+        code = (code << 1) | bit
+    return low, high, code, p, zeros, 0
+
+
+@jit
+def segment(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, values):
+    """Decode models ``lo..hi-1`` of ``meta`` from ``buf[p:]``; return (position after the rewind, 0)
+    or (fault position, END_OF_DATA / BAD_STUFFING). Values land in ``prev`` and ``values[m - lo]``."""
+    code, p, zeros, err = _look_ahead(buf, p, nbuf)
+    if err < 0:
+        return p, err
     low = 0
     high = TOP
     for m in range(lo, hi):
@@ -169,25 +215,9 @@ def segment(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, values):
         cum_lo = cum_hi - freq[foff + s]
         high = low - 1 + (length * cum_hi) // t
         low = low + (length * cum_lo) // t
-        while True:
-            if high < Q2:
-                pass
-            elif low >= Q2:
-                code -= Q2
-                low -= Q2
-                high -= Q2
-            elif low >= Q1 and high < Q3:
-                code -= Q1
-                low -= Q1
-                high -= Q1
-            else:
-                break
-            low <<= 1
-            high = (high << 1) | 1
-            bit, p, zeros = _bit(buf, p, nbuf, zeros)
-            if bit < 0:
-                return p, bit
-            code = (code << 1) | bit
+        low, high, code, p, zeros, err = _renormalise(buf, p, nbuf, zeros, low, high, code)
+        if err < 0:
+            return p, err
         count(freq, foff, tree, toff, n, total, m, s)
         level = s + meta[m, PMIN]
         q = meta[m, QSTEP]
@@ -201,13 +231,9 @@ def segment(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, values):
 def uniform_segment(buf, p, nbuf, sizes, symbols):
     """Decode one symbol per intra (uniform, never adapting) model of ``sizes``: (position after the
     rewind, 0) or (fault position, END_OF_DATA / BAD_STUFFING), as :func:`segment`."""
-    zeros = 0
-    code = 0
-    for _ in range(16):
-        bit, p, zeros = _bit(buf, p, nbuf, zeros)
-        if bit < 0:
-            return p, bit
-        code = (code << 1) | bit
+    code, p, zeros, err = _look_ahead(buf, p, nbuf)
+    if err < 0:
+        return p, err
     low = 0
     high = TOP
     for m in range(sizes.shape[0]):
@@ -217,25 +243,9 @@ def uniform_segment(buf, p, nbuf, sizes, symbols):
         s = t - target - 1
         high = low - 1 + (length * (t - s)) // t
         low = low + (length * (t - s - 1)) // t
-        while True:
-            if high < Q2:
-                pass
-            elif low >= Q2:
-                code -= Q2
-                low -= Q2
-                high -= Q2
-            elif low >= Q1 and high < Q3:
-                code -= Q1
-                low -= Q1
-                high -= Q1
-            else:
-                break
-            low <<= 1
-            high = (high << 1) | 1
-            bit, p, zeros = _bit(buf, p, nbuf, zeros)
-            if bit < 0:
-                return p, bit
-            code = (code << 1) | bit
+        low, high, code, p, zeros, err = _renormalise(buf, p, nbuf, zeros, low, high, code)
+        if err < 0:
+            return p, err
         symbols[m] = s
     return p - REWIND_BITS, 0
 
@@ -319,6 +329,19 @@ def _start_code(buf, p, nbuf, eof, base):
 
 
 @jit
+def _face_segments(fmeta):
+    """Rows of each face segment in the model table: visemes lo..hi, expressions lo..hi, FAPs from."""
+    vis_hi, exp_lo, exp_hi, fap_lo = 0, 0, 0, 0
+    for m in range(fmeta.shape[0]):
+        b = fmeta[m, BANK]
+        if b == VISEME:
+            vis_hi = exp_lo = exp_hi = fap_lo = m + 1
+        elif b == EXPRESSION:
+            exp_hi = fap_lo = m + 1
+    return 0, vis_hi, exp_lo, exp_hi, fap_lo
+
+
+@jit
 def _high_level(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, scratch, out, row, nraw, first_raw, res):
     """A FAP 1 or FAP 2 segment and its raw bits into ``out[row]``; the new position, or -1 after a fault."""
     seg_start = p
@@ -362,18 +385,7 @@ def decode_planes(buf, base, p, nbuf, eof,
     face_bound = 64 * 3 + SYMBOL_BITS * nf + 8
     body_bound = 64 + SYMBOL_BITS * nb
     has_bap_out = o_bap.shape[0] > 0
-    # rows of each face segment: visemes, expressions, then the FAPs
-    vis_lo, vis_hi, exp_lo, exp_hi, fap_lo = 0, 0, 0, 0, 0
-    for m in range(nf):
-        b = fmeta[m, BANK]
-        if b == VISEME:
-            vis_hi = m + 1
-            exp_lo = m + 1
-            exp_hi = m + 1
-            fap_lo = m + 1
-        elif b == EXPRESSION:
-            exp_hi = m + 1
-            fap_lo = m + 1
+    vis_lo, vis_hi, exp_lo, exp_hi, fap_lo = _face_segments(fmeta)
     res[CODE] = 0
     while True:
         res[ROWS] = rows
@@ -643,17 +655,7 @@ def encode_planes(out, base, first, stop, obj, skip, codes, pads, vis, exp, faps
     o = 0
     e = 0
     nf = fmeta.shape[0]
-    vis_lo, vis_hi, exp_lo, exp_hi, fap_lo = 0, 0, 0, 0, 0
-    for m in range(nf):
-        b = fmeta[m, BANK]
-        if b == VISEME:
-            vis_hi = m + 1
-            exp_lo = m + 1
-            exp_hi = m + 1
-            fap_lo = m + 1
-        elif b == EXPRESSION:
-            exp_hi = m + 1
-            fap_lo = m + 1
+    vis_lo, vis_hi, exp_lo, exp_hi, fap_lo = _face_segments(fmeta)
     nb = bmeta.shape[0]
     res[STATUS] = FULL
     for k in range(first, stop):
