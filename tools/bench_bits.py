@@ -29,9 +29,7 @@ Exit status 1 when a check failed.
 from __future__ import annotations
 
 import argparse
-import gc
 import json
-import os
 import platform
 import sys
 import time
@@ -54,6 +52,9 @@ from mpeg4fa.fba import decode  # noqa: E402
 from mpeg4fa.fba.bits import BitReader  # noqa: E402
 from mpeg4fa.fba.decoder import _Decoder  # noqa: E402
 from mpeg4fa.fba.trace import trace  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_codec import best_time, pin_one_core  # noqa: E402  (the codec bench's timing and pinning)
 
 REAL = REPO.parent / "shared" / "vectors" / "fba"
 GENERATED = REPO / "conformance" / "vectors" / "syntax"
@@ -80,28 +81,6 @@ class BitsReader(BitReader):
         p = self.p
         self.p = p + n
         return self.buf[p:p + n].bin.encode()
-
-
-def pin_one_core() -> str:
-    if hasattr(os, "sched_setaffinity"):
-        try:
-            cpu = min(os.sched_getaffinity(0))
-            os.sched_setaffinity(0, {cpu})
-            return f"pinned to CPU {cpu}"
-        except OSError as exc:
-            return f"not pinned ({exc})"
-    return "not pinned (no sched_setaffinity)"
-
-
-def best(fn, repeat: int):
-    """(best wall time in seconds, the last result)."""
-    t_best, result = float("inf"), None
-    for _ in range(max(1, repeat)):
-        gc.collect()
-        t0 = time.perf_counter()
-        result = fn()
-        t_best = min(t_best, time.perf_counter() - t0)
-    return t_best, result
 
 
 class Work:
@@ -226,22 +205,22 @@ def main(argv: list[str] | None = None) -> int:
 
     for impl, fn in (("BitReader.read", fields_bitreader), ("bitstring Reader.read_value", fields_bitstring),
                      ("bitstring Bits[a:b].u", fields_bitstring_slices)):
-        t, got = best(lambda fn=fn: fn(work), args.repeat)
+        t, got = best_time(lambda fn=fn: fn(work), args.repeat)
         row("header fields", impl, t, work.n_fields, "fields/s", got == expected_fields)
     ones = None
     for impl, fn in (("BitReader buf[p]", bits_bitreader), ("bitstring Bits[p]", bits_bitstring_index),
                      ("bitstring Reader.read_value('bool')", bits_bitstring_reader)):
-        t, got = best(lambda fn=fn: fn(work), args.repeat)
+        t, got = best_time(lambda fn=fn: fn(work), args.repeat)
         ones = got if ones is None else ones
         row("bits one at a time", impl, t, work.n_bits, "bits/s", got == ones)
     reference = None
     for impl, reader_type in (("reference decoder on BitReader", BitReader),
                               ("reference decoder on BitsReader (bitstring)", BitsReader)):
-        t, got = best(lambda rt=reader_type: decode_with(rt), args.repeat)
+        t, got = best_time(lambda rt=reader_type: decode_with(rt), args.repeat)
         reference = got if reference is None else reference
         row("whole decode", impl, t, work.n_symbols, "symbols/s", got == reference)
     # context: the compiled path reads the BitReader's unpacked bytes as a numpy array, which Bits is not
-    t, got = best(lambda: [decode(data, backend="compiled") for data, _, _, _ in work.streams], args.repeat)
+    t, got = best_time(lambda: [decode(data, backend="compiled") for data, _, _, _ in work.streams], args.repeat)
     same = [row_ for s_ in got for row_ in s_.fap_values.tolist()] == [f[0] for f in reference]
     row("whole decode", "decode(backend='compiled') (numba, context)", t, work.n_symbols, "symbols/s", same)
 

@@ -311,6 +311,20 @@ def _fail(res, fault, pos, a0, a1, a2):
 
 
 @jit
+def _short(buf, p, n, nbuf, eof, restart, field, res):
+    """Whether fewer than ``n`` bits are left for ``field``: then NEED_MORE (restart at ``restart``)
+    while the stream goes on, else a TRUNCATED_FIELD fault, is set in ``res``."""
+    if p + n <= nbuf:
+        return False
+    if eof:
+        _fail(res, TRUNCATED_FIELD, p, field, n, nbuf - p)
+    else:
+        res[STATUS] = NEED_MORE
+        res[POS] = restart
+    return True
+
+
+@jit
 def _start_code(buf, p, nbuf, eof, base):
     """The look-ahead before a plane: (found, code, stuffing bits, need_more)."""
     phase = (base + p) % 8  # the window need not start on a byte boundary of the stream
@@ -425,12 +439,7 @@ def decode_planes(buf, base, p, nbuf, eof,
             plane_code = code
         start = p
         # ---- header: is_intra, fba_object_mask, skip_frames (SYNTAX.md 3)
-        if p + 1 > nbuf:
-            if not eof:
-                res[STATUS] = NEED_MORE
-                res[POS] = restart
-                return
-            _fail(res, TRUNCATED_FIELD, p, IS_INTRA, 1, nbuf - p)
+        if _short(buf, p, 1, nbuf, eof, restart, IS_INTRA, res):
             return
         if buf[p]:
             res[STATUS] = INTRA
@@ -438,12 +447,7 @@ def decode_planes(buf, base, p, nbuf, eof,
             res[CODE] = plane_code
             return
         p += 1
-        if p + 2 > nbuf:
-            if not eof:
-                res[STATUS] = NEED_MORE
-                res[POS] = restart
-                return
-            _fail(res, TRUNCATED_FIELD, p, OBJECT_MASK, 2, nbuf - p)
+        if _short(buf, p, 2, nbuf, eof, restart, OBJECT_MASK, res):
             return
         mask = _word(buf, p, 2)
         p += 2
@@ -451,22 +455,12 @@ def decode_planes(buf, base, p, nbuf, eof,
             _fail(res, OBJECT_MASK_ZERO, start + 1, 0, 0, 0)
             return
         skip = 0
-        if p + 1 > nbuf:
-            if not eof:
-                res[STATUS] = NEED_MORE
-                res[POS] = restart
-                return
-            _fail(res, TRUNCATED_FIELD, p, SKIP_FLAG, 1, nbuf - p)
+        if _short(buf, p, 1, nbuf, eof, restart, SKIP_FLAG, res):
             return
         p += 1
         if buf[p - 1]:
             while True:
-                if p + 4 > nbuf:
-                    if not eof:
-                        res[STATUS] = NEED_MORE
-                        res[POS] = restart
-                        return
-                    _fail(res, TRUNCATED_FIELD, p, SKIP_CHUNK, 4, nbuf - p)
+                if _short(buf, p, 4, nbuf, eof, restart, SKIP_CHUNK, res):
                     return
                 chunk = _word(buf, p, 4)
                 p += 4
