@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from mpeg4fa.face import FaceModel  # noqa: E402
 from mpeg4fa.face.asset import build_head, load_head  # noqa: E402
-from mpeg4fa.face.deform import deform  # noqa: E402
+from mpeg4fa.face.deformers.feature_points import deform  # noqa: E402
 from mpeg4fa.face.fapu import measure_fapu  # noqa: E402
 from mpeg4fa.face.rig import build_rig  # noqa: E402
 from mpeg4fa.spec import EXPRESSION_PROFILES, VISEME_PROFILES  # noqa: E402

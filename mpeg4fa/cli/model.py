@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..decoded import shown_values
-from ..face import FaceError, FaceModel, asset
+from ..face import FaceError, FaceModel, asset, deformers
 from ..spec import EXPRESSION_PROFILES, FAPS, FAPU_NAMES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
 from . import options
 from .options import Commands
@@ -46,9 +46,7 @@ def register(commands: Commands) -> None:
                                                     "Chinese: zh:a, zh:bpm ...)")
     p.add_argument("--expression", metavar="NAME[=I]", type=_expression,
                    help=f"add an expression at intensity I of {FULL_INTENSITY} (default {FULL_INTENSITY})")
-    p.add_argument("--deformer", choices=("fap", "arkit"), default="fap",
-                   help="fap: feature points and smooth weights (default); arkit: the sculpted CC0 face units, "
-                        "feature points kept exact")
+    deformer_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run_pose)
 
@@ -57,6 +55,13 @@ def face_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fdp", type=Path, help="calibrate the head to this FDP (.fdp binary or .json) first")
     p.add_argument("--method", choices=("dffd", "rbf"), default="dffd",
                    help="calibration warp: Dirichlet FFD with Sibson coordinates (default) or RBF")
+
+
+def deformer_option(p: argparse.ArgumentParser) -> None:
+    """``--deformer``: the registered deformers, each with its line of help."""
+    lines = "; ".join(f"{k.name}: {k.summary}" for k in deformers.KINDS.values())
+    p.add_argument("--deformer", choices=deformers.names(), default=deformers.names()[0],
+                   help=f"how FAPs move the mesh. {lines}")
 
 
 def _fap_value(text: str) -> tuple[int, float]:

@@ -12,7 +12,7 @@ from ..render.video import AUDIO_WAV, writes_folder
 from . import options
 from .errors import UsageError
 from .media import check_video_size, read_image, render_with_progress, save_image
-from .model import face_from_args, face_options
+from .model import deformer_option, face_from_args, face_options
 from .options import Commands
 from .paths import refuse_overlaps
 
@@ -63,7 +63,7 @@ def register(commands: Commands) -> None:
 
 def _render_options(p: argparse.ArgumentParser) -> None:
     face_options(p)
-    p.add_argument("--deformer", choices=("fap", "arkit"), default="fap", help="how FAPs move the mesh (default fap)")
+    deformer_option(p)
     p.add_argument("--size", type=options.size, default=(512, 512), metavar="W[xH]",
                    help="image size, 16 to 8192 (default 512; even for MP4)")
     p.add_argument("--aa", type=options.samples, default=0, metavar="N",

@@ -9,13 +9,14 @@ Four layers, each a function over arrays (seed paper §6):
    directions, or rotate eyes, jaw, lids, tongue and head (:mod:`.motion`);
 3. feature point motion spreads to the mesh through Sibson weights cut to edge
    regions (:mod:`.rig`, :mod:`.regions`);
-4. the mesh is posed once per frame (:mod:`.deform`).
+4. the mesh is posed once per frame by a deformer (:mod:`.deformers`: the feature-point
+   deformer by default, the sculpted ARKit face units, ...).
 
 Calibration to a sender's feature points: :mod:`.calibrate` (Dirichlet FFD or RBF).
 The generic head is built from CC0 assets at set-up: :mod:`.asset`.
 """
 from mpeg4fa.face.calibrate import CalibrationReport
-from mpeg4fa.face.deform import Pose
+from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.errors import FaceError, FaceWarning
 from mpeg4fa.face.fapu import Fapu, measure_fapu
 from mpeg4fa.face.mesh import HeadMesh

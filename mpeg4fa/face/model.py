@@ -17,10 +17,11 @@ from typing import Iterable, Iterator, Mapping
 
 import numpy as np
 
-from mpeg4fa.face.arkit import ArkitRig, build_arkit_rig, deform_arkit
 from mpeg4fa.face.asset import load_head
 from mpeg4fa.face.calibrate import CalibrationReport, calibrate_mesh
-from mpeg4fa.face.deform import Pose, deform
+from mpeg4fa.face import deformers
+from mpeg4fa.face.deformers.arkit import ArkitRig, build_arkit_rig
+from mpeg4fa.face.pose import Pose
 from mpeg4fa.decoded import FapValueError, FrameResolver, check_finite, clamp, resolve, shown_frame, shown_values
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.fapu import Fapu, measure_fapu
@@ -35,21 +36,19 @@ _DEFAULT: "FaceModel | None" = None
 class FaceModel:
     """A neutral head plus everything needed to pose it from FAPs."""
 
-    DEFORMERS = ("fap", "arkit")
+    DEFORMERS = deformers.names()
 
     def __init__(self, mesh: HeadMesh, calibration: CalibrationReport | None = None, *,
                  deformer: str = "fap") -> None:
-        if deformer not in self.DEFORMERS:
-            raise FaceError(f"unknown deformer {deformer!r}", hint=f"one of {', '.join(self.DEFORMERS)}")
-        if deformer == "arkit" and mesh.face_units is None:
-            raise FaceError("the ARKit deformer needs a head with face units (the generic head has them)")
+        if deformers.kind(deformer).needs_face_units and mesh.face_units is None:
+            raise FaceError(f"the {deformer} deformer needs a head with face units (the generic head has them)",
+                            hint="use the feature-point deformer (deformer='fap')")
         self.mesh = mesh
         self.calibration = calibration
         self.deformer = deformer
 
     def with_deformer(self, deformer: str) -> "FaceModel":
-        """The same face posed by another deformer: ``fap`` (feature points and smooth weights) or
-        ``arkit`` (the sculpted CC0 face units, corrected so feature points stay exact)."""
+        """The same face posed by another deformer (:mod:`mpeg4fa.face.deformers` lists them)."""
         return FaceModel(self.mesh, self.calibration, deformer=deformer)
 
     @classmethod
@@ -78,13 +77,19 @@ class FaceModel:
         return build_rig(self.mesh, self.fapu)
 
     @cached_property
+    def posing(self) -> deformers.Deformer:
+        """This face's deformer, set up on first use: ``values (68,) -> Pose``."""
+        return deformers.build(self.deformer, self.mesh, self.rig)
+
+    @cached_property
     def arkit_rig(self) -> ArkitRig:
+        """The ARKit face units' rig (the ARKit deformer's own when that is this face's deformer)."""
+        if self.deformer == "arkit":
+            return self.posing.arkit
         return build_arkit_rig(self.mesh, self.rig)
 
     def _pose(self, values: np.ndarray) -> Pose:
-        if self.deformer == "arkit":
-            return deform_arkit(self.rig, self.arkit_rig, values)
-        return deform(self.rig, values)
+        return self.posing(values)
 
     # -- calibration ----------------------------------------------------------------------
 

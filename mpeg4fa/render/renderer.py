@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mpeg4fa.face.deform import Pose
+from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.render.camera import Camera, frame_points
 from mpeg4fa.render.context import gl_context, program

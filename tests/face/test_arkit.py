@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from mpeg4fa.face import FaceError, FaceModel
-from mpeg4fa.face.arkit import unit_weights
+from mpeg4fa.face.deformers.arkit import unit_weights
 from mpeg4fa.spec import FAPS, N_FAPS, VISEME_PROFILES
 
 LOW_LEVEL = range(3, N_FAPS + 1)

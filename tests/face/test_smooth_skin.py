@@ -54,7 +54,7 @@ def generic_graph(generic_face):
 
 def _sculpt_strain(face, graph, values):
     """Worst strain of the ARKit face units alone (no correction) for these values."""
-    from mpeg4fa.face.arkit import unit_weights
+    from mpeg4fa.face.deformers.arkit import unit_weights
 
     rig = face.arkit_rig
     skin = face.mesh.part("skin")

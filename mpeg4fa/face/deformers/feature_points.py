@@ -1,4 +1,4 @@
-"""Layers 2-4 at play time: FAP values -> feature point motion -> mesh vertices.
+"""The feature-point deformer (the default): FAP values -> feature point motion -> mesh vertices.
 
 One call per frame, vectorised: a sparse product for the translational FAPs
 (only the rows of vertices some feature point reaches), then the rotations
@@ -8,38 +8,15 @@ move in the head's frame, the head moves last.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.lids import turn_lid
+from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.rig import Rig
 
 _EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
 _JAW_FAP = {kind: fap for fap, kind in motion.JAW.items()}  # "open" -> 3, "thrust" -> 14, "shift" -> 15
-
-
-@dataclass(frozen=True)
-class Pose:
-    """A deformed face: all vertices, plus what is not geometry (pupil sizes)."""
-
-    vertices: np.ndarray  # (V, 3)
-    parts: dict[str, slice]
-    pupil_diameter: dict[str, float]  # mm, per eye part
-    fp_vertex: np.ndarray
-
-    def part(self, name: str) -> np.ndarray:
-        return self.vertices[self.parts[name]]
-
-    def by_part(self) -> dict[str, np.ndarray]:
-        """Vertex positions per part (views, no copy)."""
-        return {name: self.vertices[s] for name, s in self.parts.items()}
-
-    @property
-    def feature_points(self) -> np.ndarray:
-        """``(84, 3)`` feature point positions in this pose."""
-        return self.vertices[self.fp_vertex]
 
 
 def _rotate_rows(points: np.ndarray, rows: np.ndarray, weights: np.ndarray, centre: np.ndarray,
@@ -129,3 +106,8 @@ def deform(rig: Rig, values: np.ndarray) -> Pose:
     p, pupils = pose_in_head_frame(rig, v)
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
+
+
+def build(mesh, rig: Rig):
+    """The deformer as the registry builds it: the rig's smooth weights, nothing more to set up."""
+    return lambda values: deform(rig, values)

@@ -29,7 +29,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deform import Pose, apply_head_rotation, apply_lids, pose_in_head_frame
+from mpeg4fa.face.deformers.feature_points import apply_head_rotation, apply_lids, pose_in_head_frame
+from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.rig import Rig, skin_weights
@@ -118,3 +119,18 @@ def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray) -> Pose:
     apply_lids(rig, p, v)  # after sculpting: the lids turn over the eyeball as in the feature-point deformer
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
+
+
+@dataclass(frozen=True)
+class ArkitDeformer:
+    """The ARKit deformer set up for one face (its unit rig kept for inspection)."""
+
+    rig: Rig
+    arkit: ArkitRig
+
+    def __call__(self, values: np.ndarray) -> Pose:
+        return deform_arkit(self.rig, self.arkit, values)
+
+
+def build(mesh: HeadMesh, rig: Rig) -> ArkitDeformer:
+    return ArkitDeformer(rig, build_arkit_rig(mesh, rig))

@@ -1,0 +1,62 @@
+"""Layer 4, the choice of how a frame's FAP values pose the mesh.
+
+Every deformer honours the same FAPU semantics (a FAP moves its feature point by value x FAPU
+along the standard's direction); they differ in how the rest of the skin follows and in what
+they cost. Each lives in its own module with a ``build(mesh, rig)`` that does the per-face
+set-up once and returns a callable ``values (68,) -> Pose``; the registry below names them, so
+that :class:`~mpeg4fa.face.model.FaceModel`, the CLI and the tools list the same choices.
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from mpeg4fa.face.errors import FaceError
+from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.pose import Pose
+from mpeg4fa.face.rig import Rig
+
+Deformer = Callable[[np.ndarray], Pose]
+
+
+@dataclass(frozen=True)
+class DeformerKind:
+    """One registered deformer: its name, the module that builds it and a line for ``--help``."""
+
+    name: str
+    module: str
+    summary: str
+    needs_face_units: bool = False
+
+
+KINDS: dict[str, DeformerKind] = {k.name: k for k in (
+    DeformerKind("fap", "feature_points", "feature points and smooth Sibson weights (default)"),
+    DeformerKind("arkit", "arkit", "the sculpted CC0 ARKit face units, corrected so feature points stay exact",
+                 needs_face_units=True),
+)}
+
+
+def names() -> tuple[str, ...]:
+    """The deformer names, default first."""
+    return tuple(KINDS)
+
+
+def kind(name: str) -> DeformerKind:
+    """The registered deformer ``name``, or a :class:`FaceError` listing the choices."""
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise FaceError(f"unknown deformer {name!r}", hint=f"one of {', '.join(KINDS)}") from None
+
+
+def build(name: str, mesh: HeadMesh, rig: Rig) -> Deformer:
+    """Set up deformer ``name`` for one neutral face (imported on first use: each has its own cost)."""
+    k = kind(name)
+    if k.needs_face_units and mesh.face_units is None:
+        raise FaceError(f"the {name} deformer needs a head with face units (the generic head has them)",
+                        hint="use the feature-point deformer (deformer='fap')")
+    module = importlib.import_module(f"{__name__}.{k.module}")
+    return module.build(mesh, rig)
