@@ -36,6 +36,8 @@ KINDS: dict[str, DeformerKind] = {k.name: k for k in (
     DeformerKind("fap", "feature_points", "feature points and smooth Sibson weights (default)"),
     DeformerKind("arkit", "arkit", "the sculpted CC0 ARKit face units, corrected so feature points stay exact",
                  needs_face_units=True),
+    DeformerKind("muscle", "muscle", "Waters linear muscles fitted to the FAPs, corrected so feature points stay exact"),
+    DeformerKind("parabolic", "parabolic", "the feature-point deformer with spherical eyeballs and parabolic lid contours"),
 )}
 
 

@@ -1,0 +1,221 @@
+"""The muscle deformer: FAPs contract Waters' linear muscles, the skin follows, feature points stay exact.
+
+1. The feature-point deformer's targets: every skin feature point's FAP-driven motion
+   in the jaw's frame (``rig.translate @ values``; 0 for the points no FAP drives).
+2. The contractions: the 16 solved muscles (:mod:`mpeg4fa.face.muscles`, ``data/muscles.csv``:
+   frontalis (medial and lateral bellies), corrugator, levator labii superioris, zygomatic
+   major, risorius, depressor labii inferioris, mentalis, each side) are fitted to those
+   targets by non-negative least squares (muscles only pull) with a small ridge
+   (:data:`RIDGE`), over all the skin's anchored feature points at once; the levator
+   palpebrae contracts with its upper lid FAP (:data:`LEVATOR_GAIN`), the lid itself turns
+   over the eyeball as in the feature-point deformer.
+3. The residual correction: what the muscles leave at the feature points (what they
+   cannot reach, and their motion of points that should stay put) is spread by the
+   feature-point deformer's own smooth skin weights (:func:`.rig.skin_weights`), so every
+   feature point lands exactly where the FAPU semantics put it. The skin is then
+   ``rest + muscles + weights @ (targets - muscles at the points)``, precomputed as the
+   feature-point pose plus ``G @ K`` with ``G = B - W B_fp`` (linear in the contractions).
+
+Jaw, lids, eyes, tongue and head come from the feature-point deformer
+(:func:`.feature_points.pose_in_head_frame`, :func:`.apply_lids`, :func:`.apply_head_rotation`);
+the muscle field rides on the jaw (it is added before the jaw's rotation).
+
+What the muscles alone reach (:func:`reach_table`, each FAP alone at +-200 on the
+generic head; ``own`` is the relative error at the FAP's own point, ``fit`` the relative
+residual over every skin feature point): the eight muscles only pull, toward bone, so
+they raise and draw together the brows, raise the upper lip, pull the corners up and out,
+lower the lower lip and lift the chin; they cannot lower the upper lip, push or
+protrude lips (orbicularis oris is a sphincter, not in the set), lower the corners
+(depressor anguli oris is not in the set), puff cheeks, move the nose or the ears. Those
+FAPs are realised by the residual correction alone, that is as the feature-point
+deformer moves them. Run ``python -m mpeg4fa.face.deformers.muscle`` for the table.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import nnls
+
+from mpeg4fa.face import motion
+from mpeg4fa.face.couplings import PASSIVE_POINTS
+from mpeg4fa.face.deformers.feature_points import apply_head_rotation, apply_lids, pose_in_head_frame
+from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.muscles import Muscle, muscle_basis, place_muscles
+from mpeg4fa.face.pose import Pose
+from mpeg4fa.face.rig import Rig, skin_weights
+from mpeg4fa.spec import FAPS, N_FAPS
+
+RIDGE = 1e-3  # squared weight of the contractions (mm) against the feature point residuals (mm)
+LEVATOR_GAIN = 0.5  # mm of levator contraction per mm the upper lid point rises
+_JAW_OPEN = next(f for f, k in motion.JAW.items() if k == "open")
+_UPPER_LID = {"l": next(f for f in (19, 20) if FAPS[f - 1].name == "close_t_l_eyelid"),
+              "r": next(f for f in (19, 20) if FAPS[f - 1].name == "close_t_r_eyelid")}
+
+
+@dataclass(frozen=True)
+class MuscleRig:
+    """Everything a frame needs, precomputed for one neutral face."""
+
+    muscles: tuple[Muscle, ...]
+    basis: np.ndarray  # (skin vertices, 3, M): displacement per mm of contraction
+    solved: np.ndarray  # indices of the muscles fitted to the targets
+    lid_driven: tuple[tuple[int, int], ...]  # (muscle index, upper lid FAP)
+    anchors: np.ndarray  # feature point indices of the skin points the fit and the correction use
+    anchors_local: np.ndarray  # their vertices, local to the skin part
+    fit: np.ndarray  # (3 * anchors + solved, solved): the points' motion per contraction, and the ridge
+    target_rows: np.ndarray  # rows of (rig.translate @ v) that are the anchors' targets (3 per anchor)
+    rows: np.ndarray  # global vertex indices the muscles move (after correction)
+    field: np.ndarray  # (3 * rows, M): G = B - W B_fp on those rows
+    jaw_local: np.ndarray  # positions in ``rows`` of vertices the jaw turns
+    jaw_weight: np.ndarray
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(m.name for m in self.muscles)
+
+
+def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
+    """Place the muscles on this face, build their basis, the fit and the corrected field."""
+    muscles = tuple(place_muscles(mesh, rig.fapu))
+    basis = muscle_basis(mesh, list(muscles))
+    skin = mesh.part("skin")
+    labels = mesh.fp_labels
+    fp_v = mesh.fp_vertex
+    anchors = [i for i in range(len(labels)) if skin.start <= fp_v[i] < skin.stop and labels[i] not in PASSIVE_POINTS]
+    # one anchor per distinct vertex (11.5 shares 11.4's)
+    _, first = np.unique(fp_v[anchors], return_index=True)
+    anchors = np.array(sorted(np.array(anchors)[first]))
+    weights = skin_weights(mesh, list(anchors), list(anchors))[skin][:, anchors].toarray()  # (skin, anchors)
+    local_fp = fp_v[anchors] - skin.start
+    n_skin, m = basis.shape[0], basis.shape[2]
+    b_fp = basis[local_fp]  # (anchors, 3, M)
+    field = basis - np.einsum("va,axm->vxm", weights, b_fp)
+    field[local_fp] = 0.0  # exactly (the weights are 1 at their own point, 0 at the others')
+    moved = np.flatnonzero(np.abs(field).reshape(n_skin, -1).max(axis=1) > 1e-12)
+
+    solved = np.array([j for j, mu in enumerate(muscles) if mu.spec.driven_by == "solve"])
+    lid_driven = tuple((j, _UPPER_LID[mu.side]) for j, mu in enumerate(muscles) if mu.spec.driven_by == "lid")
+    a = b_fp[:, :, solved].reshape(-1, len(solved))
+    fit = np.vstack([a, np.sqrt(RIDGE) * np.eye(len(solved))])
+    target_rows = (3 * anchors[:, None] + np.arange(3)).ravel()
+
+    jaw_rows, jaw_w = rig.jaw_rows
+    global_rows = moved + skin.start
+    where = {int(v): k for k, v in enumerate(global_rows)}
+    pairs = [(where[int(v)], w) for v, w in zip(jaw_rows, jaw_w) if int(v) in where]
+    jaw_local = np.array([p for p, _ in pairs], dtype=np.intp)
+    jaw_weight = np.array([w for _, w in pairs], dtype=np.float64)
+    return MuscleRig(muscles=muscles, basis=basis, solved=solved, lid_driven=lid_driven, anchors=anchors,
+                     anchors_local=local_fp,
+                     fit=np.asfortranarray(fit), target_rows=target_rows, rows=global_rows,
+                     field=np.ascontiguousarray(field[moved].reshape(-1, m)), jaw_local=jaw_local,
+                     jaw_weight=jaw_weight)
+
+
+def contractions(rig: Rig, mrig: MuscleRig, values: np.ndarray) -> np.ndarray:
+    """Every muscle's contraction (mm) for one frame of FAPs."""
+    v = np.asarray(values, dtype=np.float64)
+    k = np.zeros(len(mrig.muscles))
+    targets = rig.translate[mrig.target_rows] @ v
+    if targets.any():
+        rhs = np.concatenate([targets, np.zeros(len(mrig.solved))])
+        k[mrig.solved] = nnls(mrig.fit, rhs)[0]
+    iris = rig.fapu.unit("IRISD")
+    for j, fap in mrig.lid_driven:
+        k[j] = LEVATOR_GAIN * motion.direction(fap)[1] * v[fap - 1] * iris  # the lid point's rise (mm)
+    return k
+
+
+def muscle_motion(mrig: MuscleRig, k: np.ndarray) -> np.ndarray:
+    """``(anchors, 3)``: what the muscles alone do to the anchored feature points (before correction)."""
+    b_fp = mrig.basis[mrig.anchors_local].reshape(-1, len(mrig.muscles))
+    return (b_fp @ k).reshape(-1, 3)
+
+
+def deform_muscle(rig: Rig, mrig: MuscleRig, values: np.ndarray) -> Pose:
+    """Pose one frame: muscles shape the skin, feature points exactly where the FAPs put them."""
+    v = np.asarray(values, dtype=np.float64)
+    p, pupils = pose_in_head_frame(rig, v, lids=False)
+    k = contractions(rig, mrig, v)
+    if k.any():
+        delta = (mrig.field @ k).reshape(-1, 3)
+        if v[_JAW_OPEN - 1] and len(mrig.jaw_local):  # the field rides on the jaw: turn it with the jaw
+            pivot = rig.rest[rig.joints["mouth"]]
+            chin = rig.rest[rig.fp_vertex[rig.chin_fp]]
+            angle = motion.arc_angle((chin - pivot)[1:], v[_JAW_OPEN - 1] * rig.fapu.unit("MNS"))
+            step = motion.rotation_matrix(0, angle) - np.eye(3)
+            delta[mrig.jaw_local] += mrig.jaw_weight[:, None] * (delta[mrig.jaw_local] @ step.T)
+        p[mrig.rows] += delta
+    apply_lids(rig, p, v)
+    apply_head_rotation(rig, p, v)
+    return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
+
+
+@dataclass(frozen=True)
+class MuscleDeformer:
+    """The muscle deformer set up for one face (its muscle rig kept for inspection)."""
+
+    rig: Rig
+    muscle_rig: MuscleRig
+
+    def __call__(self, values: np.ndarray) -> Pose:
+        return deform_muscle(self.rig, self.muscle_rig, values)
+
+    def contractions(self, values: np.ndarray) -> dict[str, float]:
+        """Muscle name -> contraction (mm) for one frame."""
+        return dict(zip(self.muscle_rig.names, contractions(self.rig, self.muscle_rig, values).tolist()))
+
+
+def build(mesh: HeadMesh, rig: Rig) -> MuscleDeformer:
+    return MuscleDeformer(rig, build_muscle_rig(mesh, rig))
+
+
+@dataclass(frozen=True)
+class Reach:
+    """How much of one FAP's feature point motion the muscles alone deliver (before correction)."""
+
+    fap: int
+    value: float
+    own: float  # |muscle motion - target| / |target| at the FAP's own point(s) (worst)
+    fit: float  # |muscle motion - targets| / |targets| over every anchored skin point
+
+    @property
+    def reached(self) -> bool:
+        return self.own < 0.01
+
+
+def reach_table(mesh: HeadMesh, rig: Rig, mrig: MuscleRig, value: float = 200.0) -> list[Reach]:
+    """Each skin-translating FAP alone at +value and (unless unidirectional) -value."""
+    row_of = {int(mesh.fp_vertex[a]): k for k, a in enumerate(mrig.anchors)}
+    out = []
+    for record in FAPS[2:]:
+        fap = record.number
+        if motion.kind(fap) != "translate":
+            continue
+        own_rows = [row_of[int(mesh.fp_vertex[mesh.fp_index(label)])] for label in record.feature_point
+                    if int(mesh.fp_vertex[mesh.fp_index(label)]) in row_of]
+        if not own_rows:  # the tongue
+            continue
+        for sign in ((1.0,) if record.unidirectional else (1.0, -1.0)):
+            v = np.zeros(N_FAPS)
+            v[fap - 1] = sign * value
+            targets = (rig.translate[mrig.target_rows] @ v).reshape(-1, 3)
+            moved = muscle_motion(mrig, contractions(rig, mrig, v)).reshape(-1, 3)
+            own = max(float(np.linalg.norm(moved[r] - targets[r]) / np.linalg.norm(targets[r])) for r in own_rows)
+            fit = float(np.linalg.norm(moved - targets) / np.linalg.norm(targets))
+            out.append(Reach(fap, sign * value, own, fit))
+    return out
+
+
+def _main() -> None:  # pragma: no cover - a report for people
+    from mpeg4fa.face.model import FaceModel
+
+    face = FaceModel.default().with_deformer("muscle")
+    for r in reach_table(face.mesh, face.rig, face.posing.muscle_rig):
+        name = FAPS[r.fap - 1].name
+        print(f"{r.fap:3d} {name:24s} {r.value:+5.0f}  own {r.own:6.1%}  fit {r.fit:6.1%}  {'reached' if r.reached else ''}")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    _main()
