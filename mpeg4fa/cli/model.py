@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..decoded import shown_values
-from ..face import FaceError, FaceModel, asset, deformers
+from ..face import FaceError, FaceModel, asset, calibrate, deformers
 from ..spec import EXPRESSION_PROFILES, FAPS, FAPU_NAMES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
 from . import options
 from .options import Commands
@@ -53,8 +53,9 @@ def register(commands: Commands) -> None:
 
 def face_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fdp", type=Path, help="calibrate the head to this FDP (.fdp binary or .json) first")
-    p.add_argument("--method", choices=("dffd", "rbf"), default="dffd",
-                   help="calibration warp: Dirichlet FFD with Sibson coordinates (default) or RBF")
+    p.add_argument("--method", choices=calibrate.METHODS, default="dffd",
+                   help="calibration warp: Dirichlet FFD with Sibson coordinates (default), RBF, or elastic "
+                        "(the skin as a thin plate on an elastic foundation, one sparse solve)")
 
 
 def deformer_option(p: argparse.ArgumentParser) -> None:

@@ -17,6 +17,10 @@ Two steps, both over plain arrays:
      points' hull (the back of the skull, the neck) keep the global alignment.
    * ``rbf``: a polyharmonic radial-basis field through the same displacements
      (see :mod:`mpeg4fa.face.rbf`), no cage needed (its affine part extrapolates).
+   * ``elastic``: not a field in space but an elastic skin (thin plate on an elastic
+     foundation, one sparse solve, see :mod:`mpeg4fa.face.elastic`): the residuals are
+     imposed on the feature points' vertices and the mesh follows along its surface.
+     It reshapes the head it was shaped from, so moving the points back restores it.
 
 The eyeballs are rigid: each moves with its pupil's displacement (or with the
 warp at its centre when no pupil was sent). 11.5 (hair thickness) is not a skin
@@ -33,7 +37,7 @@ from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 
-METHODS = ("dffd", "rbf")
+METHODS = ("dffd", "rbf", "elastic")
 ALIGNMENTS = ("similarity", "bbox", "none")
 NOT_CONTROLS = ("11.5",)
 _EYES = {"3.5": ("eye_l", "l-eye"), "3.6": ("eye_r", "r-eye")}
@@ -119,6 +123,10 @@ def calibrate_mesh(mesh: HeadMesh, labels: tuple[str, ...], points: np.ndarray, 
     labels = tuple(labels[i] for i in use)
     target = points[use]
     started = time.perf_counter()
+    if method == "elastic":  # shaping starts from the rest head: the result depends on the points only
+        from mpeg4fa.face.elastic import rest_head
+
+        mesh = rest_head(mesh)
     fp_rows = np.array([mesh.fp_index(label) for label in labels])
     fp_v = mesh.fp_vertex[fp_rows]
     rest = mesh.vertices
@@ -141,7 +149,11 @@ def calibrate_mesh(mesh: HeadMesh, labels: tuple[str, ...], points: np.ndarray, 
         rigid[mesh.part(part)] = True
     free = np.flatnonzero(~rigid)
     warped = aligned.copy()
-    if np.abs(residual).max() > 0:
+    if np.abs(residual).max() > 0 and method == "elastic":
+        from mpeg4fa.face.elastic import elastic_displacement
+
+        warped[free] += elastic_displacement(mesh, fp_v, residual)[free]
+    elif np.abs(residual).max() > 0:
         warped[free] += _warp(method, aligned[fp_v], residual, aligned[free], aligned)
     for label, (part, joint) in _EYES.items():
         s = mesh.part(part)
@@ -158,7 +170,12 @@ def calibrate_mesh(mesh: HeadMesh, labels: tuple[str, ...], points: np.ndarray, 
     q_after = triangle_quality(warped, tris)
     n0, n1 = _normals(rest, tris), _normals(warped, tris)
     folded = int((np.einsum("ij,ij->i", n0, n1) < 0).sum())
-    calibrated = mesh.with_vertices(warped, calibrated_with=method)
+    if method == "elastic":
+        from mpeg4fa.face.elastic import remember_rest
+
+        calibrated = mesh.with_vertices(warped, calibrated_with=method, **remember_rest(mesh, warped))
+    else:
+        calibrated = mesh.with_vertices(warped, calibrated_with=method)
     error = np.linalg.norm(warped[fp_v] - target, axis=1).max()
     report = CalibrationReport(
         method=method, alignment=alignment, labels=labels, scale=float(scale), max_error=float(error),
