@@ -27,10 +27,20 @@ FLIP_X = np.array([-1.0, 1.0, 1.0])
 MIRRORED = ((19, 20, 1.0), (21, 22, 1.0), (23, 24, -1.0), (25, 26, 1.0), (27, 28, 1.0))  # eye yaw: both positive to the left
 
 
+@pytest.fixture(scope="module")
+def generic_parabolic(generic_face):
+    return generic_face.with_deformer("parabolic")
+
+
+@pytest.fixture(scope="module")
+def procedural_parabolic(procedural_face):
+    return procedural_face.with_deformer("parabolic")
+
+
 @pytest.fixture(scope="module", params=["procedural", "generic"])
 def face(request):
     """Each face posed by the parabolic deformer (built once per module)."""
-    return request.getfixturevalue(f"{request.param}_face").with_deformer("parabolic")
+    return request.getfixturevalue(f"{request.param}_parabolic")
 
 
 def _frame(**values: float) -> np.ndarray:
@@ -93,10 +103,10 @@ def test_closing_changes_a_and_c_and_keeps_the_corners(face):
                                        atol=1e-9)
 
 
-def test_closed_upper_contour_is_the_lower_contour(generic_face):
+def test_closed_upper_contour_is_the_lower_contour(generic_parabolic):
     """Both parabolas pass through the corners; closed, the upper one passes through the lower
     lid point's height: the two nearly coincide (the lid points are 0.4 mm apart in x)."""
-    face = generic_face.with_deformer("parabolic")
+    face = generic_parabolic
     for up, low in ((19, 21), (20, 22)):
         upper, lower = _lid(face, up), _lid(face, low)
         x = np.linspace(*upper.corners_x, 21)
@@ -216,13 +226,13 @@ def test_only_the_lid_sheet_and_its_point_move(face, fap):
     np.testing.assert_array_equal(pose.feature_points[others], face.mesh.feature_points()[others])
 
 
-def test_expressions_and_blinks_keep_the_skin_outside_the_eyeballs(generic_face):
+def test_expressions_and_blinks_keep_the_skin_outside_the_eyeballs(generic_parabolic):
     """As the feature-point deformer's lid test: every expression at full intensity, lids open,
     half and fully closed (both upper, and both upper and lower halfway), no skin vertex within
     0.05 mm of an eyeball."""
     from mpeg4fa.spec.profiles import EXPRESSION_PROFILES
 
-    face = generic_face.with_deformer("parabolic")
+    face = generic_parabolic
     spheres = [e.sphere for e in face.posing.eyes.values()]
     close = closing_value(face, 19)
     for name, profile in EXPRESSION_PROFILES.items():

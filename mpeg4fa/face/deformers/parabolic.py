@@ -226,9 +226,9 @@ class ParabolicDeformer:
     def __call__(self, values: np.ndarray) -> Pose:
         v = np.asarray(values, dtype=np.float64)
         rig = self.rig
-        rest_eyes = v.copy()
-        rest_eyes[[f - 1 for f in _EYE_FAPS]] = 0.0
-        p, pupils = pose_in_head_frame(rig, rest_eyes, lids=False)
+        still_eyes = v.copy()  # the eyes are this deformer's: the feature-point layers leave them at rest
+        still_eyes[[f - 1 for f in _EYE_FAPS]] = 0.0
+        p, pupils = pose_in_head_frame(rig, still_eyes, lids=False)
         irisd = rig.fapu.unit("IRISD")
         for fap, lid in self.lids.items():
             if v[fap - 1]:
