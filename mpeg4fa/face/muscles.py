@@ -50,7 +50,8 @@ from mpeg4fa.face.regions import LID_MARGIN_LOOPS, detour_fade, edge_graph, shor
 from mpeg4fa.face.rig import LID_CLEAR_MM
 
 FLIP_X = np.array([-1.0, 1.0, 1.0])
-DRIVERS = ("solve", "lid")  # contraction solved from the feature point targets, or read off the lid FAP
+DRIVERS = ("solve", "lid")
+CROSS_ES = 0.25  # a paired muscle's field fades over this (in ES0) either side of the midline  # contraction solved from the feature point targets, or read off the lid FAP
 
 
 @dataclass(frozen=True)
@@ -170,8 +171,12 @@ def _margin_distance(mesh: HeadMesh, limit: float) -> np.ndarray:
     return dijkstra(edge_graph(local, tris), indices=margins, min_only=True, limit=limit)
 
 
-def muscle_basis(mesh: HeadMesh, muscles: list[Muscle]) -> np.ndarray:
+def muscle_basis(mesh: HeadMesh, muscles: list[Muscle], fapu: Fapu) -> np.ndarray:
     """``(skin vertices, 3, M)``: each muscle's skin displacement per mm of contraction.
+
+    A paired muscle fades out across the midline: whole up to :data:`CROSS_ES` x ES0 from it on
+    its own side, half on it, 0 as far on the other side (Waters' cones are wide: a left
+    frontalis would lift the right brow; a symmetric pair adds up to whole on the midline).
 
     On a mirror-symmetric face the right muscle's field is the exact mirror image of the
     left's (the edge graphs of a mirrored mesh are not quite mirrored: distances differ by
@@ -186,9 +191,13 @@ def muscle_basis(mesh: HeadMesh, muscles: list[Muscle]) -> np.ndarray:
     clear = 1.0 - smooth_down(to_margin / LID_CLEAR_MM)
     clear_lid = 1.0 - smooth_down(to_margin / LID_HEIGHT_MM)
     basis = np.zeros((len(local), 3, len(muscles)))
+    x = local[:, 0] - mesh.fp("2.1")[0]
     for j, m in enumerate(muscles):
         factor, direction = waters_factor(local, m.attachment, m.insertion, m.omega, m.rs, m.rf)
         factor = factor * surface[j] * (clear_lid if m.spec.driven_by == "lid" else clear)
+        if m.side in ("l", "r"):
+            c = CROSS_ES * fapu.ES0  # 1 at c on its own side, 1/2 on the midline, 0 at c across
+            factor = factor * smooth_down((c - (1.0 if m.side == "l" else -1.0) * x) / (2.0 * c))
         basis[:, :, j] = factor[:, None] * direction
     mirror = mesh.mirror[skin] - skin.start
     if _is_symmetric(mesh):

@@ -21,14 +21,25 @@ Jaw, lids, eyes, tongue and head come from the feature-point deformer
 the muscle field rides on the jaw (it is added before the jaw's rotation).
 
 What the muscles alone reach (:func:`reach_table`, each FAP alone at +-200 on the
-generic head; ``own`` is the relative error at the FAP's own point, ``fit`` the relative
-residual over every skin feature point): the eight muscles only pull, toward bone, so
-they raise and draw together the brows, raise the upper lip, pull the corners up and out,
-lower the lower lip and lift the chin; they cannot lower the upper lip, push or
-protrude lips (orbicularis oris is a sphincter, not in the set), lower the corners
-(depressor anguli oris is not in the set), puff cheeks, move the nose or the ears. Those
-FAPs are realised by the residual correction alone, that is as the feature-point
-deformer moves them. Run ``python -m mpeg4fa.face.deformers.muscle`` for the table.
+generic head, before the correction; ``own``: relative error of the motion at the FAP's
+own point, ``alone``: the same when the muscles are fitted to that point only). No FAP
+is reached within 1 % by the muscles alone: a linear muscle pulls along a chord toward
+bone, so it always adds a component the FAP does not ask for (the frontalis lifts the
+brow up *and back*: ``alone`` 29-36 % for FAPs 31-36 +; zygomatic major and risorius lift
+and stretch the corner up *and back*: 62-66 % for FAPs 6/7, 12/13, 53/54, 59/60 +;
+mentalis lifts the chin up and back: 71 % for FAP 18 +, depressor labii the lower lip:
+73-78 % for FAPs 10/11, 57/58 -), and in the deformer's fit the neighbouring points
+that must stay put hold them back further (``own`` 49-59 % for the brows, 75-78 % for
+the corners). The set has no muscle at all (``alone`` 100 %) for: lowering the brows
+straight down (31-36 -, the corrugator pulls them in), lowering the upper lip or raising
+the midlips (4, 5, 8/9, 51, 52, 55/56 +: orbicularis oris, a sphincter, is not in the set),
+pushing the lips (16, 17), narrowing or lowering the corners (6/7, 53/54 -; 12/13, 59/60 -:
+depressor anguli oris is not in the set), squeezing the brows sideways alone (37/38:
+the corrugator also lowers them), puffing or lifting the cheeks (39-42), the nose (61-64)
+and the ears (65-68). Those motions are realised by the residual correction alone, that
+is as the feature-point deformer moves them; in the expressions, where FAPs come
+together, the muscles carry most of the brows and corners. Run
+``python -m mpeg4fa.face.deformers.muscle`` for the table.
 """
 from __future__ import annotations
 
@@ -47,6 +58,8 @@ from mpeg4fa.face.rig import Rig, skin_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
 RIDGE = 1e-3  # squared weight of the contractions (mm) against the feature point residuals (mm)
+SERVES_MM = 0.05  # a muscle serves a feature point it moves by more than this per mm of contraction
+MIDLINE_ES = 0.02  # feature points within this (in ES0) of the midline belong to both sides
 LEVATOR_GAIN = 0.5  # mm of levator contraction per mm the upper lid point rises
 _JAW_OPEN = next(f for f, k in motion.JAW.items() if k == "open")
 _UPPER_LID = {"l": next(f for f in (19, 20) if FAPS[f - 1].name == "close_t_l_eyelid"),
@@ -64,7 +77,9 @@ class MuscleRig:
     anchors: np.ndarray  # feature point indices of the skin points the fit and the correction use
     anchors_local: np.ndarray  # their vertices, local to the skin part
     fit: np.ndarray  # (3 * anchors + solved, solved): the points' motion per contraction, and the ridge
+    serves: np.ndarray  # (solved, anchors) 1/0: the muscle moves that point (more than SERVES_MM per mm)
     target_rows: np.ndarray  # rows of (rig.translate @ v) that are the anchors' targets (3 per anchor)
+    translate: np.ndarray  # rig.translate[target_rows]: FAP values -> the anchors' targets
     rows: np.ndarray  # global vertex indices the muscles move (after correction)
     field: np.ndarray  # (3 * rows, M): G = B - W B_fp on those rows
     jaw_local: np.ndarray  # positions in ``rows`` of vertices the jaw turns
@@ -78,7 +93,7 @@ class MuscleRig:
 def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
     """Place the muscles on this face, build their basis, the fit and the corrected field."""
     muscles = tuple(place_muscles(mesh, rig.fapu))
-    basis = muscle_basis(mesh, list(muscles))
+    basis = muscle_basis(mesh, list(muscles), rig.fapu)
     skin = mesh.part("skin")
     labels = mesh.fp_labels
     fp_v = mesh.fp_vertex
@@ -97,6 +112,13 @@ def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
     solved = np.array([j for j, mu in enumerate(muscles) if mu.spec.driven_by == "solve"])
     lid_driven = tuple((j, _UPPER_LID[mu.side]) for j, mu in enumerate(muscles) if mu.spec.driven_by == "lid")
     a = b_fp[:, :, solved].reshape(-1, len(solved))
+    serves = (np.linalg.norm(b_fp[:, :, solved], axis=1) > SERVES_MM).T.astype(np.float64)
+    # a paired muscle serves its own side and the midline only (a left FAP contracts no right muscle)
+    x = (mesh.vertices[fp_v[anchors], 0] - mesh.fp("2.1")[0]) / rig.fapu.ES0
+    for row, j in enumerate(solved):
+        side = {"l": 1.0, "r": -1.0}.get(muscles[j].side)
+        if side is not None:
+            serves[row] *= side * x > -MIDLINE_ES
     fit = np.vstack([a, np.sqrt(RIDGE) * np.eye(len(solved))])
     target_rows = (3 * anchors[:, None] + np.arange(3)).ravel()
 
@@ -108,7 +130,8 @@ def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
     jaw_weight = np.array([w for _, w in pairs], dtype=np.float64)
     return MuscleRig(muscles=muscles, basis=basis, solved=solved, lid_driven=lid_driven, anchors=anchors,
                      anchors_local=local_fp,
-                     fit=np.asfortranarray(fit), target_rows=target_rows, rows=global_rows,
+                     fit=np.asfortranarray(fit), serves=serves, target_rows=target_rows,
+                     translate=np.ascontiguousarray(rig.translate[target_rows]), rows=global_rows,
                      field=np.ascontiguousarray(field[moved].reshape(-1, m)), jaw_local=jaw_local,
                      jaw_weight=jaw_weight)
 
@@ -117,10 +140,17 @@ def contractions(rig: Rig, mrig: MuscleRig, values: np.ndarray) -> np.ndarray:
     """Every muscle's contraction (mm) for one frame of FAPs."""
     v = np.asarray(values, dtype=np.float64)
     k = np.zeros(len(mrig.muscles))
-    targets = rig.translate[mrig.target_rows] @ v
+    targets = mrig.translate @ v
     if targets.any():
-        rhs = np.concatenate([targets, np.zeros(len(mrig.solved))])
-        k[mrig.solved] = nnls(mrig.fit, rhs)[0]
+        # only muscles that move a point this frame drives take part (a left FAP contracts no right muscle)
+        driven = np.abs(targets.reshape(-1, 3)).sum(axis=1) > 0
+        active = np.flatnonzero(mrig.serves @ driven)
+        if len(active) == len(mrig.solved):
+            k[mrig.solved] = nnls(mrig.fit, np.concatenate([targets, np.zeros(len(active))]))[0]
+        elif len(active):
+            n = len(targets)
+            a = np.vstack([mrig.fit[:n, active], mrig.fit[n + active][:, active]])
+            k[mrig.solved[active]] = nnls(a, np.concatenate([targets, np.zeros(len(active))]))[0]
     iris = rig.fapu.unit("IRISD")
     for j, fap in mrig.lid_driven:
         k[j] = LEVATOR_GAIN * motion.direction(fap)[1] * v[fap - 1] * iris  # the lid point's rise (mm)
@@ -177,8 +207,9 @@ class Reach:
 
     fap: int
     value: float
-    own: float  # |muscle motion - target| / |target| at the FAP's own point(s) (worst)
-    fit: float  # |muscle motion - targets| / |targets| over every anchored skin point
+    own: float  # |muscle motion - target| / |target| at the FAP's own point(s) (worst), the deformer's fit
+    fit: float  # |muscle motion - targets| / |targets| over every anchored skin point, the deformer's fit
+    alone: float  # ``own`` when the muscles are fitted to the FAP's own point(s) only (the others free)
 
     @property
     def reached(self) -> bool:
@@ -200,11 +231,15 @@ def reach_table(mesh: HeadMesh, rig: Rig, mrig: MuscleRig, value: float = 200.0)
         for sign in ((1.0,) if record.unidirectional else (1.0, -1.0)):
             v = np.zeros(N_FAPS)
             v[fap - 1] = sign * value
-            targets = (rig.translate[mrig.target_rows] @ v).reshape(-1, 3)
+            targets = (mrig.translate @ v).reshape(-1, 3)
             moved = muscle_motion(mrig, contractions(rig, mrig, v)).reshape(-1, 3)
             own = max(float(np.linalg.norm(moved[r] - targets[r]) / np.linalg.norm(targets[r])) for r in own_rows)
             fit = float(np.linalg.norm(moved - targets) / np.linalg.norm(targets))
-            out.append(Reach(fap, sign * value, own, fit))
+            rows = (3 * np.array(own_rows)[:, None] + np.arange(3)).ravel()
+            a = mrig.fit[:3 * len(mrig.anchors)][rows]
+            k_alone = nnls(a, targets.ravel()[rows])[0] if len(rows) else np.zeros(a.shape[1])
+            alone = float(np.linalg.norm(a @ k_alone - targets.ravel()[rows]) / np.linalg.norm(targets.ravel()[rows]))
+            out.append(Reach(fap, sign * value, own, fit, alone))
     return out
 
 
@@ -214,7 +249,8 @@ def _main() -> None:  # pragma: no cover - a report for people
     face = FaceModel.default().with_deformer("muscle")
     for r in reach_table(face.mesh, face.rig, face.posing.muscle_rig):
         name = FAPS[r.fap - 1].name
-        print(f"{r.fap:3d} {name:24s} {r.value:+5.0f}  own {r.own:6.1%}  fit {r.fit:6.1%}  {'reached' if r.reached else ''}")
+        print(f"{r.fap:3d} {name:24s} {r.value:+5.0f}  own {r.own:6.1%}  fit {r.fit:6.1%}  alone {r.alone:6.1%}"
+              f"  {'reached alone' if r.alone < 0.01 else ''}")
 
 
 if __name__ == "__main__":  # pragma: no cover
