@@ -28,7 +28,7 @@ from mpeg4fa.render.renderer import Renderer  # noqa: E402
 VIEWS = {"front": (0.0, 0.0), "side": (90.0, 0.0), "back": (180.0, 0.0), "three-quarter": (30.0, 5.0),
          "top": (0.0, 80.0)}
 POSES = {"neutral": {}, "jaw 3=600": {3: 600}, "brows up 31-36=300": {k: 300 for k in range(31, 37)},
-         "smile 53/54=300": {53: 300, 54: 300}, "head yaw 49=0.4 rad": {49: 4000}}
+         "smile 53/54=300": {53: 300, 54: 300}, "head yaw 49=0.3 rad": {49: 30000}, "head pitch 48=-0.3 rad": {48: -30000}}
 
 
 def _label(img: np.ndarray, text: str) -> Image.Image:

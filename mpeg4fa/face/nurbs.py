@@ -15,23 +15,26 @@ by a smooth surface joined to the triangles of the moving regions without cracks
   region is star-shaped from there (every region triangle keeps its orientation in the
   chart, checked). ``u`` is ``alpha`` and ``v`` is ``-beta``, both scaled to [0, 1], so that
   the surface normal ``S_u x S_v`` points out of the head and the mirror is ``v -> 1 - v``.
-* **Fit** (:func:`fit_static_parts`): the radius of the region's vertices (and one ring of
+* **Fit** (:func:`fit_static_parts`, :func:`fit_surface`): the radius of the region's vertices (and one ring of
   their neighbours, so the surface continues across the border) interpolated by a thin-plate
   spline onto a regular (u, v) grid, symmetrised, and approximated by least squares with a
-  degree-3 B-spline surface (uniform clamped knots, :data:`CONTROL_POINTS`): the basis
-  functions and the evaluation are geomdl's (``helpers.basis_function``, ``evaluate_list``,
-  ``derivatives``); the fit error is the distance of each original vertex to the surface
-  (Gauss-Newton foot points).
+  degree-3 tensor-product surface (a geomdl ``NURBS.Surface``, unit weights, uniform clamped
+  knots, :data:`CONTROL_POINTS`): the basis functions are geomdl's (``helpers.find_spans``,
+  ``helpers.basis_functions``); surface points are geomdl's ``evaluate_list`` (the foot-point
+  iterations sum geomdl's basis functions over the control net in one numpy contraction, a few
+  times faster, checked against it); the fit error is the distance of each original vertex to
+  the surface (Gauss-Newton foot points).
 * **Trims**: the region's border loops mapped to (u, v), the outer one counter-clockwise and
   holes clockwise (signed area checked and fixed), also set as degree-1 geomdl trim curves.
 * **Tessellation** (:func:`nurbs_head`): samples about :data:`SPACING_MM` apart on the
   surface (mirror-symmetric rows), the border loop's own vertices and the static feature
   points (11.x) triangulated by Delaunay in a conformal (Mercator) chart; samples are kept
-  out of every border edge's diametral circle so that each border edge is a Delaunay edge
-  (checked). The border vertices *are* the moving region's vertices (same index, same
+  out of every border edge's diametral circle, and a border edge that other border vertices
+  still hide is forced in (the two pseudo-polygons it cuts re-triangulated), so that every
+  border edge is a triangle edge (checked). The border vertices *are* the moving region's vertices (same index, same
   position: the boundary mapping), so the seam has no crack; within :data:`BLEND_MM` of the
-  border the surface is blended toward the mesh (the border's offsets from the surface,
-  interpolated and faded out) so that the seam has no step either.
+  border the surface is blended toward the triangles it replaces (smoothstep in the distance
+  to the seam), so that the seam has no step and no crease either.
 
 The result is a :class:`~mpeg4fa.face.mesh.HeadMesh` whose skin is the moving triangles plus
 the NURBS tessellation; the other parts, feature points, joints and mirror table are remapped.
@@ -281,13 +284,15 @@ def _make_surface(ctrl: np.ndarray):
     return s
 
 
-def evaluate(surface, uv: np.ndarray) -> np.ndarray:
-    """Surface points at ``(N, 2)`` parameters: geomdl's basis functions, the rational tensor-product
-    sum over the control points as one numpy contraction (the same as ``surface.evaluate_list``, which
-    costs ~0.1 ms a point in pure Python; the tests check they agree)."""
+def evaluate(surface, uv: np.ndarray, *, fast: bool = False) -> np.ndarray:
+    """Surface points at ``(N, 2)`` parameters: geomdl's ``evaluate_list`` (~0.1 ms a point in pure
+    Python), or with ``fast`` geomdl's basis functions summed over the control net in one numpy
+    contraction (the foot-point iterations; the tests check the two agree to 1e-9 mm)."""
     uv = np.clip(np.asarray(uv, float).reshape(-1, 2), 0.0, 1.0)
     if not len(uv):
         return np.zeros((0, 3))
+    if not fast:
+        return np.asarray(surface.evaluate_list(uv.tolist()), float)
     nu, nv = surface.ctrlpts_size_u, surface.ctrlpts_size_v
     w = np.asarray(surface.weights, float).reshape(nu, nv, 1)
     cw = np.c_[np.asarray(surface.ctrlpts, float).reshape(nu * nv, 3) * w.reshape(-1, 1), w.reshape(-1, 1)]
@@ -310,7 +315,7 @@ def surface_distance(surface, points: np.ndarray, uv0: np.ndarray, *, steps: int
         du = np.where(uv[:, :1] > 0.5, -eps, eps)
         dv = np.where(uv[:, 1:] > 0.5, -eps, eps)
         probe = np.vstack([uv, uv + np.c_[du, np.zeros_like(du)], uv + np.c_[np.zeros_like(dv), dv]])
-        val = evaluate(surface, probe).reshape(3, len(uv), 3)
+        val = evaluate(surface, probe, fast=True).reshape(3, len(uv), 3)
         s, su, sv = val[0], (val[1] - val[0]) / du, (val[2] - val[0]) / dv
         # normal equations of the 2x2 least squares, all points at once
         a, b, c = np.einsum("nd,nd->n", su, su), np.einsum("nd,nd->n", su, sv), np.einsum("nd,nd->n", sv, sv)
@@ -318,7 +323,7 @@ def surface_distance(surface, points: np.ndarray, uv0: np.ndarray, *, steps: int
         ru, rv = np.einsum("nd,nd->n", su, r), np.einsum("nd,nd->n", sv, r)
         det = np.maximum(a * c - b * b, 1e-300)
         uv = np.clip(uv + np.c_[(c * ru - b * rv) / det, (a * rv - b * ru) / det], 0.0, 1.0)
-    return np.linalg.norm(evaluate(surface, uv) - pts, axis=1), uv
+    return np.linalg.norm(evaluate(surface, uv, fast=True) - pts, axis=1), uv
 
 
 def _chart(points: np.ndarray, centre: np.ndarray) -> Chart:
@@ -333,15 +338,54 @@ def _chart(points: np.ndarray, centre: np.ndarray) -> Chart:
     return Chart(centre, (float(a0 - pad), float(a1 + pad)), float(b), float(r.mean()))
 
 
-def fit_static_parts(mesh: HeadMesh, rig, *, control_points: tuple[int, int] = CONTROL_POINTS) -> NurbsParts:
-    """The skull cap of ``mesh`` (no FAP of ``rig`` moves it) fitted with a trimmed NURBS surface."""
+def fit_surface(chart: Chart, points: np.ndarray, control_points: tuple[int, int] = CONTROL_POINTS):
+    """A degree-3 B-spline surface (a geomdl NURBS with unit weights) through ``points`` over ``chart``.
+
+    The radius of the points about the chart's centre is interpolated (thin-plate spline) onto a
+    regular (u, v) grid, made mirror-symmetric, and the grid's 3-D points are fitted by separable
+    least squares on geomdl's basis functions (uniform clamped knots); the control net is
+    symmetrised again so that the surface is exactly mirror-symmetric (v -> 1 - v, x -> -x)."""
+    from geomdl import knotvector
+
+    a_d, b_d, r_d = chart.angles(points)
+    scale = chart.radius
+    rbf = RBFInterpolator(np.c_[a_d * scale, b_d * scale], r_d, kernel="thin_plate_spline",
+                          smoothing=RBF_SMOOTHING, degree=1)
+    g = np.linspace(0.0, 1.0, FIT_GRID)
+    g = 0.5 * (g + (1.0 - g[::-1]))  # exactly symmetric about 0.5
+    uu, vv = np.meshgrid(g, g, indexing="ij")
+    ga, gb = chart.from_uv(np.c_[uu.ravel(), vv.ravel()])
+    radius = rbf(np.c_[ga * scale, gb * scale]).reshape(FIT_GRID, FIT_GRID)
+    radius = 0.5 * (radius + radius[:, ::-1])
+    gb = gb.reshape(FIT_GRID, FIT_GRID)
+    gb = 0.5 * (gb - gb[:, ::-1])
+    grid = chart.centre + radius.reshape(-1, 1) * chart.direction(ga, gb.ravel())
+    grid = grid.reshape(FIT_GRID, FIT_GRID, 3)
+    nu, nv = control_points
+    cu = _collocation(knotvector.generate(DEGREE, nu), nu, g)
+    cv = _collocation(knotvector.generate(DEGREE, nv), nv, g)
+    # separable least squares: grid = Cu @ P @ Cv^T per coordinate
+    step, *_ = np.linalg.lstsq(cu, grid.reshape(FIT_GRID, -1), rcond=None)  # (nu, G*3)
+    step = step.reshape(nu, FIT_GRID, 3).transpose(1, 0, 2).reshape(FIT_GRID, -1)
+    ctrl, *_ = np.linalg.lstsq(cv, step, rcond=None)  # (nv, nu*3)
+    ctrl = ctrl.reshape(nv, nu, 3).transpose(1, 0, 2)
+    ctrl = 0.5 * (ctrl + ctrl[:, ::-1] * np.array([-1.0, 1.0, 1.0]))
+    return _make_surface(ctrl)
+
+
+def fit_static_parts(mesh: HeadMesh, rig, *, control_points: tuple[int, int] = CONTROL_POINTS,
+                     static: np.ndarray | None = None) -> NurbsParts:
+    """The skull cap of ``mesh`` (no FAP of ``rig`` moves it) fitted with a trimmed NURBS surface.
+
+    ``static`` overrides which vertices count as static (default :func:`static_vertices`): a
+    moving island inside the cap becomes a hole of the trim."""
     from geomdl import BSpline, knotvector
 
     t0 = time.perf_counter()
     n = mesh.n_vertices
     v = mesh.vertices
     tri = np.asarray(mesh.triangles["skin"], np.int64)
-    static = static_vertices(mesh, rig)
+    static = static_vertices(mesh, rig) if static is None else np.asarray(static, bool)
     rows = static_region(mesh, static)
     region = tri[rows]
     used = np.unique(region)
@@ -359,34 +403,9 @@ def fit_static_parts(mesh: HeadMesh, rig, *, control_points: tuple[int, int] = C
         raise FaceError(f"{int((area <= 0).sum())} of {len(region)} static triangles fold in the skull chart",
                         where="nurbs", hint="the region is not star-shaped about its centre")
     # data: the region's vertices and one ring of neighbours (the surface runs on across the seam)
-    skin_tri = tri
-    near = np.unique(skin_tri[np.isin(skin_tri, used).any(axis=1)])
-    near = near[(chart.angles(v[near])[1].__abs__() < chart.beta)]
-    a_d, b_d, r_d = chart.angles(v[near])
-    scale = chart.radius
-    rbf = RBFInterpolator(np.c_[a_d * scale, b_d * scale], r_d, kernel="thin_plate_spline",
-                          smoothing=RBF_SMOOTHING, degree=1)
-    g = np.linspace(0.0, 1.0, FIT_GRID)
-    g = 0.5 * (g + (1.0 - g[::-1]))  # exactly symmetric about 0.5
-    uu, vv = np.meshgrid(g, g, indexing="ij")
-    ga, gb = chart.from_uv(np.c_[uu.ravel(), vv.ravel()])
-    radius = rbf(np.c_[ga * scale, gb * scale]).reshape(FIT_GRID, FIT_GRID)
-    radius = 0.5 * (radius + radius[:, ::-1])
-    gb = gb.reshape(FIT_GRID, FIT_GRID)
-    gb = 0.5 * (gb - gb[:, ::-1])
-    grid = chart.centre + radius.reshape(-1, 1) * chart.direction(ga, gb.ravel())
-    grid = grid.reshape(FIT_GRID, FIT_GRID, 3)
-    nu, nv = control_points
-    ku, kv = knotvector.generate(DEGREE, nu), knotvector.generate(DEGREE, nv)
-    cu, cv = _collocation(ku, nu, g), _collocation(kv, nv, g)
-    # separable least squares: grid = Cu @ P @ Cv^T per coordinate
-    step, *_ = np.linalg.lstsq(cu, grid.reshape(FIT_GRID, -1), rcond=None)  # (nu, G*3)
-    step = step.reshape(nu, FIT_GRID, 3).transpose(1, 0, 2).reshape(FIT_GRID, -1)
-    ctrl, *_ = np.linalg.lstsq(cv, step, rcond=None)  # (nv, nu*3)
-    ctrl = ctrl.reshape(nv, nu, 3).transpose(1, 0, 2).copy()
-    mirrored = ctrl[:, ::-1] * np.array([-1.0, 1.0, 1.0])
-    ctrl = 0.5 * (ctrl + mirrored)
-    surface = _make_surface(ctrl)
+    near = np.unique(tri[np.isin(tri, used).any(axis=1)])
+    near = near[np.abs(beta[near]) < chart.beta]
+    surface = fit_surface(chart, v[near], control_points)
 
     # trims: the border loops in (u, v), outer counter-clockwise, holes clockwise
     order, flip = orient_trims([uv_all[lp] for lp in loops])
@@ -572,20 +591,16 @@ def tessellate(mesh: HeadMesh, part: NurbsPart, *, spacing_mm: float = SPACING_M
     new_beta = np.r_[f_beta, s_beta[ok]]
     uv = chart.uv(new_alpha, new_beta)
     pts = evaluate(part.surface, uv)
-    # the blend: border offsets from the surface, spread by inverse distance and faded out
-    b_uv = chart.uv(b_alpha, b_beta)
-    offset = v[border] - evaluate(part.surface, b_uv)
+    # the blend: near the seam the surface gives way to the triangles it replaces (the point of the
+    # replaced triangle under each sample), so that the seam has neither a step nor a crease
     new_m = pts_m[n_b:]
-    k = min(8, n_b)
-    d, j = cKDTree(b_m).query(new_m, k=k)
-    d = d.reshape(len(new_m), k)
-    j = j.reshape(len(new_m), k)
-    w = 1.0 / np.maximum(d, 1e-9) ** 2
-    spread = np.einsum("nk,nkd->nd", w, offset[j]) / w.sum(axis=1, keepdims=True)
-    dist_mm = d[:, 0] * np.cos(new_beta)
+    rows, lam = _locate(mesh, part, new_m)
+    corners = v[np.asarray(mesh.triangles["skin"], np.int64)[part.region_triangles[rows]]]
+    target = np.einsum("nj,njd->nd", lam, corners)
+    dist_mm = _segment_distance(new_m, seg_a, seg_b) * np.cos(new_beta)
     x = np.clip(dist_mm / BLEND_MM, 0.0, 1.0)
     fade = 1.0 - x * x * (3.0 - 2.0 * x)
-    pts = pts + fade[:, None] * spread
+    pts = pts + fade[:, None] * (target - pts)
     # the mirror among the new vertices (the samples are symmetric by construction)
     mirror_m = new_m * np.array([1.0, -1.0])
     dm, mirror = cKDTree(new_m).query(mirror_m)
@@ -600,31 +615,38 @@ def tessellate(mesh: HeadMesh, part: NurbsPart, *, spacing_mm: float = SPACING_M
 
 # -- the head --------------------------------------------------------------------------------------
 
-def _corner_uvs(mesh: HeadMesh, part: NurbsPart, tess: Tessellation, corners_m: np.ndarray) -> np.ndarray:
+def _barycentric(p: np.ndarray, tri_m: np.ndarray) -> np.ndarray:
+    """Barycentric coordinates of points ``p (..., 2)`` in triangles ``tri_m (..., 3, 2)``."""
+    e1, e2 = tri_m[..., 1, :] - tri_m[..., 0, :], tri_m[..., 2, :] - tri_m[..., 0, :]
+    q = p - tri_m[..., 0, :]
+    det = _cross2(e1, e2)
+    l1, l2 = _cross2(q, e2) / det, _cross2(e1, q) / det
+    return np.stack([1.0 - l1 - l2, l1, l2], axis=-1)
+
+
+def _locate(mesh: HeadMesh, part: NurbsPart, points_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The replaced triangle under each chart point (index into ``part.region_triangles``) and the
+    point's barycentric coordinates in it (extended slightly outside where the chart's curved edges
+    leave a point in no triangle)."""
+    old = np.asarray(mesh.triangles["skin"], np.int64)[part.region_triangles]
+    a, b, _ = part.chart.angles(mesh.vertices)
+    old_m = part.chart.mercator(a, b)[old]  # (T, 3, 2)
+    k = min(12, len(old))
+    _, cand = cKDTree(old_m.mean(axis=1)).query(points_m, k=k)
+    cand = cand.reshape(len(points_m), k)
+    score = _barycentric(points_m[:, None, :], old_m[cand]).min(axis=-1)
+    best = cand[np.arange(len(cand)), score.argmax(axis=1)]
+    return best, _barycentric(points_m, old_m[best])
+
+
+def _corner_uvs(mesh: HeadMesh, part: NurbsPart, corners_m: np.ndarray) -> np.ndarray:
     """Texture coordinates of the new triangles: each triangle takes the texture map of the
     replaced triangle under its centroid (extended linearly), so no triangle spans a UV seam."""
-    skin_tris = np.asarray(mesh.triangles["skin"], np.int64)
-    old = skin_tris[part.region_triangles]
     old_uv = np.asarray(mesh.corner_uvs["skin"])[part.region_triangles]
+    best, _ = _locate(mesh, part, corners_m.mean(axis=1))
+    old = np.asarray(mesh.triangles["skin"], np.int64)[part.region_triangles[best]]
     a, b, _ = part.chart.angles(mesh.vertices)
-    m = part.chart.mercator(a, b)
-    old_m = m[old]  # (T, 3, 2)
-    centroid = corners_m.mean(axis=1)
-    k = min(12, len(old))
-    _, cand = cKDTree(old_m.mean(axis=1)).query(centroid, k=k)
-    cand = cand.reshape(len(centroid), k)
-
-    def bary(p, tri_m):  # p (..., 2), tri_m (..., 3, 2)
-        e1, e2 = tri_m[..., 1, :] - tri_m[..., 0, :], tri_m[..., 2, :] - tri_m[..., 0, :]
-        q = p - tri_m[..., 0, :]
-        det = e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]
-        l1 = (q[..., 0] * e2[..., 1] - q[..., 1] * e2[..., 0]) / det
-        l2 = (e1[..., 0] * q[..., 1] - e1[..., 1] * q[..., 0]) / det
-        return np.stack([1.0 - l1 - l2, l1, l2], axis=-1)
-
-    score = bary(centroid[:, None, :], old_m[cand]).min(axis=-1)
-    best = cand[np.arange(len(cand)), score.argmax(axis=1)]
-    lam = bary(corners_m, old_m[best][:, None])  # (T, 3 corners, 3)
+    lam = _barycentric(corners_m, part.chart.mercator(a, b)[old][:, None])  # (T, 3 corners, 3)
     return np.einsum("tcj,tjd->tcd", lam, old_uv[best])
 
 
@@ -644,7 +666,7 @@ def build_nurbs_head(mesh: HeadMesh, parts: NurbsParts, *, spacing_mm: float = S
         m_new = part.chart.mercator(*part.chart.from_uv(tess.uv))
         corner_m = np.where((tess.triangles < 0)[..., None], m_old[~np.minimum(tess.triangles, -1)],
                             m_new[np.maximum(tess.triangles, 0)])
-        new_uvs.append(_corner_uvs(mesh, part, tess, corner_m))
+        new_uvs.append(_corner_uvs(mesh, part, corner_m))
         new_tris.append(np.where(tess.triangles < 0, tess.triangles, tess.triangles + n_new))
         new_points.append(tess.points)
         new_mirror.append(tess.mirror + n_new)
