@@ -28,9 +28,12 @@ returns every vertex exactly.
 are carried by the skin (each vertex moves with an inverse-distance average of
 the skin's displacement, area-weighted, power 4, so they move with the lips and
 jaw next to them and stay inside the mouth; each part takes the best affine fit of
-that over its vertices, so that it keeps its shape), and when their own feature points
-were sent, an elastic solve of the same energy over the part's own triangles
-adds what puts those points exactly in place. Joint centres (no triangles) move
+that over its vertices, so that it keeps its shape). When their own feature points
+(9.8-9.11, 6.1-6.4) were sent, what those still lack is fitted by one affine map
+shared by teeth and tongue (least squares; a translation for one point), so the
+tongue's sides also set the width of the teeth beside them, and then an elastic
+solve of the same energy over each part's own triangles adds what puts its
+points exactly in place. Joint centres (no triangles) move
 with the same kind of average of the meshed vertices around them, except that a
 joint which is a sent feature point (7.1) takes its residual exactly.
 
@@ -53,7 +56,7 @@ from scipy.sparse.linalg import splu
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
 
-__all__ = ["MEMBRANE", "FOUNDATION", "ElasticBody", "ElasticModel", "cotan_laplacian", "elastic_model",
+__all__ = ["MEMBRANE", "FOUNDATION", "ElasticBody", "ElasticModel", "cotan_laplacian", "stiffness", "elastic_model",
            "elastic_displacement", "rest_head", "remember_rest"]
 
 MEMBRANE = 0.0
@@ -65,10 +68,9 @@ on the generic head), about the size of a facial region. With only the lips sent
 the worst triangle quality on realistic FDPs hardly changes between 100 and 3000."""
 CARRIED = ("teeth_upper", "teeth_lower", "tongue")
 """Parts the skin carries, each also an elastic body of its own for its feature points."""
-RIGID = ("eye_l", "eye_r")
 _IDW_POWER = 4.0
 _IDW_SOFT = 0.03  # x head height: keeps the average finite and smooth near the skin
-_CACHE_SIZE = 8
+_CACHE_SIZE = 4
 _INFO_KEY = "elastic_rest"
 _ORDERING = "COLAMD"  # column order for the sparse LU (fastest here of those SuperLU offers)
 
@@ -153,25 +155,20 @@ def _idw(queries: np.ndarray, sites: np.ndarray, weight: np.ndarray, soft: float
     return out
 
 
-def _affine_part(points: np.ndarray) -> np.ndarray:
-    """The projection of a field on ``points`` onto its best affine field (least squares), (n x n).
-
-    A carried part (teeth, tongue) takes the affine part of the skin's motion around it, so
-    it keeps its shape up to an affine map instead of following every local wrinkle of the
-    lips next to it (a lip corner moved up would lift the back teeth through it).
-    """
+def _affine_design(points: np.ndarray) -> np.ndarray:
+    """``[1, x, y, z]`` per point, centred and scaled: the basis of affine fields over a part."""
     centre = points.mean(axis=0)
     span = max(float(np.ptp(points, axis=0).max()), 1e-300)
-    x = np.column_stack([np.ones(len(points)), (points - centre) / span])
-    return x @ np.linalg.pinv(x, rcond=1e-9)
+    return np.column_stack([np.ones(len(points)), (points - centre) / span])
 
 
 @dataclass(frozen=True)
 class _Carried:
-    """A part the skin carries: its vertices' weights over the skin and its own body."""
+    """A part the skin carries: its affine field from the skin's displacement, and its own elastic body."""
 
     vertices: np.ndarray  # global indices
-    over_skin: np.ndarray  # (len(vertices), n_skin)
+    design: np.ndarray  # (len(vertices), 4): the part's affine basis
+    over_skin: np.ndarray  # (4, n_skin): affine coefficients of the part's field from the skin's displacement
     held: np.ndarray  # which controls sit on this part (indices into the control list)
     body: ElasticBody | None
 
@@ -217,9 +214,21 @@ class ElasticModel:
                 body = ElasticBody(stiffness(v[pa:pb], tris - pa, pb - pa, height), controls[here] - pa)
             elif len(here):  # points without triangles: each takes its own residual only
                 body = ElasticBody(sp.identity(pb - pa, format="csc"), controls[here] - pa)
-            over_skin = _affine_part(v[idx]) @ _idw(v[idx], v[a:b], skin_mass, soft)
-            self._carried.append(_Carried(idx, over_skin, here, body))
+            # the part takes the best affine fit (least squares) of the skin's field at its vertices, so it
+            # keeps its shape instead of following every local wrinkle of the lips next to it (a lip
+            # corner moved up would otherwise lift the back teeth through it)
+            design = _affine_design(v[idx])
+            over_skin = np.linalg.pinv(design, rcond=1e-9) @ _idw(v[idx], v[a:b], skin_mass, soft)
+            self._carried.append(_Carried(idx, design, over_skin, here, body))
             meshed.append(idx)
+        # the inner points (teeth, tongue) share one affine correction, so that the tongue's sides
+        # (6.3/6.4) also tell the teeth how wide the mouth is, as one spatial field would
+        self._inner = np.concatenate([c.vertices for c in self._carried]) if self._carried else np.zeros(0, np.int64)
+        self._inner_held = np.concatenate([c.held for c in self._carried]) if self._carried else np.zeros(0, np.int64)
+        if len(self._inner_held):
+            at = v[controls[self._inner_held]]
+            self._inner_slopes = np.linalg.pinv(at - at.mean(axis=0), rcond=1e-6)  # (3, k): 0 for one point
+            self._inner_offsets = v[self._inner] - at.mean(axis=0)
         meshed_idx = np.concatenate(meshed)
         weights = np.concatenate([skin_mass] + [self._part_mass(mesh, c.vertices) for c in self._carried])
         self._meshed = meshed_idx
@@ -251,12 +260,15 @@ class ElasticModel:
         skin = self._skin_body.solve(residual[self._skin_held])
         out[self._skin] = skin
         for c in self._carried:
-            carried = c.over_skin @ skin
+            out[c.vertices] = c.design @ (c.over_skin @ skin)
+        if len(self._inner_held):  # one affine fit of what the inner points still lack, shared by the parts
+            miss = residual[self._inner_held] - out[self.controls[self._inner_held]]
+            shift = miss.mean(axis=0)
+            out[self._inner] += shift + self._inner_offsets @ (self._inner_slopes @ (miss - shift))
+        for c in self._carried:
             if c.body is not None:
-                local = c.vertices[0]
-                at = self.controls[c.held] - local
-                carried = carried + c.body.solve(residual[c.held] - carried[at])
-            out[c.vertices] = carried
+                at = self.controls[c.held]
+                out[c.vertices] += c.body.solve(residual[c.held] - out[at])
         if len(self._joints):
             out[self._joints] = self._joint_weights @ out[self._meshed]
             for vertex, i in self._joint_held:
