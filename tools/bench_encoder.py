@@ -176,19 +176,45 @@ def bench_language(name: str, sentences: list[str], seconds: float, engine_name:
 
 
 def bench_sentences(name: str, sentences: list[str], engine_name: str) -> dict:
-    """Each sentence encoded on its own at the high level: bits per frame with the text coding."""
+    """Each sentence encoded on its own at the high level: bits per frame with the text coding, and
+    where they go (:func:`bit_budget`)."""
     engine = make_engine(engine_name)
-    rows = []
+    rows, budget, frames = [], {}, 0
     for text in sentences:
         enc = encode_text(text, engine=engine, level="high", fps=FPS)
         data = encode(enc.stream, enc.coding())
         n = len(enc.stream)
         rows.append({"text": text, "audio_s": enc.speech.duration, "frames": n, "bits": len(data) * 8,
                      "bits_per_frame": len(data) * 8 / n, "tagged": bool(enc.utterance.cues)})
+        for key, bits in bit_budget(data).items():
+            budget[key] = budget.get(key, 0) + bits
+        frames += n
     per = np.array([r["bits_per_frame"] for r in rows])
     return {"language": name, "sentences": rows, "mean": float(per.mean()), "min": float(per.min()),
             "max": float(per.max()),
-            "pooled": sum(r["bits"] for r in rows) / sum(r["frames"] for r in rows)}
+            "pooled": sum(r["bits"] for r in rows) / sum(r["frames"] for r in rows),
+            "budget_bits_per_frame": {k: v / frames for k, v in sorted(budget.items(), key=lambda kv: -kv[1])}}
+
+
+def bit_budget(data: bytes) -> dict[str, int]:
+    """Bits of a stream by syntax element (from the decoder's own trace): intra planes as one item,
+    P-plane segments by what they code, fixed fields by name."""
+    from mpeg4fa.fba.trace import trace
+
+    elements = list(trace(data))
+    intra = {e.frame for e in elements if e.name == "is_intra" and e.value == 1}
+    out: dict[str, int] = {}
+    for e in elements:
+        if e.frame in intra:
+            key = "intra planes (headers, ranges, intra segments)"
+        elif e.kind == "segment":
+            key = e.name.split(" segment")[0] + " segment (P)"
+        elif e.frame is None:
+            key = "object start and end codes"
+        else:
+            key = e.name
+        out[key] = out.get(key, 0) + e.width
+    return out
 
 
 def _sentence_tables(results: list[dict], before: dict | None) -> bool:
@@ -218,6 +244,12 @@ def _sentence_tables(results: list[dict], before: dict | None) -> bool:
                 line += (f" {was['bits_per_frame']:.1f} | {row['bits_per_frame'] / was['bits_per_frame'] - 1:+.0%} |"
                          if was else " n/a | |")
             print(line)
+    print("\n| language | where the bits go (high level, all sentences) | bits/frame |")
+    print("|---|---|---|")
+    for r in results:
+        for key, value in r["budget_bits_per_frame"].items():
+            if value >= 0.05:
+                print(f"| {r['language']} | {key} | {value:.2f} |")
     if old:
         print("\n| language | before: mean (range) | after: mean (range) |")
         print("|---|---|---|")

@@ -127,17 +127,25 @@ def plan(stream: FapStream, options: EncodeOptions, *, backend: str = "auto") ->
             codes = wide["face"] if wide else _range_codes(out, FACE, face_quant, [k], [stop], compiled)
             params.face = PartParams(face_quant, _mask_types(out.fap_mask[k], FACE, options.mask_types,
                                                              intended[source[k]]),
-                                     out.fap_mask[k].copy(), ranges=RangeSet((True,) * 4, codes))
+                                     out.fap_mask[k].copy(), ranges=_ranges(codes, out.fap_mask[k], FACE, options))
         if out.object_mask[k] & BODY_BIT:
             codes = wide["body"] if wide else _range_codes(out, BODY, body_quant, [k], [stop], compiled)
             params.body = PartParams(body_quant, _mask_types(out.bap_mask[k], BODY, None, None),
-                                     out.bap_mask[k].copy(), ranges=RangeSet((True,) * 4, codes))
+                                     out.bap_mask[k].copy(), ranges=_ranges(codes, out.bap_mask[k], BODY, options))
         out.intra[k] = params
     out.start_code[:] = 0
     if use_start_codes:
         out.start_code[intra_frames] = PLANE_START_CODE
     out.timestamps = _grid_times(out, fps)
     return out
+
+
+def _ranges(codes: np.ndarray, mask: np.ndarray, part: PartSpec, options: EncodeOptions) -> RangeSet:
+    """The four range sets of an intra header: all sent, except (``optimize``) where the header
+    masks no parameter that has ranges (FAP 1 and 2 have none), so no range is in use and every
+    decoder reads the same values whatever it keeps."""
+    send = not options.optimize or any(bool(mask[list(group)].any()) for group in part.range_groups)
+    return RangeSet((send,) * 4, codes)
 
 
 def _limits(part: PartSpec, quant: int) -> tuple[np.ndarray, int]:

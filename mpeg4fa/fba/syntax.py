@@ -8,6 +8,7 @@ order or width of a field (the idea of FFmpeg's coded-bitstream templates).
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Callable, Sequence
 
 import numpy as np
@@ -219,8 +220,10 @@ def group_masks(io, groups: Sequence[Sequence[int]], mask_types: Sequence[int], 
     return tuple(types), out
 
 
-def _minmax_layout(groups: Sequence[Sequence[int]], mask: np.ndarray) -> list[int | None]:
-    """The fields of one new-range set in order: None for a marker bit, i for parameter i's 5-bit code."""
+@lru_cache(maxsize=256)
+def _minmax_layout(groups: tuple[tuple[int, ...], ...], mask: bytes) -> tuple[int | None, ...]:
+    """The fields of one new-range set in order: None for a marker bit, i for parameter i's 5-bit code
+    (``mask`` as bytes, one per parameter: a stream's headers repeat a few masks, so this is cached)."""
     layout: list[int | None] = []
     for members in groups:
         for j, i in enumerate(members):
@@ -228,26 +231,35 @@ def _minmax_layout(groups: Sequence[Sequence[int]], mask: np.ndarray) -> list[in
                 layout.append(None)
             if mask[i]:
                 layout.append(i)
-    return layout
+    return tuple(layout)
 
 
 def new_minmax(io, groups: Sequence[Sequence[int]], mask: np.ndarray, ranges: RangeSet,
                label: str = "parameter") -> RangeSet:
-    """The four new-range sets: a marker every 4 parameters of a group, 5 bits per masked one."""
+    """The four new-range sets: a marker every 4 parameters of a group, 5 bits per masked one.
+
+    The sets an intra header flags follow one another, so they are read (or written) as one run of fields.
+    """
     flags = tuple(io.flag(ranges.flags[k], f"is_{name}_new") for k, name in enumerate(RANGE_SET_NAMES))
     codes = np.zeros_like(ranges.codes)
-    layout = _minmax_layout(groups, mask)
+    sets = [k for k in range(4) if flags[k]]
+    if not sets:
+        return RangeSet(flags, codes)
+    layout = _minmax_layout(tuple(map(tuple, groups)), np.asarray(mask, dtype=np.uint8).tobytes())
+    size = len(layout)
     markers = [i is None for i in layout]
     widths = [1 if m else 5 for m in markers]
+    sent = [1 if i is None else int(ranges.codes[k, i]) for k in sets for i in layout] if io.writing else None
+
+    def what(f: int) -> str:
+        name, i = RANGE_SET_NAMES[sets[f // size]], layout[f % size]
+        return f"new {name} ranges" if i is None else f"new {name} of {label} {i + 1}"
+
+    got = np.asarray(io.fields(widths * len(sets), sent, what, markers=markers * len(sets)), dtype=np.int64)
     coded = np.array([i for i in layout if i is not None], dtype=np.int64)
     is_code = ~np.array(markers, dtype=bool)
-    for k, name in enumerate(RANGE_SET_NAMES):
-        if not flags[k]:
-            continue
-        sent = [1 if i is None else int(ranges.codes[k, i]) for i in layout] if io.writing else None
-        got = io.fields(widths, sent, lambda f, name=name: f"new {name} ranges" if layout[f] is None
-                        else f"new {name} of {label} {layout[f] + 1}", markers=markers)
-        codes[k, coded] = np.asarray(got, dtype=np.int64)[is_code]
+    for row, k in enumerate(sets):
+        codes[k, coded] = got.reshape(len(sets), size)[row, is_code]
     return RangeSet(flags, codes)
 
 

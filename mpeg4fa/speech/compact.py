@@ -20,17 +20,22 @@ that repeats the previous one folds into its skip count. So:
   than a few frames of unchanged FAP 2. :func:`plan_expression_mask` tries a few masks, from "every
   frame" to "only the runs of change", and keeps the one that encodes smallest.
 
-Both field choices are a cheapest path (dynamic programming over the equivalent ways of writing
-each frame) under a simple bit model: a changed field costs a few bits, an unchanged one about
-nothing, a frame equal to the one before costs almost nothing (it is folded into a skip count).
+Both field choices are a cheapest path (a beam search over the equivalent ways of writing each
+frame) under the codec's own cost: each hypothesis carries the adaptive P models of the fields
+(:class:`~mpeg4fa.fba.params.FieldCoder`'s sizes and steps, counts starting uniform as after an
+intra frame, one added per coded symbol), a coded symbol costs ``-log2`` of its model probability,
+a coded frame :data:`FRAME_BITS` more, a frame equal to the one before :data:`REPEAT_BITS`.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from mpeg4fa.fba import EncodeOptions, encode
+from mpeg4fa.fba.params import FieldCoder, quantise
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.spec import FULL_INTENSITY
 
@@ -38,38 +43,66 @@ FRAME_BITS = 10.0
 """About what a P frame costs beyond its changed fields: the plane header and three segment flushes."""
 REPEAT_BITS = 1.0
 """A frame equal to the one before: folded into the previous frame's skip count."""
-SELECT_BITS = 4.5
-"""A select that changes (an adaptive model of 29 or 13 differences, a handful of them in use)."""
-LEVEL_BITS = 4.0
-"""A blend or intensity that changes, plus :data:`LEVEL_SPREAD` bits per full-scale change."""
-LEVEL_SPREAD = 1.0
 BEAM = 48
 """States kept per frame: enough for the few ways of writing a frame that differ in what they hold."""
 
 State = tuple[int, ...]
 
 
+@dataclass(frozen=True)
+class _Model:
+    """One field's P model: ``symbol[d + FULL_INTENSITY]`` is the symbol coding a change ``d`` (the
+    codec's quantiser applied, clipped to the model), ``size`` the number of symbols."""
+
+    symbol: list[int]
+    size: int
+
+
+def field_models(fap: int, fap_quant: int) -> list[_Model]:
+    """The P models of FAP ``fap``'s fields after an intra frame at ``fap_quant``, as the codec sets them up."""
+    coder = FieldCoder(fap)
+    coder.start_intra(fap_quant)
+    changes = np.arange(-FULL_INTENSITY, FULL_INTENSITY + 1)
+    out = []
+    for j in range(len(coder.fields)):
+        size = int(coder.psize[j])
+        symbol = quantise(changes, np.int64(coder.qstep[j])) - int(coder.pmin[j])
+        out.append(_Model(np.clip(symbol, 0, size - 1).tolist(), size))
+    return out
+
+
 def _cheapest(n: int, start: State, options: Callable[[int, State], Iterable[State]],
-              field_bits: Sequence[float], level_fields: Sequence[int]) -> list[State]:
-    """The sequence of states (one per frame) of least modelled bit cost; ties keep the first option."""
+              models: Sequence[_Model]) -> list[State]:
+    """The sequence of states (one per frame) of least cost under adaptive ``models``; ties keep the first option.
+
+    Hypotheses that reach the same state merge (the cheaper one's models are kept), as in a Viterbi
+    search, and only the :data:`BEAM` cheapest states go on to the next frame.
+    """
+    counts = tuple(np.ones(m.size) for m in models)
     frames: list[dict[State, tuple[float, State | None]]] = []
-    current: dict[State, tuple[float, State | None]] = {start: (0.0, None)}
+    current: dict[State, tuple[float, tuple[np.ndarray, ...]]] = {start: (0.0, counts)}
     for k in range(n):
-        nxt: dict[State, tuple[float, State | None]] = {}
-        for prev, (cost, _) in current.items():
+        nxt: dict[State, tuple[float, State, tuple[np.ndarray, ...]]] = {}
+        for prev, (cost, held) in current.items():
             for cand in options(k, prev):
+                grown = held
                 if cand == prev:
                     step = REPEAT_BITS
                 else:
-                    step = FRAME_BITS + sum(b for b, a, p in zip(field_bits, cand, prev) if a != p)
-                    step += sum(LEVEL_SPREAD * abs(cand[j] - prev[j]) / FULL_INTENSITY for j in level_fields)
+                    step, grown = FRAME_BITS, []
+                    for m, c, a, b in zip(models, held, cand, prev):
+                        symbol = m.symbol[a - b + FULL_INTENSITY]
+                        step -= math.log2(c[symbol] / c.sum())
+                        c = c.copy()
+                        c[symbol] += 1.0
+                        grown.append(c)
                 total = cost + step
                 if cand not in nxt or total < nxt[cand][0]:
-                    nxt[cand] = (total, prev)
+                    nxt[cand] = (total, prev, tuple(grown))
         if len(nxt) > BEAM:
             nxt = dict(sorted(nxt.items(), key=lambda item: item[1][0])[:BEAM])
-        frames.append(nxt)
-        current = nxt
+        frames.append({state: (total, prev) for state, (total, prev, _) in nxt.items()})
+        current = {state: (total, grown) for state, (total, _, grown) in nxt.items()}
     state = min(current, key=lambda s: current[s][0])
     path = [state]
     for k in range(n - 1, 0, -1):
@@ -78,7 +111,7 @@ def _cheapest(n: int, start: State, options: Callable[[int, State], Iterable[Sta
     return path[::-1]
 
 
-def compact_visemes(viseme: np.ndarray) -> np.ndarray:
+def compact_visemes(viseme: np.ndarray, fap_quant: int = 3) -> np.ndarray:
     """FAP 1 rows ``(n, 4)`` rewritten to show the same mixtures in the fields cheapest to code.
 
     A row showing one viseme ``x`` may be ``(x, any, 63)``, ``(any, x, 0)`` or ``(x, x, any)``, "any"
@@ -99,13 +132,13 @@ def compact_visemes(viseme: np.ndarray) -> np.ndarray:
             return [(x, prev[1], full), (prev[0], x, 0), (x, x, prev[2])]
         return [(a, b, w), (b, a, full - w)]
 
-    path = _cheapest(n, (0, 0, 0), options, (SELECT_BITS, SELECT_BITS, LEVEL_BITS), (2,))
+    path = _cheapest(n, (0, 0, 0), options, field_models(1, fap_quant))
     out = rows.copy()
     out[:, :3] = np.array(path, dtype=out.dtype)
     return out
 
 
-def compact_expressions(expression: np.ndarray) -> np.ndarray:
+def compact_expressions(expression: np.ndarray, fap_quant: int = 3) -> np.ndarray:
     """FAP 2 rows ``(n, 6)`` rewritten to show the same expression mixtures in the fields cheapest to code.
 
     A slot ``(select, intensity)`` with intensity 0 or select 0 (neutral, an all-zero profile) shows
@@ -139,7 +172,7 @@ def compact_expressions(expression: np.ndarray) -> np.ndarray:
             out.extend(a + b for a in empty(slots[0]) for b in empty(slots[1]))
         return out
 
-    path = _cheapest(n, (0, 0, 0, 0), options, (SELECT_BITS, LEVEL_BITS, SELECT_BITS, LEVEL_BITS), (1, 3))
+    path = _cheapest(n, (0, 0, 0, 0), options, field_models(2, fap_quant))
     out = rows.copy()
     out[:, :4] = np.array(path, dtype=out.dtype)
     return out

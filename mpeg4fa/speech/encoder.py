@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 
@@ -146,7 +147,9 @@ def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, valu
     FAP 1 comes from the same moves as the low-level track (same spans, same closure hold).
     With ``compact`` the fields are rewritten to the cheapest equivalent ones (:mod:`.compact`)."""
     same = lambda rows: rows  # noqa: E731
-    visemes, expressions = (compact_visemes, compact_expressions) if compact else (same, same)
+    quant = TEXT_CODING["fap_quant"]
+    visemes, expressions = ((partial(compact_visemes, fap_quant=quant), partial(compact_expressions, fap_quant=quant))
+                            if compact else (same, same))
     vis = viseme_fields(utterance.spans(), times, closure_hold=hold)
     exp = expression_fields(list(utterance.cues), times)
     n = len(times)
