@@ -172,8 +172,10 @@ def test_reach_table_reports_every_skin_fap(muscle_face):
     assert all(0 <= r.fit <= 1.0 + 1e-9 for r in table)  # NNLS never does worse than no muscle at all
     raised = {r.fap: r.own for r in table if r.value > 0}
     assert raised[59] < 0.9 and raised[31] < 0.6  # the corner and brow raisers do most of the work
+    along = {r.fap: r.along for r in table if r.value > 0}
+    assert along[31] > 0.8 and along[59] > 0.5 and along[37] > 0.5  # frontalis, zygomatic, corrugator
     lowered = {r.fap: r.own for r in table if r.value < 0}
-    assert lowered[31] > 0.99  # no muscle of the set pulls the inner brow straight down
+    assert lowered[31] > 0.9 and lowered[59] > 0.99  # no muscle of the set pulls these straight down
 
 
 # -- quality and symmetry ------------------------------------------------------------------------
@@ -204,3 +206,21 @@ def test_mirrored_faps_give_mirrored_poses(muscle_face, left, right):
         a = muscle_face.deform(_frame({left: value})).vertices
         b = muscle_face.deform(_frame({right: sign * value})).vertices
         assert np.abs(b[mesh.mirror] * FLIP_X - a).max() <= 1e-6
+
+
+def test_muscles_follow_a_resized_face(procedural_face, procedural_muscle_face):
+    """Attachments and insertions are feature points plus offsets in ES0: an unevenly stretched
+    face gets stretched muscles, and its feature points still move as the FAPU say."""
+    from mpeg4fa.face.model import FaceModel
+
+    mesh = procedural_face.mesh
+    stretched = FaceModel(mesh.with_vertices(mesh.vertices * np.array([1.2, 0.9, 1.1])), deformer="muscle")
+    small = procedural_muscle_face.posing.muscle_rig.muscles
+    big = stretched.posing.muscle_rig.muscles
+    for a, b in zip(small, big):
+        assert b.name == a.name
+        assert abs(b.insertion[0]) == pytest.approx(abs(a.insertion[0]) * 1.2, rel=0.2)
+    v = EXPRESSION_PROFILES["joy"].astype(float)
+    plain = stretched.with_deformer("fap").deform(v).feature_points
+    fixed = [i for i, label in enumerate(mesh.fp_labels) if label not in PASSIVE_POINTS]
+    assert np.abs(stretched.deform(v).feature_points[fixed] - plain[fixed]).max() <= 1e-9 * mesh.height() * 1.2

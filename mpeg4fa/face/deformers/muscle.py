@@ -20,26 +20,30 @@ Jaw, lids, eyes, tongue and head come from the feature-point deformer
 (:func:`.feature_points.pose_in_head_frame`, :func:`.apply_lids`, :func:`.apply_head_rotation`);
 the muscle field rides on the jaw (it is added before the jaw's rotation).
 
-What the muscles alone reach (:func:`reach_table`, each FAP alone at +-200 on the
-generic head, before the correction; ``own``: relative error of the motion at the FAP's
-own point, ``alone``: the same when the muscles are fitted to that point only). No FAP
-is reached within 1 % by the muscles alone: a linear muscle pulls along a chord toward
-bone, so it always adds a component the FAP does not ask for (the frontalis lifts the
-brow up *and back*: ``alone`` 29-36 % for FAPs 31-36 +; zygomatic major and risorius lift
-and stretch the corner up *and back*: 62-66 % for FAPs 6/7, 12/13, 53/54, 59/60 +;
-mentalis lifts the chin up and back: 71 % for FAP 18 +, depressor labii the lower lip:
-73-78 % for FAPs 10/11, 57/58 -), and in the deformer's fit the neighbouring points
-that must stay put hold them back further (``own`` 49-59 % for the brows, 75-78 % for
-the corners). The set has no muscle at all (``alone`` 100 %) for: lowering the brows
-straight down (31-36 -, the corrugator pulls them in), lowering the upper lip or raising
-the midlips (4, 5, 8/9, 51, 52, 55/56 +: orbicularis oris, a sphincter, is not in the set),
-pushing the lips (16, 17), narrowing or lowering the corners (6/7, 53/54 -; 12/13, 59/60 -:
-depressor anguli oris is not in the set), squeezing the brows sideways alone (37/38:
-the corrugator also lowers them), puffing or lifting the cheeks (39-42), the nose (61-64)
-and the ears (65-68). Those motions are realised by the residual correction alone, that
-is as the feature-point deformer moves them; in the expressions, where FAPs come
-together, the muscles carry most of the brows and corners. Run
-``python -m mpeg4fa.face.deformers.muscle`` for the table.
+What the muscles alone reach (:func:`reach_table`: each FAP alone at +-200 on the
+generic head, before the correction; ``alone`` is the relative error at the FAP's own
+point when the muscles are fitted to that point only, ``along`` the share of the motion
+they then deliver along the FAP's direction). No FAP is reached within 1 % by the
+muscles alone: a linear muscle pulls along a chord toward bone, so it always adds motion
+the FAP does not ask for, and in the deformer's own fit the neighbouring points that must
+stay put hold it back further. In part (``alone`` / ``along``):
+
+* brows raised (31-36 +, frontalis, up *and back*): 29-36 % / 87-92 %;
+* upper lip raised (4, 8/9, 51, 55/56 -, levator labii superioris): 36-52 % / 73-87 %;
+* lower lip lowered (5, 10/11, 52, 57/58 -, depressor labii inferioris): 43-55 % / 70-81 %;
+* corners raised and stretched (6/7, 12/13, 53/54, 59/60 +, zygomatic major, risorius,
+  which pull as much back into the cheek as up and out): 62-66 % / 56-61 %;
+* inner brows squeezed (37/38 +, corrugator, which also lowers them): 65 % / 58 %;
+* chin and lower lip raised (18 +, mentalis; 10/11, 57/58 +): 71-78 % / 40-50 %.
+
+Not at all (``alone`` over 84 %): lowering the upper lip or raising the lower lip at the
+midline (4, 5, 8/9 +: orbicularis oris, a sphincter, is not in the set), pushing or pulling
+the lips (16/17), narrowing or lowering the corners (6/7, 53/54 -; 12/13, 59/60 -: depressor
+anguli oris is not in the set), brows straight down (31-36 -), brows apart (37/38 -), the
+cheeks (39-42), the nose (61-64) and the ears (65-68). Those motions are realised by the
+residual correction alone, that is as the feature-point deformer moves them. In the
+expressions, where FAPs come together, the muscles carry most of the brows and corners.
+``python -m mpeg4fa.face.deformers.muscle`` prints the table.
 """
 from __future__ import annotations
 
@@ -210,6 +214,7 @@ class Reach:
     own: float  # |muscle motion - target| / |target| at the FAP's own point(s) (worst), the deformer's fit
     fit: float  # |muscle motion - targets| / |targets| over every anchored skin point, the deformer's fit
     alone: float  # ``own`` when the muscles are fitted to the FAP's own point(s) only (the others free)
+    along: float  # in that fit, the share of the FAP's motion delivered along its direction (1 = all)
 
     @property
     def reached(self) -> bool:
@@ -238,8 +243,11 @@ def reach_table(mesh: HeadMesh, rig: Rig, mrig: MuscleRig, value: float = 200.0)
             rows = (3 * np.array(own_rows)[:, None] + np.arange(3)).ravel()
             a = mrig.fit[:3 * len(mrig.anchors)][rows]
             k_alone = nnls(a, targets.ravel()[rows])[0] if len(rows) else np.zeros(a.shape[1])
-            alone = float(np.linalg.norm(a @ k_alone - targets.ravel()[rows]) / np.linalg.norm(targets.ravel()[rows]))
-            out.append(Reach(fap, sign * value, own, fit, alone))
+            t_own = targets.ravel()[rows]
+            m_own = a @ k_alone
+            alone = float(np.linalg.norm(m_own - t_own) / np.linalg.norm(t_own))
+            along = float(m_own @ t_own / (t_own @ t_own))
+            out.append(Reach(fap, sign * value, own, fit, alone, along))
     return out
 
 
@@ -250,7 +258,7 @@ def _main() -> None:  # pragma: no cover - a report for people
     for r in reach_table(face.mesh, face.rig, face.posing.muscle_rig):
         name = FAPS[r.fap - 1].name
         print(f"{r.fap:3d} {name:24s} {r.value:+5.0f}  own {r.own:6.1%}  fit {r.fit:6.1%}  alone {r.alone:6.1%}"
-              f"  {'reached alone' if r.alone < 0.01 else ''}")
+              f"  along {r.along:6.1%}{'  reached alone' if r.alone < 0.01 else ''}")
 
 
 if __name__ == "__main__":  # pragma: no cover
