@@ -9,7 +9,7 @@ by a smooth surface joined to the triangles of the moving regions without cracks
   feature-point weight, no jaw share and no lid share in the rig (and lie above the nape,
   :data:`FLOOR_POINT`), cut to the edge-connected piece under the top of the head (11.4)
   and cleaned until every boundary vertex has one boundary edge in and one out (each
-  border a simple loop). The mesh is mirror-symmetric, so the region is too.
+  border a simple loop), and kept mirror-symmetric (by the mirror table).
 * **Chart**: spherical angles about a centre inside the skull, ``alpha`` round the
   left-right axis (front, top, back) and ``beta`` its latitude toward the ears; the
   region is star-shaped from there (every region triangle keeps its orientation in the
@@ -120,6 +120,7 @@ class NurbsPart:
     trim_vertices: tuple[np.ndarray, ...]  # the mesh vertex of each trim point
     region_triangles: np.ndarray  # (T,) rows of mesh.triangles["skin"] the surface replaces
     interior: np.ndarray  # mesh vertices only those triangles use (removed from the skin)
+    symmetric: bool  # the mesh is mirror-symmetric (then the surface and tessellation are made exactly so)
     fit_rms_mm: float  # distance of the region's original vertices to the surface
     fit_max_mm: float
     fit_seconds: float
@@ -134,6 +135,14 @@ class NurbsParts:
 
 
 # -- the static region -----------------------------------------------------------------------------
+
+def is_symmetric(mesh: HeadMesh, *, tol_mm: float = 1e-9) -> bool:
+    """Whether the skin is its own mirror image through its mirror table about x = 0 (the generic
+    and procedural heads are, bit for bit; a calibrated head usually is not)."""
+    skin = mesh.part("skin")
+    v = mesh.vertices[skin]
+    return bool(np.abs(v[mesh.mirror[skin] - skin.start] * [-1.0, 1.0, 1.0] - v).max() <= tol_mm)
+
 
 def static_vertices(mesh: HeadMesh, rig) -> np.ndarray:
     """``(V,)`` bool: skin vertices that no FAP moves except the head rotation."""
@@ -338,13 +347,14 @@ def _chart(points: np.ndarray, centre: np.ndarray) -> Chart:
     return Chart(centre, (float(a0 - pad), float(a1 + pad)), float(b), float(r.mean()))
 
 
-def fit_surface(chart: Chart, points: np.ndarray, control_points: tuple[int, int] = CONTROL_POINTS):
+def fit_surface(chart: Chart, points: np.ndarray, control_points: tuple[int, int] = CONTROL_POINTS, *,
+                symmetric: bool = True):
     """A degree-3 B-spline surface (a geomdl NURBS with unit weights) through ``points`` over ``chart``.
 
     The radius of the points about the chart's centre is interpolated (thin-plate spline) onto a
-    regular (u, v) grid, made mirror-symmetric, and the grid's 3-D points are fitted by separable
-    least squares on geomdl's basis functions (uniform clamped knots); the control net is
-    symmetrised again so that the surface is exactly mirror-symmetric (v -> 1 - v, x -> -x)."""
+    regular (u, v) grid and the grid's 3-D points are fitted by separable least squares on geomdl's
+    basis functions (uniform clamped knots). With ``symmetric`` (a mirror-symmetric head) the grid
+    and the control net are symmetrised so that the surface is exactly so (v -> 1 - v, x -> -x)."""
     from geomdl import knotvector
 
     a_d, b_d, r_d = chart.angles(points)
@@ -356,9 +366,10 @@ def fit_surface(chart: Chart, points: np.ndarray, control_points: tuple[int, int
     uu, vv = np.meshgrid(g, g, indexing="ij")
     ga, gb = chart.from_uv(np.c_[uu.ravel(), vv.ravel()])
     radius = rbf(np.c_[ga * scale, gb * scale]).reshape(FIT_GRID, FIT_GRID)
-    radius = 0.5 * (radius + radius[:, ::-1])
     gb = gb.reshape(FIT_GRID, FIT_GRID)
-    gb = 0.5 * (gb - gb[:, ::-1])
+    if symmetric:
+        radius = 0.5 * (radius + radius[:, ::-1])
+        gb = 0.5 * (gb - gb[:, ::-1])
     grid = chart.centre + radius.reshape(-1, 1) * chart.direction(ga, gb.ravel())
     grid = grid.reshape(FIT_GRID, FIT_GRID, 3)
     nu, nv = control_points
@@ -369,7 +380,9 @@ def fit_surface(chart: Chart, points: np.ndarray, control_points: tuple[int, int
     step = step.reshape(nu, FIT_GRID, 3).transpose(1, 0, 2).reshape(FIT_GRID, -1)
     ctrl, *_ = np.linalg.lstsq(cv, step, rcond=None)  # (nv, nu*3)
     ctrl = ctrl.reshape(nv, nu, 3).transpose(1, 0, 2)
-    ctrl = 0.5 * (ctrl + ctrl[:, ::-1] * np.array([-1.0, 1.0, 1.0]))
+    if symmetric:
+        flip = np.array([-1.0, 1.0, 1.0])
+        ctrl = chart.centre + 0.5 * ((ctrl - chart.centre) + (ctrl[:, ::-1] - chart.centre) * flip)
     return _make_surface(ctrl)
 
 
@@ -392,9 +405,10 @@ def fit_static_parts(mesh: HeadMesh, rig, *, control_points: tuple[int, int] = C
     loops = border_loops(region, n)
     on_border = np.unique(np.concatenate(loops))
     interior = np.setdiff1d(used, on_border)
-    # the centre: mid-height and mid-depth of the region, on the midline
+    # the centre: the middle of the region's box (on the midline x = 0 of a symmetric head)
     lo, hi = v[used].min(axis=0), v[used].max(axis=0)
-    centre = np.array([0.0, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2])
+    centre = (lo + hi) / 2
+    symmetric = is_symmetric(mesh)
     chart = _chart(v[used], centre)
     alpha, beta, _ = chart.angles(v)
     uv_all = chart.uv(alpha, beta)
@@ -405,7 +419,7 @@ def fit_static_parts(mesh: HeadMesh, rig, *, control_points: tuple[int, int] = C
     # data: the region's vertices and one ring of neighbours (the surface runs on across the seam)
     near = np.unique(tri[np.isin(tri, used).any(axis=1)])
     near = near[np.abs(beta[near]) < chart.beta]
-    surface = fit_surface(chart, v[near], control_points)
+    surface = fit_surface(chart, v[near], control_points, symmetric=symmetric)
 
     # trims: the border loops in (u, v), outer counter-clockwise, holes clockwise
     order, flip = orient_trims([uv_all[lp] for lp in loops])
@@ -427,7 +441,7 @@ def fit_static_parts(mesh: HeadMesh, rig, *, control_points: tuple[int, int] = C
     dist, _ = surface_distance(surface, v[used], uv_all[used])
     part = NurbsPart(
         name="skull", surface=surface, chart=chart, trims=tuple(trims), trim_vertices=tuple(trim_vertices),
-        region_triangles=rows, interior=interior, fit_rms_mm=float(np.sqrt(np.mean(dist ** 2))),
+        region_triangles=rows, interior=interior, symmetric=symmetric, fit_rms_mm=float(np.sqrt(np.mean(dist ** 2))),
         fit_max_mm=float(dist.max()), fit_seconds=time.perf_counter() - t0)
     return NurbsParts(parts=(part,), static=static)
 
@@ -601,13 +615,20 @@ def tessellate(mesh: HeadMesh, part: NurbsPart, *, spacing_mm: float = SPACING_M
     x = np.clip(dist_mm / BLEND_MM, 0.0, 1.0)
     fade = 1.0 - x * x * (3.0 - 2.0 * x)
     pts = pts + fade[:, None] * (target - pts)
-    # the mirror among the new vertices (the samples are symmetric by construction)
-    mirror_m = new_m * np.array([1.0, -1.0])
-    dm, mirror = cKDTree(new_m).query(mirror_m)
-    if dm.max() > 1e-6 * chart.radius:
-        raise FaceError("the NURBS tessellation is not mirror-symmetric", where="nurbs")
-    flip = np.array([-1.0, 1.0, 1.0])
-    pts = 0.5 * (pts + pts[mirror] * flip)
+    # the mirror among the new vertices: samples pair up by construction (rows at +-beta; on an
+    # asymmetric head, whose trims differ left and right, with the nearest mirrored sample), the
+    # forced points as their mesh vertices do
+    n_f = len(forced)
+    samples_m = new_m[n_f:]
+    dm, pair = cKDTree(samples_m).query(samples_m * np.array([1.0, -1.0]))
+    if part.symmetric and len(dm) and dm.max() > 1e-6 * chart.radius:
+        raise FaceError("the NURBS samples of a symmetric head are not mirror-symmetric", where="nurbs")
+    slot = {int(f): i for i, f in enumerate(forced)}
+    forced_pair = [slot.get(int(mesh.mirror[f]), i) for i, f in enumerate(forced)]
+    mirror = np.r_[np.array(forced_pair, np.int64), pair + n_f]
+    if part.symmetric:
+        centre = chart.centre
+        pts = centre + 0.5 * ((pts - centre) + (pts[mirror] - centre) * np.array([-1.0, 1.0, 1.0]))
     tris = np.where(simp < n_b, ~border[np.minimum(simp, n_b - 1)], simp - n_b)
     return Tessellation(points=pts, uv=uv, mirror=mirror, triangles=tris,
                         forced={int(f): i for i, f in enumerate(forced)})

@@ -272,3 +272,27 @@ def test_a_moving_island_is_a_clockwise_hole(procedural_face):
     old = head.info["old_index"]
     assert all(old[a] >= 0 and old[b] >= 0 for a, b in counts if (b, a) not in counts)
     assert np.array_equal(head.fp("11.6"), mesh.fp("11.6"))
+
+
+def test_an_asymmetric_calibrated_head(procedural_face):
+    """A head calibrated to an asymmetric FDP is no mirror image of itself: the surface is fitted as
+    it is (not symmetrised), and the seam is still closed and the silhouette still within tolerance."""
+    from mpeg4fa.fdp import Fdp
+
+    fdp = procedural_face.to_fdp()
+    points = np.array(fdp.points)
+    centre = points.mean(axis=0)
+    points = centre + (points - centre) * [1.06, 0.97, 1.02] + np.random.default_rng(5).normal(0.0, 0.8, points.shape)
+    face = procedural_face.calibrate(Fdp.from_points(dict(zip(fdp.labels, points))))
+    assert not nurbs.is_symmetric(face.mesh)
+    parts = nurbs.fit_static_parts(face.mesh, face.rig)
+    part = parts.parts[0]
+    assert not part.symmetric
+    assert part.fit_max_mm <= FIT_BOUNDS["procedural"][1]
+    head = nurbs.build_nurbs_head(face.mesh, parts)
+    counts = _edge_counts(head.triangles["skin"].astype(np.int64))
+    assert max(counts.values()) == 1
+    old = head.info["old_index"]
+    assert all(old[a] >= 0 and old[b] >= 0 for a, b in counts if (b, a) not in counts)
+    for d in nurbs.compare_silhouettes(face.mesh, head, mm_per_pixel=0.4, views={"side": (90.0, 0.0)}):
+        assert d.max_mm <= nurbs.SILHOUETTE_MAX_MM and d.area_fraction <= nurbs.SILHOUETTE_AREA, d
