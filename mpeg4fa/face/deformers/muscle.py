@@ -6,9 +6,12 @@
    frontalis (medial and lateral bellies), corrugator, levator labii superioris, zygomatic
    major, risorius, depressor labii inferioris, mentalis, each side) are fitted to those
    targets by non-negative least squares (muscles only pull) with a small ridge
-   (:data:`RIDGE`), over all the skin's anchored feature points at once; the levator
-   palpebrae contracts with its upper lid FAP (:data:`LEVATOR_GAIN`), the lid itself turns
-   over the eyeball as in the feature-point deformer.
+   (:data:`RIDGE`), over all the skin's anchored feature points at once. The levator
+   palpebrae's contraction is its upper lid point's rise (FAP 19/20), and its action is the
+   lid sheet turning over the eyeball as in the feature-point deformer (:mod:`.lids`): its
+   Waters field is built (``basis``) but not added to the skin, so that a lid FAP moves its
+   lid sheet only and no lid vertex leaves its distance from the eye centre
+   (``tests/face/test_lids.py``).
 3. The residual correction: what the muscles leave at the feature points (what they
    cannot reach, and their motion of points that should stay put) is spread by the
    feature-point deformer's own smooth skin weights (:func:`.rig.skin_weights`), so every
@@ -64,7 +67,6 @@ from mpeg4fa.spec import FAPS, N_FAPS
 RIDGE = 1e-3  # squared weight of the contractions (mm) against the feature point residuals (mm)
 SERVES_MM = 0.05  # a muscle serves a feature point it moves by more than this per mm of contraction
 MIDLINE_ES = 0.02  # feature points within this (in ES0) of the midline belong to both sides
-LEVATOR_GAIN = 0.5  # mm of levator contraction per mm the upper lid point rises
 _JAW_OPEN = next(f for f, k in motion.JAW.items() if k == "open")
 _UPPER_LID = {"l": next(f for f in (19, 20) if FAPS[f - 1].name == "close_t_l_eyelid"),
               "r": next(f for f in (19, 20) if FAPS[f - 1].name == "close_t_r_eyelid")}
@@ -110,6 +112,7 @@ def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
     n_skin, m = basis.shape[0], basis.shape[2]
     b_fp = basis[local_fp]  # (anchors, 3, M)
     field = basis - np.einsum("va,axm->vxm", weights, b_fp)
+    field[:, :, [j for j, mu in enumerate(muscles) if mu.spec.driven_by == "lid"]] = 0.0  # the lid sheets turn
     field[local_fp] = 0.0  # exactly (the weights are 1 at their own point, 0 at the others')
     moved = np.flatnonzero(np.abs(field).reshape(n_skin, -1).max(axis=1) > 1e-12)
 
@@ -157,7 +160,7 @@ def contractions(rig: Rig, mrig: MuscleRig, values: np.ndarray) -> np.ndarray:
             k[mrig.solved[active]] = nnls(a, np.concatenate([targets, np.zeros(len(active))]))[0]
     iris = rig.fapu.unit("IRISD")
     for j, fap in mrig.lid_driven:
-        k[j] = LEVATOR_GAIN * motion.direction(fap)[1] * v[fap - 1] * iris  # the lid point's rise (mm)
+        k[j] = motion.direction(fap)[1] * v[fap - 1] * iris  # the lid point's rise (mm)
     return k
 
 
