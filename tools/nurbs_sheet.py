@@ -4,7 +4,8 @@
 Writes under ``--out`` (default /tmp/nurbs): ``views.png`` (triangle head top row, NURBS head
 below; front, side, back, three-quarter, top), ``seam.png`` (close-ups of the seam with the
 triangle edges drawn, NURBS triangles in blue and moving triangles in orange), ``posed.png``
-(the NURBS head with a few FAP poses and a head turn) and the silhouette differences printed.
+(the NURBS head with a few FAP poses and head turns), ``texture.png`` (both heads wearing a
+checker texture: the tessellation's texture coordinates) and the silhouette differences printed.
 
     .venv/bin/python tools/nurbs_sheet.py [--size 384] [--out /tmp/nurbs] [--spacing 6]
 """
@@ -28,7 +29,8 @@ from mpeg4fa.render.renderer import Renderer  # noqa: E402
 VIEWS = {"front": (0.0, 0.0), "side": (90.0, 0.0), "back": (180.0, 0.0), "three-quarter": (30.0, 5.0),
          "top": (0.0, 80.0)}
 POSES = {"neutral": {}, "jaw 3=600": {3: 600}, "brows up 31-36=300": {k: 300 for k in range(31, 37)},
-         "smile 53/54=300": {53: 300, 54: 300}, "head yaw 49=0.3 rad": {49: 30000}, "head pitch 48=-0.3 rad": {48: -30000}}
+         "smile 53/54=300": {53: 300, 54: 300}, "head yaw 49=0.3 rad": {49: 30000},
+         "head pitch 48=-0.3 rad": {48: -30000}}
 
 
 def _label(img: np.ndarray, text: str) -> Image.Image:
@@ -119,9 +121,23 @@ def main(argv: list[str] | None = None) -> int:
         for name, faps in POSES.items():
             row.append(_label(r.render(nurbs_face.deform(faps)), f"NURBS {name}"))
     _grid([row]).save(args.out / "posed.png")
+    # a checker texture shows whether the texture coordinates of the tessellation are continuous
+    n = 1024
+    y, x = np.mgrid[:n, :n]
+    check = (((x // 32) + (y // 32)) % 2).astype(np.uint8)
+    texture = np.stack([40 + 200 * check, 80 + 100 * check, 255 - 200 * check], axis=-1).astype(np.uint8)
+    rows = []
+    for name, face in (("triangles", tri_face), ("NURBS", nurbs_face)):
+        row = []
+        with Renderer(face, width=size, height=size, samples=4, texture=texture) as r:
+            for view in ((0.0, 0.0), (90.0, 10.0), (180.0, 20.0), (0.0, 80.0)):
+                r.set_camera(frame_points(pts, size, size, view=view, orthographic=True, margin=0.08))
+                row.append(_label(r.render(face.neutral()), f"{name} {view}"))
+        rows.append(row)
+    _grid(rows).save(args.out / "texture.png")
     for d in compare_silhouettes(tri_face.mesh, mesh):
         print(f"silhouette {d.view:13s} area {100 * d.area_fraction:.3f} %  max {d.max_mm:.2f} mm")
-    print(f"wrote {args.out}/views.png, seam.png, posed.png")
+    print(f"wrote {args.out}/views.png, seam.png, posed.png, texture.png")
     return 0
 
 

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import hashlib
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +62,7 @@ CONTROL_POINTS = (24, 24)  # (u, v) control points of the skull surface
 FIT_GRID = 72  # samples per direction of the resampled radius the surface is fitted to
 SPACING_MM = 6.0  # tessellation sample spacing on the surface (the triangle head's skull edges are ~11 mm)
 BLEND_MM = 12.0  # within this distance of the seam the surface is blended toward the mesh
+UV_SEAM_JUMP = 0.02  # corners' texture coordinates further apart than this: the triangle is on a UV seam
 CHART_MARGIN = 0.08  # the chart's rectangle exceeds the region by this fraction of its extent
 RBF_SMOOTHING = 2.0  # thin-plate smoothing of the radius (mm^2 scale): irons out the mesh's facets
 FLOOR_POINT = "7.1"  # the region stays above this feature point's height (the nape)
@@ -140,8 +141,8 @@ def is_symmetric(mesh: HeadMesh, *, tol_mm: float = 1e-9) -> bool:
     """Whether the skin is its own mirror image through its mirror table about x = 0 (the generic
     and procedural heads are, bit for bit; a calibrated head usually is not)."""
     skin = mesh.part("skin")
-    v = mesh.vertices[skin]
-    return bool(np.abs(v[mesh.mirror[skin] - skin.start] * [-1.0, 1.0, 1.0] - v).max() <= tol_mm)
+    v = mesh.vertices
+    return bool(np.abs(v[mesh.mirror[skin]] * [-1.0, 1.0, 1.0] - v[skin]).max() <= tol_mm)
 
 
 def static_vertices(mesh: HeadMesh, rig) -> np.ndarray:
@@ -661,14 +662,22 @@ def _locate(mesh: HeadMesh, part: NurbsPart, points_m: np.ndarray) -> tuple[np.n
 
 
 def _corner_uvs(mesh: HeadMesh, part: NurbsPart, corners_m: np.ndarray) -> np.ndarray:
-    """Texture coordinates of the new triangles: each triangle takes the texture map of the
-    replaced triangle under its centroid (extended linearly), so no triangle spans a UV seam."""
+    """Texture coordinates of the new triangles: each corner takes the texture map of the replaced
+    triangle under it (continuous across the new triangles); a triangle whose corners land on
+    different sides of a UV seam takes the map of the replaced triangle under its centroid for all
+    three corners (extended linearly), so that no triangle spans the seam."""
+    old_tri = np.asarray(mesh.triangles["skin"], np.int64)[part.region_triangles]
     old_uv = np.asarray(mesh.corner_uvs["skin"])[part.region_triangles]
-    best, _ = _locate(mesh, part, corners_m.mean(axis=1))
-    old = np.asarray(mesh.triangles["skin"], np.int64)[part.region_triangles[best]]
     a, b, _ = part.chart.angles(mesh.vertices)
-    lam = _barycentric(corners_m, part.chart.mercator(a, b)[old][:, None])  # (T, 3 corners, 3)
-    return np.einsum("tcj,tjd->tcd", lam, old_uv[best])
+    old_m = part.chart.mercator(a, b)[old_tri]  # (T, 3, 2)
+    flat = corners_m.reshape(-1, 2)
+    under, lam = _locate(mesh, part, flat)
+    per_corner = np.einsum("nj,njd->nd", lam, old_uv[under]).reshape(corners_m.shape)
+    best, _ = _locate(mesh, part, corners_m.mean(axis=1))
+    lam = _barycentric(corners_m, old_m[best][:, None])  # (T, 3 corners, 3)
+    per_triangle = np.einsum("tcj,tjd->tcd", lam, old_uv[best])
+    split = np.abs(per_corner - per_triangle).max(axis=(1, 2)) > UV_SEAM_JUMP
+    return np.where(split[:, None, None], per_triangle, per_corner)
 
 
 def build_nurbs_head(mesh: HeadMesh, parts: NurbsParts, *, spacing_mm: float = SPACING_MM) -> HeadMesh:

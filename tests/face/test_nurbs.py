@@ -296,3 +296,15 @@ def test_an_asymmetric_calibrated_head(procedural_face):
     assert all(old[a] >= 0 and old[b] >= 0 for a, b in counts if (b, a) not in counts)
     for d in nurbs.compare_silhouettes(face.mesh, head, mm_per_pixel=0.4, views={"side": (90.0, 0.0)}):
         assert d.max_mm <= nurbs.SILHOUETTE_MAX_MM and d.area_fraction <= nurbs.SILHOUETTE_AREA, d
+
+
+def test_texture_coordinates_are_continuous(built):
+    """Each NURBS vertex has one texture coordinate in all its triangles, except along the skin's
+    own UV seams (there a triangle keeps to one side)."""
+    _, _, _, head, _ = built
+    new = head.info["old_index"] < 0
+    corners = head.triangles["skin"].reshape(-1)
+    uv = np.round(head.corner_uvs["skin"].reshape(-1, 2) * 1e6)
+    pairs = np.unique(np.c_[corners, uv][new[corners]], axis=0)
+    per_vertex = np.bincount(pairs[:, 0].astype(np.int64))
+    assert (per_vertex > 1).sum() <= 0.1 * new.sum()
