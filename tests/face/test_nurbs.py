@@ -199,7 +199,7 @@ def test_feature_points_and_fapu(built):
 
 def test_silhouette_within_tolerance(built):
     _, face, _, head, _ = built
-    for d in nurbs.compare_silhouettes(face.mesh, head, mm_per_pixel=0.4):
+    for d in nurbs.compare_silhouettes(face.mesh, head):
         assert d.max_mm <= nurbs.SILHOUETTE_MAX_MM, d
         assert d.area_fraction <= nurbs.SILHOUETTE_AREA, d
 
