@@ -39,6 +39,11 @@ by a smooth surface joined to the triangles of the moving regions without cracks
 The result is a :class:`~mpeg4fa.face.mesh.HeadMesh` whose skin is the moving triangles plus
 the NURBS tessellation; the other parts, feature points, joints and mirror table are remapped.
 It is cached (:func:`nurbs_head` with ``cache=True``) under the asset cache folder.
+
+>>> face = FaceModel.default()
+>>> smooth = FaceModel(nurbs_head(face.mesh, face.rig))   # ~0.4 s the first time, then ~10 ms
+>>> parts = fit_static_parts(face.mesh, face.rig)         # the surface, its trims, the fit error
+>>> compare_silhouettes(face.mesh, smooth.mesh)           # per view: area fraction, max mm
 """
 from __future__ import annotations
 
@@ -512,8 +517,12 @@ def _recover_edges(pts: np.ndarray, simp: np.ndarray, edges: list[tuple[int, int
         crossed = (s0 * s1 < 0) & (t0 * t1 < 0)
         if not crossed.any():
             continue
-        if np.any((s0 == 0) & (e[:, 0] != a) & (e[:, 0] != b) & crossed):
-            raise FaceError("a seam vertex lies on another seam edge", where="nurbs")
+        q = pts - pa
+        along = q @ d / (d @ d)
+        on = (np.abs(_cross2(d, q)) <= 1e-12 * (d @ d)) & (along > 1e-9) & (along < 1.0 - 1e-9)
+        if on.any():
+            raise FaceError("a tessellation vertex lies on a seam edge", where="nurbs",
+                            hint="try another spacing_mm")
         ce = e[crossed]
         denom = _cross2(d, r[crossed])
         t = _cross2(pts[ce[:, 0]] - pa, r[crossed]) / denom  # where along a-b each crossed edge is met
@@ -532,10 +541,11 @@ def _recover_edges(pts: np.ndarray, simp: np.ndarray, edges: list[tuple[int, int
     return simp
 
 
-
 def tessellate(mesh: HeadMesh, part: NurbsPart, *, spacing_mm: float = SPACING_MM,
-               forced_vertices: np.ndarray = np.zeros(0, np.int64)) -> Tessellation:
-    """Triangles of ``part``: samples ~``spacing_mm`` apart inside its trims, plus its border vertices."""
+               forced_vertices: np.ndarray | None = None) -> Tessellation:
+    """Triangles of ``part``: samples ~``spacing_mm`` apart inside its trims, plus its border vertices
+    and ``forced_vertices`` (mesh vertices inside the region that must become vertices: the static
+    feature points, each at the surface point of its own (u, v))."""
     chart = part.chart
     v = mesh.vertices
     border = np.concatenate(part.trim_vertices)
@@ -559,7 +569,7 @@ def tessellate(mesh: HeadMesh, part: NurbsPart, *, spacing_mm: float = SPACING_M
             alphas.append(a)
             betas.append(np.full(len(a), sign * beta))
     s_alpha, s_beta = np.concatenate(alphas), np.concatenate(betas)
-    forced = np.asarray(forced_vertices, np.int64)
+    forced = np.zeros(0, np.int64) if forced_vertices is None else np.asarray(forced_vertices, np.int64)
     f_alpha, f_beta, _ = chart.angles(v[forced]) if len(forced) else (np.zeros(0), np.zeros(0), None)
     s_m = chart.mercator(s_alpha, s_beta)
     local = spacing_mm / np.cos(s_beta)  # the sample spacing in the Mercator plane
@@ -570,7 +580,7 @@ def tessellate(mesh: HeadMesh, part: NurbsPart, *, spacing_mm: float = SPACING_M
     for attempt in range(4):
         ok = keep & (_segment_distance(s_m, seg_a, seg_b) > clear * local)
         mid, half = 0.5 * (seg_a + seg_b), 0.5 * np.linalg.norm(seg_b - seg_a, axis=1) * _GABRIEL_SLACK
-        for j, ball in enumerate(cKDTree(s_m).query_ball_point(mid, half)):
+        for ball in cKDTree(s_m).query_ball_point(mid, half):
             ok[ball] = False
         if len(forced):
             f_m = chart.mercator(f_alpha, f_beta)
