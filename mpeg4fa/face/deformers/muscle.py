@@ -59,17 +59,17 @@ from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS
 from mpeg4fa.face.deformers.feature_points import apply_head_rotation, apply_lids, pose_in_head_frame
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.muscles import Muscle, muscle_basis, place_muscles
+from mpeg4fa.face.muscles import CROSS_ES, Muscle, muscle_basis, place_muscles
+from mpeg4fa.face.regions import smooth_down
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.rig import Rig, skin_weights
-from mpeg4fa.spec import FAPS, N_FAPS
+from mpeg4fa.spec import FAP_BY_NAME, FAPS, N_FAPS
 
 RIDGE = 1e-3  # squared weight of the contractions (mm) against the feature point residuals (mm)
 SERVES_MM = 0.05  # a muscle serves a feature point it moves by more than this per mm of contraction
 MIDLINE_ES = 0.02  # feature points within this (in ES0) of the midline belong to both sides
 _JAW_OPEN = next(f for f, k in motion.JAW.items() if k == "open")
-_UPPER_LID = {"l": next(f for f in (19, 20) if FAPS[f - 1].name == "close_t_l_eyelid"),
-              "r": next(f for f in (19, 20) if FAPS[f - 1].name == "close_t_r_eyelid")}
+_UPPER_LID = {"l": FAP_BY_NAME["close_t_l_eyelid"].number, "r": FAP_BY_NAME["close_t_r_eyelid"].number}
 
 
 @dataclass(frozen=True)
@@ -114,6 +114,15 @@ def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
     field = basis - np.einsum("va,axm->vxm", weights, b_fp)
     field[:, :, [j for j, mu in enumerate(muscles) if mu.spec.driven_by == "lid"]] = 0.0  # the lid sheets turn
     field[local_fp] = 0.0  # exactly (the weights are 1 at their own point, 0 at the others')
+    # the correction of a midline point (11.1, 9.12...) spreads over both sides: a paired muscle's
+    # field, correction included, ends where its basis does (CROSS_ES across the midline); it stays
+    # 0 at every feature point, so the points stay exact
+    x_skin = mesh.vertices[skin, 0] - mesh.fp("2.1")[0]
+    reach = CROSS_ES * rig.fapu.ES0
+    for j, mu in enumerate(muscles):
+        if mu.side in ("l", "r"):
+            across = -(1.0 if mu.side == "l" else -1.0) * x_skin
+            field[:, :, j] *= smooth_down((across - reach / 2) / (reach / 2))[:, None]
     moved = np.flatnonzero(np.abs(field).reshape(n_skin, -1).max(axis=1) > 1e-12)
 
     solved = np.array([j for j, mu in enumerate(muscles) if mu.spec.driven_by == "solve"])
