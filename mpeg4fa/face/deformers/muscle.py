@@ -2,11 +2,13 @@
 
 1. The feature-point deformer's targets: every skin feature point's FAP-driven motion
    in the jaw's frame (``rig.translate @ values``; 0 for the points no FAP drives).
-2. The contractions: the 16 solved muscles (:mod:`mpeg4fa.face.muscles`, ``data/muscles.csv``:
-   frontalis (medial and lateral bellies), corrugator, levator labii superioris, zygomatic
-   major, risorius, depressor labii inferioris, mentalis, each side) are fitted to those
-   targets by non-negative least squares (muscles only pull) with a small ridge
-   (:data:`RIDGE`), over all the skin's anchored feature points at once. The levator
+2. The contractions: the 18 solved muscles (:mod:`mpeg4fa.face.muscles`, ``data/muscles.csv``:
+   frontalis (medial, middle and lateral bellies), corrugator, levator labii superioris,
+   zygomatic major, risorius, depressor labii inferioris, mentalis, each side) are fitted to
+   those targets by non-negative least squares (muscles only pull) with a small ridge
+   (:data:`RIDGE`), over all the skin's anchored feature points at once; only the muscles
+   that move a point the frame drives take part, and a paired muscle serves its own side
+   and the midline only (a left FAP contracts no right muscle). The levator
    palpebrae's contraction is its upper lid point's rise (FAP 19/20), and its action is the
    lid sheet turning over the eyeball as in the feature-point deformer (:mod:`.lids`): its
    Waters field is built (``basis``) but not added to the skin, so that a lid FAP moves its
@@ -17,7 +19,8 @@
    feature-point deformer's own smooth skin weights (:func:`.rig.skin_weights`), so every
    feature point lands exactly where the FAPU semantics put it. The skin is then
    ``rest + muscles + weights @ (targets - muscles at the points)``, precomputed as the
-   feature-point pose plus ``G @ K`` with ``G = B - W B_fp`` (linear in the contractions).
+   feature-point pose plus ``G @ K`` with ``G = B - W B_fp`` (linear in the contractions),
+   faded out across the midline for a paired muscle (0 at every feature point either way).
 
 Jaw, lids, eyes, tongue and head come from the feature-point deformer
 (:func:`.feature_points.pose_in_head_frame`, :func:`.apply_lids`, :func:`.apply_head_rotation`);
@@ -31,12 +34,12 @@ muscles alone: a linear muscle pulls along a chord toward bone, so it always add
 the FAP does not ask for, and in the deformer's own fit the neighbouring points that must
 stay put hold it back further. In part (``alone`` / ``along``):
 
-* brows raised (31-36 +, frontalis, up *and back*): 29-36 % / 87-92 %;
+* brows raised (31-36 +, frontalis, up *and back*): 29-34 % / 88-92 %;
 * upper lip raised (4, 8/9, 51, 55/56 -, levator labii superioris): 36-52 % / 73-87 %;
 * lower lip lowered (5, 10/11, 52, 57/58 -, depressor labii inferioris): 43-55 % / 70-81 %;
 * corners raised and stretched (6/7, 12/13, 53/54, 59/60 +, zygomatic major, risorius,
   which pull as much back into the cheek as up and out): 62-66 % / 56-61 %;
-* inner brows squeezed (37/38 +, corrugator, which also lowers them): 65 % / 58 %;
+* inner brows squeezed (37/38 +, corrugator, which also lowers them): 62 % / 62 %;
 * chin and lower lip raised (18 +, mentalis; 10/11, 57/58 +): 71-78 % / 40-50 %.
 
 Not at all (``alone`` over 84 %): lowering the upper lip or raising the lower lip at the
