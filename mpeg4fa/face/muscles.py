@@ -50,8 +50,8 @@ from mpeg4fa.face.regions import LID_MARGIN_LOOPS, detour_fade, edge_graph, shor
 from mpeg4fa.face.rig import LID_CLEAR_MM
 
 FLIP_X = np.array([-1.0, 1.0, 1.0])
-DRIVERS = ("solve", "lid")
-CROSS_ES = 0.25  # a paired muscle's field fades over this (in ES0) either side of the midline  # contraction solved from the feature point targets, or read off the lid FAP
+DRIVERS = ("solve", "lid")  # contraction solved from the feature point targets, or read off the lid FAP
+CROSS_ES = 0.25  # a paired muscle's field fades over this (in ES0) either side of the midline
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,8 @@ def load_specs() -> tuple[MuscleSpec, ...]:
             attach_offset=tuple(float(r[f"attach_d{a}"]) for a in "xyz"), insert_fp=r["insert_fp"],
             insert_offset=tuple(float(r[f"insert_d{a}"]) for a in "xyz"), omega_deg=float(r["omega_deg"]),
             rs=float(r["rs"]), rf=float(r["rf"]), driven_by=r["driven_by"], why=r["why"])
-        if not (0 < s.omega_deg <= 90 and 0 < s.rs < s.rf) or s.driven_by not in DRIVERS or s.side not in ("pair", "mid"):
+        valid = 0 < s.omega_deg <= 90 and 0 < s.rs < s.rf and s.driven_by in DRIVERS and s.side in ("pair", "mid")
+        if not valid:
             raise FaceError(f"muscles.csv: bad row for {s.muscle}",
                             hint="0 < omega_deg <= 90, 0 < rs < rf, driven_by one of solve|lid, side pair|mid")
         specs.append(s)

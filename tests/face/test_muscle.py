@@ -160,7 +160,8 @@ def test_feature_points_match_the_feature_point_deformer(generic_face, muscle_fa
     v = EXPRESSION_PROFILES[expression].astype(float)
     a = muscle_face.deform(v)
     b = generic_face.deform(v)
-    fixed = [i for i, label in enumerate(generic_face.mesh.fp_labels) if label not in PASSIVE_POINTS]  # they ride on the skin
+    # the passive points ride on the skin (tests/face/test_fap_semantics.py)
+    fixed = [i for i, label in enumerate(generic_face.mesh.fp_labels) if label not in PASSIVE_POINTS]
     assert np.abs(a.feature_points[fixed] - b.feature_points[fixed]).max() <= 1e-9 * generic_face.mesh.height()
     assert np.abs(a.part("skin") - b.part("skin")).max() > 0.2  # the muscles shape the skin between the points
 
