@@ -21,11 +21,12 @@ edge for the narrow cones of facial muscles (a step in the skin); this module us
 falls smoothly to 0 at the edge (0 outside). The displacement is linear in ``K``
 for a fixed neutral face, so each muscle is one column of a basis.
 
-Two restrictions keep a muscle on its own skin (both are multiplied into ``A R``):
+Three restrictions keep a muscle on its own skin (all are multiplied into ``A R``):
 the skin must be reachable from the insertion along the surface the short way
-(:func:`.regions.detour_fade`: an upper-lip muscle leaves the lower lip alone), and
-the lid margins belong to the lids (fade to 0 over :data:`.rig.LID_CLEAR_MM`, over
-:data:`.lids.LID_HEIGHT_MM` for the lid's own levator).
+(:func:`.regions.detour_fade`: an upper-lip muscle leaves the lower lip alone), the lid
+margins belong to the lids (fade to 0 over :data:`.rig.LID_CLEAR_MM`, over
+:data:`.lids.LID_HEIGHT_MM` for the lid's own levator), and a paired muscle fades out
+across the midline (:data:`CROSS_ES`).
 
 The muscles are data (``data/muscles.csv``): attachment and insertion each as a
 feature point plus an offset in units of ES0 (the eye separation), so that they
