@@ -3,7 +3,7 @@
 expressions at full intensity, front and three-quarter, plus the blink and brow poses people
 notice first. Writes PNGs under out/contact/ (not committed) for looking at.
 
-    .venv/bin/python tools/contact_sheet.py [--deformer fap|arkit] [--size 256] [--out out/contact]
+    .venv/bin/python tools/contact_sheet.py [--deformer NAME (see --help)] [--size 256] [--out out/contact]
                                             [--crop face|mouth|eyes] [--only visemes|chinese|expressions|extras]
 """
 from __future__ import annotations

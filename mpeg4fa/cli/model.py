@@ -56,6 +56,9 @@ def face_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", choices=calibrate.METHODS, default="dffd",
                    help="calibration warp: Dirichlet FFD with Sibson coordinates (default), RBF, or elastic "
                         "(the skin as a thin plate on an elastic foundation, one sparse solve)")
+    p.add_argument("--skull", choices=("triangles", "nurbs"), default="triangles",
+                   help="the skull no FAP moves as the head's triangles (default) or as a trimmed NURBS "
+                        "surface joined to the moving triangles (smoother crown; after calibration)")
 
 
 def deformer_option(p: argparse.ArgumentParser) -> None:
@@ -89,6 +92,8 @@ def face_from_args(args: argparse.Namespace) -> FaceModel:
     if args.fdp is not None:
         from ..fdp import load_fdp
         face = face.calibrate(load_fdp(args.fdp), method=args.method)
+    if getattr(args, "skull", "triangles") == "nurbs":
+        face = face.with_nurbs_skull()
     return face
 
 

@@ -51,6 +51,14 @@ class FaceModel:
         """The same face posed by another deformer (:mod:`mpeg4fa.face.deformers` lists them)."""
         return FaceModel(self.mesh, self.calibration, deformer=deformer)
 
+    def with_nurbs_skull(self) -> "FaceModel":
+        """The same face with the skull cap no FAP moves as a trimmed NURBS surface, tessellated and
+        joined to the moving triangles on their own border vertices (:mod:`mpeg4fa.face.nurbs`)."""
+        from mpeg4fa.face.nurbs import nurbs_head
+
+        mesh = nurbs_head(self.mesh, self.rig, cache=self.calibration is None)  # a calibrated head: not cached
+        return FaceModel(mesh, self.calibration, deformer=self.deformer)
+
     @classmethod
     def default(cls, *, auto_install: bool = True) -> "FaceModel":
         """The generic CC0 head (built into the cache on first use); shared, so its rig is built once."""

@@ -9,7 +9,10 @@ lips that funnel and pucker). This deformer:
    target (so the FAPU semantics are the same by construction);
 2. drives the face units from the FAPs through ``data/arkit_faps.csv`` (each
    unit's gain is read off the unit itself: the FAP value whose motion equals the
-   unit's full motion at that FAP's feature point, along the FAP's direction);
+   unit's full motion at that FAP's feature point, along the FAP's direction); the
+   units are made exactly mirror symmetric, and a unit that a one-sided FAP drives
+   is cut to that side (``browInnerUp`` under FAP 31 raises the left brow only), so
+   the animation is as symmetric and as one-sided as the FAPs;
 3. corrects the sculpted skin so that every skin feature point lands exactly on
    its target: the residuals spread by the same smooth skin weights that the
    feature-point deformer uses (:func:`.rig.skin_weights`), for every skin point.
@@ -54,6 +57,42 @@ def _mapping() -> list[dict]:
         return list(csv.DictReader(f))
 
 
+MIDLINE_FADE_MM = 4.0
+"""A two-sided unit driven by one side's FAP keeps that side: its weight fades across x = 0 over +- this."""
+_FLIP_X = np.array([-1.0, 1.0, 1.0])
+_SIDES = {"Left": "Right", "Right": "Left"}
+
+
+def _side(mesh: HeadMesh, fap: int) -> str | None:
+    """``"left"`` (x > 0, the face's left) or ``"right"`` for a FAP whose point is off the midline, else None."""
+    x = mesh.fp(FAPS[fap - 1].feature_point[0])[0]
+    return None if abs(x) < 1.0 else ("left" if x > 0 else "right")
+
+
+def _driven(unit: str, side: str | None) -> str:
+    """The name of what a FAP drives: the unit, cut to the FAP's side when the FAP has one."""
+    return unit if side is None else f"{unit}[{side}]"
+
+
+def _shape(mesh: HeadMesh, name: str, x: np.ndarray) -> np.ndarray:
+    """The deltas of a driven unit, made exactly mirror symmetric (the units were sculpted by hand,
+    a few tenths of a mm asymmetric, and spill across the midline): a one-sided unit is the mean of
+    itself and its partner's mirror image, a two-sided one the mean of itself and its own mirror
+    image; cut to a side when one side's FAP drives it, so a left FAP moves only the left side."""
+    units, mirror = mesh.face_units, mesh.mirror
+    unit, _, side = name.rstrip("]").partition("[")
+    own = units.dense(unit, mesh.n_vertices)
+    partner = own
+    for suffix, other in _SIDES.items():
+        if unit.endswith(suffix):
+            partner = units.dense(unit[: -len(suffix)] + other, mesh.n_vertices)
+    shape = 0.5 * (own + partner[mirror] * _FLIP_X)
+    if not side:
+        return shape
+    t = np.clip((x if side == "left" else -x) / (2 * MIDLINE_FADE_MM) + 0.5, 0.0, 1.0)
+    return shape * (t * t * (3 - 2 * t))[:, None]
+
+
 def build_arkit_rig(mesh: HeadMesh, rig: Rig) -> ArkitRig:
     """Gains, sculpted deltas and the correction weights for one neutral face."""
     units = mesh.face_units
@@ -62,33 +101,31 @@ def build_arkit_rig(mesh: HeadMesh, rig: Rig) -> ArkitRig:
     skin = mesh.part("skin")
     n_skin = skin.stop - skin.start
     rows = _mapping()
-    names = tuple(dict.fromkeys(r["unit"] for r in rows))
+    x = mesh.vertices[:, 0]
+    side_of = {int(r["fap"]): _side(mesh, int(r["fap"])) for r in rows}
+    names = tuple(dict.fromkeys(_driven(r["unit"], side_of[int(r["fap"])]) for r in rows))
+    dense = {name: _shape(mesh, name, x) for name in names}
     gains = np.zeros((len(names), N_FAPS))
     count = np.zeros(len(names))
     for r in rows:
-        u, fap, sign = names.index(r["unit"]), int(r["fap"]), float(r["sign"])
-        record = FAPS[fap - 1]
-        idx, d = units.unit(r["unit"])
-        dense = np.zeros((mesh.n_vertices, 3))
-        dense[idx] = d
+        fap, sign = int(r["fap"]), float(r["sign"])
+        name = _driven(r["unit"], side_of[fap])
+        u, record = names.index(name), FAPS[fap - 1]
         point = mesh.fp_vertex[mesh.fp_index(record.feature_point[0])]
-        full = float(dense[point] @ motion.direction(fap)) / rig.fapu.unit(record.fapu)
+        full = float(dense[name][point] @ motion.direction(fap)) / rig.fapu.unit(record.fapu)
         if full * sign > MIN_FULL_SCALE:  # the unit moves the point the way this sign of the FAP does
             gains[u, fap - 1] += 1.0 / full
             count[u] += 1
     gains /= np.maximum(count, 1)[:, None]
 
     cols, rws, vals = [], [], []
-    flip = np.array([-1.0, 1.0, 1.0])
     for u, name in enumerate(names):
-        dense = units.dense(name, mesh.n_vertices)
-        if not name.endswith(("Left", "Right")):  # sculpted by hand, a few mm asymmetric: the average
-            dense = 0.5 * (dense + dense[mesh.mirror] * flip)
-        local = np.flatnonzero(np.abs(dense[skin]).sum(axis=1))
+        on = dense[name][skin]
+        local = np.flatnonzero(np.abs(on).sum(axis=1))
         for axis in range(3):
             rws.append(3 * local + axis)
             cols.append(np.full(len(local), u))
-            vals.append(dense[skin][local, axis])
+            vals.append(on[local, axis])
     deltas = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rws), np.concatenate(cols))),
                            shape=(3 * n_skin, len(names)))
 
