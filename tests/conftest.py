@@ -2,18 +2,24 @@
 
 ``procedural_face`` needs nothing but the code (see ``procedural_head.py``);
 ``generic_face`` is the CC0 head from the user cache and skips when it has not
-been built: the tests never download it.
+been built: the tests never download it. ``deformed_face`` is each face under each
+deformer that realises the FAPs exactly (``EXACT_DEFORMERS``), for the tests every
+such deformer must pass; the block deformer realises some FAPs approximately and has
+its measured errors in ``face/test_blocks.py``.
 """
 from __future__ import annotations
 
 import pytest
 
-from mpeg4fa.face import asset
+from mpeg4fa.face import asset, deformers
 from mpeg4fa.face.model import FaceModel
 from procedural_head import build_procedural_head
 
 GENERIC_MISSING = "generic head not built: run `mpeg4fa model install` (needs network once)"
 FACES = ("procedural", "generic")
+APPROXIMATE_DEFORMERS = ("blocks",)
+EXACT_DEFORMERS = tuple(d for d in deformers.names() if d not in APPROXIMATE_DEFORMERS)
+_DEFORMED: dict[tuple[str, str], FaceModel] = {}
 
 
 def require_generic() -> None:
@@ -64,3 +70,23 @@ def generic_head(generic_face):
 def face(request):
     """Each of the two faces in turn (the generic one skips when it is not built)."""
     return request.getfixturevalue(f"{request.param}_face")
+
+
+def face_under(request, which: str, deformer: str) -> FaceModel:
+    """Face ``which`` posed by ``deformer``, set up once per session (skips where the head cannot have it)."""
+    base = request.getfixturevalue(f"{which}_face")
+    if deformer == "fap":
+        return base
+    if deformers.kind(deformer).needs_face_units and base.mesh.face_units is None:
+        pytest.skip(f"the {which} head has no face units for the {deformer} deformer")
+    key = (which, deformer)
+    if key not in _DEFORMED:
+        _DEFORMED[key] = base.with_deformer(deformer)
+    return _DEFORMED[key]
+
+
+@pytest.fixture(scope="session", params=[(f, d) for d in EXACT_DEFORMERS for f in FACES],
+                ids=lambda p: f"{p[0]}-{p[1]}")
+def deformed_face(request):
+    """Each face under each exact deformer in turn."""
+    return face_under(request, *request.param)

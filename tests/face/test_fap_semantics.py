@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mpeg4fa.face import deformers, motion
+from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, coupled_points
 from mpeg4fa.face.fapu import DISTANCES
 from mpeg4fa.face.model import FaceModel
@@ -25,8 +25,6 @@ from mpeg4fa.spec import FAPS, N_FAPS
 
 V = 200.0
 TOL = 0.01
-APPROXIMATE_DEFORMERS = ("blocks",)
-EXACT_DEFORMERS = tuple(d for d in FaceModel.DEFORMERS if d not in APPROXIMATE_DEFORMERS)
 LOW_LEVEL = range(3, N_FAPS + 1)
 FLIP_X = np.array([-1.0, 1.0, 1.0])
 EYE_OF_PUPIL = {"3.5": ("eye_l", "l-eye"), "3.6": ("eye_r", "r-eye")}
@@ -44,17 +42,10 @@ MIDLINE = ("2.1", "2.2", "2.3", "2.10", "6.1", "6.2", "7.1", "8.1", "8.2", "9.3"
            "9.11", "9.12", "9.15", "11.1", "11.4", "11.5", "11.6")
 
 
-@pytest.fixture(scope="module", params=[(f, d) for d in EXACT_DEFORMERS for f in ("procedural", "generic")],
-                ids=lambda p: f"{p[0]}-{p[1]}")
-def face(request):
-    """Each face posed by each exact deformer (set up once per module)."""
-    which, deformer = request.param
-    base = request.getfixturevalue(f"{which}_face")
-    if deformer == "fap":
-        return base
-    if deformers.kind(deformer).needs_face_units and base.mesh.face_units is None:
-        pytest.skip(f"the {which} head has no face units for the {deformer} deformer")
-    return base.with_deformer(deformer)
+@pytest.fixture
+def face(deformed_face):
+    """Each face under each exact deformer (tests/conftest.py)."""
+    return deformed_face
 
 
 def _mirror_fap(fap: int) -> tuple[int, float] | None:

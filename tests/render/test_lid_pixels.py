@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import EXACT_DEFORMERS, face_under
 from mpeg4fa.render import Materials, Renderer, frame_points
 
 pytestmark = pytest.mark.usefixtures("generic_head_installed")
@@ -29,11 +30,13 @@ def _iris(image: np.ndarray) -> np.ndarray:
     return (r < 80) & (g > 120)
 
 
-@pytest.fixture(scope="module", params=["front", "three-quarter"])
-def eyes(request, generic_face):
-    face = generic_face
+@pytest.fixture(scope="module", params=[(view, d) for d in EXACT_DEFORMERS for view in ("front", "three-quarter")],
+                ids=lambda p: f"{p[1]}-{p[0]}")
+def eyes(request):
+    view, deformer = request.param
+    face = face_under(request, "generic", deformer)
     points = np.array([face.mesh.fp(label) for label in EYE_POINTS])
-    camera = frame_points(points, 320, 160, view=request.param, margin=0.3)
+    camera = frame_points(points, 320, 160, view=view, margin=0.3)
     with Renderer(face, width=320, height=160, lighting=False, materials=CODED, camera=camera) as r:
         yield face, r
 
