@@ -38,6 +38,7 @@ KINDS: dict[str, DeformerKind] = {k.name: k for k in (
                  needs_face_units=True),
     DeformerKind("muscle", "muscle", "Waters linear muscles fitted to the FAPs, corrected so feature points stay exact"),
     DeformerKind("parabolic", "parabolic", "the feature-point deformer with spherical eyeballs and parabolic lid contours"),
+    DeformerKind("blocks", "blocks", "eye and mouth blocks moving as least-squares affine (12-parameter elastic) fields"),
 )}
 
 
