@@ -99,13 +99,14 @@ def main() -> int:
         def run():
             nonlocal calibrated
             calibrated = face.calibrate(target, method=method)
+        first = best_of(run, 1)  # the first call pays any per-head set-up (the elastic model's factorisation)
         t = best_of(run, 3)
         rep = calibrated.calibration
-        result[f"calibrate_{method}"] = {"seconds": t, **rep.as_dict()}
-        rows.append((f"calibrate {method} (84 points)", f"{t:.2f} s",
-                     f"{'PASS' if t <= 2 else 'FAIL'} (<= 2 s); max err {rep.max_error_relative:.1e} x height, "
-                     f"min quality {rep.min_quality_before:.3f}->{rep.min_quality_after:.3f}, "
-                     f"{rep.folded_triangles} folded"))
+        result[f"calibrate_{method}"] = {"first_s": first, "seconds": t, **rep.as_dict()}
+        rows.append((f"calibrate {method} (84 points)", f"{first:.2f} s",
+                     f"{'PASS' if first <= 2 else 'FAIL'} (<= 2 s, first call; again {t:.2f} s); max err "
+                     f"{rep.max_error_relative:.1e} x height, min quality {rep.min_quality_before:.3f}->"
+                     f"{rep.min_quality_after:.3f}, {rep.folded_triangles} folded"))
 
     rig = face.rig
     rng = np.random.default_rng(1)

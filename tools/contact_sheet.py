@@ -5,6 +5,9 @@ notice first. Writes PNGs under out/contact/ (not committed) for looking at.
 
     .venv/bin/python tools/contact_sheet.py [--deformer NAME (see --help)] [--size 256] [--out out/contact]
                                             [--crop face|mouth|eyes] [--only visemes|chinese|expressions|extras]
+    .venv/bin/python tools/contact_sheet.py --compare [--view front|three-quarter] ...
+
+``--compare`` puts every registered deformer side by side: one row per deformer, the looks in columns.
 """
 from __future__ import annotations
 
@@ -91,6 +94,19 @@ def sheet(face: FaceModel, looks, size: int, crop: str, views=("front", "three-q
     return board
 
 
+def compare_sheet(names, looks, size: int, crop: str, view: str) -> Image.Image:
+    """One row per deformer, the same looks in the same columns, one view."""
+    rows = []
+    for name in names:
+        face = FaceModel.default().with_deformer(name)
+        row = sheet(face, [(f"{name}: {label}", v) for label, v in looks], size, crop, views=(view,), cols=len(looks))
+        rows.append(row)
+    board = Image.new("RGB", (rows[0].width, sum(r.height for r in rows)), (30, 30, 30))
+    for i, row in enumerate(rows):
+        board.paste(row, (0, i * rows[0].height))
+    return board
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--deformer", default="fap", choices=FaceModel.DEFORMERS)
@@ -98,7 +114,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--crop", default="face", choices=list(CROPS))
     parser.add_argument("--only", choices=["visemes", "chinese", "expressions", "extras"])
     parser.add_argument("--out", type=Path, default=Path("out/contact"))
+    parser.add_argument("--compare", action="store_true", help="every deformer side by side (one row each)")
+    parser.add_argument("--view", default="front", choices=["front", "three-quarter"], help="view for --compare")
     args = parser.parse_args(argv)
+    if args.compare:
+        args.out.mkdir(parents=True, exist_ok=True)
+        for group in [args.only] if args.only else ["visemes", "expressions"]:
+            board = compare_sheet(FaceModel.DEFORMERS, poses(FaceModel.default(), group), args.size, args.crop,
+                                  args.view)
+            path = args.out / f"compare-{group}-{args.view}-{args.crop}.png"
+            board.save(path)
+            print(path)
+        return 0
     face = FaceModel.default().with_deformer(args.deformer)
     args.out.mkdir(parents=True, exist_ok=True)
     groups = [args.only] if args.only else ["visemes", "chinese", "expressions", "extras"]

@@ -12,6 +12,7 @@ from ..decoded import shown_values
 from ..face import FaceError, FaceModel, asset, calibrate, deformers
 from ..spec import EXPRESSION_PROFILES, FAPS, FAPU_NAMES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
 from . import options
+from .errors import UsageError
 from .options import Commands
 
 
@@ -66,6 +67,17 @@ def deformer_option(p: argparse.ArgumentParser) -> None:
     lines = "; ".join(f"{k.name}: {k.summary}" for k in deformers.KINDS.values())
     p.add_argument("--deformer", choices=deformers.names(), default=deformers.names()[0],
                    help=f"how FAPs move the mesh. {lines}")
+    p.add_argument("--blocks", metavar="NAMES", type=lambda text: tuple(n for n in text.split(",") if n),
+                   help="with --deformer blocks: the blocks that move as elastic blocks, comma-separated "
+                        "(default eye_l,eye_r,lip_t,lip_b; 'mouth' is one block for both lips)")
+
+
+def posed_face(args: argparse.Namespace) -> FaceModel:
+    """The face of ``face_options`` under the deformer of ``deformer_option``."""
+    if args.blocks is not None and args.deformer != "blocks":
+        raise UsageError(f"--blocks goes with --deformer blocks, not {args.deformer}")
+    options = {"regions": args.blocks} if args.blocks is not None else {}
+    return face_from_args(args).with_deformer(args.deformer, **options)
 
 
 def _fap_value(text: str) -> tuple[int, float]:
@@ -165,7 +177,7 @@ def _pose_values(args: argparse.Namespace) -> np.ndarray:
 
 
 def run_pose(args: argparse.Namespace) -> int:
-    face = face_from_args(args).with_deformer(args.deformer)
+    face = posed_face(args)
     values = _pose_values(args)
     pose = face.deform(values)
     neutral, posed = _points(face), _points(face, pose.vertices)

@@ -12,7 +12,7 @@ from ..render.video import AUDIO_WAV, writes_folder
 from . import options
 from .errors import UsageError
 from .media import check_video_size, read_image, render_with_progress, save_image
-from .model import deformer_option, face_from_args, face_options
+from .model import deformer_option, face_options, posed_face
 from .options import Commands
 from .paths import refuse_overlaps
 
@@ -125,7 +125,7 @@ def run_play(args: argparse.Namespace) -> int:
             refuse_overlaps(inputs, {f"-o {args.output}'s {AUDIO_WAV}": args.output / AUDIO_WAV})
         check_video_size(args.output, args.size)
     stream, _ = read_stream(args.stream)
-    face = face_from_args(args).with_deformer(args.deformer)
+    face = posed_face(args)
     render_options = _renderer_options(args, face)
     if args.show:
         from ..render.window import show
@@ -157,7 +157,7 @@ def run_snapshot(args: argparse.Namespace) -> int:
 
     refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture}, {"-o": args.output})
     stream, _ = read_stream(args.stream)
-    face = face_from_args(args).with_deformer(args.deformer)
+    face = posed_face(args)
     image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args, face))
     save_image(Image.fromarray(image), args.output)
     print(f"{args.output}: {image.shape[1]}x{image.shape[0]}")

@@ -39,17 +39,17 @@ class FaceModel:
     DEFORMERS = deformers.names()
 
     def __init__(self, mesh: HeadMesh, calibration: CalibrationReport | None = None, *,
-                 deformer: str = "fap") -> None:
-        if deformers.kind(deformer).needs_face_units and mesh.face_units is None:
-            raise FaceError(f"the {deformer} deformer needs a head with face units (the generic head has them)",
-                            hint="use the feature-point deformer (deformer='fap')")
+                 deformer: str = "fap", deformer_options: Mapping | None = None) -> None:
+        deformers.check(deformer, mesh, dict(deformer_options or {}))
         self.mesh = mesh
         self.calibration = calibration
         self.deformer = deformer
+        self.deformer_options = dict(deformer_options or {})
 
-    def with_deformer(self, deformer: str) -> "FaceModel":
-        """The same face posed by another deformer (:mod:`mpeg4fa.face.deformers` lists them)."""
-        return FaceModel(self.mesh, self.calibration, deformer=deformer)
+    def with_deformer(self, deformer: str, **options) -> "FaceModel":
+        """The same face posed by another deformer (:mod:`mpeg4fa.face.deformers` lists them), with
+        its options (``with_deformer("blocks", regions=("lip_t", "lip_b"))``: elastic lip blocks only)."""
+        return FaceModel(self.mesh, self.calibration, deformer=deformer, deformer_options=options)
 
     def with_nurbs_skull(self) -> "FaceModel":
         """The same face with the skull cap no FAP moves as a trimmed NURBS surface, tessellated and
@@ -57,7 +57,7 @@ class FaceModel:
         from mpeg4fa.face.nurbs import nurbs_head
 
         mesh = nurbs_head(self.mesh, self.rig, cache=self.calibration is None)  # a calibrated head: not cached
-        return FaceModel(mesh, self.calibration, deformer=self.deformer)
+        return FaceModel(mesh, self.calibration, deformer=self.deformer, deformer_options=self.deformer_options)
 
     @classmethod
     def default(cls, *, auto_install: bool = True) -> "FaceModel":
@@ -87,7 +87,7 @@ class FaceModel:
     @cached_property
     def posing(self) -> deformers.Deformer:
         """This face's deformer, set up on first use: ``values (68,) -> Pose``."""
-        return deformers.build(self.deformer, self.mesh, self.rig)
+        return deformers.build(self.deformer, self.mesh, self.rig, **self.deformer_options)
 
     @cached_property
     def arkit_rig(self) -> ArkitRig:
@@ -108,7 +108,7 @@ class FaceModel:
         if unknown:
             raise FaceError(f"the FDP names unknown feature points {', '.join(unknown)}")
         mesh, report = calibrate_mesh(self.mesh, labels, points, method=method, alignment=alignment)
-        return FaceModel(mesh, report, deformer=self.deformer)
+        return FaceModel(mesh, report, deformer=self.deformer, deformer_options=self.deformer_options)
 
     def to_fdp(self, *, with_mesh: bool = False, name: str = "mpeg4fa generic head"):
         """This face's feature points (and optionally its skin mesh) as an FDP a sender can transmit."""

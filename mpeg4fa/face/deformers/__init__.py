@@ -30,6 +30,8 @@ class DeformerKind:
     module: str
     summary: str
     needs_face_units: bool = False
+    options: tuple[str, ...] = ()
+    """Keyword options its ``build`` takes."""
 
 
 KINDS: dict[str, DeformerKind] = {k.name: k for k in (
@@ -38,7 +40,8 @@ KINDS: dict[str, DeformerKind] = {k.name: k for k in (
                  needs_face_units=True),
     DeformerKind("muscle", "muscle", "Waters linear muscles fitted to the FAPs, corrected so feature points stay exact"),
     DeformerKind("parabolic", "parabolic", "the feature-point deformer with spherical eyeballs and parabolic lid contours"),
-    DeformerKind("blocks", "blocks", "eye and mouth blocks moving as least-squares affine (12-parameter elastic) fields"),
+    DeformerKind("blocks", "blocks", "eye and mouth blocks moving as least-squares affine (12-parameter elastic) fields",
+                 options=("regions",)),
 )}
 
 
@@ -55,11 +58,24 @@ def kind(name: str) -> DeformerKind:
         raise FaceError(f"unknown deformer {name!r}", hint=f"one of {', '.join(KINDS)}") from None
 
 
-def build(name: str, mesh: HeadMesh, rig: Rig) -> Deformer:
-    """Set up deformer ``name`` for one neutral face (imported on first use: each has its own cost)."""
+def build(name: str, mesh: HeadMesh, rig: Rig, **options) -> Deformer:
+    """Set up deformer ``name`` for one neutral face (imported on first use: each has its own cost).
+
+    ``options`` go to the deformer's own ``build`` (the block deformer's ``regions``: which blocks move
+    as elastic blocks, the rest of the face as with the feature-point deformer)."""
+    k = check(name, mesh, options)
+    module = importlib.import_module(f"{__name__}.{k.module}")
+    return module.build(mesh, rig, **options)
+
+
+def check(name: str, mesh: HeadMesh, options: dict) -> DeformerKind:
+    """The deformer ``name`` if it can pose ``mesh`` with ``options``, else a :class:`FaceError` saying why."""
     k = kind(name)
     if k.needs_face_units and mesh.face_units is None:
         raise FaceError(f"the {name} deformer needs a head with face units (the generic head has them)",
                         hint="use the feature-point deformer (deformer='fap')")
-    module = importlib.import_module(f"{__name__}.{k.module}")
-    return module.build(mesh, rig)
+    unknown = [o for o in options if o not in k.options]
+    if unknown:
+        raise FaceError(f"the {name} deformer has no option {unknown[0]!r}",
+                        hint=f"its options: {', '.join(k.options)}" if k.options else "it takes none")
+    return k

@@ -345,6 +345,6 @@ def blocks_deformer(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) 
     return BlocksDeformer(rig=rig, block_rig=block_rig, blocks=blocks)
 
 
-def build(mesh: HeadMesh, rig: Rig) -> BlocksDeformer:
-    """The deformer as the registry builds it: all blocks (:data:`REGIONS`)."""
-    return blocks_deformer(mesh, rig)
+def build(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) -> BlocksDeformer:
+    """The deformer as the registry builds it: the blocks ``regions`` (all of :data:`REGIONS` by default)."""
+    return blocks_deformer(mesh, rig, tuple(regions))
