@@ -12,7 +12,8 @@ Four layers, each a function over arrays (seed paper §6):
 4. the mesh is posed once per frame by a deformer (:mod:`.deformers`: the feature-point
    deformer by default, the sculpted ARKit face units, ...).
 
-Calibration to a sender's feature points: :mod:`.calibrate` (Dirichlet FFD or RBF).
+Calibration to a sender's feature points: :mod:`.calibrate` (Dirichlet FFD, RBF or the linear
+elastic model of :mod:`.elastic`); the static skull as a NURBS surface: :mod:`.nurbs`.
 The generic head is built from CC0 assets at set-up: :mod:`.asset`.
 """
 from mpeg4fa.face.calibrate import CalibrationReport
