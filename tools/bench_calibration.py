@@ -31,12 +31,8 @@ from mpeg4fa.face import FaceModel  # noqa: E402
 from mpeg4fa.face import elastic  # noqa: E402
 from mpeg4fa.face.calibrate import METHODS  # noqa: E402
 
-
-class Stand:
-    """An FDP stand-in: what FaceModel.calibrate reads."""
-
-    def __init__(self, labels, points):
-        self.labels, self.points = tuple(labels), np.asarray(points, dtype=np.float64)
+sys.path.insert(0, str(ROOT / "tools"))
+from bench_face import Stand, target_points  # noqa: E402  (one stand-in, one target, shared)
 
 
 def _rotation(axis, degrees: float) -> np.ndarray:
@@ -69,16 +65,6 @@ def anisotropic_target(face: FaceModel, noise_mm: float = 0.5, seed: int = 5) ->
     return Stand(face.mesh.fp_labels, (fps - centre) * np.array([1.2, 0.9, 1.1]) + centre + noise)
 
 
-def sine_target(face: FaceModel) -> Stand:
-    """tools/bench_face.py's target: scale 1.08, 4 degrees about y, a 3 mm sine warp."""
-    fps = face.mesh.feature_points()
-    centre = fps.mean(axis=0)
-    rel = fps - centre
-    a = np.radians(4.0)
-    rot = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
-    return Stand(face.mesh.fp_labels, 1.08 * rel @ rot.T + centre + 3.0 * np.sin(rel / 40.0))
-
-
 def fdp_files() -> list[Path]:
     """The conformance faces and any FDP under ../shared/vectors (skipped when absent)."""
     found = sorted((ROOT / "conformance" / "faces").glob("*.fdp"))
@@ -92,7 +78,7 @@ def target_fdps(face: FaceModel) -> list[tuple[str, object]]:
     """``(name, fdp)`` for every FDP the benchmark compares the methods on."""
     out: list[tuple[str, object]] = [("smooth", smooth_target(face)), ("anisotropic", anisotropic_target(face)),
                                      ("anisotropic noisy", anisotropic_target(face, 1.5)),
-                                     ("bench_face sine", sine_target(face))]
+                                     ("bench_face sine", target_points(face))]
     if any(fdp_files()):
         from mpeg4fa.fdp import load_fdp
 

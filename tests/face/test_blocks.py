@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import face_under
+
 from mpeg4fa.face import FaceError, motion, quality
 from mpeg4fa.face.deformers import blocks
 from mpeg4fa.face.deformers.blocks import (PARAMETERS, blocks_deformer, design_matrix, displacement,
@@ -35,14 +37,14 @@ def _look(values) -> np.ndarray:
     return v
 
 
-@pytest.fixture(scope="module")
-def generic_blocks(generic_face):
-    return generic_face.with_deformer("blocks")
+@pytest.fixture(scope="session")
+def generic_blocks(request):
+    return face_under(request, "generic", "blocks")  # one per session (tests/conftest.py)
 
 
-@pytest.fixture(scope="module")
-def procedural_blocks(procedural_face):
-    return procedural_face.with_deformer("blocks")
+@pytest.fixture(scope="session")
+def procedural_blocks(request):
+    return face_under(request, "procedural", "blocks")  # one per session (tests/conftest.py)
 
 
 # ---------------------------------------------------------------- the fit

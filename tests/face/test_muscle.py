@@ -2,6 +2,8 @@
 import numpy as np
 import pytest
 
+from conftest import face_under
+
 from mpeg4fa.face.couplings import PASSIVE_POINTS
 from mpeg4fa.face.deformers.muscle import contractions, reach_table
 from mpeg4fa.face.muscles import load_specs, waters_factor
@@ -23,14 +25,14 @@ def _frame(values):
     return v
 
 
-@pytest.fixture(scope="module")
-def muscle_face(generic_face):
-    return generic_face.with_deformer("muscle")
+@pytest.fixture(scope="session")
+def muscle_face(request):
+    return face_under(request, "generic", "muscle")  # one per session (tests/conftest.py)
 
 
-@pytest.fixture(scope="module")
-def procedural_muscle_face(procedural_face):
-    return procedural_face.with_deformer("muscle")
+@pytest.fixture(scope="session")
+def procedural_muscle_face(request):
+    return face_under(request, "procedural", "muscle")  # one per session (tests/conftest.py)
 
 
 def _at(distance, angle_deg):

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import face_under
+
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS
 from mpeg4fa.face.deformers.parabolic import LID_CLEARANCE_MM, build_eyes
@@ -27,14 +29,14 @@ FLIP_X = np.array([-1.0, 1.0, 1.0])
 MIRRORED = ((19, 20, 1.0), (21, 22, 1.0), (23, 24, -1.0), (25, 26, 1.0), (27, 28, 1.0))  # eye yaw: both positive to the left
 
 
-@pytest.fixture(scope="module")
-def generic_parabolic(generic_face):
-    return generic_face.with_deformer("parabolic")
+@pytest.fixture(scope="session")
+def generic_parabolic(request):
+    return face_under(request, "generic", "parabolic")  # one per session (tests/conftest.py)
 
 
-@pytest.fixture(scope="module")
-def procedural_parabolic(procedural_face):
-    return procedural_face.with_deformer("parabolic")
+@pytest.fixture(scope="session")
+def procedural_parabolic(request):
+    return face_under(request, "procedural", "parabolic")  # one per session (tests/conftest.py)
 
 
 @pytest.fixture(scope="module", params=["procedural", "generic"])
