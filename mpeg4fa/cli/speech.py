@@ -46,6 +46,46 @@ def register(commands: Commands) -> None:
                    help="also write OUT.fba, OUT.wav and OUT.timings.json beside it")
     p.set_defaults(run=run_say)
 
+    p = commands.add_parser(
+        "voices", help="list espeak-ng's voices and language codes (what --lang and --voice take)",
+        description="List the installed espeak-ng voices: the language code (give it to --lang or --voice), "
+                    "the voice's name and every code it answers to. English (en, en-*) and Mandarin (zh) "
+                    "map phonemes through their own tables; every other language through IPA features "
+                    "(spec/ipa_*.csv).")
+    p.add_argument("--json", action="store_true",
+                   help='print a JSON list: [{"language", "name", "identifier", "languages", "visemes"}, ...]')
+    p.set_defaults(run=run_voices)
+
+
+def run_voices(args: argparse.Namespace) -> int:
+    """``mpeg4fa voices``: :func:`mpeg4fa.speech.tts.espeak.voices`, as a table or JSON."""
+    import json
+
+    from ..speech.tts.espeak import voices
+
+    rows = []
+    for v in voices():
+        entry = v.as_dict()
+        entry["visemes"] = _viseme_route(v.language)
+        rows.append(entry)
+    if args.json:
+        print(json.dumps(rows, ensure_ascii=False, indent=1))
+        return 0
+    width = max((len(r["language"]) for r in rows), default=4)
+    for r in rows:
+        others = [c for c in r["languages"] if c != r["language"]]
+        also = f"  (also {', '.join(others)})" if others else ""
+        print(f"{r['language']:<{width}}  {r['name']}{also}  [{r['visemes']}]")
+    print(f"{len(rows)} voices; --lang takes any code above, or auto, en, zh", file=sys.stderr)
+    return 0
+
+
+def _viseme_route(code: str) -> str:
+    """How ``--lang CODE`` maps phonemes to visemes."""
+    if code == "en" or code.startswith("en-"):
+        return "English table"
+    return "IPA features"
+
 
 def text_flag(p: argparse.ArgumentParser) -> None:
     """``--text``: the positional argument is the text itself, even when it looks like a file name."""
@@ -94,10 +134,12 @@ def speech_options(g) -> list[argparse.Action]:
         g.add_argument("--engine", choices=ENGINES, default="espeak",
                        help="espeak (phoneme times; default), pyttsx3 (word boundaries, visemes estimated in "
                             "between) or estimate (no audio: word times from a duration model)"),
-        g.add_argument("--lang", choices=("auto", "en", "zh"), default="auto",
-                       help="language (default: by script); English and Mandarin are spoken, text in other "
-                            "scripts is refused"),
-        g.add_argument("--voice", help="English voice for latin text (default en-us)"),
+        g.add_argument("--lang", default="auto", metavar="auto|en|zh|CODE",
+                       help="language: auto (default: by script: Latin English, Han Mandarin, Cyrillic ru, "
+                            "Arabic ar, Devanagari hi, kana ja), en, zh, or any espeak-ng language code (es, fr, "
+                            "de, yue...: 'mpeg4fa voices' lists them; visemes from IPA features)"),
+        g.add_argument("--voice", help="under auto, the English voice for Latin text (default en-us); with "
+                                       "--lang CODE, the voice for all of it (default: CODE)"),
         g.add_argument("--rate", type=options.speech_rate, help="speech rate in words per minute, 80 to 450 "
                                                                 "(default 175)"),
         g.add_argument("--idle", action="store_true", help="add blinks and small head motion"),

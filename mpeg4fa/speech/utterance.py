@@ -7,7 +7,13 @@ espeak-ng's pinyin voice, which reports one word event per syllable; inside a
 syllable the initial takes the time of its consonant phoneme, and the glide, main
 vowel and ending share the rest by the engine's phoneme boundaries when the counts
 match, else by fixed weights. Runs are spoken separately and joined, so mixed
-Chinese/English text works. A tag's time is a mark event placed at its offset
+Chinese/English text works.
+
+Any other espeak-ng language (``lang="es"``, or a Cyrillic, Arabic, Devanagari or kana run
+under ``auto``, see :func:`.script.runs`) takes the IPA route: espeak names its phonemes in IPA
+and :mod:`.ipa` maps them to the 14 MPEG-4 visemes by their articulatory features. English and
+Mandarin keep their own tables (the reference); ``route="ipa"`` sends English through the IPA
+route too, to compare the two. A tag's time is a mark event placed at its offset
 (or, when the engine drops or cannot send marks, the start of the next word).
 
 Engines that time words but no phonemes (pyttsx3, the silent estimator) get their
@@ -21,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from mpeg4fa.speech.errors import MarkupError, TTSError
+from mpeg4fa.speech.ipa import ipa_visemes, sounding
 from mpeg4fa.speech.graphemes import SYLLABLE_UNIT, english_units, seconds_per_unit, syllable_units
 from mpeg4fa.speech.mandarin import FINAL_WEIGHT, Syllable, final_roles, syllables
 from mpeg4fa.speech.markup import Markup
-from mpeg4fa.speech.script import CHINESE as _ZH
-from mpeg4fa.speech.script import check_speakable
+from mpeg4fa.speech.script import check_speakable, runs
 from mpeg4fa.speech.timeline import ExpressionCue, VisemeSpan
 from mpeg4fa.speech.tts.base import Engine, Event, Speech, snap_to_tokens, word_tokens
 from mpeg4fa.speech.visemes import PAUSE, english_visemes
@@ -34,6 +40,8 @@ from mpeg4fa.speech.wordsync import resync
 ENGLISH_VOICE = "en-us"
 PINYIN_VOICE = "cmn-latn-pinyin"
 LANGS = ("auto", "en", "zh")
+"""The languages every engine takes; engines with IPA phoneme events take any espeak-ng language code too."""
+ROUTES = ("reference", "ipa")
 _PUNCT = {"，": ", ", "、": ", ", "；": "; ", "：": ": ", "。": ". ", "！": "! ", "？": "? ", "…": "... "}
 
 
@@ -74,16 +82,37 @@ class Utterance:
 
 def _runs(text: str) -> list[tuple[str, int, int]]:
     """(kind, start, end) runs of ``text``: 'zh' for hanzi and CJK punctuation, else 'en'."""
-    runs: list[tuple[str, int, int]] = []
-    for i, ch in enumerate(text):
-        kind = "zh" if _ZH.match(ch) else ("ws" if ch.isspace() else "en")
-        if kind == "ws" and runs:
-            kind = runs[-1][0]
-        if runs and runs[-1][0] == kind:
-            runs[-1] = (kind, runs[-1][1], i + 1)
-        else:
-            runs.append((kind if kind != "ws" else "en", i, i + 1))
-    return [r for r in runs if text[r[1]:r[2]].strip()]
+    return runs(text, "auto", False)
+
+
+def speaks_ipa(engine: Engine) -> bool:
+    """Whether ``engine`` names phonemes in IPA on request (``synthesize(..., ipa=True)``)."""
+    return bool(getattr(engine, "speaks_ipa", False))
+
+
+def check_language(lang: str, engine: Engine) -> None:
+    """Refuse a language ``engine`` cannot speak, with one line saying what to do instead."""
+    if lang in LANGS:
+        return
+    if not isinstance(lang, str) or not lang.strip() or lang != lang.strip():
+        raise TTSError(f"unknown language {lang!r}", where=engine.name,
+                       hint="give an espeak-ng language code (mpeg4fa voices lists them), or auto, en, zh")
+    if not speaks_ipa(engine):
+        raise TTSError(f"--lang {lang}: the {engine.name} engine gives no IPA phonemes, so it speaks only "
+                       "auto, en and zh", where=engine.name, hint="use --engine espeak")
+    known = getattr(engine, "languages", None)
+    if known is not None and lang.lower() not in known():
+        raise TTSError(f"unknown language {lang!r}", where=engine.name,
+                       hint="run 'mpeg4fa voices' for the language codes espeak-ng speaks (or give auto, en, zh)")
+
+
+def _route(kind: str, route: str) -> str:
+    """How a run is turned into visemes: the English or the Mandarin table, or IPA features."""
+    if kind == "zh":
+        return "zh"
+    if (kind == "en" or kind.startswith("en-")) and route == "reference":
+        return "en"
+    return "ipa"
 
 
 def _pinyin_text(text: str, start: int, end: int) -> tuple[str, dict[int, int], list[tuple[Syllable, int]]]:
@@ -187,6 +216,23 @@ def _speak_en(engine: Engine, text: str, start: int, end: int, marks: list[tuple
     return speech, timings, _mark_times(speech, local)
 
 
+def _speak_ipa(engine: Engine, text: str, start: int, end: int, marks: list[tuple[int, str]],
+               voice: str, rate: int | None) -> tuple[Speech, list[Timing], dict[str, float]]:
+    """A run in any espeak-ng language: IPA phoneme events -> visemes by articulatory features."""
+    chunk = text[start:end]
+    lead = len(chunk) - len(chunk.lstrip())
+    body = chunk.strip()
+    local = [(min(max(o - start - lead, 0), len(body)), name) for o, name in marks]
+    speech = engine.synthesize(body, voice=voice, rate=rate, marks=local, ipa=True)
+    if not any(p.text.strip() for p in speech.phonemes()):
+        raise TTSError(f"the {voice} voice gave no phonemes for {body[:40]!r}", where=engine.name,
+                       hint="check the text is in a script that voice reads")
+    placed = ipa_visemes(list(speech.phonemes()), where=f"{engine.name} {voice}",
+                         is_sound=sounding(speech.samples, speech.rate))
+    timings = [Timing(label, viseme, a, b) for label, viseme, a, b in placed]
+    return speech, timings, _mark_times(speech, local)
+
+
 def _has_phonemes(speech: Speech) -> bool:
     return any(not p.text.startswith("_") for p in speech.phonemes())
 
@@ -222,26 +268,50 @@ def _join(parts: list[tuple[Speech, list[Timing], dict[str, float]]], engine_nam
 
 
 def speak(markup: Markup, engine: Engine, *, lang: str = "auto", voice: str | None = None,
-          rate: int | None = None) -> Utterance:
-    """Speak the markup's text and time its visemes and tags (see the module docstring)."""
-    if lang not in LANGS:
-        raise TTSError(f"unknown language {lang!r}", hint=f"one of {', '.join(LANGS)}")
+          rate: int | None = None, route: str = "reference") -> Utterance:
+    """Speak the markup's text and time its visemes and tags (see the module docstring).
+
+    ``lang``: ``auto`` (by script), ``en``, ``zh``, or any espeak-ng language code (engines with IPA
+    phoneme events). ``voice``: under ``auto`` the voice of Latin (English) runs; with a language
+    code, the voice for the whole text (default: the code itself). ``route="ipa"`` maps English
+    through IPA features instead of ``spec/english_visemes.csv`` (to compare the two).
+    """
+    if route not in ROUTES:
+        raise ValueError(f"route {route!r}: one of {', '.join(ROUTES)}")
+    check_language(lang, engine)
     text = markup.text
     if not text.strip():
         raise MarkupError("there is nothing to say", 1, 1, hint="give some text", source=markup.name)
-    check_speakable(text, lang, markup.name, markup.place)  # a script no voice here speaks: refused, not spoken as silence
-    runs = _runs(text)
+    languages = speaks_ipa(engine)
+    # a script no voice here speaks: refused, not spoken as silence
+    check_speakable(text, lang, markup.name, markup.place, languages=languages)
+    pieces = runs(text, lang, languages)
     names = {i: f"tag{i}" for i in range(len(markup.tags))}
-    parts = []
-    for n, (kind, start, end) in enumerate(runs):
-        last = n == len(runs) - 1
+    parts, voices, ipa_runs = [], [], 0
+    for n, (kind, start, end) in enumerate(pieces):
+        last = n == len(pieces) - 1
         marks = [(tag.offset, names[i]) for i, tag in enumerate(markup.tags)
                  if (start <= tag.offset < end or (last and tag.offset >= end)) or (n == 0 and tag.offset < start)]
-        if kind == "zh":
+        how = _route(kind, route)
+        if how == "zh":
             parts.append(_speak_zh(engine, text, start, end, marks, rate))
+            voices.append(PINYIN_VOICE)
+            continue
+        if lang == "auto" or kind == "en":  # under auto, --voice is the voice of the English runs
+            said = (voice or ENGLISH_VOICE) if kind == "en" else kind
         else:
-            parts.append(_speak_en(engine, text, start, end, marks, voice, rate))
-    speech, timings, times = _join(parts, engine.name, voice or ENGLISH_VOICE)
+            said = voice or kind
+        voices.append(said)
+        if how == "en":
+            parts.append(_speak_en(engine, text, start, end, marks, said, rate))
+            continue
+        if not languages:
+            raise TTSError(f"the {engine.name} engine gives no IPA phonemes", where=engine.name,
+                           hint="use --engine espeak")
+        ipa_runs += 1
+        parts.append(_speak_ipa(engine, text, start, end, marks, said, rate))
+    label = "+".join(dict.fromkeys(voices)) if ipa_runs else (voice or ENGLISH_VOICE)
+    speech, timings, times = _join(parts, engine.name, label)
     cues = tuple(ExpressionCue(tag.expression, tag.intensity, tag.seconds, times[names[i]])
                  for i, tag in enumerate(markup.tags))
     return Utterance(speech, tuple(timings), cues, markup)

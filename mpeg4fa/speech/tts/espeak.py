@@ -1,7 +1,10 @@
 """espeak-ng through its C API (ctypes), the engine that gives sample-exact phoneme timing.
 
 Only the C API reports *when* each phoneme starts in the audio (``espeak_EVENT.sample``); the
-command line and pyttsx3 do not. The library and its data come from the ``espeakng_loader``
+command line and pyttsx3 do not. Phoneme names come as espeak's mnemonics (``tS``, ``aI``: what
+``spec/english_visemes.csv`` is written in) or, with ``synthesize(..., ipa=True)``, in IPA
+(``tʃ``, ``aɪ``: what :mod:`mpeg4fa.speech.ipa` reads for any language), switched per synthesis
+with ``espeak_ng_SetPhonemeEvents``; the events and the audio are the same either way. The library and its data come from the ``espeakng_loader``
 wheel (espeak-ng 1.52): Debian's 1.51 reads Mandarin tone digits as English numbers.
 
 espeak-ng is one global state per process, so it is initialised once (module level) and every
@@ -14,6 +17,7 @@ import ctypes
 import html
 import threading
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Sequence
 
 import numpy as np
@@ -45,6 +49,18 @@ EV_END = 5  # end of clause or sentence
 EV_MSG_TERMINATED = 6
 EV_PHONEME = 7
 EV_SAMPLERATE = 8
+
+
+def phoneme_name(raw: bytes) -> str:
+    """A phoneme name from the event's 8 bytes: up to the first NUL; an IPA name longer than 8 bytes
+    arrives cut, so an incomplete UTF-8 character at the end is dropped rather than shown as U+FFFD."""
+    name = raw.split(b"\0", 1)[0]
+    for cut in range(4):  # a UTF-8 character is at most 4 bytes
+        try:
+            return name[:len(name) - cut].decode("utf-8")
+        except UnicodeDecodeError:
+            continue
+    return name.decode("utf-8", "replace")
 
 
 class _EventId(ctypes.Union):
@@ -139,7 +155,7 @@ def _on_synth(wav, n: int, events) -> int:
                     break
                 raw = RawEvent(ev.type, ev.text_position, ev.length, ev.audio_position, ev.sample)
                 if ev.type == EV_PHONEME:
-                    raw.name = bytes(ev.id.string).split(b"\0", 1)[0].decode("utf-8", "replace")
+                    raw.name = phoneme_name(bytes(ev.id.string))
                 elif ev.type in (EV_MARK, EV_PLAY):
                     raw.name = (ev.id.name or b"").decode("utf-8", "replace")
                 else:
@@ -190,6 +206,8 @@ def _load() -> ctypes.CDLL:
     lib.espeak_ListVoices.restype = ctypes.POINTER(ctypes.POINTER(EspeakVoice))
     lib.espeak_GetCurrentVoice.argtypes = []
     lib.espeak_GetCurrentVoice.restype = ctypes.POINTER(EspeakVoice)
+    lib.espeak_ng_SetPhonemeEvents.argtypes = [ctypes.c_int, ctypes.c_int]
+    lib.espeak_ng_SetPhonemeEvents.restype = ctypes.c_int
 
     rate = lib.espeak_Initialize(
         AUDIO_OUTPUT_SYNCHRONOUS, 0, data_path.encode(), espeakINITIALIZE_PHONEME_EVENTS
@@ -248,6 +266,43 @@ def list_voices() -> list[tuple[str, tuple[str, ...]]]:
     return out
 
 
+@dataclass(frozen=True)
+class Voice:
+    """One installed espeak-ng voice: its first language code (what ``--lang`` and ``--voice`` take),
+    its name, its file (``identifier``, also accepted as a voice) and every language it speaks."""
+
+    language: str
+    name: str
+    identifier: str
+    languages: tuple[str, ...]
+
+    def as_dict(self) -> dict:
+        return {"language": self.language, "name": self.name, "identifier": self.identifier,
+                "languages": list(self.languages)}
+
+
+def voices() -> list[Voice]:
+    """Every installed voice, sorted by language code then name (the list ``mpeg4fa voices`` prints)."""
+    with _lock:
+        lib = _load()
+        table = lib.espeak_ListVoices(None)
+        out: list[Voice] = []
+        i = 0
+        while table and table[i]:
+            v = table[i].contents
+            langs = _languages(v.languages)
+            out.append(Voice(langs[0] if langs else "", (v.name or b"").decode("utf-8", "replace"),
+                             (v.identifier or b"").decode("utf-8", "replace"), langs))
+            i += 1
+    return sorted(out, key=lambda v: (v.language, v.name))
+
+
+@lru_cache(maxsize=1)
+def language_codes() -> frozenset[str]:
+    """Every language code some installed voice speaks (lower case): ``es``, ``fr-fr``, ``yue``..."""
+    return frozenset(code.lower() for v in voices() for code in v.languages)
+
+
 def _voice_hint(voice: str) -> str:
     """A few voices close to the one asked for, so the error says what to write instead."""
     voices = list_voices()
@@ -296,6 +351,8 @@ class EspeakEngine:
     """
 
     name = "espeak"
+    speaks_ipa = True
+    """``synthesize(..., ipa=True)`` names phonemes in IPA (what :mod:`mpeg4fa.speech.utterance` checks)."""
 
     def __init__(self, voice: str = DEFAULT_VOICE, rate: int = DEFAULT_RATE, *,
                  keep_stress: bool = False) -> None:
@@ -303,6 +360,10 @@ class EspeakEngine:
         self.rate = rate
         # espeak prefixes stressed vowels with ' (primary) or , (secondary); visemes do not care
         self.keep_stress = keep_stress
+
+    def languages(self) -> frozenset[str]:
+        """The language codes the installed voices speak (lower case; see :func:`language_codes`)."""
+        return language_codes()
 
     @property
     def sample_rate(self) -> int:
@@ -318,8 +379,11 @@ class EspeakEngine:
         voice: str | None = None,
         rate: int | None = None,
         marks: Sequence[tuple[int, str]] = (),
+        ipa: bool = False,
     ) -> Speech:
         """Speak ``text`` and return the audio with its events (see ``Engine.synthesize``).
+
+        ``ipa``: phoneme events named in IPA instead of espeak's mnemonics (same times, same audio).
 
         Marks go in as SSML ``<mark/>``s; put them between words: espeak splits a word at a
         mark inside it (and pronounces the halves separately).
@@ -357,6 +421,7 @@ class EspeakEngine:
                 raise TTSError(f"unknown voice {voice!r}", where=WHERE, hint=_voice_hint(voice))
             lib.espeak_SetParameter(espeakRATE, int(wpm), 0)
             col = _collector = _Collector()
+            lib.espeak_ng_SetPhonemeEvents(1, 1 if ipa else 0)
             try:
                 data = source.encode("utf-8") + b"\0"
                 buf = ctypes.create_string_buffer(data, len(data))
@@ -367,6 +432,8 @@ class EspeakEngine:
                 lib.espeak_Synchronize()
             finally:
                 _collector = None
+                if ipa:
+                    lib.espeak_ng_SetPhonemeEvents(1, 0)
             rate_hz = _sample_rate
         if col.error is not None:
             raise TTSError(f"event callback failed: {col.error!r}", where=WHERE,
@@ -378,7 +445,8 @@ class EspeakEngine:
         return Speech(samples=samples, rate=rate_hz, events=events, engine=self.name, voice=voice)
 
 
-STRESS_MARKS = "',"
+STRESS_MARKS = "',\u02c8\u02cc"
+"""Stress marks in front of a phoneme name: espeak's mnemonics (' and ,) and IPA's (ˈ and ˌ)."""
 
 
 def _extend_word(text: str, stop: int, limit: int) -> int:

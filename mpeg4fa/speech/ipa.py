@@ -1,0 +1,325 @@
+"""IPA phonemes -> the 14 MPEG-4 visemes, through articulatory features (any espeak-ng language).
+
+Why features: a hand-made phoneme list covers one voice; espeak-ng speaks about a hundred
+languages and reports every phoneme in IPA. An IPA segment's features (rounding, height and
+backness for a vowel; place and manner for a consonant) say what the mouth does, so one
+table of segments and one ordered list of rules cover them all. The data live in ``spec/``:
+
+* ``ipa_features.csv``: one row per IPA base segment (facts of the IPA chart);
+* ``ipa_visemes.csv``: our rules, tried in order, first match wins (an empty cell matches
+  anything, ``;`` separates alternatives);
+* ``ipa_marks.csv``: diacritics, length, stress and tone marks: dropped, or ``round`` (the
+  segment they follow counts as rounded: ``ɯᵝ``); ``alone`` is what a mark stands for when
+  espeak sends it as a phoneme of its own (``ʲ`` after a Russian consonant: ``=``, the
+  previous phoneme continues).
+
+An espeak phoneme event may hold several segments: a diphthong (``aɪ``), an affricate
+(``tʃ``), a long vowel spelt twice (``aa``), a vowel and its r-colouring (``ɛɹ``). Equal
+visemes next to each other merge; the rest split the phoneme's time: the first part takes
+:data:`FIRST_SHARE` (a diphthong's nucleus), except the stop of an affricate, which takes
+:data:`AFFRICATE_STOP_SHARE` (a short closure release; the fricative carries the sound);
+the remaining parts share the rest equally. An empty event is a pause (espeak's ``_``) when
+the audio is silent there; espeak also leaves a few short sounding phonemes without an IPA
+name (the Russian epenthetic ``@-`` between p and r): those are taken as a schwa
+(:data:`UNNAMED`). A parenthesised event (``(en)``) is a language switch inside the text (the
+previous phoneme continues). A segment or mark the tables do not know fails loudly, naming it and when it
+was spoken: a silently dropped phoneme is a mouth that stops moving.
+
+espeak hands a phoneme name over in 8 bytes; a longer IPA string arrives cut, its last
+incomplete character dropped by the engine binding (its marks matter little; a cut base
+letter loses its viseme part).
+"""
+from __future__ import annotations
+
+import unicodedata
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from mpeg4fa.spec import VISEME_PROFILES
+from mpeg4fa.spec._load import read_table, split_list
+from mpeg4fa.speech.errors import TTSError
+from mpeg4fa.speech.tts.base import Event
+
+PAUSE = "none"
+CONTINUE = "="
+UNNAMED = "ə"
+"""What a sounding phoneme espeak gives no IPA name is taken for: a neutral vowel."""
+SOUNDING_DB = -40.0
+"""Mean level (dBFS) above which an unnamed phoneme is sound, not a pause."""
+FIRST_SHARE = 0.6
+"""The first part of a split phoneme (a diphthong's nucleus, a vowel before its r-colouring)."""
+AFFRICATE_STOP_SHARE = 0.4
+"""The stop of an affricate (t of tʃ, ts): the fricative that follows carries the sound."""
+
+KINDS = ("vowel", "consonant")
+HEIGHTS = ("close", "near-close", "close-mid", "mid", "open-mid", "near-open", "open")
+BACKNESS = ("front", "central", "back")
+PLACES = ("bilabial", "labiodental", "dental", "alveolar", "postalveolar", "retroflex", "alveolopalatal",
+          "palatal", "labial-palatal", "velar", "labial-velar", "uvular", "pharyngeal", "epiglottal", "glottal")
+MANNERS = ("stop", "nasal", "trill", "tap", "fricative", "approximant", "lateral-approximant",
+           "lateral-fricative", "lateral-tap", "implosive", "click")
+_ACTIONS = ("drop", "round")
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One IPA base segment and its articulatory features (``rounded`` after marks like ``ᵝ``)."""
+
+    symbol: str
+    kind: str
+    height: str = ""
+    backness: str = ""
+    rounded: bool = False
+    place: str = ""
+    manner: str = ""
+    voiced: bool = True
+
+
+@dataclass(frozen=True)
+class Mark:
+    """A diacritic or suprasegmental: ``drop`` or ``round``; ``alone``: its meaning as a phoneme of its own."""
+
+    char: str
+    action: str
+    alone: str
+    name: str
+
+
+@dataclass(frozen=True)
+class Rule:
+    """One row of ``ipa_visemes.csv``: feature sets to match (empty: any) -> viseme."""
+
+    kind: str
+    place: tuple[str, ...]
+    manner: tuple[str, ...]
+    height: tuple[str, ...]
+    backness: tuple[str, ...]
+    rounded: bool | None
+    viseme: str
+
+    def matches(self, s: Segment) -> bool:
+        def ok(allowed: tuple[str, ...], value: str) -> bool:
+            return not allowed or value in allowed
+        return (s.kind == self.kind and ok(self.place, s.place) and ok(self.manner, s.manner)
+                and ok(self.height, s.height) and ok(self.backness, s.backness)
+                and (self.rounded is None or self.rounded == s.rounded))
+
+
+def _bit(text: str, where: str) -> bool:
+    if text not in ("0", "1"):
+        raise ValueError(f"{where}: expected 0 or 1, got {text!r}")
+    return text == "1"
+
+
+def _one_of(value: str, allowed: tuple[str, ...], where: str, empty: bool) -> str:
+    if (value or not empty) and value not in allowed:
+        raise ValueError(f"{where}: {value!r} is not one of {', '.join(allowed)}")
+    return value
+
+
+@lru_cache(maxsize=None)
+def features() -> dict[str, Segment]:
+    """``spec/ipa_features.csv``: IPA segment -> its features (checked: known values, no repeats)."""
+    out: dict[str, Segment] = {}
+    rows = read_table("ipa_features.csv", "segment,kind,height,backness,rounded,place,manner,voiced,note")
+    for line, r in enumerate(rows, start=2):
+        where = f"spec/ipa_features.csv:{line}"
+        symbol = r["segment"]
+        if len(symbol) != 1 or symbol in out:
+            raise ValueError(f"{where}: segment {symbol!r} must be one character, listed once")
+        kind = _one_of(r["kind"], KINDS, where, empty=False)
+        vowel = kind == "vowel"
+        out[symbol] = Segment(
+            symbol, kind, _one_of(r["height"], HEIGHTS, where, empty=not vowel),
+            _one_of(r["backness"], BACKNESS, where, empty=not vowel), _bit(r["rounded"], where),
+            _one_of(r["place"], PLACES, where, empty=vowel), _one_of(r["manner"], MANNERS, where, empty=vowel),
+            _bit(r["voiced"], where))
+    for s in out.values():
+        viseme_of(s)  # every segment must reach a viseme: fail at load, not in the middle of a sentence
+    return out
+
+
+@lru_cache(maxsize=None)
+def rules() -> tuple[Rule, ...]:
+    """``spec/ipa_visemes.csv``, in order (first match wins)."""
+    out = []
+    rows = read_table("ipa_visemes.csv", "kind,place,manner,height,backness,rounded,viseme,note")
+    for line, r in enumerate(rows, start=2):
+        where = f"spec/ipa_visemes.csv:{line}"
+        _one_of(r["kind"], KINDS, where, empty=False)
+        lists = {}
+        for column, allowed in (("place", PLACES), ("manner", MANNERS), ("height", HEIGHTS),
+                                ("backness", BACKNESS)):
+            lists[column] = split_list(r[column])
+            for value in lists[column]:
+                _one_of(value, allowed, f"{where} ({column})", empty=False)
+        if r["viseme"] not in VISEME_PROFILES["mpeg4"]:
+            raise ValueError(f"{where}: unknown viseme {r['viseme']!r}")
+        rounded = None if r["rounded"] == "" else _bit(r["rounded"], where)
+        out.append(Rule(r["kind"], lists["place"], lists["manner"], lists["height"], lists["backness"], rounded,
+                        r["viseme"]))
+    return tuple(out)
+
+
+@lru_cache(maxsize=None)
+def marks() -> dict[str, Mark]:
+    """``spec/ipa_marks.csv``: mark character -> what to do with it."""
+    out: dict[str, Mark] = {}
+    for line, r in enumerate(read_table("ipa_marks.csv", "codepoint,action,alone,name"), start=2):
+        where = f"spec/ipa_marks.csv:{line}"
+        code = r["codepoint"]
+        if not code.startswith("U+"):
+            raise ValueError(f"{where}: codepoint {code!r} must read U+XXXX")
+        char = chr(int(code[2:], 16))
+        if char in out:
+            raise ValueError(f"{where}: {code} is listed twice")
+        _one_of(r["action"], _ACTIONS, where, empty=False)
+        out[char] = Mark(char, r["action"], r["alone"], r["name"])
+    known = features()
+    for m in out.values():
+        if m.alone not in ("", CONTINUE) and m.alone not in known:
+            raise ValueError(f"spec/ipa_marks.csv: U+{ord(m.char):04X} stands alone for {m.alone!r}, "
+                             "which is no segment of spec/ipa_features.csv")
+        if m.char in known:
+            raise ValueError(f"spec/ipa_marks.csv: {m.char!r} is a segment in spec/ipa_features.csv as well")
+    return out
+
+
+def viseme_of(segment: Segment) -> str:
+    """The viseme of one segment: the first rule of ``ipa_visemes.csv`` it matches."""
+    for rule in rules():
+        if rule.matches(segment):
+            return rule.viseme
+    raise ValueError(f"spec/ipa_visemes.csv: no rule matches {segment.symbol!r} ({segment})")
+
+
+def parse(text: str) -> tuple[list[Segment], list[str]]:
+    """The segments of one phoneme's IPA, and the characters the tables do not know.
+
+    Marks are applied to the segment before them (or taken alone when the phoneme is nothing
+    but marks); a precomposed letter the table lacks is tried as its decomposition (``ä`` =
+    ``a`` + diaeresis); ``ç`` and other letters the table lists are never decomposed.
+    """
+    known, mark_table = features(), marks()
+    out: list[Segment] = []
+    unknown: list[str] = []
+    alone: list[str] = []
+
+    def take(ch: str) -> None:
+        if ch in known:
+            out.append(known[ch])
+            return
+        mark = mark_table.get(ch)
+        if mark is not None:
+            if mark.action == "round" and out:
+                s = out[-1]
+                out[-1] = Segment(s.symbol, s.kind, s.height, s.backness, True, s.place, s.manner, s.voiced)
+            if mark.alone:
+                alone.append(mark.alone)
+            return
+        parts = unicodedata.normalize("NFD", ch)
+        if len(parts) > 1:
+            for part in parts:
+                take(part)
+            return
+        unknown.append(ch)
+
+    for ch in text:
+        take(ch)
+    if not out and alone and not unknown:
+        first = alone[0]
+        return ([] if first == CONTINUE else [known[first]]), []
+    return out, unknown
+
+
+def phoneme_visemes(text: str) -> tuple[list[tuple[str, str]], list[str]]:
+    """(segment symbol, viseme) parts of one phoneme event with equal neighbours merged, and unknown characters.
+
+    An empty name is a pause (``[("", "none")]``); a language switch ``(xx)`` or a lone ``ʲ`` is
+    ``[("", "=")]``: the previous phoneme continues.
+    """
+    bare = text.strip()
+    if not bare:
+        return [("", PAUSE)], []
+    if bare.startswith("(") and bare.endswith(")"):
+        return [("", CONTINUE)], []
+    segments, unknown = parse(bare)
+    if unknown:
+        return [], unknown
+    if not segments:
+        return [("", CONTINUE)], []
+    parts: list[tuple[str, str]] = []
+    for s in segments:
+        v = viseme_of(s)
+        if parts and parts[-1][1] == v:
+            parts[-1] = (parts[-1][0] + s.symbol, v)
+            continue
+        parts.append((s.symbol, v))
+    return parts, []
+
+
+def shares(first: Segment | None, second: Segment | None, n: int) -> list[float]:
+    """How a phoneme's time is split over its ``n`` parts (see the module docstring)."""
+    if n <= 1:
+        return [1.0]
+    lead = FIRST_SHARE
+    if (first is not None and second is not None and first.kind == second.kind == "consonant"
+            and first.manner == "stop" and second.manner == "fricative"):
+        lead = AFFRICATE_STOP_SHARE
+    return [lead] + [(1.0 - lead) / (n - 1)] * (n - 1)
+
+
+def sounding(samples: np.ndarray, rate: int) -> Callable[[Event], bool]:
+    """A test of whether the audio is sound (not silence) over an event (see :data:`SOUNDING_DB`)."""
+    x = np.asarray(samples, dtype=np.float64) / 32768.0
+
+    def test(event: Event) -> bool:
+        a, b = int(round(event.start * rate)), int(round(event.end * rate))
+        if b <= a:
+            return False
+        power = float(np.mean(x[a:b] ** 2))
+        return power > 0 and 10 * np.log10(power) > SOUNDING_DB
+    return test
+
+
+def ipa_visemes(phonemes: list[Event], where: str = "espeak", is_sound: Callable[[Event], bool] | None = None,
+                ) -> list[tuple[str, str, float, float]]:
+    """(label, viseme, start, end) for espeak's IPA phoneme events, diphthongs and affricates split.
+
+    A one-part phoneme is labelled by its IPA; the parts of a split one as ``IPA:segment``. An
+    unnamed event is a pause, or with ``is_sound`` saying it is sound, :data:`UNNAMED`. Raises
+    :class:`TTSError` listing every phoneme with a character the tables lack.
+    """
+    out: list[tuple[str, str, float, float]] = []
+    missing: dict[str, tuple[str, float]] = {}
+    known = features()
+    for event in phonemes:
+        if not event.text.strip() and is_sound is not None and is_sound(event):
+            out.append((UNNAMED, viseme_of(known[UNNAMED]), event.start, event.end))
+            continue
+        parts, unknown = phoneme_visemes(event.text)
+        if unknown:
+            missing.setdefault(event.text, ("".join(dict.fromkeys(unknown)), event.start))
+            continue
+        if len(parts) == 1:
+            viseme = parts[0][1]
+            if viseme == CONTINUE:
+                viseme = out[-1][1] if out else PAUSE
+            out.append((event.text, viseme, event.start, event.end))
+            continue
+        heads = [known.get(p[0][:1]) for p in parts]
+        cut = shares(heads[0], heads[1], len(parts))
+        t = event.start
+        for (symbol, viseme), share in zip(parts, cut):
+            stop = t + share * (event.end - event.start)
+            out.append((f"{event.text}:{symbol}", viseme, t, stop))
+            t = stop
+    if missing:
+        listed = ", ".join(f"{p!r} ({', '.join(repr(c) + f' U+{ord(c):04X}' for c in chars)}; first at {t:.3f} s)"
+                           for p, (chars, t) in missing.items())
+        raise TTSError(f"no viseme for the IPA phonemes {listed}", where=f"{where}: spec/ipa_features.csv",
+                       hint="add a row for each segment (spec/ipa_features.csv) or mark (spec/ipa_marks.csv)")
+    return out
