@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     tri_face = FaceModel.default()
     t0 = time.perf_counter()
     mesh = nurbs_head(tri_face.mesh, tri_face.rig, spacing_mm=args.spacing)
-    print(f"NURBS head: {mesh.n_vertices} vertices ({time.perf_counter() - t0:.2f} s, cached after the first build)")
+    print(f"NURBS head: {mesh.n_vertices} vertices ({time.perf_counter() - t0:.2f} s)")
     nurbs_face = FaceModel(mesh)
     size = args.size
     pts = _head_points(tri_face)

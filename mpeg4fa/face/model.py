@@ -39,25 +39,42 @@ class FaceModel:
     DEFORMERS = deformers.names()
 
     def __init__(self, mesh: HeadMesh, calibration: CalibrationReport | None = None, *,
-                 deformer: str = "fap", deformer_options: Mapping | None = None) -> None:
+                 deformer: str = "fap", deformer_options: Mapping | None = None,
+                 triangle_face: "FaceModel | None" = None) -> None:
         deformers.check(deformer, mesh, dict(deformer_options or {}))
         self.mesh = mesh
         self.calibration = calibration
         self.deformer = deformer
         self.deformer_options = dict(deformer_options or {})
+        self.triangle_face = triangle_face
+        """For a face with a NURBS skull: the same face with its triangle skull (calibrations start there)."""
+
+    @property
+    def skull(self) -> str:
+        """``"nurbs"`` (see :meth:`with_nurbs_skull`) or ``"triangles"``."""
+        return "triangles" if self.triangle_face is None else "nurbs"
 
     def with_deformer(self, deformer: str, **options) -> "FaceModel":
         """The same face posed by another deformer (:mod:`mpeg4fa.face.deformers` lists them), with
         its options (``with_deformer("blocks", regions=("lip_t", "lip_b"))``: elastic lip blocks only)."""
-        return FaceModel(self.mesh, self.calibration, deformer=deformer, deformer_options=options)
+        triangles = self.triangle_face.with_deformer(deformer, **options) if self.triangle_face else None
+        return FaceModel(self.mesh, self.calibration, deformer=deformer, deformer_options=options,
+                         triangle_face=triangles)
 
     def with_nurbs_skull(self) -> "FaceModel":
         """The same face with the skull cap no FAP moves as a trimmed NURBS surface, tessellated and
-        joined to the moving triangles on their own border vertices (:mod:`mpeg4fa.face.nurbs`)."""
+        joined to the moving triangles on their own border vertices (:mod:`mpeg4fa.face.nurbs`).
+
+        A face that has one already is returned as it is; calibrating it calibrates its triangle
+        head and fits the skull again, so the skull is always the NURBS surface of the shape shown.
+        """
         from mpeg4fa.face.nurbs import nurbs_head
 
-        mesh = nurbs_head(self.mesh, self.rig, cache=self.calibration is None)  # a calibrated head: not cached
-        return FaceModel(mesh, self.calibration, deformer=self.deformer, deformer_options=self.deformer_options)
+        if self.triangle_face is not None:
+            return self
+        mesh = nurbs_head(self.mesh, self.rig)
+        return FaceModel(mesh, self.calibration, deformer=self.deformer, deformer_options=self.deformer_options,
+                         triangle_face=self)
 
     @classmethod
     def default(cls, *, auto_install: bool = True) -> "FaceModel":
@@ -103,6 +120,8 @@ class FaceModel:
 
     def calibrate(self, fdp, *, method: str = "dffd", alignment: str = "similarity") -> "FaceModel":
         """A new face fitted to an FDP's feature points (any subset of the 84)."""
+        if self.triangle_face is not None:  # through the triangle head, then the skull fitted again
+            return self.triangle_face.calibrate(fdp, method=method, alignment=alignment).with_nurbs_skull()
         labels, points = tuple(fdp.labels), np.asarray(fdp.points, dtype=np.float64)
         unknown = [label for label in labels if label not in self.mesh.fp_labels]
         if unknown:

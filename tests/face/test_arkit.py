@@ -62,3 +62,19 @@ def test_head_without_units_refuses_arkit(procedural_head):
         FaceModel(procedural_head, deformer="arkit")
     with pytest.raises(FaceError, match="unknown deformer"):
         FaceModel(procedural_head, deformer="blend")
+
+
+def test_sides_hold_on_a_head_moved_in_the_senders_frame(generic_face):
+    """A calibrated head stands anywhere (here 4 mm to the side, turned 5 degrees): midline FAPs still
+    drive whole units, one-sided FAPs their side's."""
+    from mpeg4fa.face.deformers.arkit import _side
+    from mpeg4fa.fdp import Fdp
+
+    fdp = generic_face.to_fdp()
+    a = np.radians(5.0)
+    turn = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    points = np.asarray(fdp.points) @ turn.T + [4.0, 0.0, 0.0]
+    moved = generic_face.calibrate(Fdp.from_points(dict(zip(fdp.labels, points))), method="rbf")
+    assert _side(moved.mesh, 4) is None and _side(moved.mesh, 59) == "left" and _side(moved.mesh, 60) == "right"
+    names = moved.with_deformer("arkit").arkit_rig.unit_names
+    assert "browInnerUp[left]" in names and "mouthFunnel" in names

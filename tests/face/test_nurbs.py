@@ -241,17 +241,6 @@ def test_stream_plays_like_the_triangle_head(built):
         assert np.abs(a.feature_points - b.feature_points).max() <= FIT_BOUNDS["procedural"][1]
 
 
-def test_cache_round_trip(procedural_face, tmp_path, monkeypatch):
-    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
-    mesh = procedural_face.mesh
-    first = nurbs.nurbs_head(mesh, procedural_face.rig)
-    assert nurbs.cache_path(mesh).is_file()
-    again = nurbs.nurbs_head(mesh)  # from the cache: no rig needed
-    assert np.array_equal(first.vertices, again.vertices)
-    assert np.array_equal(first.triangles["skin"], again.triangles["skin"])
-    assert np.array_equal(first.fp_vertex, again.fp_vertex)
-
-
 def test_a_moving_island_is_a_clockwise_hole(procedural_face):
     """A vertex inside the cap that moves (here: marked so) leaves its triangles in place, inside a
     hole trim wound clockwise, and the seam round it is closed too."""
@@ -274,15 +263,18 @@ def test_a_moving_island_is_a_clockwise_hole(procedural_face):
     assert np.array_equal(head.fp("11.6"), mesh.fp("11.6"))
 
 
-def test_an_asymmetric_calibrated_head(procedural_face):
+@pytest.mark.parametrize("seed", [1, 2, 5])
+def test_an_asymmetric_calibrated_head(procedural_face, seed):
     """A head calibrated to an asymmetric FDP is no mirror image of itself: the surface is fitted as
-    it is (not symmetrised), and the seam is still closed and the silhouette still within tolerance."""
+    it is (not symmetrised), the seam is still closed, the silhouette still within tolerance, and
+    the mirror table still pairs every vertex (seed 2 once cut the region asymmetrically)."""
     from mpeg4fa.fdp import Fdp
 
     fdp = procedural_face.to_fdp()
     points = np.array(fdp.points)
     centre = points.mean(axis=0)
-    points = centre + (points - centre) * [1.06, 0.97, 1.02] + np.random.default_rng(5).normal(0.0, 0.8, points.shape)
+    points = (centre + (points - centre) * [1.06, 0.97, 1.02]
+              + np.random.default_rng(seed).normal(0.0, 0.8, points.shape))
     face = procedural_face.calibrate(Fdp.from_points(dict(zip(fdp.labels, points))))
     assert not nurbs.is_symmetric(face.mesh)
     parts = nurbs.fit_static_parts(face.mesh, face.rig)
@@ -292,6 +284,7 @@ def test_an_asymmetric_calibrated_head(procedural_face):
     head = nurbs.build_nurbs_head(face.mesh, parts)
     counts = _edge_counts(head.triangles["skin"].astype(np.int64))
     assert max(counts.values()) == 1
+    assert head.mirror.min() >= 0 and head.mirror.max() < head.n_vertices
     old = head.info["old_index"]
     assert all(old[a] >= 0 and old[b] >= 0 for a, b in counts if (b, a) not in counts)
     for d in nurbs.compare_silhouettes(face.mesh, head, mm_per_pixel=0.4, views={"side": (90.0, 0.0)}):
@@ -308,3 +301,17 @@ def test_texture_coordinates_are_continuous(built):
     pairs = np.unique(np.c_[corners, uv][new[corners]], axis=0)
     per_vertex = np.bincount(pairs[:, 0].astype(np.int64))
     assert (per_vertex > 1).sum() <= 0.1 * new.sum()
+
+
+def test_face_model_gives_the_nurbs_skull(procedural_face):
+    """``FaceModel.with_nurbs_skull`` (once: a second call keeps it); a NURBS face is calibrated
+    through its triangle head and gets its skull fitted again, and keeps its deformer."""
+    smooth = procedural_face.with_nurbs_skull()
+    assert smooth.skull == "nurbs" and smooth.mesh.n_vertices != procedural_face.mesh.n_vertices
+    assert smooth.with_nurbs_skull() is smooth
+    fdp = procedural_face.to_fdp()
+    again = smooth.calibrate(fdp, method="rbf")
+    assert again.skull == "nurbs" and again.mesh.n_vertices == smooth.mesh.n_vertices
+    assert np.abs(again.mesh.feature_points() - smooth.mesh.feature_points()).max() < 1e-6
+    blocks = smooth.with_deformer("blocks", regions=("lip_t",))
+    assert blocks.skull == "nurbs" and blocks.calibrate(fdp, method="rbf").deformer_options == {"regions": ("lip_t",)}

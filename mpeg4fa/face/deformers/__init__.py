@@ -78,4 +78,6 @@ def check(name: str, mesh: HeadMesh, options: dict) -> DeformerKind:
     if unknown:
         raise FaceError(f"the {name} deformer has no option {unknown[0]!r}",
                         hint=f"its options: {', '.join(k.options)}" if k.options else "it takes none")
+    if options:  # their values too, by the deformer's own rule, before any set-up is paid for
+        importlib.import_module(f"{__name__}.{k.module}").check_options(**options)
     return k

@@ -325,9 +325,12 @@ class BlocksDeformer:
         return out
 
 
-def blocks_deformer(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) -> BlocksDeformer:
-    """The block deformer with only the blocks ``regions`` (names of ``data/blocks.csv``) active;
-    elsewhere the face moves as with the feature-point deformer (``regions=()``: exactly it)."""
+def check_options(regions: Sequence[str] | str = REGIONS) -> tuple[str, ...]:
+    """``regions`` as a tuple of known, compatible block names (one name may be given as a string)."""
+    if isinstance(regions, str):
+        regions = (regions,)
+    if not isinstance(regions, (tuple, list)) or not all(isinstance(r, str) for r in regions):
+        raise FaceError(f"regions={regions!r} is not a list of block names", hint=f"names from {', '.join(REGIONS)}")
     specs = block_specs()
     unknown = [r for r in regions if r not in specs]
     if unknown:
@@ -336,6 +339,14 @@ def blocks_deformer(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) 
         clash = [o for o in specs[r].instead_of if o in regions]
         if clash:
             raise FaceError(f"blocks {r!r} and {clash[0]!r} cover the same skin", hint="choose one of them")
+    return tuple(regions)
+
+
+def blocks_deformer(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) -> BlocksDeformer:
+    """The block deformer with only the blocks ``regions`` (names of ``data/blocks.csv``) active;
+    elsewhere the face moves as with the feature-point deformer (``regions=()``: exactly it)."""
+    regions = check_options(regions)
+    specs = block_specs()
     graph = edge_graph(mesh.vertices, mesh.triangles["skin"])
     margins = np.concatenate([shortest_loop(mesh, loop, graph) for loop in LID_MARGIN_LOOPS])
     blocks = tuple(build_block(mesh, rig, specs[r], graph, margins) for r in dict.fromkeys(regions))
@@ -347,4 +358,4 @@ def blocks_deformer(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) 
 
 def build(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) -> BlocksDeformer:
     """The deformer as the registry builds it: the blocks ``regions`` (all of :data:`REGIONS` by default)."""
-    return blocks_deformer(mesh, rig, tuple(regions))
+    return blocks_deformer(mesh, rig, regions)
