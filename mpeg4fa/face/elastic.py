@@ -286,6 +286,8 @@ def _digest(mesh: HeadMesh) -> bytes:
         h.update(part.encode())
         h.update(np.ascontiguousarray(mesh.triangles[part]).tobytes())
     h.update(repr(sorted(mesh.part_ranges.items())).encode())
+    h.update(np.ascontiguousarray(mesh.fp_vertex).tobytes())  # the head height the stiffness scales by
+    h.update(repr((MEMBRANE, FOUNDATION)).encode())
     return h.digest()
 
 
