@@ -8,6 +8,9 @@ table of segments and one ordered list of rules cover them all. The data live in
 * ``ipa_features.csv``: one row per IPA base segment (facts of the IPA chart);
 * ``ipa_visemes.csv``: our rules, tried in order, first match wins (an empty cell matches
   anything, ``;`` separates alternatives);
+* ``ipa_aliases.csv``: characters some voices send for IPA letters (espeak's own ASCII
+  mnemonics where a voice defines no IPA name, ``ʦ`` digraphs, Greek look-alikes) and the IPA
+  they stand for;
 * ``ipa_marks.csv``: diacritics, length, stress and tone marks: dropped, or ``round`` (the
   segment they follow counts as rounded: ``ɯᵝ``); ``alone`` is what a mark stands for when
   espeak sends it as a phoneme of its own (``ʲ`` after a Russian consonant: ``=``, the
@@ -20,8 +23,10 @@ visemes next to each other merge; the rest split the phoneme's time: the first p
 :data:`AFFRICATE_STOP_SHARE` (a short closure release; the fricative carries the sound);
 the remaining parts share the rest equally. An empty event is a pause (espeak's ``_``) when
 the audio is silent there; espeak also leaves a few short sounding phonemes without an IPA
-name (the Russian epenthetic ``@-`` between p and r): those are taken as a schwa
-(:data:`UNNAMED`). A parenthesised event (``(en)``) is a language switch inside the text (the
+name (English ``;`` after ``I2``, the Russian epenthetic ``@-`` between p and r): there the
+previous phoneme continues, as ``spec/english_visemes.csv`` has it for ``;``. Inside one
+phoneme an ``ɹ`` or ``ɻ`` after a vowel is that vowel's r-colouring (espeak writes ``ɑːɹ``,
+``ɛɹ`` for r-coloured vowels), dropped like the rhotic hook ``˞``. A parenthesised event (``(en)``) is a language switch inside the text (the
 previous phoneme continues). A segment or mark the tables do not know fails loudly, naming it and when it
 was spoken: a silently dropped phoneme is a mouth that stops moving.
 
@@ -45,15 +50,15 @@ from mpeg4fa.speech.tts.base import Event
 
 PAUSE = "none"
 CONTINUE = "="
-UNNAMED = "ə"
-"""What a sounding phoneme espeak gives no IPA name is taken for: a neutral vowel."""
 SOUNDING_DB = -40.0
 """Mean level (dBFS) above which an unnamed phoneme is sound, not a pause."""
-FIRST_SHARE = 0.6
+FIRST_SHARE = 0.7
 """The first part of a split phoneme (a diphthong's nucleus, a vowel before its r-colouring)."""
-AFFRICATE_STOP_SHARE = 0.4
+AFFRICATE_STOP_SHARE = 0.3
 """The stop of an affricate (t of tʃ, ts): the fricative that follows carries the sound."""
 
+RHOTIC = frozenset("ɹɻ")
+"""Approximants that, after a vowel in the same phoneme, are its r-colouring."""
 KINDS = ("vowel", "consonant")
 HEIGHTS = ("close", "near-close", "close-mid", "mid", "open-mid", "near-open", "open")
 BACKNESS = ("front", "central", "back")
@@ -165,6 +170,23 @@ def rules() -> tuple[Rule, ...]:
 
 
 @lru_cache(maxsize=None)
+def aliases() -> dict[str, str]:
+    """``spec/ipa_aliases.csv``: a character some voice sends -> the IPA it stands for."""
+    out: dict[str, str] = {}
+    known = features()
+    for line, r in enumerate(read_table("ipa_aliases.csv", "char,ipa,note"), start=2):
+        where = f"spec/ipa_aliases.csv:{line}"
+        char, ipa = r["char"], r["ipa"]
+        if len(char) != 1 or char in out or char in known:
+            raise ValueError(f"{where}: {char!r} must be one character, listed once, and no segment of "
+                             "spec/ipa_features.csv")
+        if not ipa or any(c not in known for c in ipa):
+            raise ValueError(f"{where}: {ipa!r} must be segments of spec/ipa_features.csv")
+        out[char] = ipa
+    return out
+
+
+@lru_cache(maxsize=None)
 def marks() -> dict[str, Mark]:
     """``spec/ipa_marks.csv``: mark character -> what to do with it."""
     out: dict[str, Mark] = {}
@@ -203,7 +225,7 @@ def parse(text: str) -> tuple[list[Segment], list[str]]:
     but marks); a precomposed letter the table lacks is tried as its decomposition (``ä`` =
     ``a`` + diaeresis); ``ç`` and other letters the table lists are never decomposed.
     """
-    known, mark_table = features(), marks()
+    known, mark_table, alias = features(), marks(), aliases()
     out: list[Segment] = []
     unknown: list[str] = []
     alone: list[str] = []
@@ -211,6 +233,10 @@ def parse(text: str) -> tuple[list[Segment], list[str]]:
     def take(ch: str) -> None:
         if ch in known:
             out.append(known[ch])
+            return
+        if ch in alias:
+            for part in alias[ch]:
+                take(part)
             return
         mark = mark_table.get(ch)
         if mark is not None:
@@ -251,6 +277,8 @@ def phoneme_visemes(text: str) -> tuple[list[tuple[str, str]], list[str]]:
         return [], unknown
     if not segments:
         return [("", CONTINUE)], []
+    segments = [s for k, s in enumerate(segments)
+                if not (k > 0 and s.symbol in RHOTIC and segments[k - 1].kind == "vowel")]
     parts: list[tuple[str, str]] = []
     for s in segments:
         v = viseme_of(s)
@@ -290,7 +318,7 @@ def ipa_visemes(phonemes: list[Event], where: str = "espeak", is_sound: Callable
     """(label, viseme, start, end) for espeak's IPA phoneme events, diphthongs and affricates split.
 
     A one-part phoneme is labelled by its IPA; the parts of a split one as ``IPA:segment``. An
-    unnamed event is a pause, or with ``is_sound`` saying it is sound, :data:`UNNAMED`. Raises
+    unnamed event is a pause, or with ``is_sound`` saying it is sound, the previous phoneme continued. Raises
     :class:`TTSError` listing every phoneme with a character the tables lack.
     """
     out: list[tuple[str, str, float, float]] = []
@@ -298,7 +326,7 @@ def ipa_visemes(phonemes: list[Event], where: str = "espeak", is_sound: Callable
     known = features()
     for event in phonemes:
         if not event.text.strip() and is_sound is not None and is_sound(event):
-            out.append((UNNAMED, viseme_of(known[UNNAMED]), event.start, event.end))
+            out.append((event.text, out[-1][1] if out else PAUSE, event.start, event.end))
             continue
         parts, unknown = phoneme_visemes(event.text)
         if unknown:
@@ -323,3 +351,25 @@ def ipa_visemes(phonemes: list[Event], where: str = "espeak", is_sound: Callable
         raise TTSError(f"no viseme for the IPA phonemes {listed}", where=f"{where}: spec/ipa_features.csv",
                        hint="add a row for each segment (spec/ipa_features.csv) or mark (spec/ipa_marks.csv)")
     return out
+
+
+def frame_agreement(reference, other, duration: float, fps: float = 25.0) -> tuple[float, int]:
+    """Share of frames where two timings (anything with ``viseme``, ``start``, ``end``) show the same viseme.
+
+    Frames are sampled at their centres over ``duration``; frames where both show a pause are left
+    out (they would agree trivially). Returns (share, frames compared). Used to hold the IPA route
+    to the English table (the reference) on English speech.
+    """
+    times = (np.arange(int(np.floor(duration * fps))) + 0.5) / fps
+
+    def at(timings) -> list[str]:
+        shown = [PAUSE] * len(times)
+        for t in timings:
+            for k in np.flatnonzero((times >= t.start) & (times < t.end)):
+                shown[k] = t.viseme
+        return shown
+
+    pairs = [(a, b) for a, b in zip(at(reference), at(other)) if not (a == PAUSE and b == PAUSE)]
+    if not pairs:
+        return float("nan"), 0
+    return sum(a == b for a, b in pairs) / len(pairs), len(pairs)

@@ -246,6 +246,16 @@ def _set_voice_by_language(lib, language: str) -> bool:
     return lib.espeak_SetVoiceByProperties(ctypes.byref(spec)) == EE_OK and _voice_is(lib, language)
 
 
+def _set_voice_by_file(lib, language: str) -> bool:
+    """Last resort: the file of a listed voice that speaks ``language`` (codes espeak's own search misses,
+    like ``chr-US-Qaaa-x-west``)."""
+    for v in voices():
+        if language.lower() in (code.lower() for code in v.languages) and v.identifier:
+            if lib.espeak_SetVoiceByName(v.identifier.encode("utf-8")) == EE_OK:
+                return True
+    return False
+
+
 def _voice_is(lib, language: str) -> bool:
     """espeak falls back to a default voice rather than failing: check the language it took."""
     current = lib.espeak_GetCurrentVoice()
@@ -417,7 +427,8 @@ class EspeakEngine:
 
         with _lock:
             lib = _load()
-            if lib.espeak_SetVoiceByName(voice.encode("utf-8")) != EE_OK and not _set_voice_by_language(lib, voice):
+            if (lib.espeak_SetVoiceByName(voice.encode("utf-8")) != EE_OK and not _set_voice_by_language(lib, voice)
+                    and not _set_voice_by_file(lib, voice)):
                 raise TTSError(f"unknown voice {voice!r}", where=WHERE, hint=_voice_hint(voice))
             lib.espeak_SetParameter(espeakRATE, int(wpm), 0)
             col = _collector = _Collector()
