@@ -108,6 +108,13 @@ class HeadMesh:
         """Head height (top of skull to bottom of chin, 11.4.y - 2.1.y): the scale for tolerances."""
         return float(self.fp("11.4")[1] - self.fp("2.1")[1])
 
+    def lateral(self) -> np.ndarray:
+        """Each vertex's signed distance (mm) from the midline, + on the face's left (+x): half its x
+        offset from its mirror image, so it holds for a calibrated head standing anywhere in the
+        sender's frame (shifted or turned), where x = 0 is no longer the midline."""
+        x = self.vertices[:, 0]
+        return 0.5 * (x - x[self.mirror])
+
     def with_vertices(self, vertices: np.ndarray, **info) -> "HeadMesh":
         """A copy with other vertex positions (a calibrated or posed head)."""
         if vertices.shape != self.vertices.shape:

@@ -193,7 +193,7 @@ def muscle_basis(mesh: HeadMesh, muscles: list[Muscle], fapu: Fapu) -> np.ndarra
     clear = 1.0 - smooth_down(to_margin / LID_CLEAR_MM)
     clear_lid = 1.0 - smooth_down(to_margin / LID_HEIGHT_MM)
     basis = np.zeros((len(local), 3, len(muscles)))
-    x = local[:, 0] - mesh.fp("2.1")[0]
+    x = mesh.lateral()[skin]
     for j, m in enumerate(muscles):
         factor, direction = waters_factor(local, m.attachment, m.insertion, m.omega, m.rs, m.rf)
         factor = factor * surface[j] * (clear_lid if m.spec.driven_by == "lid" else clear)

@@ -63,16 +63,9 @@ _FLIP_X = np.array([-1.0, 1.0, 1.0])
 _SIDES = {"Left": "Right", "Right": "Left"}
 
 
-def _lateral(mesh: HeadMesh) -> np.ndarray:
-    """Each vertex's signed distance (mm) from the midline, + on the face's left: half its x offset from its
-    mirror image, so it holds on a calibrated head standing anywhere in the sender's frame."""
-    x = mesh.vertices[:, 0]
-    return 0.5 * (x - x[mesh.mirror])
-
-
 def _side(mesh: HeadMesh, fap: int) -> str | None:
     """``"left"`` (the face's left, +x) or ``"right"`` for a FAP whose point is off the midline, else None."""
-    d = _lateral(mesh)[mesh.fp_vertex[mesh.fp_index(FAPS[fap - 1].feature_point[0])]]
+    d = mesh.lateral()[mesh.fp_vertex[mesh.fp_index(FAPS[fap - 1].feature_point[0])]]
     return None if abs(d) < 1.0 else ("left" if d > 0 else "right")
 
 
@@ -108,7 +101,7 @@ def build_arkit_rig(mesh: HeadMesh, rig: Rig) -> ArkitRig:
     skin = mesh.part("skin")
     n_skin = skin.stop - skin.start
     rows = _mapping()
-    x = _lateral(mesh)
+    x = mesh.lateral()
     side_of = {int(r["fap"]): _side(mesh, int(r["fap"])) for r in rows}
     names = tuple(dict.fromkeys(_driven(r["unit"], side_of[int(r["fap"])]) for r in rows))
     dense = {name: _shape(mesh, name, x) for name in names}

@@ -120,7 +120,7 @@ def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
     # the correction of a midline point (11.1, 9.12...) spreads over both sides: a paired muscle's
     # field, correction included, ends where its basis does (CROSS_ES across the midline); it stays
     # 0 at every feature point, so the points stay exact
-    x_skin = mesh.vertices[skin, 0] - mesh.fp("2.1")[0]
+    x_skin = mesh.lateral()[skin]
     reach = CROSS_ES * rig.fapu.ES0
     for j, mu in enumerate(muscles):
         if mu.side in ("l", "r"):
@@ -133,7 +133,7 @@ def build_muscle_rig(mesh: HeadMesh, rig: Rig) -> MuscleRig:
     a = b_fp[:, :, solved].reshape(-1, len(solved))
     serves = (np.linalg.norm(b_fp[:, :, solved], axis=1) > SERVES_MM).T.astype(np.float64)
     # a paired muscle serves its own side and the midline only (a left FAP contracts no right muscle)
-    x = (mesh.vertices[fp_v[anchors], 0] - mesh.fp("2.1")[0]) / rig.fapu.ES0
+    x = mesh.lateral()[fp_v[anchors]] / rig.fapu.ES0
     for row, j in enumerate(solved):
         side = {"l": 1.0, "r": -1.0}.get(muscles[j].side)
         if side is not None:
