@@ -17,7 +17,12 @@ A script run on demand, not a test::
 3. size of that long speech: bits per frame and kbit/s at the high level (FAP 1 + FAP 2; Chinese
    visemes go out as low-level FAPs, see mpeg4fa.speech.encoder), the low level (every moving FAP
    3-68) and the low level restricted to the lip, jaw and brow groups (2, 4, 8), each with
-   ``TEXT_CODING`` and with the codec's plain defaults.
+   ``TEXT_CODING`` and with the codec's plain defaults;
+4. per language (issue 16): two sentences in each of the espeak-ng languages of ``LANGUAGES`` (the
+   IPA route: visemes from articulatory features, ``spec/ipa_*.csv``), English and Mandarin on their
+   tables for comparison, each encoded on its own at the high level: bits per frame (mean over the
+   sentences and pooled), and for English the share of frames where the IPA route shows the viseme
+   the English table does (the reference; ``mpeg4fa.speech.ipa.english_agreement``, on ``ENGLISH``).
 
 Targets: English high level <= 17 bits/frame on average over the sentences (issue 14; issue 5's
 target was <= 30 on the long speech); low-level lip, jaw and brow FAPs <= 60 bits/frame
@@ -52,6 +57,8 @@ TARGET_SENTENCES = 17.0
 TARGET_HIGH = 30.0
 """English high level on the long speech (issue 5): kept as a note, it is no longer the goal."""
 TARGET_LIPS = 60.0
+TARGET_AGREEMENT = 0.90
+"""English through the IPA route vs the English table: share of frames with the same viseme (issue 16)."""
 LIP_JAW_BROW_GROUPS = (2, 4, 8)
 
 ENGLISH = [
@@ -92,6 +99,75 @@ CHINESE = [
     "(joy, 40, 0.5)晚上音乐会的门票在服务台还可以买到。",
     "请随身携带您的行李，祝您旅途愉快。",
 ]
+
+
+LANGUAGES = {
+    "en": ("English (table)", ENGLISH[:2]),
+    "zh": ("Mandarin (pinyin table)", CHINESE[:2]),
+    "es": ("Spanish", ["El perro de mi vecino come pan y bebe agua todas las mañanas.",
+                       "(joy, 30, 0.5) Mañana vamos a la playa con toda la familia."]),
+    "fr": ("French", ["Le petit garçon a vu une lune rouge au-dessus du pont.",
+                      "(surprise, 35, 0.3) Nous partons demain matin pour Paris!"]),
+    "de": ("German", ["Der kleine Junge möchte heute über die Brücke gehen.",
+                      "(joy, 30, 0.5) Wir fahren morgen früh mit dem Zug nach Berlin."]),
+    "it": ("Italian", ["Il ragazzo mangia una buona pizza con gli amici.",
+                       "(joy, 30, 0.5) Domani andiamo al mare con tutta la famiglia."]),
+    "pt": ("Portuguese", ["O menino comeu pão com manteiga e bebeu um copo de leite.",
+                          "(joy, 30, 0.5) Amanhã vamos à praia com toda a família."]),
+    "ru": ("Russian", ["Мальчик пошёл в школу утром и купил хлеб.",
+                       "(joy, 30, 0.5) Завтра мы поедем на море всей семьёй."]),
+    "ja": ("Japanese (kana)", ["こんにちは、きょうはとてもいいてんきですね。",
+                               "(joy, 30, 0.5) あしたはかぞくでうみにいきます。"]),
+    "hi": ("Hindi", ["मेरा नाम राम है और मैं दिल्ली में रहता हूँ।",
+                     "(joy, 30, 0.5) कल हम पूरे परिवार के साथ समुद्र जाएंगे।"]),
+    "ar": ("Arabic", ["ذهب الولد إلى المدرسة في الصباح.",
+                      "(joy, 30, 0.5) غدا نذهب إلى البحر مع العائلة."]),
+    "yue": ("Cantonese", ["我哋今日去飲茶，好開心。", "(joy, 30, 0.5) 聽日我哋一家人去海邊。"]),
+}
+"""Language code -> (label, sentences) for the per-language table (``en`` and ``zh``: the reference tables)."""
+
+
+def bench_languages(engine_name: str) -> list[dict]:
+    """Each language's sentences encoded on their own at the high level: bits per frame; English also
+    through the IPA route, against the English table frame by frame."""
+    from mpeg4fa.speech.ipa import english_agreement
+    from mpeg4fa.speech.markup import parse_markup
+
+    engine = make_engine(engine_name)
+    out = []
+    for code, (label, sentences) in LANGUAGES.items():
+        rows = []
+        for text in sentences:
+            enc = encode_text(text, engine=engine, lang=code, level="high", fps=FPS)
+            data = encode(enc.stream, enc.coding())
+            rows.append({"text": text, "audio_s": enc.speech.duration, "frames": len(enc.stream),
+                         "bits": len(data) * 8, "bits_per_frame": len(data) * 8 / len(enc.stream)})
+        entry = {"code": code, "language": label, "sentences": rows,
+                 "mean": float(np.mean([r["bits_per_frame"] for r in rows])),
+                 "pooled": sum(r["bits"] for r in rows) / sum(r["frames"] for r in rows),
+                 "audio_s": sum(r["audio_s"] for r in rows)}
+        if code == "en" and getattr(engine, "speaks_ipa", False):
+            share, frames = english_agreement(engine, [parse_markup(text).text for text in ENGLISH], FPS)
+            entry["ipa_agreement"] = {"share": share, "frames": frames}
+        out.append(entry)
+    return out
+
+
+def _language_table(results: list[dict]) -> bool:
+    """The per-language table; True when the IPA route agrees with the English table on >= 90 % of frames."""
+    print("| language | code | sentences | audio s | mean bits/frame | pooled | note |")
+    print("|---|---|---|---|---|---|---|")
+    ok = True
+    for r in results:
+        note = ""
+        if "ipa_agreement" in r:
+            share = r["ipa_agreement"]["share"]
+            ok = share >= TARGET_AGREEMENT
+            note = (f"IPA route = English table on {share:.1%} of {r['ipa_agreement']['frames']} frames "
+                    f"(>= {TARGET_AGREEMENT:.0%} {'PASS' if ok else 'FAIL'})")
+        print(f"| {r['language']} | {r['code']} | {len(r['sentences'])} | {r['audio_s']:.1f} | {r['mean']:.1f} | "
+              f"{r['pooled']:.1f} | {note} |")
+    return ok
 
 
 def long_text(sentences: list[str], seconds: float, engine) -> str:
@@ -289,6 +365,7 @@ def main(argv: list[str] | None = None) -> int:
 
     results = [bench_language("English", ENGLISH, args.seconds, args.engine),
                bench_language("Chinese", CHINESE, args.seconds, args.engine)]
+    languages = bench_languages(args.engine) if args.engine == "espeak" else []
     print(f"mpeg4fa {MPEG4FA_VERSION}, {platform.python_implementation()} {platform.python_version()}, "
           f"{platform.machine()}, engine {args.engine}, {FPS:g} fps, coding for text: {TEXT_CODING}\n")
     ok = _sentence_tables(sentences, before)
@@ -325,9 +402,12 @@ def main(argv: list[str] | None = None) -> int:
             e = r[level]["max_error"]
             mm = f"{e['max'] * mns:.2f} (MNS0/1024 = {mns:.4f} mm)" if mns else "n/a (no default head)"
             print(f"| {r['language']} | {level} | {r[level]['mask_types']} | {e['max']:.0f} | {e['mean']:.2f} | {mm} |")
+    if languages:
+        print("\nPer language (high level, each sentence on its own; visemes from IPA features except en, zh):\n")
+        ok &= _language_table(languages)
     args.json.write_text(json.dumps({"version": MPEG4FA_VERSION, "engine": args.engine, "fps": FPS,
                                      "text_coding": TEXT_CODING, "sentences": sentences, "results": results,
-                                     "targets_met": ok},
+                                     "languages": languages, "targets_met": ok},
                                     indent=1))
     print(f"\nwrote {args.json}")
     return 0

@@ -373,3 +373,38 @@ def frame_agreement(reference, other, duration: float, fps: float = 25.0) -> tup
     if not pairs:
         return float("nan"), 0
     return sum(a == b for a, b in pairs) / len(pairs), len(pairs)
+
+
+@dataclass(frozen=True)
+class _Span:
+    viseme: str
+    start: float
+    end: float
+
+
+def english_agreement(engine, texts: list[str], fps: float = 25.0, voice: str = "en-us") -> tuple[float, int]:
+    """How often the IPA route shows the English table's viseme on English speech: (share of frames, frames).
+
+    Each text is spoken twice, once with espeak's mnemonics (mapped by ``spec/english_visemes.csv``,
+    the reference) and once in IPA (mapped here). espeak's timing wanders by up to ~10 ms from one
+    synthesis to the next, which alone would flip frames, so the IPA events are put on the mnemonic
+    run's times (the two runs give the same phonemes, one for one): what is compared is the mapping
+    and the splitting, frame by frame (:func:`frame_agreement`).
+    """
+    from mpeg4fa.speech.visemes import english_visemes
+
+    agree = frames = 0.0
+    for text in texts:
+        reference = engine.synthesize(text, voice=voice)
+        named = engine.synthesize(text, voice=voice, ipa=True)
+        ref_events, ipa_events = list(reference.phonemes()), list(named.phonemes())
+        if len(ref_events) != len(ipa_events):
+            raise TTSError(f"the two runs of {text[:40]!r} gave {len(ref_events)} and {len(ipa_events)} phonemes",
+                           where=engine.name, hint="this comparison needs one phoneme list")
+        retimed = [Event("phoneme", r.start, r.end, i.text, r.position) for r, i in zip(ref_events, ipa_events)]
+        table = [_Span(v, e.start, e.end) for v, e in english_visemes(ref_events)]
+        route = [_Span(v, a, b) for _, v, a, b in
+                 ipa_visemes(retimed, where=engine.name, is_sound=sounding(reference.samples, reference.rate))]
+        share, n = frame_agreement(table, route, reference.duration, fps)
+        agree, frames = agree + share * n, frames + n
+    return (agree / frames if frames else float("nan")), int(frames)
