@@ -20,7 +20,8 @@ def register(commands: Commands) -> None:
     p = commands.add_parser(
         "say", help="speak tagged text and render the face saying it (MP4 with audio)",
         description="Speak TEXT with espeak-ng (phonemes with sample-exact times), turn phonemes into "
-                    "visemes (English: the 14 MPEG-4 visemes; Chinese: 15 visemes from pinyin) and tags "
+                    "visemes (English: the 14 MPEG-4 visemes; Chinese: 15 visemes from pinyin; any other "
+                    "espeak-ng language, --lang CODE: the 14 MPEG-4 visemes from IPA features) and tags "
                     "like (joy, 40, 0.5) into expressions with Hermite transitions, encode the FAPs as an "
                     "FBA stream, decode it again and render the default head with the speech. TEXT may be "
                     "a text file, '-' (read standard input) or @FILE (read a UTF-8 text file); a TEXT that "
@@ -28,6 +29,7 @@ def register(commands: Commands) -> None:
                     "readable file, unless --text says it is text.",
         epilog='examples:\n  mpeg4fa say "(joy, 40, 0.5) Hello there! (sadness, 30, 1) Goodbye." -o hello.mp4\n'
                '  mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o nihao.mp4 --keep\n'
+               '  mpeg4fa say "Buenos días, ¿cómo estás?" --lang es -o hola.mp4\n'
                '  mpeg4fa say script.txt -o script.mp4',
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("text", help="the text with optional (expression, intensity 0-63, seconds) tags; a text file, "

@@ -1,5 +1,6 @@
 """Phonemes to visemes: English (espeak-ng's phoneme mnemonics -> the 14 MPEG-4 visemes) and
-Mandarin (pinyin syllables -> Chinese visemes, see :mod:`.mandarin`).
+Mandarin (pinyin syllables -> Chinese visemes, see :mod:`.mandarin`); every other language goes
+through IPA and articulatory features (:mod:`.ipa`), held to this English table on English speech.
 
 The English table is data (``spec/english_visemes.csv``). A pause (a mnemonic starting
 with ``_``) is ``none``; a ``=`` row means "the previous phoneme continues" (espeak's
