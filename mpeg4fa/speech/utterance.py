@@ -80,11 +80,6 @@ class Utterance:
         return out
 
 
-def _runs(text: str) -> list[tuple[str, int, int]]:
-    """(kind, start, end) runs of ``text``: 'zh' for hanzi and CJK punctuation, else 'en'."""
-    return runs(text, "auto", False)
-
-
 def speaks_ipa(engine: Engine) -> bool:
     """Whether ``engine`` names phonemes in IPA on request (``synthesize(..., ipa=True)``)."""
     return bool(getattr(engine, "speaks_ipa", False))
@@ -108,9 +103,10 @@ def check_language(lang: str, engine: Engine) -> None:
 
 def _route(kind: str, route: str) -> str:
     """How a run is turned into visemes: the English or the Mandarin table, or IPA features."""
-    if kind == "zh":
+    code = kind.lower()
+    if code == "zh":
         return "zh"
-    if (kind == "en" or kind.startswith("en-")) and route == "reference":
+    if (code == "en" or code.startswith("en-")) and route == "reference":
         return "en"
     return "ipa"
 
@@ -310,7 +306,8 @@ def speak(markup: Markup, engine: Engine, *, lang: str = "auto", voice: str | No
                            hint="use --engine espeak")
         ipa_runs += 1
         parts.append(_speak_ipa(engine, text, start, end, marks, said, rate))
-    label = "+".join(dict.fromkeys(voices)) if ipa_runs else (voice or ENGLISH_VOICE)
+    # the voices used; for English/Mandarin text under auto, en or zh, the English voice as before
+    label = "+".join(dict.fromkeys(voices)) if ipa_runs or lang not in LANGS else (voice or ENGLISH_VOICE)
     speech, timings, times = _join(parts, engine.name, label)
     cues = tuple(ExpressionCue(tag.expression, tag.intensity, tag.seconds, times[names[i]])
                  for i, tag in enumerate(markup.tags))

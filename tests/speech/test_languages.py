@@ -131,6 +131,13 @@ def test_an_explicit_language_code_takes_the_whole_text():
     assert "es" in language_codes() and "yue" in language_codes()
 
 
+def test_english_codes_keep_the_english_table():
+    for code in ("en-gb", "EN-GB"):
+        enc = encode_text("Hello there, how are you?", lang=code)
+        assert enc.speech.voice == code
+        assert "oU" in {t.phoneme for t in enc.utterance.timings} or "@U" in {t.phoneme for t in enc.utterance.timings}
+
+
 def test_unknown_languages_and_engines_without_ipa_are_refused():
     with pytest.raises(TTSError, match="unknown language 'xx'") as info:
         encode_text("Hola", lang="xx")
