@@ -17,18 +17,20 @@ table of segments and one ordered list of rules cover them all. The data live in
   previous phoneme continues).
 
 An espeak phoneme event may hold several segments: a diphthong (``aɪ``), an affricate
-(``tʃ``), a long vowel spelt twice (``aa``), a vowel and its r-colouring (``ɛɹ``). Equal
-visemes next to each other merge; the rest split the phoneme's time: the first part takes
-:data:`FIRST_SHARE` (a diphthong's nucleus), except the stop of an affricate, which takes
-:data:`AFFRICATE_STOP_SHARE` (a short closure release; the fricative carries the sound);
-the remaining parts share the rest equally. An empty event is a pause (espeak's ``_``) when
-the audio is silent there; espeak also leaves a few short sounding phonemes without an IPA
-name (English ``;`` after ``I2``, the Russian epenthetic ``@-`` between p and r): there the
-previous phoneme continues, as ``spec/english_visemes.csv`` has it for ``;``. Inside one
+(``tʃ``), a long vowel spelt twice (``aa``). Equal visemes next to each other merge; the rest
+split the phoneme's time: the first part takes :data:`FIRST_SHARE` (a diphthong's nucleus),
+except the stop of an affricate, which takes :data:`AFFRICATE_STOP_SHARE` (a short release;
+the fricative carries the sound); the remaining parts share the rest equally. Inside one
 phoneme an ``ɹ`` or ``ɻ`` after a vowel is that vowel's r-colouring (espeak writes ``ɑːɹ``,
-``ɛɹ`` for r-coloured vowels), dropped like the rhotic hook ``˞``. A parenthesised event (``(en)``) is a language switch inside the text (the
-previous phoneme continues). A segment or mark the tables do not know fails loudly, naming it and when it
-was spoken: a silently dropped phoneme is a mouth that stops moving.
+``ɛɹ`` for r-coloured vowels), dropped like the rhotic hook ``˞``.
+
+An empty event is a pause (espeak's ``_``) when the audio is silent there; espeak also leaves
+a few short sounding phonemes without an IPA name (English ``;`` after ``I2``, the Russian
+epenthetic ``@-`` between p and r): there the previous phoneme continues, as
+``spec/english_visemes.csv`` has it for ``;``. A parenthesised event (``(en)``) is a language
+switch inside the text: the previous phoneme continues. A segment or mark the tables do not
+know fails loudly, naming it and when it was spoken: a silently dropped phoneme is a mouth
+that stops moving.
 
 espeak hands a phoneme name over in 8 bytes; a longer IPA string arrives cut, its last
 incomplete character dropped by the engine binding (its marks matter little; a cut base
@@ -53,7 +55,9 @@ CONTINUE = "="
 SOUNDING_DB = -40.0
 """Mean level (dBFS) above which an unnamed phoneme is sound, not a pause."""
 FIRST_SHARE = 0.7
-"""The first part of a split phoneme (a diphthong's nucleus, a vowel before its r-colouring)."""
+"""The first part of a split phoneme (a diphthong's nucleus: the offglide is a movement towards a target
+reached late). Halves would agree with the English table on 91.6 % of frames, 60/40 on 92.9 %, 70/30 on 94.0 %
+(spec/README.md)."""
 AFFRICATE_STOP_SHARE = 0.3
 """The stop of an affricate (t of tʃ, ts): the fricative that follows carries the sound."""
 

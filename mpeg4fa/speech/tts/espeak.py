@@ -4,8 +4,10 @@ Only the C API reports *when* each phoneme starts in the audio (``espeak_EVENT.s
 command line and pyttsx3 do not. Phoneme names come as espeak's mnemonics (``tS``, ``aI``: what
 ``spec/english_visemes.csv`` is written in) or, with ``synthesize(..., ipa=True)``, in IPA
 (``tʃ``, ``aɪ``: what :mod:`mpeg4fa.speech.ipa` reads for any language), switched per synthesis
-with ``espeak_ng_SetPhonemeEvents``; the events and the audio are the same either way. The library and its data come from the ``espeakng_loader``
-wheel (espeak-ng 1.52): Debian's 1.51 reads Mandarin tone digits as English numbers.
+with ``espeak_ng_SetPhonemeEvents``: the same phonemes one for one, timed alike (up to the ~10 ms
+espeak's timing wanders between any two syntheses). The library and its data come from the
+``espeakng_loader`` wheel (espeak-ng 1.52): Debian's 1.51 reads Mandarin tone digits as English
+numbers.
 
 espeak-ng is one global state per process, so it is initialised once (module level) and every
 synthesis holds one lock. Do not use pyttsx3 in the same process: it drives the same instance.
@@ -393,7 +395,7 @@ class EspeakEngine:
     ) -> Speech:
         """Speak ``text`` and return the audio with its events (see ``Engine.synthesize``).
 
-        ``ipa``: phoneme events named in IPA instead of espeak's mnemonics (same times, same audio).
+        ``ipa``: phoneme events named in IPA instead of espeak's mnemonics (the same phonemes).
 
         Marks go in as SSML ``<mark/>``s; put them between words: espeak splits a word at a
         mark inside it (and pronounces the halves separately).
