@@ -109,6 +109,34 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
     markup = parse_markup(text, name=name)
     utterance = speak(markup, make_engine(engine) if isinstance(engine, str) else engine, lang=lang, voice=voice,
                       rate=rate)
+    return encode_utterance(utterance, fps=fps, level=level, idle=idle, seed=seed, fold=fold, compact=compact)
+
+
+def encode_recording(recording, transcript: str, *, lang: str = "auto", voice: str | None = None,
+                     rate: int | None = None, method: str = "auto", fps: float = 25.0, level: str = "high",
+                     idle: bool = False, seed: int = 0, name: str = "<transcript>", fold: bool = True,
+                     compact: bool = True) -> Encoded:
+    """A recording (WAV path or :class:`~mpeg4fa.speech.align.Recording`) and its tagged transcript -> the
+    FapStream of the face saying it in time with the recording (:func:`mpeg4fa.speech.align.align_recording`:
+    ``method`` auto, pocketsphinx or dtw; ``voice``/``rate`` espeak-ng's reference). The Encoded's speech is
+    the recording's own audio (mono, at its rate); the rest is :func:`encode_text`'s path.
+    """
+    if level not in LEVELS:
+        raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
+    from mpeg4fa.speech.align import align_recording
+
+    aligned = align_recording(recording, transcript, lang=lang, voice=voice, rate=rate, method=method, name=name)
+    return encode_utterance(aligned.utterance, fps=fps, level=level, idle=idle, seed=seed, fold=fold,
+                            compact=compact)
+
+
+def encode_utterance(utterance: Utterance, *, fps: float = 25.0, level: str = "high", idle: bool = False,
+                     seed: int = 0, fold: bool = True, compact: bool = True) -> Encoded:
+    """The timeline and stream of a timed :class:`Utterance` (spoken by an engine or aligned to a recording):
+    stops start at their closure's silence, then viseme, expression (and idle) tracks at ``fps``, coded
+    at ``level`` (see :func:`encode_text` for ``fold`` and ``compact``)."""
+    if level not in LEVELS:
+        raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
     utterance = replace(utterance, timings=stop_closures(utterance.timings, utterance.speech))
     times = frame_times(utterance.speech.duration, fps)
     spans, cues = utterance.spans(), list(utterance.cues)

@@ -1,0 +1,218 @@
+"""A recording and its transcript -> the same :class:`~mpeg4fa.speech.utterance.Utterance` the TTS path
+makes, timed on the recording and playing its audio.
+
+The transcript (expression tags allowed) is spoken by espeak-ng exactly as :func:`~mpeg4fa.speech.
+utterance.speak` does for text: that gives the phones, their visemes (the English, Mandarin or IPA
+tables, unchanged) and a reference timing. The aligner then finds a monotone map from the reference's
+time to the recording's, and every phoneme, viseme, word, mark and expression cue goes through it:
+
+* ``pocketsphinx`` (English): forced alignment of the transcript's words and their phones. Each word's
+  start and end is an anchor; inside a word whose phone count matches espeak's, every phone onset is
+  one too, else espeak's phones share the word in proportion to their own durations.
+* ``dtw`` (any language): dynamic time warping between the recording and the reference on normalised
+  cepstra, with the recording's frequency axis scaled to the reference voice's (:mod:`.dtw`); the reference is first re-spoken at the rate that gives it the recording's
+  length of speech, so the warp corrects what a straight line cannot.
+
+``auto`` takes pocketsphinx for English transcripts of dictionary words, DTW for the rest.
+"""
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from mpeg4fa.speech.align.errors import AlignError
+from mpeg4fa.speech.align.recording import HOP, Recording, check_speech, read_recording, resample
+from mpeg4fa.speech.markup import Markup, parse_markup
+from mpeg4fa.speech.script import runs
+from mpeg4fa.speech.tts.base import Event, Speech, snap_to_tokens, word_tokens
+from mpeg4fa.speech.utterance import Timing, Utterance, check_language, speak
+from mpeg4fa.speech.visemes import PAUSE
+
+METHODS = ("auto", "pocketsphinx", "dtw")
+FIT_RATIO = 3.0
+"""The recording's speech may last at most this many times the transcript's spoken length, or a third of it."""
+MIN_COVERAGE = 0.8
+"""Share of the recording's speech frames the aligned transcript must span."""
+_ASCII_WORD = set("abcdefghijklmnopqrstuvwxyz'")
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """What :func:`align_recording` found: the utterance on the recording, the reference it came from,
+    the aligner used, the anchors of the time map (reference s -> recording s), the share of the
+    recording's speech the aligned phones span, and the seconds the alignment took."""
+
+    utterance: Utterance
+    reference: Utterance
+    method: str
+    anchors: tuple[np.ndarray, np.ndarray]
+    coverage: float
+    seconds: float
+
+    def warp(self, t):
+        """Reference time(s) -> recording time(s)."""
+        return np.interp(t, *self.anchors)
+
+
+def _sounding(timings) -> list[Timing]:
+    return [t for t in timings if t.viseme != PAUSE and t.end > t.start]
+
+
+def _speech_seconds(utt: Utterance) -> tuple[float, float, float]:
+    """(first sound start, last sound end, seconds of phones) of a spoken utterance."""
+    sound = _sounding(utt.timings)
+    if not sound:
+        return 0.0, 0.0, 0.0
+    return sound[0].start, max(t.end for t in sound), sum(t.end - t.start for t in sound)
+
+
+def is_english(text: str, lang: str) -> bool:
+    """Whether the transcript is all English (what pocketsphinx's model speaks)."""
+    code = lang.lower()
+    if code == "en" or code.startswith("en-"):
+        return True
+    if code != "auto":
+        return False
+    return all(kind == "en" for kind, _, _ in runs(text, "auto", True))
+
+
+def _dictionary_words(text: str) -> list[str] | None:
+    """The transcript's words for pocketsphinx, or None if one is not plain ASCII letters."""
+    words = [w.lower() for _, _, w in word_tokens(text)]
+    return words if words and all(set(w) <= _ASCII_WORD for w in words) else None
+
+
+def choose_method(method: str, text: str, lang: str) -> str:
+    if method not in METHODS:
+        raise ValueError(f"method {method!r}: one of {', '.join(METHODS)}")
+    english = is_english(text, lang)
+    if method == "pocketsphinx":
+        if not english:
+            raise AlignError(f"pocketsphinx aligns English only, not --lang {lang}", where="pocketsphinx",
+                             hint="use the dtw aligner for other languages")
+        words = _dictionary_words(text)
+        if words is None:
+            raise AlignError("pocketsphinx aligns words of letters only (no digits or other scripts)",
+                             where="pocketsphinx", hint="spell numbers out, or use the dtw aligner")
+        return method
+    if method == "dtw" or not english:
+        return "dtw"
+    from mpeg4fa.speech.align.sphinx import unknown_words
+
+    words = _dictionary_words(text)
+    return "pocketsphinx" if words is not None and not unknown_words(words) else "dtw"
+
+
+def _monotone(ref: np.ndarray, rec: np.ndarray, ref_end: float, rec_end: float) -> tuple[np.ndarray, np.ndarray]:
+    """Anchors sorted, with (0, 0) and the two ends, recording times never going back."""
+    ref = np.r_[0.0, np.asarray(ref, dtype=np.float64), ref_end]
+    rec = np.r_[0.0, np.clip(np.asarray(rec, dtype=np.float64), 0.0, rec_end), rec_end]
+    keep = (ref >= 0) & (ref <= ref_end)
+    ref, rec = ref[keep], rec[keep]
+    order = np.argsort(ref, kind="stable")
+    ref, rec = ref[order], np.maximum.accumulate(rec[order])
+    uniq, inverse = np.unique(ref, return_inverse=True)
+    out = np.bincount(inverse, weights=rec) / np.bincount(inverse)
+    return uniq, np.maximum.accumulate(out)
+
+
+def _sphinx_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray]:
+    from mpeg4fa.speech.align.sphinx import STOPS, align_words
+
+    text = ref.markup.text
+    tokens = word_tokens(text)
+    aligned = align_words(rec, [w.lower() for _, _, w in tokens])
+    phones = [e for e in ref.speech.phonemes() if not e.text.startswith("_")]
+    words = sorted(ref.speech.words(), key=lambda e: e.start)
+    first = snap_to_tokens([w.position for w in words], tokens)
+    keep = [(w, k) for w, k in zip(words, first) if k >= 0]
+    ref_t, rec_t = [], []
+    for n, (w, k) in enumerate(keep):
+        stop_k = keep[n + 1][1] if n + 1 < len(keep) else len(tokens)
+        stop_t = keep[n + 1][0].start if n + 1 < len(keep) else ref.speech.duration
+        if stop_k <= k:
+            continue
+        mine = [p for p in phones if w.start - 0.02 <= p.start < stop_t - 0.005]
+        theirs = [p for a in aligned[k:stop_k] for p in a.phones]
+        if not mine or not theirs:
+            continue
+        if len(mine) == len(theirs):  # one for one: every onset but a stop's is an anchor
+            pairs = [(p.start, q[1]) for p, q in zip(mine, theirs) if q[0] not in STOPS]
+        else:  # the word's start (unless it is a stop's closure): espeak's phones share the word
+            pairs = [(mine[0].start, aligned[k].start)] if theirs[0][0] not in STOPS else []
+        ref_t += [a for a, _ in pairs]
+        rec_t += [b for _, b in pairs]
+        after = aligned[stop_k].phones[:1] if stop_k < len(aligned) else ()
+        if not after or after[0][0] not in STOPS:  # a word's end, unless it is the next stop's closure
+            ref_t.append(mine[-1].end)
+            rec_t.append(aligned[stop_k - 1].end)
+    return np.array(ref_t), np.array(rec_t)
+
+
+def _dtw_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray]:
+    from mpeg4fa.speech.align import dtw
+
+    path, _, _ = dtw.align(resample(ref.speech.samples.astype(np.float64) / 32768.0, ref.speech.rate, dtw.RATE),
+                           resample(rec.floats(), rec.rate, dtw.RATE))
+    return dtw.warp_anchors(path)
+
+
+def _warped(ref: Utterance, rec: Recording, anchors, engine: str) -> Utterance:
+    f = lambda t: float(np.interp(t, *anchors))  # noqa: E731
+    events = sorted((Event(e.kind, f(e.start), max(f(e.end), f(e.start)), e.text, e.position)
+                     for e in ref.speech.events), key=lambda e: e.start)
+    speech = Speech(rec.samples, rec.rate, tuple(events), engine, ref.speech.voice)
+    timings = tuple(Timing(t.phoneme, t.viseme, f(t.start), max(f(t.end), f(t.start)), t.set) for t in ref.timings)
+    cues = tuple(replace(c, start=f(c.start)) for c in ref.cues)
+    return Utterance(speech, timings, cues, ref.markup)
+
+
+def _no_fit(rec: Recording, why: str) -> AlignError:
+    return AlignError(f"the transcript does not fit the recording: {why}", where=rec.name,
+                      hint="check the transcript is what the recording says (and --lang its language)")
+
+
+def align_recording(recording: Recording | str | os.PathLike, transcript: str | Markup, *, lang: str = "auto",
+                    voice: str | None = None, rate: int | None = None, method: str = "auto",
+                    name: str = "<transcript>") -> Alignment:
+    """Time ``transcript`` (tagged text or a parsed :class:`Markup`) on ``recording`` (a WAV path or a
+    :class:`Recording`); see the module docstring. ``voice``/``rate``: espeak-ng's reference (default
+    the language's voice at 175 wpm; DTW picks its own rate unless ``rate`` is given).
+
+    Raises :class:`AlignError` for a missing, unreadable or silent recording and a transcript that
+    does not fit it, :class:`~mpeg4fa.speech.errors.TTSError` for an unknown language,
+    :class:`~mpeg4fa.speech.errors.MarkupError` for bad tags.
+    """
+    from mpeg4fa.speech.tts.espeak import DEFAULT_RATE, RATE_RANGE, EspeakEngine
+
+    began = time.perf_counter()
+    rec = recording if isinstance(recording, Recording) else read_recording(recording)
+    markup = transcript if isinstance(transcript, Markup) else parse_markup(transcript, name=name)
+    engine = EspeakEngine()
+    check_language(lang, engine)
+    how = choose_method(method, markup.text, lang)
+    frames = check_speech(rec)
+    rec_speech = float(np.flatnonzero(frames)[-1] - np.flatnonzero(frames)[0] + 1) * HOP
+    ref = speak(markup, engine, lang=lang, voice=voice, rate=rate)
+    start, end, _ = _speech_seconds(ref)
+    ratio = rec_speech / max(end - start, 1e-3)
+    if not 1 / FIT_RATIO <= ratio <= FIT_RATIO:
+        raise _no_fit(rec, f"it holds {rec_speech:.2f} s of speech where the transcript takes "
+                           f"{end - start:.2f} s to say")
+    if how == "dtw" and rate is None:  # a reference as long as the recording: the warp corrects the rest
+        wpm = int(np.clip(round(DEFAULT_RATE / ratio), *RATE_RANGE))
+        if abs(wpm - DEFAULT_RATE) > 5:
+            ref = speak(markup, engine, lang=lang, voice=voice, rate=wpm)
+    anchors = _sphinx_anchors(rec, ref) if how == "pocketsphinx" else _dtw_anchors(rec, ref)
+    anchors = _monotone(*anchors, ref.speech.duration, rec.duration)
+    utterance = _warped(ref, rec, anchors, "recording")
+    start, end, _ = _speech_seconds(utterance)
+    lo, hi = np.flatnonzero(frames)[[0, -1]] * HOP
+    inside = frames[int(start / HOP):int(np.ceil(end / HOP)) + 1].sum() / max(frames.sum(), 1)
+    if inside < MIN_COVERAGE:
+        raise _no_fit(rec, f"the aligned transcript spans {100 * inside:.0f} % of the recording's speech "
+                           f"({lo:.2f}-{hi:.2f} s)")
+    return Alignment(utterance, ref, how, anchors, float(inside), time.perf_counter() - began)

@@ -1,0 +1,92 @@
+"""English forced alignment with pocketsphinx 5.1.1 and its bundled en-us model (no download).
+
+The transcript's words go to ``Decoder.set_align_text``; a first pass aligns the words, a second
+(``set_alignment``) the phones inside them; ``get_alignment()`` yields words, each with its phones,
+in 10 ms frames. Audio goes in as 16 kHz int16 with one LSB of seeded noise: digital silence gives
+the model's log-energy features minus infinity and the search fails.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from mpeg4fa.speech.align.errors import AlignError
+from mpeg4fa.speech.align.recording import HOP, Recording, resample
+
+RATE = 16000
+"""The bundled acoustic model's sample rate."""
+WINDOW = 0.025625
+"""The front end's analysis window (410 samples at 16 kHz)."""
+OFFSET = WINDOW / 2 - HOP / 2
+"""Frame ``t``'s features come from the window starting at ``t`` * 10 ms, centred half a window later; a
+boundary between frames ``t-1`` and ``t`` lies between their centres: ``t`` * 10 ms + this."""
+STOPS = frozenset({"P", "B", "T", "D", "K", "G", "CH", "JH"})
+"""Phones that pocketsphinx starts at the closure (the silence before the burst), espeak-ng at the release."""
+_FILLERS = {"SIL", "+NSN+", "+SPN+", "+BREATH+", "+COUGH+", "+UM+", "+NOISE+"}
+
+
+@dataclass(frozen=True)
+class Word:
+    """One aligned word: its spelling, start and end (s) and its phones as (ARPAbet, start, end)."""
+
+    word: str
+    start: float
+    end: float
+    phones: tuple[tuple[str, float, float], ...]
+
+
+@lru_cache(maxsize=1)
+def _decoder():
+    try:
+        from pocketsphinx import Decoder
+    except ImportError as exc:  # a runtime dependency: only a broken install gets here
+        raise AlignError(f"pocketsphinx is not installed ({exc})", where="pocketsphinx",
+                         hint="pip install pocketsphinx==5.1.1") from None
+    # bestpath off: its lattice rescoring can give the phone pass a path it cannot align
+    return Decoder(samprate=RATE, bestpath=False, loglevel="FATAL")
+
+
+def unknown_words(words: list[str]) -> list[str]:
+    """The words the CMU dictionary lacks."""
+    decoder = _decoder()
+    return sorted({w for w in words if decoder.lookup_word(w) is None})
+
+
+def pcm16k(rec: Recording, seed: int = 0) -> bytes:
+    y = resample(rec.floats(), rec.rate, RATE) * 32767.0
+    y = y + np.random.default_rng(seed).standard_normal(len(y))
+    return np.clip(np.rint(y), -32768, 32767).astype("<i2").tobytes()
+
+
+def align_words(rec: Recording, words: list[str]) -> list[Word]:
+    """Force-align ``words`` (lower case, in the CMU dictionary) to the recording."""
+    decoder = _decoder()
+    pcm = pcm16k(rec)
+    try:
+        decoder.set_align_text(" ".join(words))
+        for second_pass in (False, True):
+            if second_pass:
+                decoder.set_alignment()
+            decoder.start_utt()
+            decoder.process_raw(pcm, full_utt=True)
+            decoder.end_utt()
+        alignment = decoder.get_alignment()
+    except RuntimeError as exc:
+        raise AlignError(f"the transcript does not fit the recording: pocketsphinx found no path through it ({exc})",
+                         where=rec.name, hint="check the transcript is what the recording says") from None
+    out = []
+    for word in alignment:
+        if word.name in _FILLERS or word.name.startswith("<"):
+            continue
+        spelling = re.sub(r"\(\d+\)$", "", word.name)
+        phones = tuple((p.name, p.start * HOP + OFFSET, (p.start + p.duration) * HOP + OFFSET)
+                       for p in word if p.name not in _FILLERS)
+        out.append(Word(spelling, word.start * HOP + OFFSET, (word.start + word.duration) * HOP + OFFSET, phones))
+    if [w.word for w in out] != words:
+        raise AlignError("the transcript does not fit the recording: pocketsphinx aligned "
+                         f"{len(out)} of its {len(words)} words", where=rec.name,
+                         hint="check the transcript is what the recording says")
+    return out
