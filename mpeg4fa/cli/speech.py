@@ -26,16 +26,21 @@ def register(commands: Commands) -> None:
                     "FBA stream, decode it again and render the default head with the speech. TEXT may be "
                     "a text file, '-' (read standard input) or @FILE (read a UTF-8 text file); a TEXT that "
                     "looks like a file name (a path separator or an extension, no spaces) must name a "
-                    "readable file, unless --text says it is text.",
+                    "readable file, unless --text says it is text. With --speech REC.wav --transcript TEXT the face says a "
+                    "recording instead: the transcript is phonemised, aligned to the recording (pocketsphinx for "
+                    "English, DTW against espeak-ng's rendering for other languages) and the video plays the "
+                    "recording's audio.",
         epilog='examples:\n  mpeg4fa say "(joy, 40, 0.5) Hello there! (sadness, 30, 1) Goodbye." -o hello.mp4\n'
                '  mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o nihao.mp4 --keep\n'
                '  mpeg4fa say "Buenos días, ¿cómo estás?" --lang es -o hola.mp4\n'
-               '  mpeg4fa say script.txt -o script.mp4',
+               '  mpeg4fa say script.txt -o script.mp4\n'
+               '  mpeg4fa say --speech me.wav --transcript "(joy, 30, 0.5) Hello there!" -o me.mp4',
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("text", help="the text with optional (expression, intensity 0-63, seconds) tags; a text file, "
-                                "- or @FILE")
+    p.add_argument("text", nargs="?", help="the text with optional (expression, intensity 0-63, seconds) tags; a text "
+                                           "file, - or @FILE (or --speech REC.wav --transcript TEXT)")
     p.add_argument("-o", "--output", type=Path, required=True, help="OUT.mp4, or a folder for PNG frames")
     text_flag(p)
+    recording_options(p)
     speech_options(p)
     p.add_argument("--fps", type=options.fps, default=25.0, help="frame rate, 0 < fps < 256 (default 25)")
     p.add_argument("--level", choices=LEVELS, default="low",
@@ -96,10 +101,15 @@ def text_flag(p: argparse.ArgumentParser) -> None:
 
 
 def text_encoding_options(p: argparse.ArgumentParser) -> None:
-    """The options of ``encode`` when INPUT is text (speech, FAP timeline, FDP of the speaker)."""
+    """The options of ``encode`` when INPUT is text (speech, FAP timeline, FDP of the speaker), or when a
+    recording and its transcript stand in for it (INPUT is then left out)."""
+    for action in p._actions:  # argparse has no public way to relax a positional added before
+        if action.dest == "input":
+            action.nargs, action.default, action.required = "?", NO_INPUT, False
     text_flag(p)
+    added = recording_options(p)
     g = p.add_argument_group("text input: speech and FAPs")
-    added = [g.add_argument("--audio", type=Path, metavar="WAV", help="write the speech here (16-bit mono WAV)"),
+    added += [g.add_argument("--audio", type=Path, metavar="WAV", help="write the speech here (16-bit mono WAV)"),
              g.add_argument("--timings", type=Path, metavar="JSON",
                             help='write the timed visemes used: [{"phoneme", "viseme", "start", "end"}, ...] in '
                                  'seconds')]
@@ -128,6 +138,58 @@ def text_encoding_options(p: argparse.ArgumentParser) -> None:
     ]
     # what these options default to, so that a stream INPUT can tell which of them were given
     p.set_defaults(text_defaults={action.dest: action.default for action in added})
+
+
+NO_INPUT = ""
+"""What ``encode``'s INPUT holds when it is left out (with ``--speech``, the transcript is the text)."""
+
+
+def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
+    """``--speech``, ``--transcript``, ``--aligner``: a recording to animate instead of text to speak."""
+    from ..speech.align import METHODS
+
+    g = p.add_argument_group("recorded speech: lip sync to a recording",
+                             "the transcript is phonemised by espeak-ng and aligned to the recording; --lang, "
+                             "--voice and --rate then describe espeak-ng's reference rendering")
+    return [
+        g.add_argument("--speech", type=Path, metavar="REC.wav",
+                       help="a recording of the transcript (WAV, any rate and channel count)"),
+        g.add_argument("--transcript", metavar="TEXT|FILE",
+                       help="what the recording says, with optional expression tags; a text file, - or @FILE"),
+        g.add_argument("--aligner", choices=METHODS, default="auto",
+                       help="auto (default: pocketsphinx for English, else dtw), pocketsphinx (English) or dtw "
+                            "(any language: warping against espeak-ng's rendering)"),
+    ]
+
+
+def _recording_args(args: argparse.Namespace, given_text: bool, what: str) -> bool:
+    """Whether a recording is to be animated; UsageError for options that clash with one (or lack it)."""
+    if args.speech is None:
+        if args.transcript is not None or args.aligner != "auto":
+            flag = "--transcript" if args.transcript is not None else "--aligner"
+            raise UsageError(f"{flag} goes with --speech REC.wav", hint="add --speech, or drop " + flag)
+        return False
+    if args.transcript is None:
+        raise UsageError("--speech needs the transcript of the recording", hint='add --transcript "TEXT" (or FILE)')
+    if given_text:
+        raise UsageError(f"--speech animates the recording, so {what} has no place beside it",
+                         hint="give the text as --transcript and drop " + what)
+    if args.engine != "espeak":
+        raise UsageError(f"--engine {args.engine} with --speech: the transcript is phonemised by espeak",
+                         hint="drop --engine")
+    return True
+
+
+def _aligned(args: argparse.Namespace, inputs: dict, outputs: dict):
+    """The transcript read (text, file, - or @FILE) and aligned to the recording: (Alignment, transcript name).
+    No output may overwrite ``inputs``, the recording or the transcript file."""
+    from ..speech.align import align_recording
+
+    source = text_input.classify(args.transcript, as_text=args.as_text)
+    refuse_overlaps({**inputs, "--speech": args.speech, "--transcript": source.path}, outputs)
+    text, name = text_input.read_text(source)
+    return align_recording(args.speech, text, lang=args.lang, voice=args.voice, rate=args.rate,
+                           method=args.aligner, name=name), name
 
 
 def speech_options(g) -> list[argparse.Action]:
@@ -159,10 +221,13 @@ def reject_text_options(args: argparse.Namespace) -> None:
 
 def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -> int:
     """``mpeg4fa encode TEXT``: speech -> FAP stream (+ WAV, timings, FDP), all written or none."""
-    from ..fba import encode
-    from ..say import write_timings
     from ..speech.encoder import encode_text
 
+    if _recording_args(args, args.input != NO_INPUT, f"INPUT ({args.input})"):
+        return _encode_recording(args)
+    if args.input == NO_INPUT:
+        raise UsageError("INPUT missing: give the text to speak (or a .fap/.fba stream)",
+                         hint='or --speech REC.wav --transcript "TEXT" to animate a recording')
     if args.engine == "estimate" and args.audio is not None:
         raise UsageError("the estimate engine makes no audio, so there is nothing for --audio",
                          hint="drop --audio, or use --engine espeak or pyttsx3")
@@ -175,6 +240,31 @@ def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -
     fps = args.fps if args.fps is not None else 25.0
     encoded = encode_text(text, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate,
                           fps=fps, level=args.level, idle=args.idle, name=name)
+    return _write_encoded(args, encoded, name, fps, fdp)
+
+
+def _encode_recording(args: argparse.Namespace) -> int:
+    """``mpeg4fa encode --speech REC.wav --transcript TEXT``: the aligned transcript -> FAP stream (+ files)."""
+    from ..speech.encoder import encode_utterance
+
+    inputs = {"--face-mesh": args.face_mesh, "--face-points": args.face_points, "--front": args.front,
+              "--front-points": args.front_points, "--side": args.side, "--side-points": args.side_points}
+    outputs = {"-o": args.output, "--audio": args.audio, "--timings": args.timings, "--fdp-out": args.fdp_out}
+    refuse_overlaps({**inputs, "--speech": args.speech}, outputs)
+    fdp = _speaker_fdp(args) if args.fdp_out is not None else None
+    aligned, name = _aligned(args, inputs, outputs)
+    fps = args.fps if args.fps is not None else 25.0
+    encoded = encode_utterance(aligned.utterance, fps=fps, level=args.level, idle=args.idle)
+    print(f"{args.speech}: {name} aligned by {aligned.method} ({aligned.seconds:.2f} s, "
+          f"{aligned.seconds / max(encoded.speech.duration, 1e-9):.2f} x real time)", file=sys.stderr)
+    return _write_encoded(args, encoded, str(args.speech), fps, fdp)
+
+
+def _write_encoded(args: argparse.Namespace, encoded, name: str, fps: float, fdp) -> int:
+    """Write the stream and the files asked for, all or none, and say what was written."""
+    from ..fba import encode
+    from ..say import write_timings
+
     data = encode(encoded.stream, coding_options(args, encoded.coding()))
     written = [f"{args.output} ({len(data)} bytes)"]
     with atomic_outputs(args.output, args.audio, args.timings, args.fdp_out) as (out, audio, timings, fdp_out):
@@ -238,6 +328,10 @@ def run_say(args: argparse.Namespace) -> int:
     """``mpeg4fa say``: :func:`mpeg4fa.say.say` with a progress bar, after checking what it would write."""
     from ..say import kept_paths, say
 
+    if _recording_args(args, args.text is not None, f"TEXT ({args.text})"):
+        return _say_recording(args)
+    if args.text is None:
+        raise UsageError("TEXT missing: give the text to say", hint='or --speech REC.wav --transcript "TEXT"')
     source = text_input.classify(args.text, as_text=args.as_text)
     kept = kept_paths(args.output) if args.keep else {}
     refuse_overlaps({"text file": source.path}, {"-o": args.output, **{f"--keep ({what})": path
@@ -254,4 +348,44 @@ def run_say(args: argparse.Namespace) -> int:
           f"{len(said.data) * 8 / max(len(said.stream), 1):.0f} bits/frame of FAPs ({args.level}-level); "
           f"rendered in {result.seconds:.1f} s" + (f"; kept {', '.join(map(str, said.kept.values()))}"
                                                    if said.kept else ""))
+    return 0
+
+
+def _say_recording(args: argparse.Namespace) -> int:
+    """``mpeg4fa say --speech REC.wav --transcript TEXT``: the face saying the recording, with its audio.
+
+    The same steps as :func:`mpeg4fa.say.say` from the encoded stream on: coded, decoded again (the face
+    plays what a receiver would decode), rendered with the recording's audio, files kept beside."""
+    import numpy as np
+
+    from ..atomic import atomic_output
+    from ..face import FaceModel
+    from ..fba import decode, encode
+    from ..render import Audio, play
+    from ..say import kept_paths, write_timings
+    from ..speech.encoder import encode_utterance
+
+    kept = kept_paths(args.output) if args.keep else {}
+    outputs = {"-o": args.output, **{f"--keep ({what})": path for what, path in kept.items()}}
+    refuse_overlaps({"--speech": args.speech}, outputs)
+    check_video_size(args.output, args.size)
+    aligned, name = _aligned(args, {}, outputs)
+    encoded = encode_utterance(aligned.utterance, fps=args.fps, level=args.level, idle=args.idle)
+    data = encode(encoded.stream, encoded.coding())
+    stream = decode(data)
+    speech = encoded.speech
+    audio = Audio((speech.samples.astype(np.float32) / 32768.0)[:, None], speech.rate)
+    width, height = args.size
+    with rendering("say", args.output) as progress:
+        result = play(stream, args.output, face=FaceModel.default(), audio=audio, width=width, height=height,
+                      samples=args.aa, progress=progress)
+    if kept:
+        with atomic_output(kept["stream"]) as partial:
+            Path(partial).write_bytes(data)
+        speech.write_wav(kept["audio"])
+        write_timings(encoded, kept["timings"])
+    print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s) of {args.speech} "
+          f"({name} aligned by {aligned.method}), {len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs "
+          f"({args.level}-level); rendered in {result.seconds:.1f} s"
+          + (f"; kept {', '.join(map(str, kept.values()))}" if kept else ""))
     return 0
