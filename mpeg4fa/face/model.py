@@ -58,8 +58,12 @@ class FaceModel:
         """The same face posed by another deformer (:mod:`mpeg4fa.face.deformers` lists them), with
         its options (``with_deformer("blocks", regions=("lip_t", "lip_b"))``: elastic lip blocks only)."""
         triangles = self.triangle_face.with_deformer(deformer, **options) if self.triangle_face else None
-        return FaceModel(self.mesh, self.calibration, deformer=deformer, deformer_options=options,
-                         triangle_face=triangles)
+        other = FaceModel(self.mesh, self.calibration, deformer=deformer, deformer_options=options,
+                          triangle_face=triangles)
+        for name in ("fapu", "rig"):  # the same mesh: what was set up for it already serves
+            if name in self.__dict__:
+                other.__dict__[name] = self.__dict__[name]
+        return other
 
     def with_nurbs_skull(self) -> "FaceModel":
         """The same face with the skull cap no FAP moves as a trimmed NURBS surface, tessellated and
