@@ -173,24 +173,30 @@ def _renormalise(buf, p, nbuf, zeros, low, high, code):
     """Double the interval while it lies in one half or the middle half, reading a bit each time:
     (low, high, code, p, zeros, 0), or a fault as the last item."""
     while True:
-        if high < Q2:
-            pass
-        elif low >= Q2:
-            code -= Q2
-            low -= Q2
-            high -= Q2
+        if high < Q2 or low >= Q2:  # one half: doubling modulo 2**16 drops the half (code lies between)
+            low = (low << 1) & TOP
+            high = ((high << 1) | 1) & TOP
+            code = (code << 1) & TOP
         elif low >= Q1 and high < Q3:
-            code -= Q1
-            low -= Q1
-            high -= Q1
+            low = (low - Q1) << 1
+            high = ((high - Q1) << 1) | 1
+            code = (code - Q1) << 1
         else:
             break
-        low <<= 1
-        high = (high << 1) | 1
-        bit, p, zeros = _bit(buf, p, nbuf, zeros)
-        if bit < 0:
-            return low, high, code, p, zeros, bit
-        code = (code << 1) | bit
+        if p >= nbuf:
+            return low, high, code, p, zeros, END_OF_DATA
+        bit = buf[p]
+        p += 1
+        if zeros == MAX_ZERO_RUN:  # a stuffed '1' after 22 zeros: dropped
+            if bit == 0:
+                return low, high, code, p, zeros, BAD_STUFFING
+            zeros = 0
+            if p >= nbuf:
+                return low, high, code, p, zeros, END_OF_DATA
+            bit = buf[p]
+            p += 1
+        zeros = (zeros + 1) * (1 - bit)
+        code |= bit
     return low, high, code, p, zeros, 0
 
 
