@@ -4,7 +4,8 @@ Each sentence is spoken by a voice and at a rate other than the aligner's refere
 then aligned back from its transcript with pocketsphinx and with DTW (its reference re-spoken at the
 rate that matches the recording's length, and at the plain 175 wpm). The truth is the recording's own
 phoneme events; the aligned phones are paired with them by name, in order (difflib), per sentence,
-and an onset counts as right within 30 ms. Prints a table; --json writes the figures.
+and an onset counts as right within 30 ms. Cost: audio seconds aligned per wall second (x real time,
+espeak-ng's reference rendering included). Prints a table; --json writes the figures.
 
     .venv/bin/python tools/bench_align.py [--json align.json] [--quick]
 """
@@ -66,7 +67,7 @@ def run_case(voice: str, rate: int, method: str, ref_rate: int | None, sentences
     return {"voice": voice, "rate": rate, "method": method, "reference_rate": ref_rate or "matched",
             "within_30ms": float((e <= TOLERANCE).mean()), "mean_ms": float(e.mean() * 1000),
             "p90_ms": float(np.percentile(e, 90) * 1000), "paired": paired, "phones": total,
-            "x_real_time": spent / audio, "audio_s": audio}
+            "x_real_time": audio / spent, "align_s": spent, "audio_s": audio}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -78,14 +79,14 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     print(f"{len(sentences)} sentences; reference en-us; onset right within {TOLERANCE * 1000:.0f} ms")
     print(f"{'voice':<10} {'rate':>4}  {'aligner':<13} {'ref wpm':>7}  {'<=30ms':>6}  {'mean':>6}  {'p90':>6}  "
-          f"{'paired':>11}  {'x RT':>5}")
+          f"{'paired':>11}  {'x real time':>11}")
     for voice, rate in CASES:
         for method, ref_rate in (("pocketsphinx", None), ("dtw", None), ("dtw", 175)):
             r = run_case(voice, rate, method, ref_rate, sentences)
             rows.append(r)
             print(f"{voice:<10} {rate:>4}  {method:<13} {str(r['reference_rate']):>7}  {100 * r['within_30ms']:5.1f}%  "
                   f"{r['mean_ms']:4.0f}ms  {r['p90_ms']:4.0f}ms  {r['paired']:>4}/{r['phones']:<6}  "
-                  f"{r['x_real_time']:5.3f}", flush=True)
+                  f"{r['x_real_time']:11.1f}", flush=True)
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1) + "\n", encoding="utf-8")
         print(f"wrote {args.json}")
