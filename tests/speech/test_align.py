@@ -73,9 +73,22 @@ def test_auto_picks_pocketsphinx_for_english_and_dtw_for_the_rest():
     assert choose_method("auto", TEXT, "auto") == "pocketsphinx"
     assert choose_method("auto", "Buenos días", "es") == "dtw"
     assert choose_method("auto", "It costs 5 dollars", "en") == "dtw"  # digits: no dictionary words
-    assert choose_method("auto", "Qwzxv said hello", "en") == "dtw"  # not in the CMU dictionary
+    assert choose_method("auto", "Qwzxv said hello", "en") == "pocketsphinx"  # the word is added (below)
     with pytest.raises(AlignError, match="English only"):
         choose_method("pocketsphinx", "Buenos días", "es")
+
+
+def test_words_outside_the_dictionary_are_added_as_espeak_says_them():
+    from mpeg4fa.speech.align.sphinx import unknown_words
+
+    text = "Brenwick met Zhangwei by the river."
+    assert unknown_words(["brenwick", "zhangwei", "river"]) == ["brenwick", "zhangwei"]
+    rec, truth = spoken(text)
+    al = align_recording(rec, text, lang="en")
+    assert al.method == "pocketsphinx" and not unknown_words(["brenwick", "zhangwei"])
+    a = [p.start for p in al.utterance.speech.phonemes() if not p.text.startswith("_")][:15]
+    t = [p.start for p in truth.phonemes() if not p.text.startswith("_")][:15]  # brenwick met zhangwei
+    assert np.mean(np.abs(np.subtract(a, t)) <= 0.030) >= 0.75
 
 
 def test_other_languages_align_by_dtw():

@@ -13,7 +13,8 @@ time to the recording's, and every phoneme, viseme, word, mark and expression cu
   cepstra, with the recording's frequency axis scaled to the reference voice's (:mod:`.dtw`); the reference is first re-spoken at the rate that gives it the recording's
   length of speech, so the warp corrects what a straight line cannot.
 
-``auto`` takes pocketsphinx for English transcripts of dictionary words, DTW for the rest.
+``auto`` takes pocketsphinx for English transcripts of letter words (a word the CMU dictionary lacks is
+added, pronounced as espeak-ng says it), DTW for the rest.
 """
 from __future__ import annotations
 
@@ -98,12 +99,51 @@ def choose_method(method: str, text: str, lang: str) -> str:
             raise AlignError("pocketsphinx aligns words of letters only (no digits or other scripts)",
                              where="pocketsphinx", hint="spell numbers out, or use the dtw aligner")
         return method
-    if method == "dtw" or not english:
-        return "dtw"
-    from mpeg4fa.speech.align.sphinx import unknown_words
+    return "dtw" if method == "dtw" or not english or _dictionary_words(text) is None else "pocketsphinx"
 
-    words = _dictionary_words(text)
-    return "pocketsphinx" if words is not None and not unknown_words(words) else "dtw"
+
+def _word_phonemes(ref: Utterance) -> list[list[str] | None]:
+    """Per word of the transcript, espeak-ng's phonemes for it (None where espeak read it with its
+    neighbours as one word, or gave it none)."""
+    tokens = word_tokens(ref.markup.text)
+    phones = [e for e in ref.speech.phonemes() if not e.text.startswith("_")]
+    words = sorted(ref.speech.words(), key=lambda e: e.start)
+    keep = [(w, k) for w, k in zip(words, snap_to_tokens([w.position for w in words], tokens)) if k >= 0]
+    out: list[list[str] | None] = [None] * len(tokens)
+    for n, (w, k) in enumerate(keep):
+        stop_k = keep[n + 1][1] if n + 1 < len(keep) else len(tokens)
+        stop_t = keep[n + 1][0].start if n + 1 < len(keep) else ref.speech.duration
+        mine = [p.text for p in phones if w.start - 0.02 <= p.start < stop_t - 0.005]
+        if stop_k == k + 1 and mine:
+            out[k] = mine
+    return out
+
+
+def _learn_words(ref: Utterance, explicit: bool) -> bool:
+    """Add the transcript's words the CMU dictionary lacks, pronounced as espeak-ng said them; False
+    (or, when pocketsphinx was asked for, AlignError) if one cannot be."""
+    from mpeg4fa.speech.align.sphinx import add_words, arpabet, unknown_words
+
+    words = _dictionary_words(ref.markup.text) or []
+    unknown = set(unknown_words(words))
+    if not unknown:
+        return True
+    said = _word_phonemes(ref)
+    learned, failed = {}, []
+    for word, phonemes in zip(words, said):
+        if word in unknown and word not in learned:
+            pron = arpabet(phonemes) if phonemes else None
+            if pron is None:
+                failed.append(word)
+            else:
+                learned[word] = pron
+    if failed:
+        if explicit:
+            raise AlignError(f"not in pocketsphinx's dictionary and not spelt out by espeak-ng alone: "
+                             f"{', '.join(sorted(set(failed)))}", where="pocketsphinx", hint="use the dtw aligner")
+        return False
+    add_words(learned)
+    return True
 
 
 def _monotone(ref: np.ndarray, rec: np.ndarray, ref_end: float, rec_end: float) -> tuple[np.ndarray, np.ndarray]:
@@ -197,6 +237,8 @@ def align_recording(recording: Recording | str | os.PathLike, transcript: str | 
     frames = check_speech(rec)
     rec_speech = float(np.flatnonzero(frames)[-1] - np.flatnonzero(frames)[0] + 1) * HOP
     ref = speak(markup, engine, lang=lang, voice=voice, rate=rate)
+    if how == "pocketsphinx" and not _learn_words(ref, explicit=method == "pocketsphinx"):
+        how = "dtw"
     start, end, _ = _speech_seconds(ref)
     ratio = rec_speech / max(end - start, 1e-3)
     if not 1 / FIT_RATIO <= ratio <= FIT_RATIO:

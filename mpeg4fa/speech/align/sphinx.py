@@ -28,6 +28,44 @@ STOPS = frozenset({"P", "B", "T", "D", "K", "G", "CH", "JH"})
 _FILLERS = {"SIL", "+NSN+", "+SPN+", "+BREATH+", "+COUGH+", "+UM+", "+NOISE+"}
 
 
+ESPEAK_ARPABET: dict[str, str] = {
+    "p": "P", "b": "B", "m": "M", "f": "F", "v": "V", "T": "TH", "D": "DH", "t": "T", "d": "D", "t#": "T",
+    "t2": "T", "t[": "T", "?": "T", "k": "K", "g": "G", "x": "K", "h": "HH", "N": "NG", "tS": "CH", "dZ": "JH",
+    "S": "SH", "Z": "ZH", "s": "S", "z": "Z", "n": "N", "n-": "N", "l": "L", "l/": "L", "@L": "AH L", "r": "R",
+    "r-": "R", "w": "W", "W": "W", "w#": "W", "j": "Y", "a": "AE", "aa": "AE", "a#": "AH", "A:": "AA", "A@": "AA R",
+    "V": "AH", "VR": "AH R", "aI": "AY", "aI2": "AY", "aI3": "AY ER", "aI@": "AY ER", "aU": "AW", "aU@": "AW ER",
+    "E": "EH", "e@": "EH R", "eI": "EY", "@": "AH", "@-": "AH", "@2": "AH", "@5": "AH", "3": "ER", "3:": "ER",
+    "I": "IH", "I#": "IH", "I2": "IH", "IR": "IH R", "i": "IY", "i:": "IY", "i@": "IH R", "i@3": "IH R", "0": "AA",
+    "O:": "AO", "O@": "AO R", "O2": "AO", "OI": "OY", "o@": "AO R", "oU": "OW", "U": "UH", "U@": "UH R", "u:": "UW",
+}
+"""espeak-ng's English phonemes (``spec/english_visemes.csv``) in the CMU dictionary's ARPAbet: how a word
+the dictionary lacks is added, pronounced as espeak-ng says it."""
+
+
+def arpabet(phonemes: list[str]) -> str | None:
+    """espeak-ng phoneme names -> an ARPAbet pronunciation, or None if one has no counterpart."""
+    out = []
+    for name in phonemes:
+        if name == ";":  # palatalisation mark, not a sound
+            continue
+        if name not in ESPEAK_ARPABET:
+            return None
+        out.append(ESPEAK_ARPABET[name])
+    return " ".join(out) or None
+
+
+def add_words(pronunciations: dict[str, str]) -> None:
+    """Teach the decoder words it lacks (word -> ARPAbet phones), for this process."""
+    decoder = _decoder()
+    items = list(pronunciations.items())
+    for n, (word, phones) in enumerate(items):
+        try:
+            decoder.add_word(word, phones, update=n == len(items) - 1)
+        except RuntimeError as exc:
+            raise AlignError(f"pocketsphinx cannot take the word {word!r} as {phones} ({exc})",
+                             where="pocketsphinx", hint="use the dtw aligner") from None
+
+
 @dataclass(frozen=True)
 class Word:
     """One aligned word: its spelling, start and end (s) and its phones as (ARPAbet, start, end)."""
