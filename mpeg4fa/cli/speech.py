@@ -1,4 +1,5 @@
-"""``mpeg4fa say`` and ``mpeg4fa encode TEXT``: tagged text -> speech, FAPs, and the face saying it."""
+"""``mpeg4fa say`` and ``mpeg4fa encode TEXT``: tagged text -> speech, FAPs, and the face saying it; with
+``--speech REC.wav --transcript TEXT``, the same for a recording (its transcript aligned to it)."""
 from __future__ import annotations
 
 import argparse
