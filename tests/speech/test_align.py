@@ -156,3 +156,27 @@ def test_dtw_path_follows_a_known_warp():
     assert tuple(path[0]) == (0, 0) and tuple(path[-1]) == (199, 259)
     assert (np.diff(path, axis=0) >= 0).all() and (np.diff(path, axis=0).sum(axis=1) >= 1).all()
     assert all(i == idx[j] for i, j in path)  # every frame on its own copy: the zero-cost path
+
+
+def test_wav_sample_formats(tmp_path):
+    """8-bit and 32-bit integer PCM through the stdlib, 32-bit float (WAVE_FORMAT_IEEE_FLOAT) through PyAV."""
+    import struct
+
+    x = 0.5 * np.sin(2 * np.pi * 440 * np.arange(8000) / 8000)
+    for width, data in ((1, np.clip(np.rint(x * 127 + 128), 0, 255).astype(np.uint8).tobytes()),
+                        (4, np.rint(x * 2**31 * 0.999).astype("<i4").tobytes())):
+        path = tmp_path / f"w{width}.wav"
+        with wave.open(str(path), "wb") as w:
+            w.setnchannels(1)
+            w.setsampwidth(width)
+            w.setframerate(8000)
+            w.writeframes(data)
+        got = read_recording(path)
+        assert got.rate == 8000 and np.abs(got.floats() - x).max() < 0.01
+    data = x.astype("<f4").tobytes()
+    fmt = struct.pack("<HHIIHH", 3, 1, 8000, 8000 * 4, 4, 32)
+    path = tmp_path / "float.wav"
+    path.write_bytes(b"RIFF" + struct.pack("<I", 4 + 8 + len(fmt) + 8 + len(data)) + b"WAVE" + b"fmt "
+                     + struct.pack("<I", len(fmt)) + fmt + b"data" + struct.pack("<I", len(data)) + data)
+    got = read_recording(path)
+    assert got.rate == 8000 and np.abs(got.floats()[:len(x)] - x).max() < 0.01
