@@ -8,7 +8,11 @@ time to the recording's, and every phoneme, viseme, word, mark and expression cu
 
 * ``pocketsphinx`` (English): forced alignment of the transcript's words and their phones. Each word's
   start and end is an anchor; inside a word whose phone count matches espeak's, every phone onset is
-  one too, else espeak's phones share the word in proportion to their own durations.
+  one too, else the onsets of the phones that pair by name (espeak's in ARPAbet, in order); espeak's
+  other phones share what is left in proportion to their own durations. A stop is never an anchor:
+  pocketsphinx starts it at the closure, espeak-ng at the release (the encoder then moves the viseme
+  back over the closure, :mod:`mpeg4fa.speech.closures`). pocketsphinx's frame times are moved to the
+  middle between frame centres (:data:`.sphinx.OFFSET`).
 * ``dtw`` (any language): dynamic time warping between the recording and the reference on normalised
   cepstra, with the recording's frequency axis scaled to the reference voice's (:mod:`.dtw`); the reference is first re-spoken at the rate that gives it the recording's
   length of speech, so the warp corrects what a straight line cannot.
@@ -18,6 +22,7 @@ added, pronounced as espeak-ng says it), DTW for the rest.
 """
 from __future__ import annotations
 
+import difflib
 import os
 import time
 from dataclasses import dataclass, replace
@@ -160,7 +165,7 @@ def _monotone(ref: np.ndarray, rec: np.ndarray, ref_end: float, rec_end: float) 
 
 
 def _sphinx_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray]:
-    from mpeg4fa.speech.align.sphinx import STOPS, align_words
+    from mpeg4fa.speech.align.sphinx import ESPEAK_ARPABET, STOPS, align_words
 
     text = ref.markup.text
     tokens = word_tokens(text)
@@ -181,8 +186,12 @@ def _sphinx_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndar
             continue
         if len(mine) == len(theirs):  # one for one: every onset but a stop's is an anchor
             pairs = [(p.start, q[1]) for p, q in zip(mine, theirs) if q[0] not in STOPS]
-        else:  # the word's start (unless it is a stop's closure): espeak's phones share the word
+        else:  # the word's start (unless a stop's closure), and the phones that pair by ARPAbet name
             pairs = [(mine[0].start, aligned[k].start)] if theirs[0][0] not in STOPS else []
+            names = [(ESPEAK_ARPABET.get(p.text) or "?").split()[0] for p in mine]
+            match = difflib.SequenceMatcher(None, names, [q[0] for q in theirs], autojunk=False)
+            pairs += [(mine[b.a + i].start, theirs[b.b + i][1]) for b in match.get_matching_blocks()
+                      for i in range(b.size) if theirs[b.b + i][0] not in STOPS and b.a + i > 0]
         ref_t += [a for a, _ in pairs]
         rec_t += [b for _, b in pairs]
         after = aligned[stop_k].phones[:1] if stop_k < len(aligned) else ()
