@@ -305,7 +305,7 @@ def _wait_until_blocked(pid: int, timeout: float = 60.0) -> None:
         fields = stat.read_text().rsplit(")", 1)[1].split()
         state, cpu = fields[0], int(fields[11]) + int(fields[12])
         still = still + 1 if state == "S" and cpu == last else 0
-        if still >= 5:
+        if still >= 10:  # a full second asleep: a pause in the imports is shorter
             return
         last = cpu
         time.sleep(0.1)

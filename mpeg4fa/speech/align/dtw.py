@@ -18,8 +18,8 @@ from mpeg4fa.speech.align.recording import HOP
 
 RATE = 16000
 WINDOW = 0.025
-N_MELS = 40
-N_CEPS = 12
+MEL_BANDS = 40
+CEPSTRA = 12
 
 
 @lru_cache(maxsize=4)
@@ -46,9 +46,9 @@ def features(x: np.ndarray, rate: int = RATE, alpha: float = 1.0) -> np.ndarray:
     idx = np.arange(frames)[:, None] * hop + np.arange(win)[None, :]
     seg = padded[idx] * np.hanning(win)[None, :]
     power = np.abs(np.fft.rfft(seg, n_fft, axis=1)) ** 2
-    logmel = np.log(power @ _mel_bank(n_fft, rate, N_MELS, round(alpha, 4)).T + 1e-8)
-    k = np.arange(N_MELS)
-    dct = np.cos(np.pi / N_MELS * (k[None, :] + 0.5) * np.arange(1, N_CEPS + 1)[:, None])
+    logmel = np.log(power @ _mel_bank(n_fft, rate, MEL_BANDS, round(alpha, 4)).T + 1e-8)
+    k = np.arange(MEL_BANDS)
+    dct = np.cos(np.pi / MEL_BANDS * (k[None, :] + 0.5) * np.arange(1, CEPSTRA + 1)[:, None])
     ceps = logmel @ dct.T
     energy = np.log((seg ** 2).sum(axis=1) + 1e-8)[:, None]
     f = np.hstack([ceps, energy])
