@@ -4,27 +4,21 @@ The encoder times visemes by espeak-ng's own phoneme events; measuring the resul
 against those same events cannot show where espeak's events and the sound part
 ways. espeak-ng, for one, starts a voiceless stop's event at the release: the
 silent closure before it is booked to the phoneme before. A forced aligner reads
-the audio instead. pocketsphinx (the ``test`` extra; it bundles an en-us acoustic
-model and the CMU dictionary) aligns the text to the speech; its phones (ARPAbet)
-are mapped to MPEG-4 visemes and paired with the spans by :func:`match_phones`.
-
-Only a measuring tool: nothing in the encoder or decoder depends on it, so it is
-imported lazily and its absence is a :class:`RenderError` with the fix.
+the audio instead: the encoder's own pocketsphinx aligner (:mod:`mpeg4fa.speech.align.sphinx`,
+the bundled en-us acoustic model and CMU dictionary) aligns the text to the speech; its
+phones (ARPAbet) are mapped to MPEG-4 visemes and paired with the spans by :func:`match_phones`.
 """
 from __future__ import annotations
 
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from mpeg4fa.render.audio import Audio
 from mpeg4fa.render.errors import RenderError
-
-ALIGN_RATE = 16000
-"""The bundled acoustic model's sample rate."""
+from mpeg4fa.speech.align.sphinx import force_align, pcm16k, shared_decoder
 
 FRAME = 0.01
 """pocketsphinx's frame step: alignment times are multiples of 10 ms."""
@@ -60,29 +54,6 @@ def alignment_words(text: str) -> list[str]:
     return re.findall(r"[a-z']+", text.lower())
 
 
-@lru_cache(maxsize=1)
-def _decoder():
-    try:
-        from pocketsphinx import Decoder
-    except ImportError as exc:
-        raise RenderError(f"pocketsphinx is not installed ({exc})", where="phone alignment",
-                          hint="pip install the project's test extra: .[test]") from None
-    # bestpath off: its lattice rescoring can give the phone pass a path it cannot align
-    return Decoder(samprate=ALIGN_RATE, bestpath=False, loglevel="FATAL")
-
-
-def _pcm16k(audio: Audio, seed: int) -> bytes:
-    """Mono 16 kHz int16, with one LSB of seeded noise: digital silence (exact zeros) gives the
-    aligner's log-energy features minus infinity and the alignment fails."""
-    from scipy.signal import resample_poly
-
-    x = audio.mono().astype(np.float64)
-    g = np.gcd(int(audio.rate), ALIGN_RATE)
-    y = resample_poly(x, ALIGN_RATE // g, int(audio.rate) // g) if audio.rate != ALIGN_RATE else x
-    y = y * 32767.0 + np.random.default_rng(seed).standard_normal(len(y))
-    return np.clip(np.rint(y), -32768, 32767).astype("<i2").tobytes()
-
-
 def align_phones(audio: Audio, text: str, *, seed: int = 0) -> list[AlignedPhone]:
     """Force-align ``text`` to ``audio``: every phone with its start and end (silences left out).
 
@@ -91,21 +62,13 @@ def align_phones(audio: Audio, text: str, *, seed: int = 0) -> list[AlignedPhone
     words = alignment_words(text)
     if not words:
         raise RenderError("no words to align", where="phone alignment", hint="give the text that was spoken")
-    decoder = _decoder()
+    decoder = shared_decoder()
     unknown = [w for w in words if decoder.lookup_word(w) is None]
     if unknown:
         raise RenderError(f"not in the CMU dictionary: {', '.join(sorted(set(unknown)))}",
                           where="phone alignment", hint="align text of dictionary words")
-    pcm = _pcm16k(audio, seed)
     try:
-        decoder.set_align_text(" ".join(words))
-        for second_pass in (False, True):
-            if second_pass:
-                decoder.set_alignment()
-            decoder.start_utt()
-            decoder.process_raw(pcm, full_utt=True)
-            decoder.end_utt()
-        alignment = decoder.get_alignment()
+        alignment = force_align(pcm16k(audio.mono().astype(np.float64), int(audio.rate), seed), words)
     except RuntimeError as exc:
         raise RenderError(f"the aligner found no path through the text ({exc})", where="phone alignment",
                           hint="check the text is what the audio says") from None

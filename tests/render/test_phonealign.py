@@ -1,5 +1,5 @@
 """English viseme timing against an independent aligner: pocketsphinx's forced alignment of the audio
-(mpeg4fa.render.phonealign). Skips when pocketsphinx (the test extra) is not installed.
+(mpeg4fa.render.phonealign). Skips when pocketsphinx (a dependency) is not installed.
 
 Measured (tools/lipsync_report.py --generated, 8 sentences, 249 pairs): viseme peak minus aligned
 phone onset, mean +27 ms and 95th percentile 60 ms (per sentence up to 69 ms); the seed's placement
@@ -53,7 +53,7 @@ def test_alignment_words():
 
 @pytest.fixture(scope="module")
 def aligned():
-    pytest.importorskip("pocketsphinx", reason="pocketsphinx (the test extra) is not installed")
+    pytest.importorskip("pocketsphinx", reason="pocketsphinx (a dependency) is not installed")
     out = []
     for text in TEXTS:
         enc = encode_text(text, level="high")

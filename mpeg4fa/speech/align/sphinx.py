@@ -56,7 +56,7 @@ def arpabet(phonemes: list[str]) -> str | None:
 
 def add_words(pronunciations: dict[str, str]) -> None:
     """Teach the decoder words it lacks (word -> ARPAbet phones), for this process."""
-    decoder = _decoder()
+    decoder = shared_decoder()
     items = list(pronunciations.items())
     for n, (word, phones) in enumerate(items):
         try:
@@ -77,7 +77,7 @@ class Word:
 
 
 @lru_cache(maxsize=1)
-def _decoder():
+def shared_decoder():
     try:
         from pocketsphinx import Decoder
     except ImportError as exc:  # a runtime dependency: only a broken install gets here
@@ -89,29 +89,36 @@ def _decoder():
 
 def unknown_words(words: list[str]) -> list[str]:
     """The words the CMU dictionary lacks."""
-    decoder = _decoder()
+    decoder = shared_decoder()
     return sorted({w for w in words if decoder.lookup_word(w) is None})
 
 
-def pcm16k(rec: Recording, seed: int = 0) -> bytes:
-    y = resample(rec.floats(), rec.rate, RATE) * 32767.0
+def pcm16k(x: np.ndarray, rate: int, seed: int = 0) -> bytes:
+    """Mono float samples ``x`` at ``rate`` as the model takes them: 16 kHz int16 with one LSB of
+    seeded noise (see the module docstring)."""
+    y = resample(x, rate, RATE) * 32767.0
     y = y + np.random.default_rng(seed).standard_normal(len(y))
     return np.clip(np.rint(y), -32768, 32767).astype("<i2").tobytes()
 
 
+def force_align(pcm: bytes, words: list[str]):
+    """pocketsphinx's alignment of ``words`` (lower case, in its dictionary) to ``pcm`` (:func:`pcm16k`):
+    words first, then the phones inside them; raises ``RuntimeError`` when it finds no path."""
+    decoder = shared_decoder()
+    decoder.set_align_text(" ".join(words))
+    for second_pass in (False, True):
+        if second_pass:
+            decoder.set_alignment()
+        decoder.start_utt()
+        decoder.process_raw(pcm, full_utt=True)
+        decoder.end_utt()
+    return decoder.get_alignment()
+
+
 def align_words(rec: Recording, words: list[str]) -> list[Word]:
     """Force-align ``words`` (lower case, in the CMU dictionary) to the recording."""
-    decoder = _decoder()
-    pcm = pcm16k(rec)
     try:
-        decoder.set_align_text(" ".join(words))
-        for second_pass in (False, True):
-            if second_pass:
-                decoder.set_alignment()
-            decoder.start_utt()
-            decoder.process_raw(pcm, full_utt=True)
-            decoder.end_utt()
-        alignment = decoder.get_alignment()
+        alignment = force_align(pcm16k(rec.floats(), rec.rate), words)
     except RuntimeError as exc:
         raise AlignError(f"the transcript does not fit the recording: pocketsphinx found no path through it ({exc})",
                          where=rec.name, hint="check the transcript is what the recording says") from None
