@@ -57,8 +57,9 @@ def register(commands: Commands) -> None:
                '  echo "你好，世界" | mpeg4fa encode - -o nihao.fba --audio nihao.wav --level both\n'
                '  mpeg4fa encode received.fap -o received.fba --optimize',
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("input", help="a .fap or .fba file, a text file, tagged text, @FILE or - (text from standard "
-                                 "input)")
+    p.add_argument("input", nargs="?", default=speech.NO_INPUT,
+                   help="a .fap or .fba file, a text file, tagged text, @FILE or - (text from standard input); "
+                        "left out with --speech REC.wav --transcript TEXT")
     p.add_argument("-o", "--output", type=Path, required=True, help="the .fba stream to write")
     coding_flags(p)
     speech.text_encoding_options(p)

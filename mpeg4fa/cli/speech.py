@@ -103,10 +103,7 @@ def text_flag(p: argparse.ArgumentParser) -> None:
 
 def text_encoding_options(p: argparse.ArgumentParser) -> None:
     """The options of ``encode`` when INPUT is text (speech, FAP timeline, FDP of the speaker), or when a
-    recording and its transcript stand in for it (INPUT is then left out)."""
-    for action in p._actions:  # argparse has no public way to relax a positional added before
-        if action.dest == "input":
-            action.nargs, action.default, action.required = "?", NO_INPUT, False
+    recording and its transcript stand in for it (INPUT is then left out: :data:`NO_INPUT`)."""
     text_flag(p)
     added = recording_options(p)
     g = p.add_argument_group("text input: speech and FAPs")
