@@ -61,17 +61,28 @@ def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str 
     the render succeeded. Every file appears whole or not at all (:mod:`mpeg4fa.atomic`).
     Errors are the layers' own (:class:`~mpeg4fa.speech.MarkupError`, ``TTSError``, ``RenderError``...).
     """
+    from mpeg4fa.speech.encoder import encode_text
+
+    encoded = encode_text(text, engine=engine, lang=lang, voice=voice, rate=rate, fps=fps, level=level, idle=idle,
+                          name=name)
+    return say_encoded(encoded, out, width=width, height=height, samples=samples, keep=keep, face=face,
+                       progress=progress)
+
+
+def say_encoded(encoded, out: str | os.PathLike, *, width: int = 512, height: int = 512, samples: int = 4,
+                keep: bool = False, face: "FaceModel | None" = None,
+                progress: Callable[[int, int], None] | None = None) -> Said:
+    """:func:`say` from an encoded stream on (spoken text, or a recording with its aligned transcript):
+    coded, decoded again (the face plays what a receiver would decode), rendered with the speech, and
+    the files of ``keep`` written once the render succeeded."""
     import numpy as np
 
     from mpeg4fa.face import FaceModel
     from mpeg4fa.fba import decode, encode
     from mpeg4fa.render import Audio, play
-    from mpeg4fa.speech.encoder import encode_text
 
-    encoded = encode_text(text, engine=engine, lang=lang, voice=voice, rate=rate, fps=fps, level=level, idle=idle,
-                          name=name)
     data = encode(encoded.stream, encoded.coding())
-    stream = decode(data)  # the face plays what a receiver would decode
+    stream = decode(data)
     speech = encoded.speech
     audio = Audio((speech.samples.astype(np.float32) / 32768.0)[:, None], speech.rate)
     result = play(stream, out, face=face if face is not None else FaceModel.default(), audio=audio, width=width,

@@ -350,17 +350,9 @@ def run_say(args: argparse.Namespace) -> int:
 
 
 def _say_recording(args: argparse.Namespace) -> int:
-    """``mpeg4fa say --speech REC.wav --transcript TEXT``: the face saying the recording, with its audio.
-
-    The same steps as :func:`mpeg4fa.say.say` from the encoded stream on: coded, decoded again (the face
-    plays what a receiver would decode), rendered with the recording's audio, files kept beside."""
-    import numpy as np
-
-    from ..atomic import atomic_output
-    from ..face import FaceModel
-    from ..fba import decode, encode
-    from ..render import Audio, play
-    from ..say import kept_paths, write_timings
+    """``mpeg4fa say --speech REC.wav --transcript TEXT``: the face saying the recording, with its audio
+    (:func:`mpeg4fa.say.say_encoded` on the aligned transcript)."""
+    from ..say import kept_paths, say_encoded
     from ..speech.encoder import encode_utterance
 
     kept = kept_paths(args.output) if args.keep else {}
@@ -369,19 +361,11 @@ def _say_recording(args: argparse.Namespace) -> int:
     check_video_size(args.output, args.size)
     aligned, name = _aligned(args, {}, outputs)
     encoded = encode_utterance(aligned.utterance, fps=args.fps, level=args.level, idle=args.idle)
-    data = encode(encoded.stream, encoded.coding())
-    stream = decode(data)
-    speech = encoded.speech
-    audio = Audio((speech.samples.astype(np.float32) / 32768.0)[:, None], speech.rate)
     width, height = args.size
     with rendering("say", args.output) as progress:
-        result = play(stream, args.output, face=FaceModel.default(), audio=audio, width=width, height=height,
-                      samples=args.aa, progress=progress)
-    if kept:
-        with atomic_output(kept["stream"]) as partial:
-            Path(partial).write_bytes(data)
-        speech.write_wav(kept["audio"])
-        write_timings(encoded, kept["timings"])
+        said = say_encoded(encoded, args.output, width=width, height=height, samples=args.aa, keep=args.keep,
+                           progress=progress)
+    result, data, stream, kept = said.result, said.data, said.stream, said.kept
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s) of {args.speech} "
           f"({name} aligned by {aligned.method}), {len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs "
           f"({args.level}-level); rendered in {result.seconds:.1f} s"
