@@ -64,7 +64,7 @@ def face_options(p: argparse.ArgumentParser) -> None:
 
 def deformer_option(p: argparse.ArgumentParser) -> None:
     """``--deformer``: the registered deformers, each with its line of help."""
-    lines = "; ".join(f"{k.name}: {k.summary}" for k in deformers.KINDS.values())
+    lines = "; ".join(f"{k.name}: {k.summary}" for k in deformers.KINDS.values() if k.listed)
     p.add_argument("--deformer", choices=deformers.names(), default=deformers.names()[0],
                    help=f"how FAPs move the mesh. {lines}")
     p.add_argument("--blocks", metavar="NAMES", type=lambda text: tuple(n for n in text.split(",") if n),

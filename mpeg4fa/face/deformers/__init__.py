@@ -32,6 +32,8 @@ class DeformerKind:
     needs_face_units: bool = False
     options: tuple[str, ...] = ()
     """Keyword options its ``build`` takes."""
+    listed: bool = True
+    """Offered as a choice (``--deformer``, :func:`names`); the FDP tables' deformer is chosen by its FDP."""
 
 
 KINDS: dict[str, DeformerKind] = {k.name: k for k in (
@@ -42,12 +44,14 @@ KINDS: dict[str, DeformerKind] = {k.name: k for k in (
     DeformerKind("parabolic", "parabolic", "the feature-point deformer with spherical eyeballs and parabolic lid contours"),
     DeformerKind("blocks", "blocks", "eye and mouth blocks moving as least-squares affine (12-parameter elastic) fields",
                  options=("regions",)),
+    DeformerKind("tables", "tables", "the FDP's own FaceDefTables (case 4) for the FAPs they define, "
+                 "feature points for the rest", options=("tables",), listed=False),
 )}
 
 
 def names() -> tuple[str, ...]:
-    """The deformer names, default first."""
-    return tuple(KINDS)
+    """The deformer names a user chooses from, default first."""
+    return tuple(name for name, k in KINDS.items() if k.listed)
 
 
 def kind(name: str) -> DeformerKind:
