@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Vendor three.js from the npm registry into the editor's static files (no CDN at run time).
+#   tools/vendor_three.sh [VERSION]     (default: the version pinned below)
+# Writes mpeg4fa/web/static/vendor/three/: the ES module build (three.module.js + three.core.js),
+# the OrbitControls add-on, three.js's MIT licence, and VENDORED.md with the version and checksums.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+VERSION=${1:-0.187.0}
+DEST=mpeg4fa/web/static/vendor/three
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+(cd "$WORK" && npm pack --silent "three@$VERSION" >/dev/null && tar xzf "three-$VERSION.tgz")
+PKG="$WORK/package"
+mkdir -p "$DEST/addons/controls"
+cp "$PKG/build/three.module.js" "$PKG/build/three.core.js" "$PKG/LICENSE" "$DEST/"
+cp "$PKG/examples/jsm/controls/OrbitControls.js" "$DEST/addons/controls/"
+{
+    echo "# three.js $VERSION, vendored"
+    echo
+    echo "From the npm registry (\`npm pack three@$VERSION\`) by \`tools/vendor_three.sh\`; MIT licence in LICENSE."
+    echo "The page imports \`three\` and \`three/addons/\` through an import map pointing here."
+    echo
+    echo '```'
+    (cd "$DEST" && sha256sum three.module.js three.core.js addons/controls/OrbitControls.js LICENSE)
+    echo '```'
+} > "$DEST/VENDORED.md"
+echo "vendored three.js $VERSION into $DEST"
