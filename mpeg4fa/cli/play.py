@@ -63,6 +63,11 @@ def register(commands: Commands) -> None:
 
 def _render_options(p: argparse.ArgumentParser) -> None:
     face_options(p)
+    p.add_argument("--face-mesh", type=Path, metavar="OBJ",
+                   help="play on this mesh instead of the generic head (Wavefront OBJ; all of it is skin), "
+                        "rigged from its feature points")
+    p.add_argument("--face-points", type=Path, metavar="JSON",
+                   help="with --face-mesh: its feature points, JSON label -> vertex index or [x, y, z]")
     deformer_option(p)
     p.add_argument("--size", type=options.size, default=(512, 512), metavar="W[xH]",
                    help="image size, 16 to 8192 (default 512; even for MP4)")
@@ -73,6 +78,35 @@ def _render_options(p: argparse.ArgumentParser) -> None:
                                                 "FDP's own texture")
     p.add_argument("--no-fdp-texture", action="store_true",
                    help="do not paint the skin with the texture the --fdp file carries (its front photo)")
+
+
+def _face(args: argparse.Namespace):
+    """The face to play: ``posed_face``'s, or the --face-mesh rigged (:meth:`FaceModel.from_mesh`)."""
+    if args.face_mesh is None:
+        if args.face_points is not None:
+            raise UsageError("--face-points goes with --face-mesh")
+        return posed_face(args)
+    if args.face_points is None:
+        raise UsageError("--face-mesh needs --face-points", hint="a JSON file: label -> vertex index or [x, y, z]")
+    if args.blocks is not None and args.deformer != "blocks":
+        raise UsageError(f"--blocks goes with --deformer blocks, not {args.deformer}")
+    from ..face import FaceModel
+    from ..fdp import FdpError, FdpValueError, read_obj
+    from ..fdp.build import read_points_json
+
+    mesh = read_obj(args.face_mesh)
+    points = read_points_json(args.face_points)
+    try:
+        face = FaceModel.from_mesh(mesh.vertices, mesh.triangles, points, uvs=mesh.uvs, name=args.face_mesh.stem)
+    except FdpValueError as exc:
+        raise FdpError.no_place(str(args.face_points), exc.message) from None
+    if args.fdp is not None:
+        from ..fdp import load_fdp
+        face = face.calibrate(load_fdp(args.fdp), method=args.method)
+    if getattr(args, "skull", "triangles") == "nurbs":
+        face = face.with_nurbs_skull()
+    options = {"regions": args.blocks} if args.blocks is not None else {}
+    return face.with_deformer(args.deformer, **options)
 
 
 def _renderer_options(args: argparse.Namespace, face) -> dict:
@@ -119,13 +153,14 @@ def run_play(args: argparse.Namespace) -> int:
         raise UsageError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
     audio = _audio_for(args) if args.output is not None else None
     if args.output is not None:
-        inputs = {"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture}
+        inputs = {"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture,
+                  "--face-mesh": args.face_mesh, "--face-points": args.face_points}
         refuse_overlaps(inputs, {"-o": args.output})
         if audio is not None and writes_folder(args.output):  # PNG frames, and the audio beside them
             refuse_overlaps(inputs, {f"-o {args.output}'s {AUDIO_WAV}": args.output / AUDIO_WAV})
         check_video_size(args.output, args.size)
     stream, _ = read_stream(args.stream)
-    face = posed_face(args)
+    face = _face(args)
     render_options = _renderer_options(args, face)
     if args.show:
         from ..render.window import show
@@ -155,9 +190,10 @@ def run_snapshot(args: argparse.Namespace) -> int:
 
     from ..render import snapshot
 
-    refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture}, {"-o": args.output})
+    refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture,
+                     "--face-mesh": args.face_mesh, "--face-points": args.face_points}, {"-o": args.output})
     stream, _ = read_stream(args.stream)
-    face = posed_face(args)
+    face = _face(args)
     image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args, face))
     save_image(Image.fromarray(image), args.output)
     print(f"{args.output}: {image.shape[1]}x{image.shape[0]}")

@@ -99,7 +99,9 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         ratio = np.where(lid_closure != 0, closure / lid_closure, 0.0)
 
         # the sheet: skin on this lid's side of the margins, within the orbit
-        radius = np.linalg.norm(rest[mesh.part(eye)] - centre, axis=1).max()
+        ball = rest[mesh.part(eye)]  # no eyeball part: the margin's nearest vertex bounds the eye
+        radius = np.linalg.norm((ball if len(ball) else rest[own]) - centre, axis=1)
+        radius = radius.max() if len(ball) else radius.min()
         p = rest[skin.start:skin.stop]
         idx = np.arange(skin.start, skin.stop)
         x_lo, x_hi = rest[own, 0].min(), rest[own, 0].max()

@@ -81,6 +81,14 @@ class FaceModel:
                          triangle_face=self)
 
     @classmethod
+    def from_mesh(cls, vertices, triangles, points, parts=None, uvs=None, *, name: str = "custom mesh",
+                  deformer: str = "fap") -> "FaceModel":
+        """Any triangle mesh with feature points, rigged as the generic head is (:func:`.custom.head_from_mesh`)."""
+        from mpeg4fa.face.custom import head_from_mesh
+
+        return cls(head_from_mesh(vertices, triangles, points, parts, uvs, name=name), deformer=deformer)
+
+    @classmethod
     def default(cls, *, auto_install: bool = True) -> "FaceModel":
         """The generic CC0 head (built into the cache on first use); shared, so its rig is built once."""
         global _DEFAULT

@@ -97,9 +97,11 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     columns = []
     anchors = [i for i in range(len(labels)) if _in(fp_vertex[i], skin) and labels[i] not in PASSIVE_POINTS]
     columns.append(skin_weights(mesh, anchors, driven))
-    root = _tongue_root(rest, tongue)
-    columns.append(part_weights(mesh, tongue, [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)],
-                                 driven, extra_controls=root))
+    tongue_fps = [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)]
+    if tongue_fps:  # a head without a tongue (or without its points) has no tongue weights
+        columns.append(part_weights(mesh, tongue, tongue_fps, driven, extra_controls=_tongue_root(rest, tongue)))
+    else:
+        columns.append(sp.csr_matrix((mesh.n_vertices, len(labels))))
     weights = (columns[0] + columns[1]).tocsr()
     weights.eliminate_zeros()
     moving = np.unique(weights.nonzero()[0])
@@ -241,6 +243,8 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
         with np.errstate(invalid="ignore", divide="ignore"):
             w = np.einsum("ij,ij->i", delta, r) / np.einsum("ij,ij->i", r, r)
         w = np.nan_to_num(w)
+    elif len(mesh.info.get("jaw_weights", ())) == mesh.n_vertices:  # a rigged custom mesh (:mod:`.custom`): its own jaw weights
+        w = np.asarray(mesh.info["jaw_weights"], dtype=np.float64).copy()
     else:  # a face without face units (a test head): everything below the lip line
         w = (rest[:, 1] < (mesh.fp("2.2")[1] + mesh.fp("2.3")[1]) / 2).astype(float)
     w = 0.5 * (w + w[mesh.mirror])  # the face unit is slightly asymmetric; the jaw is not
