@@ -17,7 +17,7 @@ import warnings
 
 from .. import __version__
 from ..errors import MpegFaError
-from . import codec, conform, model, play, speech, texture
+from . import codec, conform, edit, model, play, speech, texture
 from .errors import UsageError
 from .media import one_line
 
@@ -37,6 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
     texture.register(commands)
     speech.register(commands)
     conform.register(commands)
+    edit.register(commands)
     return parser
 
 

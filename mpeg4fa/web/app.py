@@ -1,0 +1,271 @@
+"""The editor's JSON API (FastAPI), over :mod:`.edits`, :mod:`.session` and the face engine.
+
+Every fault answers ``{"error": one line, "where": the field or step}`` with 400 (bad request or
+edit), 404 (no such route) or 413 (upload too large); files are written only as plain names
+inside ``out_dir``; nothing in a request is executed or opened as a path.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated, Literal, Union
+
+import numpy as np
+from fastapi import FastAPI, Request, UploadFile
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import HTMLResponse, JSONResponse
+from pydantic import BaseModel, ConfigDict, Field
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from mpeg4fa.errors import MpegFaError
+from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
+from mpeg4fa.web import edits
+from mpeg4fa.web.files import FORMATS, read_mesh, save_model
+from mpeg4fa.web.posing import pose_values, posed_vertices
+from mpeg4fa.web.session import Session
+
+UPLOAD_LIMIT = 64 * 1024 * 1024
+HOST = "127.0.0.1"
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+Index = Annotated[int, Field(ge=0)]
+Xyz = Annotated[list[float], Field(min_length=3, max_length=3)]
+
+
+class DeleteFaces(_Strict):
+    op: Literal["delete_faces"]
+    faces: list[Index]
+
+
+class DeleteVertices(_Strict):
+    op: Literal["delete_vertices"]
+    vertices: list[Index]
+
+
+class FillHole(_Strict):
+    op: Literal["fill_hole"]
+    loop: list[Index]
+    part: str | None = None
+
+
+class MoveVertices(_Strict):
+    op: Literal["move_vertices"]
+    vertices: list[Index]
+    positions: list[Xyz] | None = None
+    delta: Xyz | None = None
+
+
+class SplitPart(_Strict):
+    op: Literal["split_part"]
+    faces: list[Index]
+    name: str
+
+
+class RenamePart(_Strict):
+    op: Literal["rename_part"]
+    name: str
+    to: str
+
+
+class DeletePart(_Strict):
+    op: Literal["delete_part"]
+    name: str
+
+
+class AssignPoint(_Strict):
+    op: Literal["assign_point"]
+    label: str
+    vertex: Index
+
+
+class ClearPoint(_Strict):
+    op: Literal["clear_point"]
+    label: str
+
+
+class MirrorPoints(_Strict):
+    op: Literal["mirror_points"]
+    labels: list[str] | None = None
+    overwrite: bool = False
+
+
+Edit = Annotated[Union[DeleteFaces, DeleteVertices, FillHole, MoveVertices, SplitPart, RenamePart, DeletePart,
+                       AssignPoint, ClearPoint, MirrorPoints], Field(discriminator="op")]
+
+
+def _apply(e: BaseModel):
+    match e:
+        case DeleteFaces(): return lambda m: edits.delete_faces(m, e.faces)
+        case DeleteVertices(): return lambda m: edits.delete_vertices(m, e.vertices)
+        case FillHole(): return lambda m: edits.fill_hole(m, e.loop, e.part)
+        case MoveVertices(): return lambda m: edits.move_vertices(m, e.vertices, e.positions, e.delta)
+        case SplitPart(): return lambda m: edits.split_part(m, e.faces, e.name)
+        case RenamePart(): return lambda m: edits.rename_part(m, e.name, e.to)
+        case DeletePart(): return lambda m: edits.delete_part(m, e.name)
+        case AssignPoint(): return lambda m: edits.assign_point(m, e.label, e.vertex)
+        case ClearPoint(): return lambda m: edits.clear_point(m, e.label)
+        case MirrorPoints(): return lambda m: edits.mirror_points(m, e.labels, overwrite=e.overwrite)
+    raise AssertionError(e)  # pragma: no cover
+
+
+class EditRequest(_Strict):
+    edit: Edit
+
+
+class LoadRequest(_Strict):
+    source: Literal["head"]
+
+
+class RegionRequest(_Strict):
+    face: Index
+    same_part: bool = False
+
+
+class SaveRequest(_Strict):
+    name: str = "model"
+    required_points: list[str] | None = None
+
+
+class ValidateRequest(_Strict):
+    required_points: list[str] | None = None
+
+
+class PoseRequest(_Strict):
+    faps: dict[Annotated[int, Field(ge=3, le=N_FAPS)], float] = {}
+    viseme: str | None = None
+    expression: str | None = None
+    intensity: Annotated[int, Field(ge=0, le=FULL_INTENSITY)] = FULL_INTENSITY
+
+
+def model_json(mesh: edits.EditMesh, session: Session) -> dict:
+    """The mesh for three.js: flat positions and indices, each triangle's part, the placed points."""
+    return {
+        "source": mesh.source,
+        "positions": np.round(mesh.vertices, 6).ravel().tolist(),
+        "indices": mesh.triangles.ravel().tolist(),
+        "parts": list(mesh.part_names),
+        "triangle_parts": mesh.tri_part.tolist(),
+        "points": mesh.points,
+        "counts": {"vertices": len(mesh.vertices), "triangles": len(mesh.triangles)},
+        "can_undo": bool(session.undo_stack), "can_redo": bool(session.redo_stack),
+    }
+
+
+def _error(status: int, error: str, where: str) -> JSONResponse:
+    return JSONResponse({"error": error, "where": where}, status_code=status)
+
+
+def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.PathLike = ".", *,
+               head=None, upload_limit: int = UPLOAD_LIMIT) -> FastAPI:
+    """The editor's app. ``model_path``: a mesh file to start with (else the head); ``head``: the
+    :class:`~mpeg4fa.face.FaceModel` that ``load head`` gives and poses go through (default the generic head)."""
+    out = Path(out_dir).resolve()
+    app = FastAPI(title="mpeg4fa face model editor", docs_url=None, redoc_url=None, openapi_url=None)
+    session = Session()
+    state: dict = {"head": head, "cache": {}}
+
+    def the_head():
+        if state["head"] is None:
+            from mpeg4fa.face import FaceModel
+            state["head"] = FaceModel.default()
+        return state["head"]
+
+    app.state.session, app.state.out_dir = session, out
+    if model_path is not None:
+        path = Path(model_path)
+        session.load(read_mesh(path.read_bytes(), path.name))
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(request: Request, exc: RequestValidationError):
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "body"
+        if first.get("type") == "json_invalid":
+            return _error(400, f"malformed JSON: {first.get('ctx', {}).get('error', first.get('msg'))}", "body")
+        return _error(400, f"{first.get('msg', 'invalid request')}", where)
+
+    @app.exception_handler(MpegFaError)
+    async def _failed(request: Request, exc: MpegFaError):
+        text = f"{exc.message} ({exc.hint})" if exc.hint else exc.message
+        return _error(400, text, exc.where or request.url.path)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException):
+        return _error(exc.status_code, str(exc.detail).lower(), request.url.path)
+
+    @app.get("/", response_class=HTMLResponse)
+    def index():
+        return (Path(__file__).with_name("index.html")).read_text(encoding="utf-8")
+
+    @app.get("/api/model")
+    def get_model():
+        return model_json(session.require(), session)
+
+    @app.get("/api/feature-points")
+    def feature_points():
+        return {"points": [{"label": f.label, "group": f.group, "description": f.description,
+                            "side": f.side, "mirror": f.mirror} for f in FEATURE_POINTS]}
+
+    @app.post("/api/load")
+    def load(req: LoadRequest):
+        session.load(edits.from_head(the_head().mesh))
+        return model_json(session.mesh, session)
+
+    @app.post("/api/upload")
+    async def upload(request: Request, file: UploadFile):
+        data = await file.read(upload_limit + 1)
+        if len(data) > upload_limit:
+            return _error(413, f"upload larger than {upload_limit} bytes", "file")
+        session.load(read_mesh(data, Path(file.filename or "upload").name))
+        return model_json(session.mesh, session)
+
+    @app.post("/api/edit")
+    def edit(req: EditRequest):
+        return model_json(session.apply(_apply(req.edit)), session)
+
+    @app.post("/api/undo")
+    def undo():
+        return model_json(session.undo(), session)
+
+    @app.post("/api/redo")
+    def redo():
+        return model_json(session.redo(), session)
+
+    @app.post("/api/region")
+    def region(req: RegionRequest):
+        return {"faces": edits.connected_region(session.require(), req.face, same_part=req.same_part).tolist()}
+
+    @app.get("/api/fapu")
+    def get_fapu():
+        return {"fapu": edits.fapu(session.require()).as_dict()}
+
+    @app.post("/api/validate")
+    def check(req: ValidateRequest):
+        problems = edits.validate(session.require(), req.required_points)
+        return {"ok": not problems, "problems": problems}
+
+    @app.post("/api/save")
+    def save(req: SaveRequest):
+        paths = save_model(session.require(), out, req.name, req.required_points)
+        return {"files": [p.name for p in paths], "folder": str(out)}
+
+    @app.post("/api/pose")
+    def pose(req: PoseRequest):
+        values = pose_values(req.faps, req.viseme, req.expression, req.intensity)
+        v = posed_vertices(session.require(), the_head(), values, state["cache"])
+        return {"positions": np.round(v, 6).ravel().tolist()}
+
+    @app.middleware("http")
+    async def _limit(request: Request, call_next):
+        length = request.headers.get("content-length")
+        if length is not None and length.isdigit() and int(length) > upload_limit + 65536:
+            return _error(413, f"request larger than {upload_limit} bytes", request.url.path)
+        return await call_next(request)
+
+    return app
+
+
+__all__ = ["create_app", "HOST", "FORMATS"]
