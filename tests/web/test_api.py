@@ -129,3 +129,17 @@ def test_glb_with_two_meshes_loads_as_two_parts(client):
     r = client.post("/api/upload", files={"file": ("head.glb", scene.export(file_type="glb"), "model/gltf-binary")})
     assert r.status_code == 200, r.text
     assert sorted(r.json()["parts"]) == ["skin", "teeth_upper"]
+
+
+@pytest.mark.usefixtures("generic_head_installed")
+def test_the_generic_head_loads_poses_and_saves(tmp_path, generic_face):
+    with TestClient(create_app(out_dir=tmp_path)) as client:
+        model = client.post("/api/load", json={"source": "head"}).json()
+        assert model["counts"]["vertices"] == generic_face.mesh.n_vertices
+        assert client.get("/api/fapu").json()["fapu"] == pytest.approx(generic_face.fapu.as_dict())
+        posed = client.post("/api/pose", json={"expression": "joy"}).json()["positions"]
+        assert np.abs(np.subtract(posed, model["positions"])).max() > 0.5
+        assert client.post("/api/validate", json={}).json() == {"ok": True, "problems": []}
+        assert client.post("/api/save", json={"name": "generic"}).status_code == 200
+    points = read_points_json(tmp_path / "generic.points.json")
+    assert len(points) == 84 and points["2.1"] == generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("2.1")]

@@ -120,3 +120,20 @@ def test_validation_finds_degenerate_faces_and_open_eyes():
     eye = edits.split_part(edits.delete_faces(m, [0]), range(len(m.triangles) - 1), "eye_l")
     assert any("eye_l must be closed" in p for p in edits.validate(eye, []))
     assert edits.validate(m, []) == []
+
+
+def test_a_foreign_mesh_poses_through_the_calibrated_head(procedural_face):
+    """With no link to the head's vertices, a mesh is posed through the head calibrated to its points:
+    the head itself, so read as foreign, poses as the engine poses it."""
+    from dataclasses import replace
+
+    from mpeg4fa.web.posing import pose_values, posed_vertices
+
+    head = edits.from_head(procedural_face.mesh)
+    foreign = replace(head, origin=np.full(len(head.vertices), -1))
+    values = pose_values({3: 400, 51: -100})
+    expected = procedural_face.deform(values).vertices
+    assert np.abs(posed_vertices(foreign, procedural_face, values) - expected).max() < 1e-6
+    assert np.abs(posed_vertices(head, procedural_face, values) - expected).max() < 1e-9
+    with pytest.raises(edits.EditError, match="place feature points"):
+        posed_vertices(replace(foreign, points={}), procedural_face, values)
