@@ -56,6 +56,9 @@ class _Model:
 
     symbol: list[int]
     size: int
+    qstep: int = 0
+    """The field's quantiser step (0: not quantised): a change is priced between the two values as the
+    decoder rebuilds them (closed loop: the previous value is already a multiple of the step)."""
 
 
 def field_models(fap: int, fap_quant: int) -> list[_Model]:
@@ -67,8 +70,18 @@ def field_models(fap: int, fap_quant: int) -> list[_Model]:
     for j in range(len(coder.fields)):
         size = int(coder.psize[j])
         symbol = quantise(changes, np.int64(coder.qstep[j])) - int(coder.pmin[j])
-        out.append(_Model(np.clip(symbol, 0, size - 1).tolist(), size))
+        out.append(_Model(np.clip(symbol, 0, size - 1).tolist(), size, int(coder.qstep[j])))
     return out
+
+
+_REBUILT: dict[int, list[int]] = {}
+
+
+def _rebuilt(value: int, step: int) -> int:
+    """``value`` (0..63) as a decoder rebuilds it at quantiser ``step`` (the nearest multiple, as the codec rounds)."""
+    if step not in _REBUILT:
+        _REBUILT[step] = (quantise(np.arange(FULL_INTENSITY + 1), np.int64(step)) * step).tolist()
+    return _REBUILT[step][value]
 
 
 def _cheapest(n: int, start: State, options: Callable[[int, State], Iterable[State]],
@@ -91,6 +104,8 @@ def _cheapest(n: int, start: State, options: Callable[[int, State], Iterable[Sta
                 else:
                     step, grown = FRAME_BITS, []
                     for m, c, a, b in zip(models, held, cand, prev):
+                        if m.qstep:
+                            a, b = _rebuilt(a, m.qstep), _rebuilt(b, m.qstep)
                         symbol = m.symbol[a - b + FULL_INTENSITY]
                         step -= math.log2(c[symbol] / c.sum())
                         c = c.copy()
