@@ -77,7 +77,10 @@ def posed_face(args: argparse.Namespace) -> FaceModel:
     if args.blocks is not None and args.deformer != "blocks":
         raise UsageError(f"--blocks goes with --deformer blocks, not {args.deformer}")
     options = {"regions": args.blocks} if args.blocks is not None else {}
-    return face_from_args(args).with_deformer(args.deformer, **options)
+    face = face_from_args(args)
+    if face.deformer == "tables" and args.deformer == "fap":  # FDP case 4: the sender's tables stay
+        return face
+    return face.with_deformer(args.deformer, **options)
 
 
 def _fap_value(text: str) -> tuple[int, float]:
@@ -102,8 +105,9 @@ def _expression(text: str) -> tuple[str, int]:
 def face_from_args(args: argparse.Namespace) -> FaceModel:
     face = FaceModel.default()
     if args.fdp is not None:
+        from ..face.sent import played_face
         from ..fdp import load_fdp
-        face = face.calibrate(load_fdp(args.fdp), method=args.method)
+        face = played_face(load_fdp(args.fdp), method=args.method)
     if getattr(args, "skull", "triangles") == "nurbs":
         face = face.with_nurbs_skull()
     return face

@@ -16,7 +16,8 @@ What the generic asset carries by hand is derived here:
   y up, from the mouth to the eyes; z out of the face): the nearest axis permutation when the
   mesh is within 30 degrees of one, else the measured frame; shifted so the midline is x = 0;
   scaled to millimetres (a power of ten that gives a human eye separation, else exactly the
-  generic head's ES0), since the rig's distances are in mm. ``info["frame"]`` has the map back.
+  generic head's ES0), since the rig's distances are in mm. ``info["frame"]`` has the map back,
+  ``info["head_vertex"]`` each source vertex's index here (its skin copy; -1 if no triangle uses it).
 * **mirror**: each vertex's nearest vertex to its x-reflection in the mirrored part
   (``scipy.spatial.cKDTree``), the feature point pairs forced onto each other;
 * **joints**: eye centres (the fitted eyeball spheres, :func:`.eyes.fit_sphere`, or the pupil
@@ -218,7 +219,12 @@ def head_from_mesh(vertices, triangles, points: Mapping[str, int | Sequence[floa
                     joints=joints, fp_labels=LABELS, fp_vertex=np.array([fp_vertex[k] for k in LABELS], np.int64),
                     fp_reach=np.array([reach.get(k, 0) for k in LABELS], np.int64), face_units=None,
                     source=name)
-    info = {"frame": {"rotation": rot, "midline_x": mid, "scale": scale},
+    head_vertex = np.full(len(v), -1, np.int64)  # source vertex -> its copy here (skin first)
+    for part in reversed(names):
+        for src, here in local_of[part].items():
+            if isinstance(src, (int, np.integer)):
+                head_vertex[src] = here
+    info = {"frame": {"rotation": rot, "midline_x": mid, "scale": scale}, "head_vertex": head_vertex,
             "absent_points": tuple(k for k in LABELS if k not in given),
             "absent_parts": tuple(p for p in PARTS if p != "joints" and ranges[p][0] == ranges[p][1]),
             "jaw_weights": jaw_weights(head)}

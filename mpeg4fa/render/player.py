@@ -22,6 +22,7 @@ import numpy as np
 from mpeg4fa.atomic import atomic_output
 from mpeg4fa.decoded import FrameResolver, resolve
 from mpeg4fa.face.model import FaceModel
+from mpeg4fa.face.sent import played_face
 from mpeg4fa.fba.stream import FapStream, Frame
 from mpeg4fa.render.audio import Audio, fit_audio, read_audio
 from mpeg4fa.fdp.model import Fdp
@@ -99,9 +100,7 @@ def _face_and_options(face: FaceModel | None, fdp: Fdp | None, fdp_texture: bool
         raise RenderError(f"the face has {face.mesh.n_vertices} vertices, the renderer's {renderer.face.mesh.n_vertices}",
                           hint="pass the renderer's own face, or no face")
     if face is None:
-        face = FaceModel.default()
-        if fdp is not None:
-            face = face.calibrate(fdp)
+        face = FaceModel.default() if fdp is None else played_face(fdp)
     if fdp is not None and fdp_texture and renderer is None and options.get("texture") is None:
         sent = fdp_skin_texture(face.mesh, fdp)
         if sent is not None:
@@ -124,8 +123,9 @@ def play(stream: FapStream, target: str | os.PathLike, *, face: FaceModel | None
     """Render every frame of ``stream`` to ``target`` (.mp4/.mov/.m4v file, else a PNG folder).
 
     ``render_options`` go to :class:`.Renderer` (width, height, samples, view, texture...).
-    ``fdp``: the sender's FDP; without ``face`` the generic head is calibrated to it, and when it
-    carries a texture (FDP case 3) the skin wears it (:mod:`.fdp_texture`) unless ``texture`` is
+    ``fdp``: the sender's FDP; without ``face`` the generic head is calibrated to it (or, when it
+    carries a mesh and FaceDefTables, FDP case 4, that mesh is played, moved by its tables:
+    :mod:`mpeg4fa.face.sent`), and when it carries a texture (FDP case 3) the skin wears it (:mod:`.fdp_texture`) unless ``texture`` is
     given or ``fdp_texture`` is False.
     Warnings (:class:`.RenderWarning`) say how stream and audio lengths were matched.
     """

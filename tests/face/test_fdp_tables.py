@@ -89,3 +89,52 @@ def test_high_level_tables_are_named_as_unused_and_the_deformer_is_not_a_user_ch
     tables = (FaceDefTable(fap=1, high_level_select=3), FaceDefTable(fap=OPEN_JAW))
     assert unused_tables(tables) == [1]
     assert "tables" not in names()
+
+
+# ---- FDP case 4: the sender's mesh, rigged, moved by its tables ---------------------------------
+
+
+def _case4(face: FaceModel, units: float = 1.0):
+    """The face's skin as a sender's FDP mesh (in ``units`` of a mm), one table moving 8.1's vertex."""
+    from mpeg4fa.fdp import Fdp, FdpMesh
+
+    sent = face.to_fdp(with_mesh=True)
+    skin = face.mesh.part("skin")
+    v = _skin_vertex(face) - skin.start
+    mesh = FdpMesh(vertices=sent.mesh.vertices * units, triangles=sent.mesh.triangles, name="skin")
+    per_unit = np.array([0.0, -0.01, 0.003])
+    table = FaceDefTable(fap=RAISE_B_MIDLIP, meshes=(FaceDefMesh([v], [0, 1000], [[per_unit * units]]),))
+    fdp = Fdp(labels=sent.labels, points=np.asarray(sent.points) * units, mesh=mesh, tables=(table,))
+    return fdp, v, per_unit
+
+
+@pytest.mark.parametrize("units", [1.0, 0.001])  # millimetres, and a sender working in metres
+def test_case4_plays_the_senders_mesh_moved_by_its_table(face, units):
+    from mpeg4fa.face.sent import played_face
+
+    fdp, v, per_unit = _case4(face, units)
+    played = played_face(fdp)
+    skin = played.mesh.part("skin")
+    assert played.deformer == "tables" and skin.stop - skin.start == len(fdp.mesh.vertices)
+    here = int(played.mesh.info["head_vertex"][v])
+    values = np.zeros(68)
+    values[RAISE_B_MIDLIP - 1] = 250
+    moved = played.pose_values(values).vertices - played.neutral().vertices
+    np.testing.assert_allclose(moved[here], 250 * per_unit, atol=1e-9)  # the rig's frame is in mm
+    assert np.count_nonzero(np.linalg.norm(moved, axis=1) > 1e-12) == 1
+    values[:] = 0
+    values[OPEN_JAW - 1] = 300  # no table: the rig opens the jaw
+    assert np.linalg.norm(played.pose_values(values).vertices - played.neutral().vertices, axis=1).max() > 1.0
+
+
+def test_case4_without_the_points_a_rig_needs_falls_back_to_the_generic_head(face, generic_head_installed):
+    from mpeg4fa.face.sent import TablesWarning, played_face
+    from mpeg4fa.fdp import Fdp
+
+    fdp, _, _ = _case4(face)
+    keep = [i for i, label in enumerate(fdp.labels) if label != "2.1"]
+    partial = Fdp(labels=[fdp.labels[i] for i in keep], points=np.asarray(fdp.points)[keep], mesh=fdp.mesh,
+                  tables=fdp.tables)
+    with pytest.warns(TablesWarning, match="cannot be played.*2.1"):
+        played = played_face(partial)
+    assert played.deformer == "fap" and played.calibration is not None

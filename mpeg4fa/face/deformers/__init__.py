@@ -45,7 +45,7 @@ KINDS: dict[str, DeformerKind] = {k.name: k for k in (
     DeformerKind("blocks", "blocks", "eye and mouth blocks moving as least-squares affine (12-parameter elastic) fields",
                  options=("regions",)),
     DeformerKind("tables", "tables", "the FDP's own FaceDefTables (case 4) for the FAPs they define, "
-                 "feature points for the rest", options=("tables",), listed=False),
+                 "feature points for the rest", options=("tables", "origin"), listed=False),
 )}
 
 

@@ -7,9 +7,9 @@ A FAP with a table is the sender's to define, so here it moves the mesh by its t
 feature-point deformer poses the face with that FAP at 0, then each table adds its displacements
 (:meth:`~mpeg4fa.fdp.model.FaceDefMesh.displace`, so a vertex moves by exactly the table's amount
 per FAP unit) and applies its transforms (:meth:`~mpeg4fa.fdp.model.FaceDefTransform.at`) about
-the mesh's origin, in FAP order. FAPs without a table pose the face as the feature-point deformer
-does. Vertex indices are the mesh's own (``coord_index`` into the FDP mesh, which a face built
-from that mesh keeps in its order).
+the mesh's origin (option ``origin``: where the sender's origin lies on a rigged mesh), in FAP
+order. FAPs without a table pose the face as the feature-point deformer does. Vertex indices are
+the face's own (:mod:`mpeg4fa.face.sent` converts a sender's mesh and tables into a rigged head's).
 
 FAP 1 and 2 tables (a viseme's or expression's own displacements, chosen by ``highLevelSelect``)
 are not applied: visemes and expressions reach the face expanded into low-level FAPs
@@ -31,9 +31,15 @@ from mpeg4fa.face.rig import Rig
 HIGH_LEVEL = (1, 2)
 
 
-def check_options(tables: Sequence = ()) -> tuple:
-    """``tables`` as a tuple of :class:`~mpeg4fa.fdp.model.FaceDefTable`."""
+def check_options(tables: Sequence = (), origin: Sequence[float] | None = None) -> tuple:
+    """``tables`` as a tuple of :class:`~mpeg4fa.fdp.model.FaceDefTable` (``origin``, where transforms
+    act, must be three finite numbers)."""
     from mpeg4fa.fdp.model import FaceDefTable
+
+    if origin is not None:
+        o = np.asarray(origin, dtype=np.float64) if not isinstance(origin, str) else np.zeros(0)
+        if o.shape != (3,) or not np.isfinite(o).all():
+            raise FaceError(f"origin={origin!r} is not a point (x, y, z)", hint="the point the tables' transforms act about")
 
     if isinstance(tables, FaceDefTable):
         tables = (tables,)
@@ -47,14 +53,14 @@ def unused_tables(tables: Sequence) -> list[int]:
     return sorted({t.fap for t in tables if t.fap in HIGH_LEVEL})
 
 
-def _transform(p: np.ndarray, transform, value: float) -> None:
-    """Apply one FaceDefTransform at FAP value ``value`` to every row of ``p`` (in place)."""
+def _transform(p: np.ndarray, transform, value: float, origin: np.ndarray) -> None:
+    """Apply one FaceDefTransform at FAP value ``value`` about ``origin`` to every row of ``p`` (in place)."""
     t = transform.at(value)
     if t.field == "rotation":
         axis = t.rotation[:3] / np.linalg.norm(t.rotation[:3])
-        p[:] = Rotation.from_rotvec(axis * t.rotation[3]).apply(p)
+        p[:] = origin + Rotation.from_rotvec(axis * t.rotation[3]).apply(p - origin)
     elif t.field == "scale":
-        p *= t.scale
+        p[:] = origin + (p - origin) * t.scale
     else:
         p += t.translation
 
@@ -62,8 +68,9 @@ def _transform(p: np.ndarray, transform, value: float) -> None:
 class TablesDeformer:
     """``values (68,) -> Pose``: the feature-point deformer for FAPs without a table, the tables for the rest."""
 
-    def __init__(self, mesh: HeadMesh, rig: Rig, tables: Sequence) -> None:
+    def __init__(self, mesh: HeadMesh, rig: Rig, tables: Sequence, origin: Sequence[float] | None = None) -> None:
         self.rig = rig
+        self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64)
         self.tables = tuple(t for t in check_options(tables) if t.fap not in HIGH_LEVEL)
         n = mesh.n_vertices
         for t in self.tables:
@@ -87,9 +94,9 @@ class TablesDeformer:
             for m in t.meshes:
                 p[m.coord_index] += m.displace(value)
             for transform in t.transforms:
-                _transform(p, transform, value)
+                _transform(p, transform, value, self.origin)
         return Pose(vertices=p, parts=base.parts, pupil_diameter=base.pupil_diameter, fp_vertex=base.fp_vertex)
 
 
-def build(mesh: HeadMesh, rig: Rig, tables: Sequence = ()) -> TablesDeformer:
-    return TablesDeformer(mesh, rig, tables)
+def build(mesh: HeadMesh, rig: Rig, tables: Sequence = (), origin: Sequence[float] | None = None) -> TablesDeformer:
+    return TablesDeformer(mesh, rig, tables, origin)
