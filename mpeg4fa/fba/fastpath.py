@@ -62,6 +62,7 @@ class FastDecoder(_Decoder):
         self.res = np.zeros(kernel.RESULT_SIZE, dtype=np.int64)
         self.times = np.zeros(1, dtype=np.float64)
         self.scratch = np.zeros(max(N_BAPS, N_FAPS) + 8, dtype=np.int64)
+        self._packed, self._packed_of = np.zeros(8, np.uint8), None
 
     def segment(self, models: list, adapt: bool) -> list[int]:
         """Intra segments (uniform models) compiled too; P segments never come here but stay correct."""
@@ -130,8 +131,11 @@ class FastDecoder(_Decoder):
         bap = np.empty((n if self.body is not None else 0, N_BAPS), np.int32)
         self.times[0] = self.next_pts
         buf = np.frombuffer(r.buf, dtype=np.uint8)
+        if self._packed_of is not r.buf:  # the window's bits 8 to a byte, for the coder's multi-bit reads
+            self._packed = np.concatenate([np.packbits(buf), np.zeros(8, np.uint8)])
+            self._packed_of = r.buf
         face = self.face
-        kernel.decode_planes(buf, r.base, r.p, len(buf), self.eof,
+        kernel.decode_planes(buf, self._packed, r.base, r.p, len(buf), self.eof,
                              fb.meta, fb.total, fb.freq, fb.tree, self.fprev, face is not None,
                              bool(face is not None and face.mask[0]), bool(face is not None and face.mask[1]),
                              bb.meta, bb.total, bb.freq, bb.tree, self.baps.prev, self.body is not None,

@@ -13,6 +13,15 @@ import numpy as np
 
 from . import jit
 
+try:  # LLVM's count-leading/trailing-zeros, for renormalising several bits at once
+    from numba.cpython.unsafe.numbers import leading_zeros, trailing_zeros
+except ImportError:  # pragma: no cover - without numba the kernels run as plain Python
+    def leading_zeros(x):
+        return 64 - int(x).bit_length()
+
+    def trailing_zeros(x):
+        return (int(x) & -int(x)).bit_length() - 1 if x else 64
+
 
 # ==== adaptive models as Fenwick trees ==========================================================
 # Adaptive frequency models as Fenwick trees over flat arrays (the compiled path's model search).
@@ -201,7 +210,41 @@ def _renormalise(buf, p, nbuf, zeros, low, high, code):
 
 
 @jit
-def segment(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, values):
+def _renormalise_fast(buf, packed, p, nbuf, zeros, low, high, code):
+    """:func:`_renormalise` in one step: the doublings counted at once and their bits read from
+    ``packed`` (``buf`` packed 8 bits a byte, 8 spare zero bytes at the end) when no stuffed bit can
+    lie among them and the window holds them all; otherwise :func:`_renormalise` bit by bit.
+
+    While low and high agree in their top bit the interval lies in one half; the first bit where
+    they differ is low's 0 and high's 1, and from then on each doubling of the middle half (low
+    '01..', high '10..') is a doubling modulo 2**16 with the top bit flipped. So ``n`` half
+    doublings (the leading bits low and high share) are followed by ``k`` middle doublings (the
+    run of '1' in low over '0' in high that follows), and no half doubling can come after those.
+    """
+    n = leading_zeros(np.int64(low ^ high)) - 48
+    low2 = (low << n) & TOP
+    high2 = ((high << n) | ((1 << n) - 1)) & TOP
+    run = ((low2 & ~high2) << 1) & TOP
+    k = leading_zeros(np.int64(run ^ TOP)) - 48
+    bits = n + k
+    if bits == 0:
+        return low, high, code, p, zeros, 0
+    if zeros + bits > MAX_ZERO_RUN or p + bits > nbuf:
+        return _renormalise(buf, p, nbuf, zeros, low, high, code)
+    i = p >> 3
+    word = (np.int64(packed[i]) << 32) | (np.int64(packed[i + 1]) << 24) | (np.int64(packed[i + 2]) << 16) \
+        | (np.int64(packed[i + 3]) << 8) | np.int64(packed[i + 4])
+    w = (word >> (40 - (p & 7) - bits)) & ((1 << bits) - 1)
+    flip = Q2 if k else 0
+    low = ((low2 << k) & TOP) ^ flip
+    high = (((high2 << k) | ((1 << k) - 1)) & TOP) ^ flip
+    code = (((code << bits) | w) & TOP) ^ flip
+    zeros = trailing_zeros(w) if w else zeros + bits
+    return low, high, code, p + bits, zeros, 0
+
+
+@jit
+def segment(buf, packed, p, nbuf, meta, lo, hi, total, freq, tree, prev, values):
     """Decode models ``lo..hi-1`` of ``meta`` from ``buf[p:]``; return (position after the rewind, 0)
     or (fault position, END_OF_DATA / BAD_STUFFING). Values land in ``prev`` and ``values[m - lo]``."""
     code, p, zeros, err = _look_ahead(buf, p, nbuf)
@@ -221,7 +264,7 @@ def segment(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, values):
         cum_lo = cum_hi - freq[foff + s]
         high = low - 1 + (length * cum_hi) // t
         low = low + (length * cum_lo) // t
-        low, high, code, p, zeros, err = _renormalise(buf, p, nbuf, zeros, low, high, code)
+        low, high, code, p, zeros, err = _renormalise_fast(buf, packed, p, nbuf, zeros, low, high, code)
         if err < 0:
             return p, err
         count(freq, foff, tree, toff, n, total, m, s)
@@ -362,10 +405,10 @@ def _face_segments(fmeta):
 
 
 @jit
-def _high_level(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, scratch, out, row, nraw, first_raw, res):
+def _high_level(buf, packed, p, nbuf, meta, lo, hi, total, freq, tree, prev, scratch, out, row, nraw, first_raw, res):
     """A FAP 1 or FAP 2 segment and its raw bits into ``out[row]``; the new position, or -1 after a fault."""
     seg_start = p
-    p, err = segment(buf, p, nbuf, meta, lo, hi, total, freq, tree, prev, scratch)
+    p, err = segment(buf, packed, p, nbuf, meta, lo, hi, total, freq, tree, prev, scratch)
     if err != 0:
         _segment_fault(res, p, err)
         return -1
@@ -394,7 +437,7 @@ def _segment_fault(res, p, err):
 
 
 @jit
-def decode_planes(buf, base, p, nbuf, eof,
+def decode_planes(buf, packed, base, p, nbuf, eof,
                   fmeta, ftotal, ffreq, ftree, fprev, face_ready, vis_on, exp_on,
                   bmeta, btotal, bfreq, btree, bprev, body_ready,
                   fps, times,
@@ -490,16 +533,16 @@ def decode_planes(buf, base, p, nbuf, eof,
             o_fap[rows, j] = 0
         if mask & 1:
             if vis_on:
-                p = _high_level(buf, p, nbuf, fmeta, vis_lo, vis_hi, ftotal, ffreq, ftree, fprev, scratch,
+                p = _high_level(buf, packed, p, nbuf, fmeta, vis_lo, vis_hi, ftotal, ffreq, ftree, fprev, scratch,
                                 o_vis, rows, 1, VISEME_DEF, res)
                 if p < 0:
                     return
             if exp_on:
-                p = _high_level(buf, p, nbuf, fmeta, exp_lo, exp_hi, ftotal, ffreq, ftree, fprev, scratch,
+                p = _high_level(buf, packed, p, nbuf, fmeta, exp_lo, exp_hi, ftotal, ffreq, ftree, fprev, scratch,
                                 o_exp, rows, 2, INIT_FACE, res)
                 if p < 0:
                     return
-            p, err = segment(buf, p, nbuf, fmeta, fap_lo, nf, ftotal, ffreq, ftree, fprev, scratch)
+            p, err = segment(buf, packed, p, nbuf, fmeta, fap_lo, nf, ftotal, ffreq, ftree, fprev, scratch)
             if err != 0:
                 _segment_fault(res, p, err)
                 return
@@ -513,7 +556,7 @@ def decode_planes(buf, base, p, nbuf, eof,
             if not body_ready:
                 _fail(res, NO_BODY_INTRA, p, 0, 0, 0)
                 return
-            p, err = segment(buf, p, nbuf, bmeta, 0, nb, btotal, bfreq, btree, bprev, scratch)
+            p, err = segment(buf, packed, p, nbuf, bmeta, 0, nb, btotal, bfreq, btree, bprev, scratch)
             if err != 0:
                 _segment_fault(res, p, err)
                 return
