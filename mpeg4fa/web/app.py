@@ -14,6 +14,7 @@ import numpy as np
 from fastapi import FastAPI, Request, UploadFile
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
@@ -26,6 +27,8 @@ from mpeg4fa.web.session import Session
 
 UPLOAD_LIMIT = 64 * 1024 * 1024
 HOST = "127.0.0.1"
+STATIC = Path(__file__).with_name("static")
+"""The editor page (``editor.html``), its ES modules (``js/``), style (``css/``) and vendored three.js."""
 
 
 class _Strict(BaseModel):
@@ -198,7 +201,9 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
 
     @app.get("/", response_class=HTMLResponse)
     def index():
-        return (Path(__file__).with_name("index.html")).read_text(encoding="utf-8")
+        return (STATIC / "editor.html").read_text(encoding="utf-8")
+
+    app.mount("/static", StaticFiles(directory=STATIC), name="static")
 
     @app.get("/api/model")
     def get_model():

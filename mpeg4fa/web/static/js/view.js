@@ -1,0 +1,264 @@
+// The three.js view: the mesh (flat shaded, coloured per part, selected faces highlighted),
+// the feature points as small spheres with labels, orbit/zoom/pan, picking and projection.
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+
+const PALETTE = [0x93c47d, 0x8e7cc3, 0xffd966, 0xb4a7d6, 0xa2c4c9, 0xea9999, 0xf9cb9c, 0x6aa84f, 0x45818e];
+const SELECTED = new THREE.Color(0xff6a00);
+const POINT = 0x1f4fff, POINT_PICKED = 0xff1f6a;
+export const BACKGROUND = 0x2b2f36;
+
+const KNOWN = { skin: 0xd9b49c, eye_l: 0x6fa8dc, eye_r: 0x76a5af, teeth_upper: 0xf6f0d8, teeth_lower: 0xe3d9b8,
+                teeth: 0xf2e6b0, tongue: 0xc27ba0 };
+
+// a part keeps its colour through edits: known names have theirs, others one picked by their name
+export function partColor(name) {
+  if (name in KNOWN) return KNOWN[name];
+  let h = 0;
+  for (const ch of name) h = (h * 31 + ch.charCodeAt(0)) >>> 0;
+  return PALETTE[h % PALETTE.length];
+}
+
+export class View {
+  constructor(container, overlay) {
+    this.container = container;
+    this.overlay = overlay;
+    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(window.devicePixelRatio || 1);
+    this.renderer.setClearColor(BACKGROUND);
+    this.renderer.domElement.id = "canvas";
+    this.renderer.domElement.dataset.testid = "canvas";
+    container.prepend(this.renderer.domElement);
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(35, 1, 0.1, 1e5);
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 1.6));
+    this.light = new THREE.DirectionalLight(0xffffff, 1.6);
+    this.camera.add(this.light);
+    this.light.position.set(0.3, 0.5, 1);
+    this.scene.add(this.camera);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.addEventListener("change", () => this.requestRender());
+    this.raycaster = new THREE.Raycaster();
+    this.mesh = null;
+    this.points = new THREE.Group();
+    this.scene.add(this.points);
+    this.labels = new Map();
+    this.showLabels = true;
+    this.pickedLabel = null;
+    this.pending = false;
+    this.frames = 0;
+    new ResizeObserver(() => this.resize()).observe(container);
+    this.resize();
+  }
+
+  resize() {
+    const w = Math.max(1, this.container.clientWidth), h = Math.max(1, this.container.clientHeight);
+    this.renderer.setSize(w, h, false);
+    this.renderer.domElement.style.width = `${w}px`;
+    this.renderer.domElement.style.height = `${h}px`;
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.requestRender();
+  }
+
+  requestRender() {
+    if (this.pending) return;
+    this.pending = true;
+    requestAnimationFrame(() => { this.pending = false; this.render(); });
+  }
+
+  render() {
+    this.renderer.render(this.scene, this.camera);
+    this.frames += 1;
+    this.placeLabels();
+  }
+
+  // model: the API's /api/model answer; positions: the shown positions (neutral or posed), flat V*3
+  setModel(model, positions, { frame = false } = {}) {
+    this.model = model;
+    this.indices = model.indices;
+    const t = model.indices.length / 3;
+    if (this.mesh) { this.scene.remove(this.mesh); this.mesh.geometry.dispose(); }
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(t * 9), 3));
+    geometry.setAttribute("color", new THREE.BufferAttribute(new Float32Array(t * 9), 3));
+    const material = new THREE.MeshStandardMaterial({ vertexColors: true, flatShading: true, roughness: 0.8,
+                                                       metalness: 0.0, side: THREE.DoubleSide });
+    this.mesh = new THREE.Mesh(geometry, material);
+    this.scene.add(this.mesh);
+    this.setPositions(positions);
+    this.setColors(new Set());
+    if (frame) this.frame();
+    this.requestRender();
+  }
+
+  setPositions(positions) {
+    this.positions = positions;
+    const out = this.mesh.geometry.attributes.position;
+    const a = out.array, idx = this.indices;
+    for (let k = 0; k < idx.length; k++) {
+      const v = idx[k] * 3;
+      a[k * 3] = positions[v]; a[k * 3 + 1] = positions[v + 1]; a[k * 3 + 2] = positions[v + 2];
+    }
+    out.needsUpdate = true;
+    this.vertexNormals();
+    this.mesh.geometry.computeVertexNormals();
+    this.mesh.geometry.computeBoundingSphere();
+    this.mesh.geometry.computeBoundingBox();
+    this.setPoints(this.model.points);
+    this.requestRender();
+  }
+
+  // area-weighted vertex normals: a label whose point faces away from the camera is hidden
+  vertexNormals() {
+    const p = this.positions, idx = this.indices;
+    const n = new Float32Array(p.length);
+    const a = new THREE.Vector3(), b = new THREE.Vector3(), c = new THREE.Vector3();
+    for (let f = 0; f < idx.length; f += 3) {
+      const i = idx[f] * 3, j = idx[f + 1] * 3, k = idx[f + 2] * 3;
+      a.set(p[j] - p[i], p[j + 1] - p[i + 1], p[j + 2] - p[i + 2]);
+      b.set(p[k] - p[i], p[k + 1] - p[i + 1], p[k + 2] - p[i + 2]);
+      c.crossVectors(a, b);
+      for (const v of [i, j, k]) { n[v] += c.x; n[v + 1] += c.y; n[v + 2] += c.z; }
+    }
+    this.normals = n;
+  }
+
+  facesCamera(v) {
+    const n = this.normals, p = this.vertex(v);
+    const toCamera = this.camera.position.clone().sub(p);
+    return n[v * 3] * toCamera.x + n[v * 3 + 1] * toCamera.y + n[v * 3 + 2] * toCamera.z >= 0;
+  }
+
+  setColors(selected) {
+    const c = this.mesh.geometry.attributes.color, a = c.array;
+    const parts = this.model.parts.map((name, i) => new THREE.Color(partColor(name)));
+    const tp = this.model.triangle_parts;
+    for (let f = 0; f < tp.length; f++) {
+      const col = selected.has(f) ? SELECTED : parts[tp[f]];
+      for (let k = 0; k < 3; k++) { a[f * 9 + k * 3] = col.r; a[f * 9 + k * 3 + 1] = col.g; a[f * 9 + k * 3 + 2] = col.b; }
+    }
+    c.needsUpdate = true;
+    this.requestRender();
+  }
+
+  size() {
+    const box = this.mesh.geometry.boundingBox;
+    return box.getSize(new THREE.Vector3()).length();
+  }
+
+  frame() {
+    const box = this.mesh.geometry.boundingBox;
+    const centre = box.getCenter(new THREE.Vector3());
+    const d = this.size() / (2 * Math.tan((this.camera.fov * Math.PI) / 360)) * 1.05;
+    this.camera.position.set(centre.x, centre.y, centre.z + d);
+    this.camera.near = d / 100; this.camera.far = d * 100;
+    this.camera.updateProjectionMatrix();
+    this.controls.target.copy(centre);
+    this.controls.update();
+    this.requestRender();
+  }
+
+  vertex(i) {
+    const p = this.positions;
+    return new THREE.Vector3(p[i * 3], p[i * 3 + 1], p[i * 3 + 2]);
+  }
+
+  setPoints(points) {
+    this.points.clear();
+    const r = this.size() * 0.004;
+    const geometry = new THREE.SphereGeometry(r, 10, 8);
+    const seen = new Set();
+    for (const [label, v] of Object.entries(points)) {
+      const m = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
+        color: label === this.pickedLabel ? POINT_PICKED : POINT, depthTest: true }));
+      m.position.copy(this.vertex(v));
+      m.userData.label = label;
+      this.points.add(m);
+      seen.add(label);
+      if (!this.labels.has(label)) {
+        const div = document.createElement("div");
+        div.className = "fp-label";
+        div.textContent = label;
+        div.dataset.label = label;
+        this.overlay.appendChild(div);
+        this.labels.set(label, div);
+      }
+    }
+    for (const [label, div] of this.labels) if (!seen.has(label)) { div.remove(); this.labels.delete(label); }
+    this.requestRender();
+  }
+
+  setPicked(label) {
+    this.pickedLabel = label;
+    if (this.model) this.setPoints(this.model.points);
+  }
+
+  placeLabels() {
+    if (!this.model) return;
+    const w = this.container.clientWidth, h = this.container.clientHeight;
+    for (const [label, div] of this.labels) {
+      const v = this.model.points[label];
+      if (v === undefined || !this.showLabels) { div.style.display = "none"; continue; }
+      const p = this.vertex(v).project(this.camera);
+      div.style.display = p.z < 1 && this.facesCamera(v) ? "" : "none";
+      div.style.left = `${((p.x + 1) / 2) * w + 4}px`;
+      div.style.top = `${((1 - p.y) / 2) * h - 6}px`;
+      div.classList.toggle("picked", label === this.pickedLabel);
+    }
+  }
+
+  // NDC of a client (page) position over the canvas
+  ndc(clientX, clientY) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    return new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+  }
+
+  // {face, point, vertex}: the face under the pointer and its corner nearest the hit, or null
+  pick(clientX, clientY) {
+    if (!this.mesh) return null;
+    this.raycaster.setFromCamera(this.ndc(clientX, clientY), this.camera);
+    const hit = this.raycaster.intersectObject(this.mesh, false)[0];
+    if (!hit) return null;
+    const face = hit.faceIndex;
+    let best = -1, bestD = Infinity;
+    for (let k = 0; k < 3; k++) {
+      const v = this.indices[face * 3 + k];
+      const d = this.vertex(v).distanceToSquared(hit.point);
+      if (d < bestD) { bestD = d; best = v; }
+    }
+    return { face, point: hit.point.toArray(), vertex: best };
+  }
+
+  // page (client) coordinates of a model-space point
+  screenOf(vec) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const p = vec.clone().project(this.camera);
+    return { x: r.left + ((p.x + 1) / 2) * r.width, y: r.top + ((1 - p.y) / 2) * r.height, z: p.z };
+  }
+
+  faceCentre(f) {
+    const i = this.indices;
+    return this.vertex(i[f * 3]).add(this.vertex(i[f * 3 + 1])).add(this.vertex(i[f * 3 + 2])).divideScalar(3);
+  }
+
+  faceFacesCamera(f) {
+    const i = this.indices;
+    const a = this.vertex(i[f * 3]), b = this.vertex(i[f * 3 + 1]), c = this.vertex(i[f * 3 + 2]);
+    const n = b.clone().sub(a).cross(c.clone().sub(a));
+    const centre = a.add(b).add(c).divideScalar(3);
+    return n.dot(this.camera.position.clone().sub(centre)) > 0;
+  }
+
+  // faces whose projected centre lies in the client rectangle and that face the camera
+  facesInRect(x0, y0, x1, y1) {
+    const out = [];
+    const [ax, bx] = [Math.min(x0, x1), Math.max(x0, x1)], [ay, by] = [Math.min(y0, y1), Math.max(y0, y1)];
+    const n = this.indices.length / 3;
+    for (let f = 0; f < n; f++) {
+      const s = this.screenOf(this.faceCentre(f));
+      if (s.z < 1 && s.x >= ax && s.x <= bx && s.y >= ay && s.y <= by && this.faceFacesCamera(f)) out.push(f);
+    }
+    return out;
+  }
+}
