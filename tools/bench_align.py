@@ -107,7 +107,7 @@ noise starts, a stop's burst is. Only segments whose start is plain to see; espe
 
 
 def run_hand(folder: Path) -> list[dict]:
-    """Aligned phone onsets against :data:`HAND_ONSETS` (the n-th phone of that name in the sentence)."""
+    """Aligned phone onsets against :data:`HAND_ONSETS` (the nearest phone of that name)."""
     rows = []
     for method in ("pocketsphinx", "dtw"):
         errors = []
