@@ -11,17 +11,18 @@ from pathlib import Path
 from typing import Annotated, Literal, Union
 
 import numpy as np
-from fastapi import FastAPI, Request, UploadFile
+from fastapi import FastAPI, Form, Request, UploadFile
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import HTMLResponse, JSONResponse
+from fastapi.responses import HTMLResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
-from mpeg4fa.web import edits
-from mpeg4fa.web.files import FORMATS, read_mesh, save_model
+from mpeg4fa.web import edits, photos
+from mpeg4fa.atomic import atomic_outputs
+from mpeg4fa.web.files import FORMATS, output_path, read_mesh, save_model
 from mpeg4fa.web.posing import pose_values, posed_vertices
 from mpeg4fa.web.session import Session
 
@@ -144,6 +145,24 @@ class PoseRequest(_Strict):
     intensity: Annotated[int, Field(ge=0, le=FULL_INTENSITY)] = FULL_INTENSITY
 
 
+Pixel = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+
+class BoxRequest(_Strict):
+    view: Literal["front", "side"]
+    box: Annotated[list[float], Field(min_length=4, max_length=4)]
+
+
+class CalibrateRequest(_Strict):
+    front: dict[str, Pixel]
+    side: dict[str, Pixel]
+    method: Literal["dffd", "rbf", "elastic"] = "dffd"
+
+
+class ExportRequest(_Strict):
+    name: str = "face"
+
+
 def model_json(mesh: edits.EditMesh, session: Session) -> dict:
     """The mesh for three.js: flat positions and indices, each triangle's part, the placed points."""
     return {
@@ -262,6 +281,84 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
         values = pose_values(req.faps, req.viseme, req.expression, req.intensity)
         v = posed_vertices(session.require(), the_head(), values, state["cache"])
         return {"positions": np.round(v, 6).ravel().tolist()}
+
+    # -- photo calibration (issue 17 item 4; the pure steps are in .photos) ---------------------------
+
+    def need_photos() -> dict:
+        if "photos" not in state:
+            raise edits.EditError("no photos loaded", where="photos", hint="POST /api/photos first (front and side)")
+        return state["photos"]
+
+    def need_calibration() -> dict:
+        ph = need_photos()
+        if "calibrated" not in ph:
+            raise edits.EditError("nothing calibrated yet", where="calibrate", hint="POST /api/calibrate first")
+        return ph
+
+    @app.post("/api/photos")
+    async def load_photos(front: UploadFile, side: UploadFile,
+                          side_view: Annotated[Literal["left", "right"], Form()] = "left"):
+        images = {}
+        for key, f in (("front", front), ("side", side)):
+            data = await f.read(upload_limit + 1)
+            if len(data) > upload_limit:
+                return _error(413, f"upload larger than {upload_limit} bytes", key)
+            images[key] = photos.decode_photo(data, key)
+        sizes = {k: (int(im.shape[1]), int(im.shape[0])) for k, im in images.items()}
+        placed = photos.guess(the_head().mesh, sizes, side_view)
+        state["photos"] = {"images": images, "sizes": sizes, "side_view": side_view, "guess": placed}
+        return {"front": {"size": list(sizes["front"])}, "side": {"size": list(sizes["side"])},
+                "side_view": side_view, "guess": placed}
+
+    @app.post("/api/photos/box")
+    def photo_box(req: BoxRequest):
+        ph = need_photos()
+        box = photos.check_box(req.box, ph["sizes"][req.view], "box")
+        boxes = dict(ph["guess"]["box"], **{req.view: box})
+        ph["guess"] = photos.guess(the_head().mesh, ph["sizes"], ph["side_view"], boxes)
+        return {"guess": ph["guess"]}
+
+    @app.post("/api/calibrate")
+    def calibrate(req: CalibrateRequest):
+        ph = need_photos()
+        mesh, head = session.require(), the_head()
+        if (mesh.origin is None or len(mesh.origin) != len(mesh.vertices) or not len(mesh.origin)
+                or (mesh.origin < 0).any() or mesh.origin.max() >= head.mesh.n_vertices):
+            raise edits.EditError("photo calibration works on the head only; this mesh is not the head's",
+                                  where="calibrate", hint="load the head (POST /api/load) first")
+        face, targets, report = photos.calibrate_from_photos(head, req.front, req.side, ph["side_view"], req.method)
+        ph["calibrated"] = {"face": face, "front": dict(req.front), "side": dict(req.side)}
+        ph.pop("texture", None)
+        return {"positions": np.round(face.mesh.vertices[mesh.origin], 6).ravel().tolist(),
+                "points": {k: np.round(face.mesh.fp(k), 6).tolist() for k in targets}, "report": report}
+
+    def baked() -> np.ndarray:
+        ph = need_calibration()
+        if "texture" not in ph:
+            c = ph["calibrated"]
+            ph["texture"] = photos.bake(c["face"], ph["images"], c["front"], c["side"], ph["side_view"])
+        return ph["texture"]
+
+    # The bake draws with GL, whose context works only on the thread that made it: these two routes are
+    # async, so they run on the event loop's thread (uvicorn's main thread), never in the worker pool.
+    @app.get("/api/texture-preview")
+    async def texture_preview():
+        return Response(photos.encode_png(baked()), media_type="image/png")
+
+    @app.post("/api/export")
+    async def export(req: ExportRequest):
+        from mpeg4fa.fdp import save_fdp
+
+        ph = need_calibration()
+        paths = [output_path(out, f"{req.name}{s}") for s in (".fdp", ".texture.png")]
+        c = ph["calibrated"]
+        fdp = photos.photo_fdp(c["front"], c["side"], ph["side_view"], ph["images"]["front"], req.name)
+        png = photos.encode_png(baked())
+        out.mkdir(parents=True, exist_ok=True)
+        with atomic_outputs(*paths) as tmps:
+            save_fdp(fdp, tmps[0])
+            tmps[1].write_bytes(png)
+        return {"files": [p.name for p in paths], "folder": str(out)}
 
     @app.middleware("http")
     async def _limit(request: Request, call_next):

@@ -1,0 +1,157 @@
+"""Photo calibration for the editor (issue 17 item 4): pure functions over arrays, no server needed.
+
+A front and a side photo are orthographic views of the head: the front shows x (to the image's
+right) and y (up), the side z and y (a ``"left"`` photo has the nose toward the image's left, as
+:mod:`mpeg4fa.render.texture` has it). The first placement of the feature points is the head's
+own points projected into each photo and fitted to a box (:func:`default_box`,
+:func:`fit_to_box`); the user then drags the box and the points. :func:`calibrate_from_photos`
+turns the dragged points into 3D points (:func:`mpeg4fa.fdp.build.points_from_photos`), brought
+back to the head's scale and place (photos carry no absolute size), and calibrates the head on
+them (:meth:`mpeg4fa.face.FaceModel.calibrate`). :func:`bake` is
+:func:`mpeg4fa.render.texture.bake_texture` on the calibrated head; :func:`photo_fdp` the FDP a
+sender transmits (:func:`mpeg4fa.fdp.build.fdp_from_photos`, the front photo as its texture).
+"""
+from __future__ import annotations
+
+import io
+from typing import Mapping
+
+import numpy as np
+
+from mpeg4fa.web.edits import EditError
+
+VIEWS = ("front", "left", "right")
+BOX_HEIGHT = 0.8
+"""The default box's height as a share of the photo's height (centred)."""
+# per view: the head axis toward the image's right (the same axes as mpeg4fa.render.texture)
+_ACROSS = {"front": (1.0, 0.0, 0.0), "left": (0.0, 0.0, -1.0), "right": (0.0, 0.0, 1.0)}
+_HIDDEN_SIDE = {"left": "right", "right": "left"}  # a side photo does not show the face's other half
+
+
+def decode_photo(data: bytes, where: str) -> np.ndarray:
+    """Image bytes (anything Pillow reads) as an (H, W, 3) uint8 RGB array; EditError otherwise."""
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(io.BytesIO(data)) as img:
+            rgb = np.asarray(img.convert("RGB"))
+    except (OSError, UnidentifiedImageError, ValueError, Image.DecompressionBombError) as exc:
+        raise EditError(f"cannot read the {where} photo ({exc})", where=where,
+                        hint="send a PNG or JPEG image") from None
+    if rgb.shape[0] < 16 or rgb.shape[1] < 16:
+        raise EditError(f"the {where} photo is only {rgb.shape[1]}x{rgb.shape[0]} pixels", where=where,
+                        hint="at least 16x16")
+    return rgb
+
+
+def view_labels(head_mesh, view: str) -> tuple[str, ...]:
+    """The feature points a photo from ``view`` shows: all on the front, one half and the middle on a side."""
+    from mpeg4fa.spec import FEATURE_POINTS
+
+    if view == "front":
+        return tuple(head_mesh.fp_labels)
+    hidden = {fp.label for fp in FEATURE_POINTS if fp.side == _HIDDEN_SIDE[view]}
+    return tuple(label for label in head_mesh.fp_labels if label not in hidden)
+
+
+def head_outline(head_mesh, view: str) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The head in ``view``'s plane, in mm: each shown point's (across, up) and the skin's box [a0, u0, a1, u1]."""
+    across = np.asarray(_ACROSS[view])
+    skin = head_mesh.vertices[head_mesh.part("skin")]
+    flat = np.c_[skin @ across, skin[:, 1]]
+    points = {label: np.array([head_mesh.fp(label) @ across, head_mesh.fp(label)[1]])
+              for label in view_labels(head_mesh, view)}
+    return points, np.r_[flat.min(axis=0), flat.max(axis=0)]
+
+
+def default_box(size: tuple[int, int], outline_box: np.ndarray) -> list[float]:
+    """A box centred in a (width, height) photo, BOX_HEIGHT of its height, with the head's aspect ratio."""
+    width, height = size
+    a0, u0, a1, u1 = outline_box
+    h = BOX_HEIGHT * height
+    w = min(h * (a1 - a0) / (u1 - u0), 0.95 * width)
+    return [(width - w) / 2.0, (height - h) / 2.0, (width + w) / 2.0, (height + h) / 2.0]
+
+
+def check_box(box, size: tuple[int, int], where: str) -> list[float]:
+    b = np.asarray(box, float)
+    if b.shape != (4,) or not np.isfinite(b).all() or b[2] - b[0] < 2 or b[3] - b[1] < 2:
+        raise EditError(f"a box is [x0, y0, x1, y1] with x1 > x0 and y1 > y0 (pixels), got {box!r}", where=where)
+    return b.tolist()
+
+
+def fit_to_box(points: Mapping[str, np.ndarray], outline_box: np.ndarray, box) -> dict[str, list[float]]:
+    """Head-plane points (mm, up positive) mapped so that the head's box lands on ``box`` (pixels, y down)."""
+    a0, u0, a1, u1 = outline_box
+    x0, y0, x1, y1 = box
+    sx, sy = (x1 - x0) / (a1 - a0), (y1 - y0) / (u1 - u0)
+    return {label: [round(float(x0 + (p[0] - a0) * sx), 3), round(float(y1 - (p[1] - u0) * sy), 3)]
+            for label, p in points.items()}
+
+
+def guess(head_mesh, sizes: Mapping[str, tuple[int, int]], side_view: str, boxes: Mapping[str, list] | None = None):
+    """The first placement: {"front": {label: [x, y]}, "side": {label: [z, y]}, "box": {"front": .., "side": ..}}."""
+    out: dict = {"front": {}, "side": {}, "box": {}}
+    for key, view in (("front", "front"), ("side", side_view)):
+        points, outline = head_outline(head_mesh, view)
+        box = [round(float(v), 3) for v in (boxes or {}).get(key) or default_box(sizes[key], outline)]
+        out[key] = fit_to_box(points, outline, box)
+        out["box"][key] = box
+    return out
+
+
+def _rescale(points: Mapping[str, np.ndarray], head_mesh) -> dict[str, np.ndarray]:
+    """Photo-pixel 3D points moved and scaled uniformly onto the head's own points (least squares)."""
+    labels = list(points)
+    p = np.array([points[k] for k in labels])
+    h = np.array([head_mesh.fp(k) for k in labels])
+    pc, hc = p - p.mean(axis=0), h - h.mean(axis=0)
+    s = float(np.sum(pc * hc) / max(np.sum(pc * pc), 1e-12))
+    return {k: s * row + h.mean(axis=0) for k, row in zip(labels, pc)}
+
+
+def calibrate_from_photos(face, front: Mapping[str, list], side: Mapping[str, list], side_view: str,
+                          method: str = "dffd"):
+    """(the calibrated FaceModel, the 3D targets in head mm, the report as a dict)."""
+    from mpeg4fa.fdp import Fdp
+    from mpeg4fa.fdp.build import points_from_photos
+
+    _known(face.mesh, front, "front")
+    _known(face.mesh, side, "side")
+    targets = _rescale(points_from_photos(front, side, side_view=side_view), face.mesh)
+    calibrated = face.calibrate(Fdp.from_points(targets), method=method)
+    report = calibrated.calibration.as_dict() if getattr(calibrated, "calibration", None) else {}
+    errors = [float(np.linalg.norm(calibrated.mesh.fp(k) - v)) for k, v in targets.items()]
+    report.update(points=len(targets), max_point_error_mm=max(errors))
+    return calibrated, targets, report
+
+
+def _known(head_mesh, points: Mapping, where: str) -> None:
+    unknown = sorted(set(points) - set(head_mesh.fp_labels))
+    if unknown:
+        raise EditError(f"labels {', '.join(unknown)} are not feature points of this head", where=where)
+
+
+def bake(face, images: Mapping[str, np.ndarray], front: Mapping, side: Mapping, side_view: str, size: int = 512):
+    """The skin texture baked from the photos onto ``face`` (the calibrated head): (H, W, 3) uint8."""
+    from mpeg4fa.render.texture import PhotoView, bake_texture
+
+    return bake_texture(face.mesh, PhotoView(images["front"], dict(front), "front"),
+                        PhotoView(images["side"], dict(side), side_view), size=size).image
+
+
+def encode_png(image: np.ndarray) -> bytes:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(image).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def photo_fdp(front: Mapping, side: Mapping, side_view: str, front_image: np.ndarray, name: str):
+    """The FDP of the photos' points, with the front photo (PNG) as its texture and texture coordinates."""
+    from mpeg4fa.fdp.build import fdp_from_photos
+    from mpeg4fa.fdp.model import TextureImage
+
+    texture = TextureImage(f"{name}.front.png", "image/png", encode_png(front_image))
+    return fdp_from_photos(front, side, side_view=side_view, texture=texture, name=name)
