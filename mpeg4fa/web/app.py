@@ -18,10 +18,10 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
 from mpeg4fa.web import edits, photos
-from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.web.files import FORMATS, output_path, read_mesh, save_model
 from mpeg4fa.web.posing import pose_values, posed_vertices
 from mpeg4fa.web.session import Session
