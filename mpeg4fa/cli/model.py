@@ -103,14 +103,39 @@ def _expression(text: str) -> tuple[str, int]:
 
 
 def face_from_args(args: argparse.Namespace) -> FaceModel:
-    face = FaceModel.default()
+    """The generic head, or ``--face-mesh`` rigged where the command has it; calibrated to ``--fdp``
+    (without --face-mesh, a case-4 FDP plays its own mesh: :func:`~mpeg4fa.face.sent.played_face`);
+    the NURBS skull if asked."""
+    mesh_face = _mesh_face(args)
+    face = mesh_face or FaceModel.default()
     if args.fdp is not None:
         from ..face.sent import played_face
         from ..fdp import load_fdp
-        face = played_face(load_fdp(args.fdp), method=args.method)
+        fdp = load_fdp(args.fdp)
+        face = face.calibrate(fdp, method=args.method) if mesh_face else played_face(fdp, method=args.method)
     if getattr(args, "skull", "triangles") == "nurbs":
         face = face.with_nurbs_skull()
     return face
+
+
+def _mesh_face(args: argparse.Namespace) -> FaceModel | None:
+    """``--face-mesh OBJ --face-points JSON`` rigged (:meth:`FaceModel.from_mesh`), or None without them."""
+    mesh_path, points_path = getattr(args, "face_mesh", None), getattr(args, "face_points", None)
+    if mesh_path is None:
+        if points_path is not None:
+            raise UsageError("--face-points goes with --face-mesh")
+        return None
+    if points_path is None:
+        raise UsageError("--face-mesh needs --face-points", hint="a JSON file: label -> vertex index or [x, y, z]")
+    from ..fdp import FdpError, FdpValueError, read_obj
+    from ..fdp.build import read_points_json
+
+    mesh = read_obj(mesh_path)
+    points = read_points_json(points_path)
+    try:
+        return FaceModel.from_mesh(mesh.vertices, mesh.triangles, points, uvs=mesh.uvs, name=mesh_path.stem)
+    except FdpValueError as exc:
+        raise FdpError.no_place(str(points_path), exc.message) from None
 
 
 def run_install(args: argparse.Namespace) -> int:

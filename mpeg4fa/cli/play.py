@@ -80,35 +80,6 @@ def _render_options(p: argparse.ArgumentParser) -> None:
                    help="do not paint the skin with the texture the --fdp file carries (its front photo)")
 
 
-def _face(args: argparse.Namespace):
-    """The face to play: ``posed_face``'s, or the --face-mesh rigged (:meth:`FaceModel.from_mesh`)."""
-    if args.face_mesh is None:
-        if args.face_points is not None:
-            raise UsageError("--face-points goes with --face-mesh")
-        return posed_face(args)
-    if args.face_points is None:
-        raise UsageError("--face-mesh needs --face-points", hint="a JSON file: label -> vertex index or [x, y, z]")
-    if args.blocks is not None and args.deformer != "blocks":
-        raise UsageError(f"--blocks goes with --deformer blocks, not {args.deformer}")
-    from ..face import FaceModel
-    from ..fdp import FdpError, FdpValueError, read_obj
-    from ..fdp.build import read_points_json
-
-    mesh = read_obj(args.face_mesh)
-    points = read_points_json(args.face_points)
-    try:
-        face = FaceModel.from_mesh(mesh.vertices, mesh.triangles, points, uvs=mesh.uvs, name=args.face_mesh.stem)
-    except FdpValueError as exc:
-        raise FdpError.no_place(str(args.face_points), exc.message) from None
-    if args.fdp is not None:
-        from ..fdp import load_fdp
-        face = face.calibrate(load_fdp(args.fdp), method=args.method)
-    if getattr(args, "skull", "triangles") == "nurbs":
-        face = face.with_nurbs_skull()
-    options = {"regions": args.blocks} if args.blocks is not None else {}
-    return face.with_deformer(args.deformer, **options)
-
-
 def _renderer_options(args: argparse.Namespace, face) -> dict:
     chosen = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
     texture = _skin_texture(args, face)
@@ -160,7 +131,7 @@ def run_play(args: argparse.Namespace) -> int:
             refuse_overlaps(inputs, {f"-o {args.output}'s {AUDIO_WAV}": args.output / AUDIO_WAV})
         check_video_size(args.output, args.size)
     stream, _ = read_stream(args.stream)
-    face = _face(args)
+    face = posed_face(args)
     render_options = _renderer_options(args, face)
     if args.show:
         from ..render.window import show
@@ -193,7 +164,7 @@ def run_snapshot(args: argparse.Namespace) -> int:
     refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture,
                      "--face-mesh": args.face_mesh, "--face-points": args.face_points}, {"-o": args.output})
     stream, _ = read_stream(args.stream)
-    face = _face(args)
+    face = posed_face(args)
     image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args, face))
     save_image(Image.fromarray(image), args.output)
     print(f"{args.output}: {image.shape[1]}x{image.shape[0]}")

@@ -58,12 +58,12 @@ __all__ = ["PhotoView", "BakedTexture", "Alignment", "UVRaster", "bake_texture",
 VIEWS = ("front", "left", "right")
 SIDE_VIEWS = ("left", "right")
 
-# Per view: the head axis that points to the image's right, and the one toward the camera.
-_AXES: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
+VIEW_AXES: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
     "front": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
     "left": ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0)),
     "right": ((0.0, 0.0, 1.0), (-1.0, 0.0, 0.0)),
 }
+"""Per view: the head axis that points to the image's right, and the one toward the camera."""
 _DRAWN_PARTS = ("skin", "eye_l", "eye_r", "teeth_upper", "teeth_lower", "tongue")
 DEPTH_MAP_SIZE = 1024      # long side of the visibility depth maps, in pixels
 MIN_SIZE, MAX_SIZE = 16, 8192
@@ -128,7 +128,7 @@ class Alignment:
     def project(self, points: np.ndarray) -> np.ndarray:
         """(N, 3): photo x, y (pixels) and depth toward the camera (mm, larger = nearer)."""
         p = np.asarray(points, float)
-        across, toward = (np.asarray(a) for a in _AXES[self.view])
+        across, toward = (np.asarray(a) for a in VIEW_AXES[self.view])
         x = self.scale[0] * (p @ across) + self.offset[0]
         y = self.offset[1] - self.scale[1] * p[:, 1]
         return np.c_[x, y, p @ toward]
@@ -235,7 +235,7 @@ def align_view(mesh: HeadMesh, photo: PhotoView) -> Alignment:
     if len(labels) < 2:
         raise RenderError(f"{len(labels)} annotated feature point(s); at least 2 are needed", where=where,
                           hint="annotate e.g. the pupils 3.5/3.6, the nose tip 9.3 and the chin 2.1")
-    across, _ = (np.asarray(a) for a in _AXES[photo.view])
+    across, _ = (np.asarray(a) for a in VIEW_AXES[photo.view])
     head3 = np.array([mesh.fp(label) for label in labels])
     head = np.c_[head3 @ across, head3[:, 1]]        # across (to the image's right), up
     pix = np.array([photo.points[label] for label in labels])
@@ -347,7 +347,7 @@ def _bilinear(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def _sample_view(photo: PhotoView, align: Alignment, dmap: DepthMap, points: np.ndarray, normals: np.ndarray,
                  tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(colours (N, 3) float32, seen (N,) bool) of surface points in one photo."""
-    _, toward = (np.asarray(a) for a in _AXES[align.view])
+    _, toward = (np.asarray(a) for a in VIEW_AXES[align.view])
     return sample_projected(photo.image, align.project(points), normals @ toward, dmap,
                             align.scale, tolerance_mm)
 

@@ -20,11 +20,8 @@ import numpy as np
 
 from mpeg4fa.web.edits import EditError
 
-VIEWS = ("front", "left", "right")
 BOX_HEIGHT = 0.8
 """The default box's height as a share of the photo's height (centred)."""
-# per view: the head axis toward the image's right (the same axes as mpeg4fa.render.texture)
-_ACROSS = {"front": (1.0, 0.0, 0.0), "left": (0.0, 0.0, -1.0), "right": (0.0, 0.0, 1.0)}
 _HIDDEN_SIDE = {"left": "right", "right": "left"}  # a side photo does not show the face's other half
 
 
@@ -56,7 +53,9 @@ def view_labels(head_mesh, view: str) -> tuple[str, ...]:
 
 def head_outline(head_mesh, view: str) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """The head in ``view``'s plane, in mm: each shown point's (across, up) and the skin's box [a0, u0, a1, u1]."""
-    across = np.asarray(_ACROSS[view])
+    from mpeg4fa.render.texture import VIEW_AXES
+
+    across = np.asarray(VIEW_AXES[view][0])
     skin = head_mesh.vertices[head_mesh.part("skin")]
     flat = np.c_[skin @ across, skin[:, 1]]
     points = {label: np.array([head_mesh.fp(label) @ across, head_mesh.fp(label)[1]])
