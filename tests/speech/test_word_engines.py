@@ -64,16 +64,20 @@ def test_pyttsx3_word_boundaries_are_espeaks(both_english):
     assert max(abs(got[k] - want[k]) for k in want) < 0.5 / p3.rate
 
 
-def test_pyttsx3_stream_keeps_sync_at_every_word_boundary(both_english):
+def test_pyttsx3_stream_keeps_sync_at_every_word_boundary():
     """Each word's first viseme starts at the word's start in the audio (espeak's own word event: ground
     truth), or, for a stop, at the closure's silence just before it; read back from the decoded FAP 1,
     it is shown most between a frame before that onset and a frame after the onset plus LAG."""
     enc = encode_text(TEXT, engine="pyttsx3", level="high", fps=FPS)
     stream = decode(encode(enc.stream, enc.coding()))
-    _, es = both_english
+    # The word events of this very speech: in a process that has spoken other texts espeak's lengths
+    # drift by a few ms, so a fresh rendering is not the truth for this one (the test above checks
+    # that pyttsx3's boundaries are espeak's).
+    words = enc.speech.words()
+    assert len(words) >= 12
     spans = enc.utterance.spans()
     offsets = []
-    for word in es.words():
+    for word in words:
         k = min(range(len(spans)), key=lambda i: abs(spans[i].start - word.start))
         first = spans[k]
         moved = word.start - first.start
