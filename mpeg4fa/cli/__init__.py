@@ -17,7 +17,7 @@ import warnings
 
 from .. import __version__
 from ..errors import MpegFaError
-from . import codec, conform, edit, model, play, speech, texture
+from . import codec, conform, edit, export, model, play, speech, texture
 from .errors import UsageError
 from .media import one_line
 
@@ -38,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     speech.register(commands)
     conform.register(commands)
     edit.register(commands)
+    export.register(commands)
     return parser
 
 

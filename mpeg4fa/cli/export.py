@@ -1,0 +1,100 @@
+"""``mpeg4fa export``: a decoded stream as a file other tools play (a glTF binary head with its animation).
+
+The formats are a small table (:data:`FORMATS`): output suffix -> writer. Each writer takes
+the parsed arguments and does its work through a library call in :mod:`mpeg4fa.export`.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Callable
+
+from .errors import UsageError
+from .model import deformer_option, face_options
+from .options import Commands
+from .paths import refuse_overlaps
+
+AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
+
+
+def _write_glb(args: argparse.Namespace) -> str:
+    """The head (calibrated to --fdp) as GLB, the stream baked as ARKit morph weights or per-frame vertices."""
+    from ..export.gltf import export_glb
+    from ..formats import read_stream
+    from .model import face_from_args
+
+    stream, _ = read_stream(args.stream)
+    face = face_from_args(args)
+    audio = _audio_for(args)
+    if audio is not None:
+        refuse_overlaps({"stream": args.stream, "--audio": audio}, {"-o": args.output})
+    result = export_glb(stream, face, args.output, animation=args.animation, audio=audio)
+    extra = f"; audio: {result.audio}" if result.audio else ""
+    return (f"{args.output}: {result.n_parts} parts, {result.n_targets} morph targets, "
+            f"{result.n_frames} frames ({result.duration:.2f} s, {args.animation} animation){extra}")
+
+
+FORMATS: dict[str, tuple[tuple[str, ...], Callable[[argparse.Namespace], str]]] = {
+    "glb": ((".glb",), _write_glb),
+}
+"""Format name -> (output suffixes it is chosen by, writer returning the line to print)."""
+
+
+def register(commands: Commands) -> None:
+    p = commands.add_parser(
+        "export", help="export a .fba or .fap stream for other players (glTF binary head with its animation)",
+        description="Decode a stream and write it for other tools. glb: the head (calibrated to --fdp) with its "
+                    "parts, materials and texture, and the stream baked as a glTF animation. "
+                    "--animation morph (default) drives the 52 ARKit-named morph targets the generic head "
+                    "carries with the weights the arkit deformer derives from each frame's FAPs, so the GLB "
+                    "shows the head as '--deformer arkit' would, not exactly as the default feature-point "
+                    "deformer does (a head without ARKit units, e.g. a --face-mesh, cannot do this). "
+                    "--animation vertex bakes every frame's vertex positions as one morph target per frame "
+                    "(exact for any head and deformer; larger files). glTF has no audio: the stream's speech "
+                    "(--audio, or the WAV beside the stream) is copied next to OUT with OUT's name and .wav.",
+        epilog="examples:\n  mpeg4fa export talk.fba -o talk.glb\n"
+               "  mpeg4fa export talk.fap --fdp face.fdp --animation vertex --audio talk.wav -o talk.glb",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) stream")
+    p.add_argument("-o", "--output", type=Path, required=True, help="the file to write (format from its suffix)")
+    p.add_argument("--format", choices=tuple(FORMATS), help="output format (default: from the -o suffix)")
+    p.add_argument("--animation", choices=("morph", "vertex"), default="morph",
+                   help="glb: ARKit morph-target weights (default; as the arkit deformer shows the face) or "
+                        "per-frame vertex positions (the chosen --deformer, exact, bigger)")
+    audio = p.add_mutually_exclusive_group()
+    audio.add_argument("--audio", type=Path, help="speech to copy next to the output (WAV)")
+    audio.add_argument("--no-audio", action="store_true", help="do not look for a WAV beside the stream")
+    face_options(p)
+    deformer_option(p)
+    p.set_defaults(run=run_export)
+
+
+def _format_of(args: argparse.Namespace) -> str:
+    if args.format is not None:
+        return args.format
+    suffix = args.output.suffix.lower()
+    for name, (suffixes, _) in FORMATS.items():
+        if suffix in suffixes:
+            return name
+    known = ", ".join(s for suffixes, _ in FORMATS.values() for s in suffixes)
+    raise UsageError(f"-o {args.output}: no export format for suffix {suffix or '(none)'!r}",
+                     hint=f"name the output with one of {known}, or give --format")
+
+
+def _audio_for(args: argparse.Namespace) -> Path | None:
+    if args.audio is not None or args.no_audio:
+        return args.audio
+    for suffix in AUDIO_SUFFIXES:
+        candidate = args.stream.with_suffix(suffix)
+        if candidate.is_file():
+            print(f"audio: {candidate} (found beside the stream; --no-audio to leave it out)", file=sys.stderr)
+            return candidate
+    return None
+
+
+def run_export(args: argparse.Namespace) -> int:
+    refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--audio": args.audio}, {"-o": args.output})
+    _, writer = FORMATS[_format_of(args)]
+    print(writer(args))
+    return 0
