@@ -27,6 +27,7 @@ from mpeg4fa.web.posing import pose_values, posed_vertices
 from mpeg4fa.web.session import Session
 
 UPLOAD_LIMIT = 64 * 1024 * 1024
+STALE = "the mesh changed (an edit, load or upload) after it was calibrated"
 HOST = "127.0.0.1"
 STATIC = Path(__file__).with_name("static")
 """The editor page (``editor.html``), its ES modules (``js/``), style (``css/``) and vendored three.js."""
@@ -151,6 +152,7 @@ Pixel = Annotated[list[float], Field(min_length=2, max_length=2)]
 class BoxRequest(_Strict):
     view: Literal["front", "side"]
     box: Annotated[list[float], Field(min_length=4, max_length=4)]
+    dragged: dict[str, Pixel] | None = None  # the view's points the user put by hand (they stay put); None: as before
 
 
 class CalibrateRequest(_Strict):
@@ -289,11 +291,32 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
             raise edits.EditError("no photos loaded", where="photos", hint="POST /api/photos first (front and side)")
         return state["photos"]
 
+    def still_current(ph: dict) -> bool:
+        """A calibration belongs to the mesh it was made on (edits make new meshes): cleared once that changes."""
+        if "calibrated" in ph and ph["calibrated"]["mesh"] is not session.mesh:
+            ph.pop("calibrated")
+            ph.pop("texture", None)
+            ph["cleared"] = STALE
+        return "calibrated" in ph
+
     def need_calibration() -> dict:
         ph = need_photos()
-        if "calibrated" not in ph:
+        if not still_current(ph):
+            if ph.get("cleared"):
+                raise edits.EditError(f"the calibration was cleared: {ph['cleared']}", where="calibrate",
+                                      hint="calibrate again (POST /api/calibrate)")
             raise edits.EditError("nothing calibrated yet", where="calibrate", hint="POST /api/calibrate first")
         return ph
+
+    @app.get("/api/photos")
+    def photo_state():
+        ph = state.get("photos")
+        if ph is None:
+            return {"loaded": False, "calibrated": False, "cleared": None}
+        current = still_current(ph)
+        return {"loaded": True, "calibrated": current, "cleared": None if current else ph.get("cleared"),
+                "front": {"size": list(ph["sizes"]["front"])}, "side": {"size": list(ph["sizes"]["side"])},
+                "side_view": ph["side_view"], "guess": ph["guess"]}
 
     @app.post("/api/photos")
     async def load_photos(front: UploadFile, side: UploadFile,
@@ -306,7 +329,8 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
             images[key] = photos.decode_photo(data, key)
         sizes = {k: (int(im.shape[1]), int(im.shape[0])) for k, im in images.items()}
         placed = photos.guess(the_head().mesh, sizes, side_view)
-        state["photos"] = {"images": images, "sizes": sizes, "side_view": side_view, "guess": placed}
+        state["photos"] = {"images": images, "sizes": sizes, "side_view": side_view, "guess": placed,
+                           "dragged": {"front": {}, "side": {}}}
         return {"front": {"size": list(sizes["front"])}, "side": {"size": list(sizes["side"])},
                 "side_view": side_view, "guess": placed}
 
@@ -315,7 +339,9 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
         ph = need_photos()
         box = photos.check_box(req.box, ph["sizes"][req.view], "box")
         boxes = dict(ph["guess"]["box"], **{req.view: box})
-        ph["guess"] = photos.guess(the_head().mesh, ph["sizes"], ph["side_view"], boxes)
+        dragged = dict(ph["dragged"], **({} if req.dragged is None else {req.view: dict(req.dragged)}))
+        ph["guess"] = photos.guess(the_head().mesh, ph["sizes"], ph["side_view"], boxes, dragged)
+        ph["dragged"] = dragged
         return {"guess": ph["guess"]}
 
     @app.post("/api/calibrate")
@@ -327,10 +353,14 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
             raise edits.EditError("photo calibration works on the head only; this mesh is not the head's",
                                   where="calibrate", hint="load the head (POST /api/load) first")
         face, targets, report = photos.calibrate_from_photos(head, req.front, req.side, ph["side_view"], req.method)
-        ph["calibrated"] = {"face": face, "front": dict(req.front), "side": dict(req.side)}
+        ph["calibrated"] = {"face": face, "front": dict(req.front), "side": dict(req.side), "mesh": mesh}
         ph.pop("texture", None)
+        ph.pop("cleared", None)
+        skin = mesh.part_names.index("skin") if "skin" in mesh.part_names else -1
         return {"positions": np.round(face.mesh.vertices[mesh.origin], 6).ravel().tolist(),
-                "points": {k: np.round(face.mesh.fp(k), 6).tolist() for k in targets}, "report": report}
+                "points": {k: np.round(face.mesh.fp(k), 6).tolist() for k in targets}, "report": report,
+                "skin": photos.skin_texture_mapping(head.mesh, mesh.origin, mesh.triangles),
+                "other_indices": mesh.triangles[mesh.tri_part != skin].ravel().tolist()}
 
     def baked() -> np.ndarray:
         ph = need_calibration()

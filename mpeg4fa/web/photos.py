@@ -88,15 +88,29 @@ def fit_to_box(points: Mapping[str, np.ndarray], outline_box: np.ndarray, box) -
             for label, p in points.items()}
 
 
-def guess(head_mesh, sizes: Mapping[str, tuple[int, int]], side_view: str, boxes: Mapping[str, list] | None = None):
-    """The first placement: {"front": {label: [x, y]}, "side": {label: [z, y]}, "box": {"front": .., "side": ..}}."""
-    out: dict = {"front": {}, "side": {}, "box": {}}
+def guess(head_mesh, sizes: Mapping[str, tuple[int, int]], side_view: str, boxes: Mapping[str, list] | None = None,
+          dragged: Mapping[str, Mapping[str, list]] | None = None):
+    """The placement: {"front": {label: [x, y]}, "side": {label: [z, y]}, "box": {"front": .., "side": ..},
+    "dragged": {"front": [labels], "side": [labels]}}. The points fitted to the box are guesses; those in
+    ``dragged`` ({view: {label: [x, y]}}) were put by the user and stay where they were put."""
+    out: dict = {"front": {}, "side": {}, "box": {}, "dragged": {}}
     for key, view in (("front", "front"), ("side", side_view)):
         points, outline = head_outline(head_mesh, view)
         box = [round(float(v), 3) for v in (boxes or {}).get(key) or default_box(sizes[key], outline)]
-        out[key] = fit_to_box(points, outline, box)
+        placed = fit_to_box(points, outline, box)
+        held = {k: [round(float(x), 3), round(float(y), 3)] for k, (x, y) in ((dragged or {}).get(key) or {}).items()}
+        _known_in(placed, held, key)
+        out[key] = {**placed, **held}
         out["box"][key] = box
+        out["dragged"][key] = sorted(held)
     return out
+
+
+def _known_in(placed: Mapping, held: Mapping, where: str) -> None:
+    unknown = sorted(set(held) - set(placed))
+    if unknown:
+        raise EditError(f"labels {', '.join(unknown)} are not feature points this photo shows", where=where,
+                        hint="drag only the points the page draws on it")
 
 
 def _rescale(points: Mapping[str, np.ndarray], head_mesh) -> dict[str, np.ndarray]:
@@ -123,6 +137,23 @@ def calibrate_from_photos(face, front: Mapping[str, list], side: Mapping[str, li
     errors = [float(np.linalg.norm(calibrated.mesh.fp(k) - v)) for k, v in targets.items()]
     report.update(points=len(targets), max_point_error_mm=max(errors))
     return calibrated, targets, report
+
+
+def skin_texture_mapping(head_mesh, origin: np.ndarray, triangles: np.ndarray) -> dict[str, list]:
+    """The head's skin triangles that the edited mesh still has, in its vertex numbering (``origin``: each
+    edited vertex's head vertex; ``triangles``: its (T, 3) triangles), with their corners' texture
+    coordinates, for showing the baked texture on it: {"indices": flat, "uvs": flat (u, v) per corner, v up}."""
+    n = len(origin) + 1
+    inverse = np.full(head_mesh.n_vertices, -1, np.int64)
+    inverse[np.asarray(origin, np.int64)] = np.arange(len(origin))
+    tri = inverse[np.asarray(head_mesh.triangles["skin"], np.int64)]
+
+    def keys(t: np.ndarray) -> np.ndarray:
+        s = np.sort(t, axis=1) + 1
+        return (s[:, 0] * n + s[:, 1]) * n + s[:, 2]
+    kept = (tri >= 0).all(axis=1) & np.isin(keys(tri), keys(np.asarray(triangles, np.int64)))
+    uvs = np.asarray(head_mesh.corner_uvs["skin"], float)[kept]
+    return {"indices": tri[kept].ravel().tolist(), "uvs": np.round(uvs, 6).ravel().tolist()}
 
 
 def _known(head_mesh, points: Mapping, where: str) -> None:

@@ -214,3 +214,86 @@ def test_bad_input(client, synth):
     big = client.post("/api/photos", files={"front": ("f.png", b"\0" * 2_100_000, "image/png"),
                                             "side": ("s.png", synth.png["side"], "image/png")})
     assert big.status_code == 413
+
+
+def test_dragged_points_stay_when_the_box_moves(client, synth):
+    guess = post_photos(client, synth).json()["guess"]
+    assert guess["dragged"] == {"front": [], "side": []}
+    x0, y0, x1, y1 = guess["box"]["front"]
+    put = [guess["front"]["9.3"][0] + 7.5, guess["front"]["9.3"][1] - 4.0]
+    r = client.post("/api/photos/box", json={"view": "front", "box": [x0 + 12, y0, x1 + 12, y1],
+                                             "dragged": {"9.3": put}})
+    assert r.status_code == 200, r.text
+    new = r.json()["guess"]
+    assert new["front"]["9.3"] == put and new["dragged"] == {"front": ["9.3"], "side": []}
+    others = [k for k in guess["front"] if k != "9.3"]
+    assert np.allclose([np.subtract(new["front"][k], guess["front"][k]) for k in others], [12, 0], atol=1e-2)
+    assert new["side"] == guess["side"]
+    # the server remembers the dragged points: a later refit (of either view) without them keeps them
+    x0, y0, x1, y1 = new["box"]["front"]
+    again = client.post("/api/photos/box", json={"view": "front", "box": [x0, y0 - 9, x1, y1 - 9]}).json()["guess"]
+    assert again["front"]["9.3"] == put and again["front"]["2.1"][1] == pytest.approx(new["front"]["2.1"][1] - 9, abs=1e-2)
+    sx0, sy0, sx1, sy1 = again["box"]["side"]
+    side = client.post("/api/photos/box", json={"view": "side", "box": [sx0 - 5, sy0, sx1 - 5, sy1]}).json()["guess"]
+    assert side["front"]["9.3"] == put
+    assert client.get("/api/photos").json()["guess"] == side
+    # an empty set lets the point follow the box again
+    free = client.post("/api/photos/box", json={"view": "front", "box": again["box"]["front"], "dragged": {}})
+    assert free.json()["guess"]["front"]["9.3"] == pytest.approx([guess["front"]["9.3"][0] + 12,
+                                                                  guess["front"]["9.3"][1] - 9], abs=1e-2)
+    # only labels the photo shows can be dragged (the side photo shows the face's left half)
+    r = client.post("/api/photos/box", json={"view": "side", "box": side["box"]["side"], "dragged": {"3.6": [1, 2]}})
+    assert r.status_code == 400 and r.json()["where"] == "side" and "3.6" in r.json()["error"], r.text
+    assert client.get("/api/photos").json()["guess"]["dragged"]["side"] == []  # a refused request changes nothing
+
+
+def calibrate_true(client, synth, guess):
+    front = synth.true_points("front", guess["front"])
+    side = synth.true_points("side", guess["side"])
+    r = client.post("/api/calibrate", json={"front": front, "side": side, "method": "dffd"})
+    assert r.status_code == 200, r.text
+    return r.json()
+
+
+def test_a_mesh_change_clears_the_calibration(client, synth):
+    assert client.get("/api/photos").json() == {"loaded": False, "calibrated": False, "cleared": None}
+    client.post("/api/load", json={"source": "head"})
+    guess = post_photos(client, synth).json()["guess"]
+    state = client.get("/api/photos").json()
+    assert state["loaded"] and not state["calibrated"] and state["cleared"] is None
+    out = calibrate_true(client, synth, guess)
+    head = synth.mesh
+    n_skin = len(head.triangles["skin"])
+    assert len(out["skin"]["indices"]) == 3 * n_skin and len(out["skin"]["uvs"]) == 6 * n_skin
+    n_other = sum(len(t) for name, t in head.triangles.items() if name != "skin")
+    assert len(out["other_indices"]) == 3 * n_other
+    assert client.get("/api/photos").json()["calibrated"] is True
+
+    # an edit: the calibration is gone, and the API says why
+    model = client.get("/api/model").json()
+    skin = model["parts"].index("skin")
+    first_skin_face = model["triangle_parts"].index(skin)
+    assert client.post("/api/edit", json={"edit": {"op": "delete_faces", "faces": [first_skin_face]}}).status_code == 200
+    state = client.get("/api/photos").json()
+    assert state["calibrated"] is False and "mesh changed" in state["cleared"]
+    for r in (client.get("/api/texture-preview"), client.post("/api/export", json={"name": "stale"})):
+        assert r.status_code == 400 and "calibration was cleared" in r.json()["error"], r.text
+    assert list(client.out.iterdir()) == []
+    out = calibrate_true(client, synth, guess)  # on the edited mesh: the deleted face has no texture to show
+    assert len(out["skin"]["indices"]) == 3 * (n_skin - 1)
+    assert client.get("/api/photos").json() | {"guess": None} == {
+        **client.get("/api/photos").json(), "calibrated": True, "cleared": None, "guess": None}
+
+    # a load (even of the same head) and an upload clear it too
+    client.post("/api/load", json={"source": "head"})
+    assert "mesh changed" in client.get("/api/photos").json()["cleared"]
+    calibrate_true(client, synth, guess)
+    import trimesh
+    obj = trimesh.exchange.obj.export_obj(trimesh.creation.icosphere(1), include_normals=False,
+                                          include_texture=False).encode()
+    assert client.post("/api/upload", files={"file": ("ball.obj", obj, "text/plain")}).status_code == 200
+    r = client.post("/api/export", json={"name": "stale"})
+    assert r.status_code == 400 and r.json()["where"] == "calibrate" and "calibrate again" in r.json()["error"]
+    # new photos start afresh: nothing calibrated, nothing cleared
+    post_photos(client, synth)
+    assert client.get("/api/photos").json()["cleared"] is None
