@@ -1,4 +1,4 @@
-"""Open a stream file of either kind: binary FBA (.fba) or text FAP (.fap)."""
+"""Open a stream file of any kind: binary FBA (.fba), text FAP (.fap) or text BAP (.bap)."""
 from __future__ import annotations
 
 import os
@@ -6,25 +6,42 @@ from pathlib import Path
 
 from ..fba import FapStream, decode
 from ..fba.bits import START_CODE_PREFIX
+from .bap_text import SUPPORTED_VERSIONS as BAP_VERSIONS
+from .bap_text import read_bap
 from .errors import FormatError
 from .fap_text import read_fap
 
+_TEXT_PEEK = 1 << 16
+"""Bytes of a text file looked at for its header line (comments before it included)."""
+
 
 def sniff(path: str | os.PathLike) -> str:
-    """'fba' when the file starts with a start code prefix, else 'fap' (text).
+    """'fba' when the file starts with a start code prefix; for text, 'bap' when the header line's version
+    is a .bap one (3.1, 3.2), else 'fap' (whose reader then says what is wrong).
 
     A missing or unreadable path (a directory) is a :class:`FormatError` naming it.
     """
     try:
         with open(path, "rb") as fh:
-            head = fh.read(4)
+            head = fh.read(_TEXT_PEEK)
     except OSError as exc:
         raise FormatError.from_os_error(os.fsdecode(path), exc) from None
-    return "fba" if len(head) == 4 and int.from_bytes(head[:3], "big") == START_CODE_PREFIX else "fap"
+    if len(head) >= 4 and int.from_bytes(head[:3], "big") == START_CODE_PREFIX:
+        return "fba"
+    return "bap" if _text_version(head) in BAP_VERSIONS else "fap"
+
+
+def _text_version(head: bytes) -> str | None:
+    """First field of the first line that is neither blank nor a ``#`` comment (None when there is none)."""
+    for raw in head.removeprefix(b"\xef\xbb\xbf").splitlines():
+        fields = raw.split()
+        if fields and not fields[0].startswith(b"#"):
+            return fields[0].decode("ascii", "replace")
+    return None
 
 
 def read_stream(path: str | os.PathLike) -> tuple[FapStream, str]:
-    """Read a .fba or .fap file (chosen by content, not by name); return the stream and its kind."""
+    """Read a .fba, .fap or .bap file (chosen by content, not by name); return the stream and its kind."""
     kind = sniff(path)
-    stream = decode(Path(path)) if kind == "fba" else read_fap(path)
-    return stream, kind
+    readers = {"fba": lambda: decode(Path(path)), "bap": lambda: read_bap(path), "fap": lambda: read_fap(path)}
+    return readers[kind](), kind

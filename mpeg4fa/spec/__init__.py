@@ -15,7 +15,7 @@ from mpeg4fa.spec._records import Expression, Fap, Fapu, FeaturePoint, HighLevel
 
 __all__ = [
     "Fap", "FeaturePoint", "Fapu", "Viseme", "Expression", "HighLevelField",
-    "N_FAPS", "N_BAPS", "N_FAP_GROUPS", "N_BAP_GROUPS", "FULL_INTENSITY", "ANGLE_UNIT", "AU_PER_RADIAN",
+    "N_FAPS", "N_BAPS", "N_ISO_BAPS", "N_FAP_GROUPS", "N_BAP_GROUPS", "FULL_INTENSITY", "ANGLE_UNIT", "AU_PER_RADIAN",
     "FAPU_NAMES", "FEATURE_POINT_MIRROR", "FAPS", "FAP_BY_NAME", "QUANT_STEP", "I_MAX_DEFAULT", "P_MAX_DEFAULT",
     "FAP_GROUP", "FAP_GROUP_SLICES", "FAP_PARTNERS", "HIGH_LEVEL_FIELDS", "FEATURE_POINTS", "FAPU",
     "VISEMES", "EXPRESSIONS", "BAP_GROUPS", "BAP_QUANT_STEP", "BAP_QUANT_STEP_ALT",
@@ -195,6 +195,23 @@ BAP_GROUPS = _bap_groups()
 """The 24 BAP groups as 0-based BAP indices in bitstream order (19 ISO + 5 visage)."""
 N_BAP_GROUPS = len(BAP_GROUPS)
 """24: the groups a frame's BAP mask is sent by (``bap_groups.csv``)."""
+
+
+def _iso_bap_count() -> int:
+    """Last ISO BAP (``bap_sets.csv``), checked against the BAP groups: the ISO groups hold exactly BAPs 1..n."""
+    sets = {r["set"]: r for r in read_table("bap_sets.csv", "set,first_bap,last_bap,first_group,last_group,note")}
+    iso, ext = sets["iso"], sets["extension"]
+    last = int(iso["last_bap"])
+    check(int(iso["first_bap"]) == 1 and int(ext["first_bap"]) == last + 1 and int(ext["last_bap"]) == N_BAPS,
+          "bap_sets.csv: the ISO and extension BAPs must split 1..N_BAPS")
+    iso_groups = BAP_GROUPS[int(iso["first_group"]) - 1:int(iso["last_group"])]
+    check(sorted(b for g in iso_groups for b in g) == list(range(last)) and int(ext["last_group"]) == N_BAP_GROUPS,
+          "bap_sets.csv: the ISO groups must hold exactly the ISO BAPs")
+    return last
+
+
+N_ISO_BAPS = _iso_bap_count()
+"""186: the BAPs of ISO/IEC 14496-2 (BAP groups 1..19); BAPs above are the visage extension (``bap_sets.csv``)."""
 
 BAP_QUANT_STEP = _frozen([int(r["bqp"]) for r in _BAP_QUANT])
 """Per-BAP quantiser step (BQP) that real streams decode with (visage "experiment")."""
