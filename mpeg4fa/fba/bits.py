@@ -43,6 +43,9 @@ class BitReader:
             self.buf = unpack(bytes(source))
         else:
             self._file = source
+            # read1: what has arrived, up to a chunk (a buffered file's read(n) waits for all n bytes,
+            # so a live socket opened with makefile('rb') would decode nothing until it closed)
+            self._read = getattr(source, "read1", None) or source.read
             self.buf = b""
         self._chunk = chunk_bytes
         self.base = 0  # absolute bit offset of buf[0]
@@ -58,7 +61,7 @@ class BitReader:
         """Load the next chunk of a file source; False at the end of the data."""
         if self._file is None:
             return False
-        data = self._file.read(self._chunk)
+        data = self._read(self._chunk)
         if not data:
             self._file = None
             return False

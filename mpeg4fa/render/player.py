@@ -197,8 +197,11 @@ def play_live(frames: Iterable[Frame], renderer: Renderer, *, face: FaceModel | 
               stall_timeout: float = 2.0, stats: LiveStats | None = None, **pacing) -> Iterator[LiveFrame]:
     """Decode -> deform -> render at wall-clock pace: late frames are dropped, a stalled source raises.
 
-    ``frames`` is any iterator of decoded frames (e.g. :func:`mpeg4fa.fba.iter_decode` on a
-    socket's file object). Every frame is resolved in the source thread, because unsent FAPs
+    ``frames`` is any iterator of decoded frames, e.g. :func:`mpeg4fa.fba.iter_decode` on a
+    socket's file object: ``sock.makefile("rb")`` with its default buffering works (the bit reader
+    takes what has arrived, ``read1``). For the lowest latency decode a live source with
+    ``backend="python"``: the compiled path decodes a P plane only once a worst-case margin of bits
+    has arrived after it (about 100 bytes, seconds at the rates of streams made from text). Every frame is resolved in the source thread, because unsent FAPs
     hold their values across frames, even across frames that are dropped for lateness.
     """
     face = face or renderer.face
