@@ -1,7 +1,7 @@
 // The face model editor page: wires the panels to the API, the view and the pointer.
 import { api, setStatus, upload } from "./api.js";
 import { View, partColor } from "./view.js";
-import { installPointer, holeLoop } from "./select.js";
+import { installPointer, holeLoop, cornersOf, facesWithin } from "./select.js";
 
 const $ = (id) => document.getElementById(id);
 const FAPS = [
@@ -14,15 +14,20 @@ const EXPRESSIONS = ["neutral", "joy", "sadness", "anger", "fear", "disgust", "s
 const FAPU_ROWS = [["IRISD0", "iris diameter"], ["ES0", "eye separation"], ["ENS0", "eye-nose separation"],
                    ["MNS0", "mouth-nose separation"], ["MW0", "mouth width"]];
 
+// selected: faces (Faces mode); vertices: vertices (Vertices mode); moveMode: the gizmo is shown
 const state = {
-  model: null, selected: new Set(), armed: null, featurePoints: [], posed: false,
-  version: 0, poseVersion: 0, fapu: null, problems: null, boxMode: false, lastSave: null,
+  model: null, mode: "faces", selected: new Set(), vertices: new Set(), armed: null, featurePoints: [],
+  posed: false, version: 0, poseVersion: 0, fapu: null, problems: null, boxMode: false, moveMode: false,
+  lastSave: null, drag: null,
 };
 const view = new View($("viewport"), $("labels"));
 
+// keepSelection: keep it when the edit kept the vertex and face numbering (same counts)
 function show(model, { frame = false, keepSelection = false } = {}) {
+  const old = state.model;
+  const same = old && old.counts.vertices === model.counts.vertices && old.counts.triangles === model.counts.triangles;
   state.model = model;
-  if (!keepSelection) state.selected = new Set();
+  if (!keepSelection || !same) { state.selected = new Set(); state.vertices = new Set(); }
   resetPose();
   view.setModel(model, model.positions, { frame });
   view.setColors(state.selected);
@@ -58,15 +63,121 @@ function showParts() {
 }
 
 function showSelection() {
-  $("sel-count").textContent = `${state.selected.size} faces selected`;
-  $("sel-count").dataset.count = String(state.selected.size);
-  view.setColors(state.selected);
+  const faces = state.mode === "faces", n = faces ? state.selected.size : state.vertices.size;
+  $("sel-count").textContent = `${n} ${faces ? "faces" : "vertices"} selected`;
+  $("sel-count").dataset.count = String(n);
+  $("sel-count").dataset.mode = state.mode;
+  view.setColors(faces ? state.selected : new Set(facesWithin(state.model.indices, state.vertices)));
+  view.markVertices(faces ? [] : [...state.vertices]);
+  showMove();
 }
 
-function select(faces, add) {
-  if (!add) state.selected = new Set();
-  for (const f of faces) state.selected.add(f);
+// faces or vertices, by the mode
+function select(items, add) {
+  const set = state.mode === "faces" ? "selected" : "vertices";
+  if (!add) state[set] = new Set();
+  for (const i of items) state[set].add(i);
   showSelection();
+}
+
+function toggle(item) {
+  const set = state.mode === "faces" ? state.selected : state.vertices;
+  if (set.has(item)) set.delete(item); else set.add(item);
+  showSelection();
+}
+
+function setMode(mode) {
+  if (mode === state.mode || !state.model) { if (!state.model) state.mode = mode; return; }
+  // the selection carries over: faces give their corners, vertices the faces they wholly span
+  if (mode === "vertices") state.vertices = new Set(cornersOf(state.model.indices, state.selected));
+  else state.selected = new Set(facesWithin(state.model.indices, state.vertices));
+  state.mode = mode;
+  for (const m of ["faces", "vertices"]) {
+    $(`btn-mode-${m}`).classList.toggle("on", m === mode);
+    $(`btn-mode-${m}`).setAttribute("aria-pressed", String(m === mode));
+  }
+  view.showVertexDots(mode === "vertices");
+  showSelection();
+}
+
+// ---- moving vertices ------------------------------------------------------------------------------
+
+// what a move moves: the selected vertices, or the corners of the selected faces
+function moveSet() {
+  if (!state.model) return [];
+  return state.mode === "vertices" ? [...state.vertices].sort((a, b) => a - b)
+                                   : cornersOf(state.model.indices, state.selected);
+}
+
+function centroid(vertices) {
+  const p = state.model.positions, c = [0, 0, 0];
+  for (const v of vertices) for (let k = 0; k < 3; k++) c[k] += p[v * 3 + k];
+  return c.map((x) => x / vertices.length);
+}
+
+function showMove(centre = null) {
+  const vs = moveSet();
+  const c = centre || (vs.length ? centroid(vs) : null);
+  for (const [k, axis] of ["x", "y", "z"].entries()) {
+    const input = $(`move-${axis}`);
+    input.disabled = !c;
+    input.value = c ? c[k].toFixed(3) : "";
+  }
+  $("btn-move-to").disabled = !c;
+  if (!state.drag) view.placeGizmo(state.moveMode && c ? c : null);
+}
+
+function moveBy(vertices, delta, how) {
+  if (!vertices.length) { setStatus("select vertices (or faces) to move", "error"); return Promise.resolve(null); }
+  if (delta.every((d) => d === 0)) { setStatus("nothing to move: the centre is already there", "info"); return Promise.resolve(null); }
+  return edit("move_vertices", { vertices, delta }, { keepSelection: true }).then((m) => {
+    if (m) setStatus(`${how}: moved ${vertices.length} vertices by `
+      + `(${delta.map((d) => d.toFixed(3)).join(", ")})`, "ok");
+    return m;
+  });
+}
+
+function moveTo() {
+  const vs = moveSet();
+  if (!vs.length) { moveBy(vs, [0, 0, 0], ""); return; }
+  const target = ["x", "y", "z"].map((a) => Number($(`move-${a}`).value));
+  if (!target.every(Number.isFinite)) { setStatus("move: x, y and z must be numbers", "error"); return; }
+  const c = centroid(vs);
+  moveBy(vs, target.map((t, k) => t - c[k]), "numeric move");
+}
+
+// the gizmo's drag previews the move on the shown mesh; its release applies it through the API (undoable)
+function wireGizmo() {
+  const g = view.gizmo;
+  g.addEventListener("mouseDown", () => {
+    const vertices = moveSet();
+    state.drag = { vertices, from: view.pivot.position.toArray(), base: Float64Array.from(state.model.positions) };
+  });
+  g.addEventListener("objectChange", () => {
+    const d = state.drag;
+    if (!d) return;
+    const at = view.pivot.position.toArray(), delta = at.map((x, k) => x - d.from[k]);
+    const p = Float64Array.from(d.base);
+    for (const v of d.vertices) for (let k = 0; k < 3; k++) p[v * 3 + k] += delta[k];
+    view.setPositions(p);
+    for (const [k, axis] of ["x", "y", "z"].entries()) $(`move-${axis}`).value = at[k].toFixed(3);
+  });
+  g.addEventListener("mouseUp", () => {
+    const d = state.drag;
+    if (!d) return;
+    const delta = view.pivot.position.toArray().map((x, k) => x - d.from[k]);
+    state.drag = null;
+    if (delta.every((x) => Math.abs(x) < 1e-9)) { showMove(); return; }
+    moveBy(d.vertices, delta, "dragged").then((m) => { if (!m) show(state.model, { keepSelection: true }); });
+  });
+}
+
+function toggleMoveMode() {
+  state.moveMode = !state.moveMode;
+  $("btn-move-mode").classList.toggle("on", state.moveMode);
+  $("btn-move-mode").setAttribute("aria-pressed", String(state.moveMode));
+  showMove();
+  if (state.moveMode && !moveSet().length) setStatus("move: select vertices or faces to show the gizmo", "info");
 }
 
 async function edit(op, args, { keepSelection = false } = {}) {
@@ -237,8 +348,8 @@ function onClick(hit, add) {
     });
     return;
   }
-  if (add && state.selected.has(hit.face)) { state.selected.delete(hit.face); showSelection(); return; }
-  select([hit.face], add);
+  const item = state.mode === "faces" ? hit.face : hit.vertex;
+  if (add) toggle(item); else select([item], false);
 }
 
 function selectedList() { return [...state.selected].sort((a, b) => a - b); }
@@ -260,35 +371,39 @@ function wire() {
     $("btn-box-mode").setAttribute("aria-pressed", String(state.boxMode));
   });
   $("btn-clear-sel").addEventListener("click", () => select([], false));
-  $("btn-grow").addEventListener("click", async () => {
-    if (!state.selected.size) { setStatus("select a face to grow from", "error"); return; }
-    try {
-      const all = new Set();
-      for (const f of [...state.selected]) {
-        if (all.has(f)) continue;  // already inside a region grown from another selected face
-        const { faces } = await api("/api/region", { face: f, same_part: $("grow-same-part").checked });
-        for (const g of faces) all.add(g);
-      }
-      select(all, false);
-      setStatus(`grew the selection to ${state.selected.size} connected faces`, "ok");
-    } catch { /* shown */ }
-  });
-  $("btn-delete-faces").addEventListener("click", () => {
-    if (!state.selected.size) { setStatus("select faces to delete", "error"); return; }
-    edit("delete_faces", { faces: selectedList() });
-  });
+  $("btn-mode-faces").addEventListener("click", () => setMode("faces"));
+  $("btn-mode-vertices").addEventListener("click", () => setMode("vertices"));
+  $("btn-grow").addEventListener("click", grow);
+  $("btn-delete-faces").addEventListener("click", deleteFaces);
+  $("btn-delete-vertices").addEventListener("click", deleteVertices);
   $("btn-split").addEventListener("click", () => {
-    if (!state.selected.size) { setStatus("select faces to split off", "error"); return; }
-    edit("split_part", { faces: selectedList(), name: $("part-name").value.trim() });
+    const faces = selectedFaces();
+    if (!faces.length) { setStatus("select faces (or the vertices around them) to split off", "error"); return; }
+    edit("split_part", { faces, name: $("part-name").value.trim() });
   });
   $("btn-delete-part").addEventListener("click", () => edit("delete_part", { name: $("part-select").value }));
+  $("btn-rename-part").addEventListener("click", () => {
+    const name = $("part-select").value, to = $("rename-to").value.trim();
+    if (!to) { setStatus("rename: type the part's new name", "error"); return; }
+    edit("rename_part", { name, to }, { keepSelection: true }).then((m) => {
+      if (m) { $("part-select").value = to; setStatus(`renamed part ${name} to ${to}`, "ok"); }
+    });
+  });
   $("btn-fill-hole").addEventListener("click", () => {
-    const { loop, why } = holeLoop(state.model.indices, state.selected);
+    const faces = state.mode === "faces";
+    const { loop, why } = holeLoop(state.model.indices, faces ? state.selected : state.vertices, { faces });
     if (!loop) { setStatus(`fill hole: ${why}`, "error"); return; }
     edit("fill_hole", { loop });
   });
-  $("btn-undo").addEventListener("click", async () => { try { show(await api("/api/undo", {})); setStatus("undone", "ok"); } catch { /* shown */ } });
-  $("btn-redo").addEventListener("click", async () => { try { show(await api("/api/redo", {})); setStatus("redone", "ok"); } catch { /* shown */ } });
+  $("btn-undo").addEventListener("click", undo);
+  $("btn-redo").addEventListener("click", redo);
+  $("btn-move-mode").addEventListener("click", toggleMoveMode);
+  $("btn-move-to").addEventListener("click", moveTo);
+  for (const a of ["x", "y", "z"]) {
+    $(`move-${a}`).addEventListener("keydown", (e) => { if (e.key === "Enter") moveTo(); });
+  }
+  document.addEventListener("keydown", shortcut);
+  wireGizmo();
   $("btn-validate").addEventListener("click", validate);
   $("btn-save").addEventListener("click", save);
   $("btn-fp-clear").addEventListener("click", () => {
@@ -298,9 +413,79 @@ function wire() {
   $("btn-mirror").addEventListener("click", () => edit("mirror_points", { overwrite: $("mirror-overwrite").checked },
                                                        { keepSelection: true }));
   $("show-labels").addEventListener("change", (e) => { view.showLabels = e.target.checked; view.requestRender(); });
-  installPointer(view, $("box"), { onClick, onBox: (faces, add) => {
-    select(faces, add); setStatus(`box selected ${faces.length} faces`, "ok");
+  installPointer(view, $("box"), { onClick, onBox: (rect, add) => {
+    if (!state.model) return;
+    const faces = state.mode === "faces";
+    const items = faces ? view.facesInRect(...rect) : view.verticesInRect(...rect);
+    select(items, add);
+    setStatus(`box selected ${items.length} ${faces ? "faces" : "vertices"}`, "ok");
   }, boxMode: () => state.boxMode });
+}
+
+// the faces an edit on faces takes: the selected ones, or those the selected vertices wholly span
+function selectedFaces() {
+  return state.mode === "faces" ? selectedList() : facesWithin(state.model.indices, state.vertices);
+}
+
+async function grow() {
+  const faces = state.mode === "faces";
+  const seeds = faces ? [...state.selected] : firstFaces([...state.vertices]);
+  if (!seeds.length) { setStatus(`select a ${faces ? "face" : "vertex"} to grow from`, "error"); return; }
+  try {
+    const all = new Set();
+    for (const f of seeds) {
+      if (all.has(f)) continue;  // already inside a region grown from another seed
+      const { faces: region } = await api("/api/region", { face: f, same_part: $("grow-same-part").checked });
+      for (const g of region) all.add(g);
+    }
+    select(faces ? all : cornersOf(state.model.indices, all), false);
+    setStatus(`grew the selection to ${faces ? state.selected.size : state.vertices.size} connected `
+      + `${faces ? "faces" : "vertices"}`, "ok");
+  } catch { /* shown */ }
+}
+
+// one face using each vertex (vertices no face uses give none)
+function firstFaces(vertices) {
+  const want = new Set(vertices), out = new Set(), idx = state.model.indices;
+  for (let k = 0; k < idx.length && want.size; k++) {
+    if (want.has(idx[k])) { want.delete(idx[k]); out.add(Math.floor(k / 3)); }
+  }
+  return [...out];
+}
+
+function deleteFaces() {
+  const faces = selectedFaces();
+  if (!faces.length) { setStatus("select faces to delete", "error"); return; }
+  edit("delete_faces", { faces });
+}
+
+function deleteVertices() {
+  const vertices = moveSet();
+  if (!vertices.length) { setStatus("select vertices (or faces) to delete", "error"); return; }
+  edit("delete_vertices", { vertices });
+}
+
+async function undo() {
+  try { show(await api("/api/undo", {}), { keepSelection: true }); setStatus("undone", "ok"); } catch { /* shown */ }
+}
+
+async function redo() {
+  try { show(await api("/api/redo", {}), { keepSelection: true }); setStatus("redone", "ok"); } catch { /* shown */ }
+}
+
+// keys over the page (not while typing in a field): Delete, Ctrl+Z, Ctrl+Y / Ctrl+Shift+Z, G, Escape
+function shortcut(e) {
+  const t = e.target;
+  if (t instanceof HTMLInputElement || t instanceof HTMLSelectElement || t instanceof HTMLTextAreaElement) return;
+  const key = e.key.toLowerCase(), ctrl = e.ctrlKey || e.metaKey;
+  if (ctrl && key === "z" && !e.shiftKey) undo();
+  else if (ctrl && (key === "y" || (key === "z" && e.shiftKey))) redo();
+  else if (ctrl || e.altKey) return;
+  else if (key === "delete" || key === "backspace") { if (state.mode === "faces") deleteFaces(); else deleteVertices(); }
+  else if (key === "g") toggleMoveMode();
+  else if (key === "escape") select([], false);
+  else return;
+  e.preventDefault();
 }
 
 function showProblems(problems) {
@@ -350,7 +535,9 @@ async function start() {
 // faces that no click reaches (inside the mouth)
 window.editor = {
   state, view,
-  selectFaces: (faces, add = false) => select(faces, add),
+  selectFaces: (faces, add = false) => { setMode("faces"); select(faces, add); },
+  moveSet, centroid: () => centroid(moveSet()),
+  screenOfGizmoHandle: (axis, t) => view.gizmoHandle(axis, t),
   screenOfVertex: (i) => view.screenOf(view.vertex(i)),
   screenOfFace: (f) => view.screenOf(view.faceCentre(f)),
   facesCamera: (f) => view.faceFacesCamera(f),

@@ -1,11 +1,15 @@
-// The three.js view: the mesh (flat shaded, coloured per part, selected faces highlighted),
-// the feature points as small spheres with labels, orbit/zoom/pan, picking and projection.
+// The three.js view: the mesh (flat shaded, coloured per part, selected faces highlighted), the vertices
+// as dots (all of them in vertex mode, the selected ones always), the feature points as small spheres
+// with labels, orbit/zoom/pan, a translate gizmo on the selection's centre, picking and projection.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { TransformControls } from "three/addons/controls/TransformControls.js";
 
 const PALETTE = [0x93c47d, 0x8e7cc3, 0xffd966, 0xb4a7d6, 0xa2c4c9, 0xea9999, 0xf9cb9c, 0x6aa84f, 0x45818e];
 const SELECTED = new THREE.Color(0xff6a00);
 const POINT = 0x1f4fff, POINT_PICKED = 0xff1f6a;
+const DOT = 0x1b1d22, DOT_SELECTED = 0xffe000;
+const GIZMO_SIZE = 0.8;  // TransformControls' handle size (1 is its default)
 export const BACKGROUND = 0x2b2f36;
 
 const KNOWN = { skin: 0xd9b49c, eye_l: 0x6fa8dc, eye_r: 0x76a5af, teeth_upper: 0xf6f0d8, teeth_lower: 0xe3d9b8,
@@ -42,6 +46,17 @@ export class View {
     this.mesh = null;
     this.points = new THREE.Group();
     this.scene.add(this.points);
+    this.dots = this.makeDots(DOT, 3);             // every vertex, in vertex mode
+    this.selectedDots = this.makeDots(DOT_SELECTED, 7);
+    this.selectedVertices = [];
+    this.pivot = new THREE.Object3D();             // what the gizmo moves: placed on the selection's centre
+    this.scene.add(this.pivot);
+    this.gizmo = new TransformControls(this.camera, this.renderer.domElement);
+    this.gizmo.setMode("translate");
+    this.gizmo.setSize(GIZMO_SIZE);
+    this.gizmo.addEventListener("change", () => this.requestRender());
+    this.gizmo.addEventListener("dragging-changed", (e) => { this.controls.enabled = !e.value; });
+    this.scene.add(this.gizmo.getHelper());
     this.labels = new Map();
     this.showLabels = true;
     this.pickedLabel = null;
@@ -59,6 +74,16 @@ export class View {
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
     this.requestRender();
+  }
+
+  makeDots(color, px) {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(0), 3));
+    const dots = new THREE.Points(geometry, new THREE.PointsMaterial({ color, size: px, sizeAttenuation: false }));
+    dots.visible = false;
+    dots.renderOrder = 1;
+    this.scene.add(dots);
+    return dots;
   }
 
   requestRender() {
@@ -82,10 +107,14 @@ export class View {
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(t * 9), 3));
     geometry.setAttribute("color", new THREE.BufferAttribute(new Float32Array(t * 9), 3));
+    // pushed back in depth a little, so the vertex dots on its surface pass the depth test
     const material = new THREE.MeshStandardMaterial({ vertexColors: true, flatShading: true, roughness: 0.8,
-                                                       metalness: 0.0, side: THREE.DoubleSide });
+                                                       metalness: 0.0, side: THREE.DoubleSide,
+                                                       polygonOffset: true, polygonOffsetFactor: 1,
+                                                       polygonOffsetUnits: 1 });
     this.mesh = new THREE.Mesh(geometry, material);
     this.scene.add(this.mesh);
+    this.selectedVertices = [];  // their numbers may not hold in the new mesh: the caller marks them again
     this.setPositions(positions);
     this.setColors(new Set());
     if (frame) this.frame();
@@ -105,8 +134,59 @@ export class View {
     this.mesh.geometry.computeVertexNormals();
     this.mesh.geometry.computeBoundingSphere();
     this.mesh.geometry.computeBoundingBox();
+    const all = this.dots.geometry;
+    all.setAttribute("position", new THREE.BufferAttribute(Float32Array.from(positions), 3));
+    all.computeBoundingSphere();
+    this.markVertices(this.selectedVertices);
     this.setPoints(this.model.points);
     this.requestRender();
+  }
+
+  // vertex mode shows every vertex as a dot; the selected vertices are bright dots in either mode
+  showVertexDots(on) {
+    this.dots.visible = on;
+    this.requestRender();
+  }
+
+  markVertices(vertices) {
+    this.selectedVertices = vertices;
+    const a = new Float32Array(vertices.length * 3), p = this.positions;
+    vertices.forEach((v, k) => { a[k * 3] = p[v * 3]; a[k * 3 + 1] = p[v * 3 + 1]; a[k * 3 + 2] = p[v * 3 + 2]; });
+    const g = this.selectedDots.geometry;
+    g.setAttribute("position", new THREE.BufferAttribute(a, 3));
+    g.computeBoundingSphere();
+    this.selectedDots.visible = vertices.length > 0;
+    this.requestRender();
+  }
+
+  // the translate gizmo at centre (an [x, y, z]), or hidden with null
+  placeGizmo(centre) {
+    if (this.gizmo.dragging) return;
+    if (!centre) { this.gizmo.detach(); this.requestRender(); return; }
+    this.pivot.position.fromArray(centre);
+    this.pivot.updateMatrixWorld();
+    if (this.gizmo.object !== this.pivot) this.gizmo.attach(this.pivot);
+    this.requestRender();
+  }
+
+  // whether a press at this client position grabs one of the gizmo's handles (and which)
+  overGizmo(clientX, clientY) {
+    if (!this.gizmo.object || !this.gizmo.enabled) return null;
+    const p = this.ndc(clientX, clientY);
+    this.gizmo.pointerHover({ x: p.x, y: p.y, button: 0 });
+    return this.gizmo.axis;
+  }
+
+  // client position of a point on the gizmo's axis handle ("X", "Y" or "Z"), at t of its arrow's length
+  gizmoHandle(axis, t = 0.4) {
+    if (!this.gizmo.object) return null;
+    const at = this.pivot.position.clone();
+    const cam = this.camera.position;
+    // TransformControls' own handle scale for a perspective camera, times its size
+    const factor = at.distanceTo(cam) * Math.min(1.9 * Math.tan(Math.PI * this.camera.fov / 360) / this.camera.zoom, 7);
+    const dir = { X: [1, 0, 0], Y: [0, 1, 0], Z: [0, 0, 1] }[axis];
+    at.add(new THREE.Vector3(...dir).multiplyScalar(t * factor * this.gizmo.size / 4));
+    return this.screenOf(at);
   }
 
   // area-weighted vertex normals: a label whose point faces away from the camera is hidden
@@ -248,6 +328,20 @@ export class View {
     const n = b.clone().sub(a).cross(c.clone().sub(a));
     const centre = a.add(b).add(c).divideScalar(3);
     return n.dot(this.camera.position.clone().sub(centre)) > 0;
+  }
+
+  // vertices that project into the client rectangle and whose normal faces the camera
+  verticesInRect(x0, y0, x1, y1) {
+    const out = [];
+    const [ax, bx] = [Math.min(x0, x1), Math.max(x0, x1)], [ay, by] = [Math.min(y0, y1), Math.max(y0, y1)];
+    const used = new Uint8Array(this.positions.length / 3);
+    for (const v of this.indices) used[v] = 1;
+    for (let v = 0; v < used.length; v++) {
+      if (!used[v]) continue;
+      const s = this.screenOf(this.vertex(v));
+      if (s.z < 1 && s.x >= ax && s.x <= bx && s.y >= ay && s.y <= by && this.facesCamera(v)) out.push(v);
+    }
+    return out;
   }
 
   // faces whose projected centre lies in the client rectangle and that face the camera
