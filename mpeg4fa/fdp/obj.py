@@ -1,34 +1,55 @@
-"""A user's face mesh from a Wavefront OBJ file, the one mesh form every modelling tool writes.
+"""A user's face mesh from a Wavefront OBJ file, the one mesh form every modelling tool writes, read by trimesh.
 
-Only what an FDP mesh holds is read: ``v`` (x y z; a w or vertex colours after
-them are ignored), ``vt`` (u [v]) and ``f`` with corners ``v``, ``v/vt``,
-``v//vn`` or ``v/vt/vn``, indices 1-based or negative (counting back from the
-last ``v``/``vt`` above the face). Polygons are split into a fan of triangles
-(exact for the convex polygons modellers export). The first ``o`` names the
-mesh; every other statement (``vn``, ``g``, ``s``, ``usemtl``, ``l``...) and
-``#`` comments are skipped.
+trimesh's OBJ reader (:func:`trimesh.exchange.obj.load_obj`) makes the arrays. A feature point names a
+vertex by its index in the file, so this module hands trimesh the file in a form where its indices are
+the file's own, and refuses, at the line:column of the statement, what trimesh would read wrong:
 
-An FdpMesh has one uv per vertex, so texture coordinates are kept only when
-every vertex is used by a face and all its corners carry the same uv; a mesh
-whose uvs are split along seams (or that has none) is read without uvs.
+* ``#`` comments are cut and ``usemtl``/``mtllib`` lines dropped before trimesh sees the text (it reads
+  a comment after a face as an index, and splits the faces of each material into a mesh of its own);
+  normal references (``v//vn``, ``v/vt/vn``) are dropped too (an FdpMesh has no normals, and trimesh would
+  split a vertex per normal).
+* Positions and faces are read with ``maintain_order`` and no texture references, the one way trimesh
+  keeps every ``v`` line as vertex ``i`` (unused ones included); the result is checked against the
+  file's count of ``v`` lines and of triangles.
+* Texture coordinates come from a second read with the ``vt`` references: trimesh then gives one vertex
+  per distinct (v, vt) pair, and its uvs are kept only when that is exactly the file's vertex list, i.e.
+  every vertex is used by a face and all its corners carry the same uv (an FdpMesh has one uv per vertex).
+  A mesh whose uvs are split along seams (or that has none) is read without uvs.
+* trimesh counts a negative (relative) index back from the file's last ``v``/``vt``, not from the face's
+  place; such a face above more ``v``/``vt`` lines is refused, as are index 0, a malformed ``v``/``vt``/``f``
+  statement and an index out of range.
 
-Every fault is an :class:`FdpError` at the line:column of the offending token.
+Polygons are triangulated by trimesh (a fan from the first corner; a quad as (0,1,2), (2,3,0)). The
+first ``o`` names the mesh; ``vn``, ``g``, ``s``, ``l`` and other statements are ignored.
 """
 from __future__ import annotations
 
+import io
 import math
 import os
 import re
 
 import numpy as np
+import trimesh
 
 from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.model import FdpMesh
 
-_TOKEN = re.compile(r"\S+")
 _INDEX_HINT = "OBJ indices count from 1; negative ones count back from the last one defined above the face"
-# One row per face corner: resolved v, v as written, has vt, resolved vt, vt as written, line, column of v, of vt.
-_V, _V_RAW, _HAS_VT, _VT, _VT_RAW, _LINE, _COL_V, _COL_VT = range(8)
+_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_CORNER = r"-?\d+(?:/-?\d*(?:/-?\d*)?)?"
+_WS = r"[ \t\r]"
+# First statement of each kind that is not well formed (checked by regex, located by _explain_*).
+_BAD_V = re.compile(rf"(?m)^{_WS}*v(?={_WS}|$)(?!(?:{_WS}+{_NUM}){{3,}}{_WS}*$)")
+_BAD_VT = re.compile(rf"(?m)^{_WS}*vt(?={_WS}|$)(?!(?:{_WS}+{_NUM}){{1,}}{_WS}*$)")
+_BAD_F = re.compile(rf"(?m)^{_WS}*f(?={_WS}|$)(?!(?:{_WS}+{_CORNER}){{3,}}{_WS}*$)")
+_STATEMENT = {key: re.compile(rf"(?m)^{_WS}*{key}{_WS}") for key in ("v", "vt", "f")}
+_FACE_LINE = re.compile(rf"(?m)^{_WS}*f{_WS}[^\n]*")
+_IN_FACE = rf"(?m)^{_WS}*f{_WS}[^\n]*?"
+_ZERO = re.compile(_IN_FACE + r"(?<![\w.-])(-?0+)(?![\w.])")
+_NEG = {"v": re.compile(_IN_FACE + r"(?<![\w/-])(-\d+)"), "vt": re.compile(_IN_FACE + r"(?<![\w/-])-?\d+/(-\d+)")}
+_INDEX = {"v": re.compile(r"(?<![\w/-])(-?\d+)"), "vt": re.compile(r"(?<![\w/-])-?\d+/(-?\d+)")}
+_NAME = re.compile(rf"(?m)^{_WS}*o{_WS}+([^\n]*\S)")
 
 
 def read_obj(path: str | os.PathLike[str]) -> FdpMesh:
@@ -39,120 +60,141 @@ def read_obj(path: str | os.PathLike[str]) -> FdpMesh:
 
 
 def mesh_from_obj(text: str | bytes, path: str = "<string>") -> FdpMesh:
-    """Parse OBJ text; ``path`` only names the source in error messages."""
+    """Parse OBJ text (with trimesh); ``path`` only names the source in error messages."""
     if isinstance(text, (bytes, bytearray, memoryview)):
         text = bytes(text).decode("utf-8", errors="replace")  # only ASCII numbers matter; names may be anything
-    vertices: list[list[float]] = []
-    uvs: list[list[float]] = []
-    corners: list[tuple[int, ...]] = []
-    sizes: list[int] = []
-    name = ""
-    for number, raw in enumerate(text.split("\n"), 1):
-        line = raw.split("#", 1)[0].rstrip("\r")
-        tokens = list(_TOKEN.finditer(line))
-        if not tokens:
-            continue
-        key = tokens[0].group()
-        if key == "v":
-            vertices.append(_numbers(tokens, line, 3, 3, path, number, "a vertex needs x y z", "v 0.5 1.2 -3"))
-        elif key == "vt":
-            uv = _numbers(tokens, line, 1, 2, path, number, "a texture coordinate needs u [v]", "vt 0.25 0.75")
-            uvs.append((uv + [0.0])[:2])
-        elif key == "f":
-            face = [_corner(m, len(vertices), len(uvs), path, number) for m in tokens[1:]]
-            if len(face) < 3:
-                raise FdpError(path, number, tokens[0].start() + 1,
-                               f"a face needs at least 3 corners, got {len(face)}", "e.g. f 1 2 3")
-            corners.extend(face)
-            sizes.append(len(face))
-        elif key == "o" and not name:
-            name = line[tokens[0].end():].strip()
-    if not sizes:
+    plain = re.sub(r"#[^\n]*", "", text)  # same lines and columns as the file, for locating faults
+    _check_statements(plain, path)
+    counts = {key: len(pattern.findall(plain)) for key, pattern in _STATEMENT.items()}
+    if not counts["f"]:
         raise FdpError.no_place(path, "no faces ('f' lines) in the OBJ file",
                                 "export the mesh with its faces (triangles or polygons), not only its points")
-    table = np.array(corners, dtype=np.int64)
-    _check_range(table, _V, _V_RAW, _COL_V, len(vertices), "vertex", path)
-    verts = np.array(vertices, dtype=np.float64).reshape(len(vertices), 3)
-    return FdpMesh(verts, _fan(table[:, _V], np.array(sizes)), _per_vertex_uvs(table, uvs, len(verts), path),
-                   name=name)
-
-
-def _numbers(tokens: list[re.Match[str]], line: str, need: int, take: int, path: str, number: int, problem: str,
-             example: str) -> list[float]:
-    """The first ``take`` numbers after the statement keyword (at least ``need``), each finite."""
-    values = tokens[1:1 + take]
-    if len(values) < need:
-        raise FdpError(path, number, len(line.rstrip()) + 1, f"{problem}, got {len(values)} number(s)",
-                       f"e.g. {example}")
-    out = []
-    for m in values:
+    faces_text = "\n".join(m.group() for m in _FACE_LINE.finditer(plain))
+    _check_indices(plain, faces_text, counts, path)
+    feed = re.sub(rf"(?m)^{_WS}+|^(?:usemtl|mtllib)\b[^\n]*", "", plain).replace("\t", " ").replace("\r", "")
+    feed = re.sub(r"(/-?\d+)/-?\d*|//-?\d*", r"\1", feed)  # v/vt/vn -> v/vt, v//vn -> v
+    triangles = sum(len(m.group().split()) - 3 for m in _FACE_LINE.finditer(plain))
+    vertices, faces, _ = _trimesh_read(re.sub(r"/-?\d*", "", feed), plain, counts, triangles, path, uv=False)
+    uvs = None
+    if counts["vt"] and "/" in feed:
         try:
-            value = float(m.group())
-        except ValueError:
-            value = math.nan
-        if not math.isfinite(value):
-            raise FdpError(path, number, m.start() + 1, f"{m.group()!r} is not a finite number",
-                           f"e.g. {example}")
-        out.append(value)
-    return out
+            v_uv, f_uv, uv = _trimesh_read(feed, plain, counts, triangles, path, uv=True)
+        except FdpError:
+            uv = None  # no usable texture pairs (e.g. some corners have none): read without uvs
+        else:
+            if uv is not None and len(v_uv) == len(vertices) and np.array_equal(f_uv, faces):
+                uvs = uv  # trimesh's (v, vt) pairs are exactly the file's vertices
+    name = _NAME.search(plain)
+    return FdpMesh(vertices, faces, uvs, name=name.group(1).strip() if name else "")
 
 
-def _corner(m: re.Match[str], n_vertices: int, n_uvs: int, path: str, number: int) -> tuple[int, ...]:
-    """One face corner as a row of the corner table (see the column names above)."""
-    parts = m.group().split("/")
-    if len(parts) > 3:
-        raise FdpError(path, number, m.start() + 1, f"face corner {m.group()!r} has more than 3 parts",
-                       "corners are v, v/vt, v//vn or v/vt/vn")
-    v = _index(parts[0], n_vertices, path, number, m.start() + 1)
-    col_vt = m.start() + len(parts[0]) + 2
-    has_vt = len(parts) > 1 and parts[1] != ""
-    vt = _index(parts[1], n_uvs, path, number, col_vt) if has_vt else (0, 0)
-    return (v[0], v[1], int(has_vt), vt[0], vt[1], number, m.start() + 1, col_vt)
-
-
-def _index(text: str, defined: int, path: str, number: int, column: int) -> tuple[int, int]:
-    """(0-based index, index as written); negative indices are relative to the ``defined`` entries so far."""
+def _trimesh_read(feed: str, plain: str, counts: dict[str, int], triangles: int, path: str,
+                  uv: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """(vertices, triangles, per-vertex uvs or None) as trimesh reads ``feed``, checked against the file."""
     try:
-        value = int(text)
-    except ValueError:
-        raise FdpError(path, number, column, f"{text!r} is not an index", _INDEX_HINT) from None
-    if value == 0:
-        raise FdpError(path, number, column, "index 0 does not exist", _INDEX_HINT)
-    return (value - 1 if value > 0 else defined + value), value
+        scene = trimesh.load(io.StringIO(feed), file_type="obj", force="scene", process=False,
+                             maintain_order=not uv, skip_materials=True, group_material=False)
+        geoms = [g for g in scene.geometry.values() if isinstance(g, trimesh.Trimesh)]
+    except (IndexError, ValueError) as exc:  # an index out of range: find it for the message
+        _locate_range(plain, counts, path)
+        raise FdpError.no_place(path, f"trimesh cannot read the OBJ file: {exc}", _INDEX_HINT) from None
+    if len(geoms) != 1:
+        raise FdpError.no_place(path, f"trimesh read {len(geoms)} meshes from the file, expected 1",
+                                "export the face as one object")
+    mesh = geoms[0]
+    vertices, faces = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
+    if len(faces) != triangles:
+        raise FdpError.no_place(path, f"trimesh read {len(faces)} triangles where the faces make {triangles}",
+                                "report this file: trimesh skipped or split faces")
+    if not uv and len(vertices) != counts["v"]:
+        raise FdpError.no_place(path, f"trimesh read {len(vertices)} vertices where the file has {counts['v']}"
+                                " 'v' lines, which would shift feature point indices",
+                                "report this file: trimesh did not keep the vertex order")
+    _locate_range(plain, counts, path) if len(faces) and faces.max() >= len(vertices) else None
+    coords = getattr(mesh.visual, "uv", None)
+    return vertices, faces, None if coords is None else np.asarray(coords, np.float64)[:, :2]
 
 
-def _check_range(table: np.ndarray, col: int, raw: int, col_at: int, count: int, what: str, path: str,
-                 used: np.ndarray | None = None) -> None:
-    """Fail at the first corner whose index (column ``col``) is outside ``count`` entries."""
-    bad = (table[:, col] < 0) | (table[:, col] >= count)
-    if used is not None:
-        bad &= used
-    if bad.any():
-        row = table[int(np.argmax(bad))]
-        written = int(row[raw])
-        problem = (f"{what} index {written} points before the first {what}" if written < 0 else
-                   f"{what} index {written} is out of range: the file has {count} {what}s")
-        raise FdpError(path, int(row[_LINE]), int(row[col_at]), problem, _INDEX_HINT)
+def _check_statements(plain: str, path: str) -> None:
+    """Refuse the first malformed ``v``, ``vt`` or ``f`` statement, at its line:column."""
+    found = [(m.start(), key, pattern) for key, pattern in (("v", _BAD_V), ("vt", _BAD_VT), ("f", _BAD_F))
+             for m in [pattern.search(plain)] if m]
+    if not found:
+        return
+    start, key, _ = min(found)
+    number, line, offset = _line_at(plain, start)
+    tokens = list(re.finditer(r"\S+", line))
+    if key == "f":
+        _explain_face(tokens, line, path, number)
+    need, problem, example = (3, "a vertex needs x y z", "v 0.5 1.2 -3") if key == "v" else \
+        (1, "a texture coordinate needs u [v]", "vt 0.25 0.75")
+    for m in tokens[1:1 + (3 if key == "v" else 2)]:
+        try:
+            ok = math.isfinite(float(m.group()))
+        except ValueError:
+            ok = False
+        if not ok:
+            raise FdpError(path, number, m.start() + 1, f"{m.group()!r} is not a finite number", f"e.g. {example}")
+    if len(tokens) - 1 < need:
+        raise FdpError(path, number, len(line.rstrip()) + 1, f"{problem}, got {len(tokens) - 1} number(s)",
+                       f"e.g. {example}")
+    raise FdpError(path, number, tokens[-1].start() + 1, f"cannot read {tokens[-1].group()!r}", f"e.g. {example}")
 
 
-def _fan(corner_vertices: np.ndarray, sizes: np.ndarray) -> np.ndarray:
-    """(T, 3) triangles (c0, ci, ci+1) of each polygon, polygons given as consecutive runs of ``sizes`` corners."""
-    counts = sizes - 2
-    first = np.repeat(np.cumsum(sizes) - sizes, counts)
-    step = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
-    return np.stack([corner_vertices[first], corner_vertices[first + step + 1], corner_vertices[first + step + 2]],
-                    axis=1)
+def _explain_face(tokens: list[re.Match[str]], line: str, path: str, number: int) -> None:
+    """Raise the fault of a malformed face line (a bad corner, fewer than 3 corners)."""
+    for m in tokens[1:]:
+        parts = m.group().split("/")
+        if len(parts) > 3:
+            raise FdpError(path, number, m.start() + 1, f"face corner {m.group()!r} has more than 3 parts",
+                           "corners are v, v/vt, v//vn or v/vt/vn")
+        column = m.start() + 1
+        for i, part in enumerate(parts):
+            if (part or i == 0) and not re.fullmatch(r"-?\d+", part):
+                raise FdpError(path, number, column, f"{part!r} is not an index", _INDEX_HINT)
+            column += len(part) + 1
+    raise FdpError(path, number, tokens[0].start() + 1, f"a face needs at least 3 corners, got {len(tokens) - 1}",
+                   "e.g. f 1 2 3")
 
 
-def _per_vertex_uvs(table: np.ndarray, uvs: list[list[float]], n_vertices: int, path: str) -> np.ndarray | None:
-    """One uv per vertex, or None when some corner has none, a vertex is unused or has two different uvs."""
-    has = table[:, _HAS_VT].astype(bool)
-    _check_range(table, _VT, _VT_RAW, _COL_VT, len(uvs), "texture coordinate", path, used=has)
-    if not has.all():
-        return None
-    corner_uv = np.array(uvs, dtype=np.float64)[table[:, _VT]]
-    per_vertex = np.full((n_vertices, 2), np.nan)
-    per_vertex[table[:, _V]] = corner_uv
-    if np.isnan(per_vertex).any() or not np.array_equal(per_vertex[table[:, _V]], corner_uv):
-        return None
-    return per_vertex
+def _check_indices(plain: str, faces_text: str, counts: dict[str, int], path: str) -> None:
+    """Refuse the indices trimesh would silently read wrong: 0, negative ones above more v/vt lines, out of range."""
+    zero = _ZERO.search(plain)
+    if zero:
+        number, _, offset = _line_at(plain, zero.start(1))
+        raise FdpError(path, number, offset + 1, "index 0 does not exist", _INDEX_HINT)
+    for key in ("v", "vt"):
+        neg = _NEG[key].search(plain)
+        last = max((m.start() for m in _STATEMENT[key].finditer(plain)), default=-1)
+        if neg and neg.start(1) < last:
+            number, _, offset = _line_at(plain, neg.start(1))
+            raise FdpError(path, number, offset + 1,
+                           f"a relative (negative) index in a face above further '{key}' lines: "
+                           f"trimesh counts it back from the file's last '{key}'",
+                           f"export with absolute indices, or put every '{key}' line above the faces")
+    _locate_range(plain, counts, path, faces_text)
+
+
+def _locate_range(plain: str, counts: dict[str, int], path: str, faces_text: str | None = None) -> None:
+    """Raise at the first corner whose v or vt index is outside the file's vertices / texture coordinates."""
+    text = faces_text if faces_text is not None else "\n".join(m.group() for m in _FACE_LINE.finditer(plain))
+    for key, what in (("v", "vertex"), ("vt", "texture coordinate")):
+        values = np.array([int(x) for x in _INDEX[key].findall(text)] or [1], np.int64)
+        bad = (values > counts[key]) | (values < -counts[key])
+        if not bad.any():
+            continue
+        written = int(values[np.argmax(bad)])
+        for face in _FACE_LINE.finditer(plain):
+            hit = next((h for h in _INDEX[key].finditer(face.group()) if int(h.group(1)) == written), None)
+            if hit:
+                number, _, offset = _line_at(plain, face.start() + hit.start(1))
+                problem = (f"{what} index {written} points before the first {what}" if written < 0 else
+                           f"{what} index {written} is out of range: the file has {counts[key]} {what}s")
+                raise FdpError(path, number, offset + 1, problem, _INDEX_HINT)
+
+
+def _line_at(text: str, position: int) -> tuple[int, str, int]:
+    """(1-based line number, the line, 0-based column) of ``position`` in ``text``."""
+    begin = text.rfind("\n", 0, position) + 1
+    end = text.find("\n", position)
+    return text.count("\n", 0, position) + 1, text[begin:end if end >= 0 else len(text)], position - begin

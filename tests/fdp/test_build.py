@@ -46,7 +46,8 @@ def test_obj_quads_polygons_and_uvs():
     mesh = mesh_from_obj(SQUARE)
     assert mesh.name == "face"
     assert mesh.vertices.shape == (6, 3) and mesh.vertices[5].tolist() == [2, 1, 0]
-    assert mesh.triangles.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]]
+    # trimesh splits every quad into (0, 1, 2) and (2, 3, 0), the first halves of all quads before the second
+    assert mesh.triangles.tolist() == [[0, 1, 2], [1, 4, 5], [2, 3, 0], [5, 2, 1]]
     assert mesh.uvs.tolist() == [[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [0.5, 1]]
     hexagon = mesh_from_obj("v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 2 0\nv -1 1 0\nf 1 2 3 4 5 6\r\n")
     assert hexagon.triangles.tolist() == [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]]
@@ -54,10 +55,30 @@ def test_obj_quads_polygons_and_uvs():
 
 
 def test_obj_negative_indices_and_corner_forms():
-    text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//1 -1//1\nv 1 1 0\nf 2 4 -2\n"
+    text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvt 0 0\nf -4/1/1 -3/-1/1 -2/1\nf 2/1 4/1/1 -2/-1\n"
     mesh = mesh_from_obj(text)
     assert mesh.triangles.tolist() == [[0, 1, 2], [1, 3, 2]]
-    assert mesh.uvs is None
+    assert mesh.uvs is None  # trimesh pairs (-2, vt 1) and (3, vt 1) as two vertices, so such uvs are not kept
+
+
+@pytest.mark.parametrize("text, needle, key", [
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 1 1 0\nf 2 4 3\n", "-3", "v"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-1 2/1 3/1\nvt 1 1\n", "-1", "vt"),
+])
+def test_obj_relative_indices_above_more_statements_are_refused(text, needle, key):
+    """trimesh counts a negative index from the file's last v/vt, so a face above more of them would shift."""
+    with pytest.raises(FdpError, match=f"further '{key}' lines") as err:
+        mesh_from_obj(text, "rel.obj")
+    assert (err.value.line, err.value.column) == place(text, needle, 0) and err.value.hint
+
+
+def test_obj_keeps_every_vertex_index_through_materials_groups_and_normals():
+    """What trimesh alone would reorder or split: faces under several materials, per-corner normals, unused vertices."""
+    text = ("mtllib none.mtl\nv 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvn 0 0 -1\n"
+            "usemtl a\ng one\nf 2//1 3//2 4//1\nusemtl b\ng two\nf 3//1 5//1 4//2\nusemtl a\nf 2 3 5\nv 7 7 7\n")
+    mesh = mesh_from_obj(text)
+    assert len(mesh.vertices) == 6 and mesh.vertices[0].tolist() == [9, 9, 9] and mesh.vertices[5].tolist() == [7, 7, 7]
+    assert mesh.triangles.tolist() == [[1, 2, 3], [2, 4, 3], [1, 2, 4]]
 
 
 def test_obj_uvs_dropped_when_a_vertex_has_two():
