@@ -1,0 +1,224 @@
+"""Viseme events from a cloud TTS (Azure Speech, Amazon Polly) -> the encoder's viseme timeline -> FAPs.
+
+Azure and Polly speak the text themselves and say *when* each mouth shape starts; this module reads
+those events and hands them to the same path as our own speech (:func:`.encoder.encode_utterance`:
+Hermite moves across each boundary, closures held, FAP 1 or low-level FAPs), so the stream shows the
+mouth as it would for espeak-ng's phoneme events.
+
+Accepted files (``format="auto"`` tells them apart by their keys):
+
+* **Azure** ``VisemeReceived`` events logged as JSON: an array (or ``{"visemes": [...]}`` /
+  ``{"events": [...]}``) of objects with the audio offset in ticks of 100 ns and the viseme ID
+  0..21: ``{"AudioOffset": 500000, "VisemeId": 21}``; the SDKs' other spellings ``audioOffset`` /
+  ``visemeId``, ``audio_offset`` / ``viseme_id`` and the JavaScript SDK's ``privAudioOffset`` /
+  ``privVisemeId`` are read too, and other keys (``Animation``) are ignored;
+* **Polly** speech marks: JSON lines (or a JSON array) ``{"time": 6, "type": "viseme", "value": "p"}``
+  with the time in milliseconds; marks of other types (word, sentence, ssml) are skipped.
+
+IDs and Polly visemes become MPEG-4 visemes through ``spec/azure_visemes.csv`` and
+``spec/polly_visemes.csv`` (:mod:`mpeg4fa.spec.avatars`). Each event's viseme lasts until the next
+event; silence (Azure 0, Polly ``sil``) is a pause; the last viseme lasts :data:`LAST_VISEME` unless
+an event ends it, and the stream runs :data:`TAIL` past the last event so the mouth comes to rest.
+There is no audio: the stream goes with the TTS's own.
+
+Errors are :class:`~mpeg4fa.formats.FormatError` located in the file: ``path:line:column`` for
+broken JSON, ``path:line`` and the event's index (0-based, among the file's events) for a bad time
+or viseme.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mpeg4fa.formats.errors import FormatError
+from mpeg4fa.spec.avatars import from_azure, from_polly
+from mpeg4fa.spec.errors import SpecError
+from mpeg4fa.speech.markup import Markup
+from mpeg4fa.speech.tts.base import Speech
+from mpeg4fa.speech.utterance import Timing, Utterance
+from mpeg4fa.speech.visemes import PAUSE
+
+__all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "TICKS_PER_SECOND", "parse_viseme_events",
+           "read_viseme_events", "events_utterance", "encode_viseme_events"]
+
+FORMATS = ("auto", "azure", "polly")
+TICKS_PER_SECOND = 10_000_000
+"""Azure's audio offsets are in ticks of 100 ns."""
+LAST_VISEME = 0.15
+"""Seconds the last viseme lasts when no event (silence) ends it: about one spoken phoneme."""
+TAIL = 0.2
+"""Seconds the stream runs past the end of the last viseme, long enough for the mouth to reach rest."""
+_RATE = 16000  # sample rate of the silent audio that gives the utterance its duration
+_AZURE_KEYS = (("AudioOffset", "VisemeId"), ("audioOffset", "visemeId"), ("audio_offset", "viseme_id"),
+               ("privAudioOffset", "privVisemeId"))
+
+
+@dataclass(frozen=True)
+class VisemeEvent:
+    """From ``time`` (seconds in the TTS audio) the mouth shows MPEG-4 ``viseme`` (``none``: silence)."""
+
+    time: float
+    viseme: str
+    source: str
+    """What the file said: the Azure ID or Polly viseme, e.g. ``"21"`` or ``"p"``."""
+    line: int | None = None
+    """The file's line of this event, where known (JSON lines)."""
+
+
+def _records(text: str, name: str) -> list[tuple[dict, int | None]]:
+    """The file's objects and their line (known for JSON lines): a JSON array, an object holding one, or lines."""
+    stripped = text.lstrip()
+    if not stripped:
+        raise FormatError(name, None, None, "the file is empty", hint="give Azure or Polly viseme events as JSON")
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        if exc.msg != "Extra data":
+            raise FormatError(name, exc.lineno, exc.colno, f"not JSON: {exc.msg}",
+                              hint="a JSON array of events, or JSON lines as Polly writes them") from None
+        return _json_lines(text, name)
+    if isinstance(data, dict):
+        for key in ("visemes", "events", "speechMarks", "marks"):
+            if isinstance(data.get(key), list):
+                data = data[key]
+                break
+        else:
+            data = [data]
+    if not isinstance(data, list):
+        raise FormatError(name, 1, 1, f"JSON {type(data).__name__} where a list of events was expected",
+                          hint="a JSON array of events, or JSON lines")
+    return [(item, None) for item in data]
+
+
+def _json_lines(text: str, name: str) -> list[tuple[dict, int | None]]:
+    out = []
+    decoder = json.JSONDecoder()
+    for number, line in enumerate(text.splitlines(), start=1):
+        body = line.strip()
+        if not body:
+            continue
+        try:
+            item, end = decoder.raw_decode(body)
+        except json.JSONDecodeError as exc:
+            raise FormatError(name, number, len(line) - len(line.lstrip()) + exc.colno, f"not JSON: {exc.msg}",
+                              hint="one JSON object a line, as Polly writes speech marks") from None
+        if body[end:].strip():
+            raise FormatError(name, number, len(line) - len(line.lstrip()) + end + 1,
+                              "more than one JSON value on the line", hint="one speech mark a line")
+        out.append((item, number))
+    return out
+
+
+def _guess(records: list[tuple[dict, int | None]], name: str) -> str:
+    for item, _ in records:
+        if isinstance(item, dict):
+            if any(time in item and vid in item for time, vid in _AZURE_KEYS):
+                return "azure"
+            if "time" in item and "type" in item:
+                return "polly"
+    raise FormatError(name, None, None, "cannot tell Azure viseme events from Polly speech marks",
+                      hint="Azure: {\"AudioOffset\": ticks, \"VisemeId\": 0-21}; Polly: {\"time\": ms, "
+                           "\"type\": \"viseme\", \"value\": \"p\"}; or pass the format")
+
+
+def _place(name: str, line: int | None, index: int, problem: str, hint: str) -> FormatError:
+    return FormatError(name, line, None, f"event {index}: {problem}", hint=hint)
+
+
+def _number(value: object) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) and value >= 0 else None
+
+
+def _azure_event(item: object, line: int | None, index: int, name: str) -> VisemeEvent:
+    hint = "Azure events are {\"AudioOffset\": ticks of 100 ns, \"VisemeId\": 0-21}"
+    if not isinstance(item, dict):
+        raise _place(name, line, index, f"JSON {type(item).__name__} is not an event object", hint)
+    keys = next(((t, v) for t, v in _AZURE_KEYS if t in item and v in item), None)
+    if keys is None:
+        raise _place(name, line, index, f"no audio offset and viseme ID among the keys {sorted(item)}", hint)
+    ticks = _number(item[keys[0]])
+    if ticks is None:
+        raise _place(name, line, index, f"{keys[0]} {item[keys[0]]!r} is not a time (ticks >= 0)", hint)
+    vid = item[keys[1]]
+    try:
+        viseme = from_azure(vid)
+    except SpecError as exc:
+        raise _place(name, line, index, exc.message, exc.hint) from None
+    return VisemeEvent(ticks / TICKS_PER_SECOND, viseme, str(vid), line)
+
+
+def _polly_event(item: object, line: int | None, index: int, name: str) -> VisemeEvent | None:
+    hint = "Polly viseme marks are {\"time\": ms, \"type\": \"viseme\", \"value\": \"p\"}"
+    if not isinstance(item, dict):
+        raise _place(name, line, index, f"JSON {type(item).__name__} is not a speech mark", hint)
+    if item.get("type") != "viseme":
+        if "type" not in item:
+            raise _place(name, line, index, "a speech mark without a type", hint)
+        return None
+    time = _number(item.get("time"))
+    if time is None:
+        raise _place(name, line, index, f"time {item.get('time')!r} is not a time (ms >= 0)", hint)
+    try:
+        viseme = from_polly(item.get("value"))
+    except SpecError as exc:
+        raise _place(name, line, index, exc.message, exc.hint) from None
+    return VisemeEvent(time / 1000.0, viseme, str(item.get("value")), line)
+
+
+def parse_viseme_events(text: str, name: str = "<events>", format: str = "auto") -> tuple[str, list[VisemeEvent]]:
+    """``(format, events)`` of a viseme event file's text, in time order (see the module docstring)."""
+    if format not in FORMATS:
+        raise ValueError(f"format {format!r}: one of {', '.join(FORMATS)}")
+    records = _records(text, name)
+    kind = _guess(records, name) if format == "auto" else format
+    reader = _azure_event if kind == "azure" else _polly_event
+    events = [e for k, (item, line) in enumerate(records) if (e := reader(item, line, k, name)) is not None]
+    if not events:
+        raise FormatError(name, None, None, f"no {kind} viseme events in the file",
+                          hint="Polly: request speech mark type viseme; Azure: log the VisemeReceived events")
+    for k in range(1, len(events)):
+        if events[k].time < events[k - 1].time:
+            e = events[k]
+            raise _place(name, e.line, k, f"time {e.time:.3f} s is before the previous event's "
+                         f"{events[k - 1].time:.3f} s", "events must be in time order, as the TTS sends them")
+    return kind, events
+
+
+def read_viseme_events(path: str | Path, format: str = "auto") -> tuple[str, list[VisemeEvent]]:
+    """:func:`parse_viseme_events` of a file (UTF-8)."""
+    name = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise FormatError.from_os_error(name, exc) from None
+    except UnicodeDecodeError as exc:
+        raise FormatError.no_place(name, f"not UTF-8 text (byte {exc.start})", hint="viseme events are JSON") from None
+    return parse_viseme_events(text, name, format)
+
+
+def events_utterance(events: list[VisemeEvent], engine: str = "events", name: str = "<events>") -> Utterance:
+    """An :class:`Utterance` of the events, silent audio covering them: what the encoder's timeline takes."""
+    timings = []
+    for k, e in enumerate(events):
+        end = events[k + 1].time if k + 1 < len(events) else e.time + (0.0 if e.viseme == PAUSE else LAST_VISEME)
+        if end > e.time:
+            timings.append(Timing(phoneme=e.source, viseme=e.viseme, start=e.time, end=end))
+    duration = (timings[-1].end if timings else events[-1].time) + TAIL
+    speech = Speech(np.zeros(int(math.ceil(duration * _RATE)), np.int16), _RATE, (), engine, "")
+    return Utterance(speech=speech, timings=tuple(timings), cues=(), markup=Markup("", (), name=name))
+
+
+def encode_viseme_events(events: list[VisemeEvent], *, engine: str = "events", fps: float = 25.0,
+                         level: str = "high", idle: bool = False, seed: int = 0, name: str = "<events>"):
+    """The :class:`~mpeg4fa.speech.encoder.Encoded` stream of the events, as text is encoded."""
+    from mpeg4fa.speech.encoder import encode_utterance
+
+    return encode_utterance(events_utterance(events, engine, name), fps=fps, level=level, idle=idle, seed=seed)
+
