@@ -17,7 +17,7 @@ import warnings
 
 from .. import __version__
 from ..errors import MpegFaError
-from . import codec, conform, edit, export, model, play, speech, texture
+from . import batch, codec, conform, edit, export, model, play, speech, texture
 from .errors import UsageError
 from .media import one_line
 
@@ -39,6 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     conform.register(commands)
     edit.register(commands)
     export.register(commands)
+    batch.register(commands)
     return parser
 
 
