@@ -50,6 +50,17 @@ ensure_browser() {
     fi
 }
 
+ensure_npm_tools() {
+    # node tools the tests run (the Khronos glTF validator), pinned in tools/npm/package-lock.json;
+    # without node or network their tests skip, saying so
+    if command -v npm >/dev/null; then
+        [ -d tools/npm/node_modules/gltf-validator ] || (cd tools/npm && npm ci --no-audit --no-fund --silent) \
+            || echo "warning: npm tools not installed; the glTF validator tests will skip" >&2
+    else
+        echo "warning: npm not found; the glTF validator tests will skip" >&2
+    fi
+}
+
 job=${1:-}
 case "$job" in
     demo)
@@ -68,7 +79,7 @@ case "$job" in
         .venv/bin/mpeg4fa info out/talk.fba
         ;;
     test)
-        ensure_python; ensure_venv; ensure_browser
+        ensure_python; ensure_venv; ensure_browser; ensure_npm_tools
         shift
         # the generic head is built from a CC0 wheel on PyPI; without network its tests skip
         .venv/bin/mpeg4fa model install >&2 || echo "warning: generic head not built; its tests will skip" >&2

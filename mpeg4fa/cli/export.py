@@ -11,9 +11,9 @@ from pathlib import Path
 from typing import Callable
 
 from .errors import UsageError
-from .model import deformer_option, face_options
+from .model import deformer_option, face_options, posed_face
 from .options import Commands
-from .paths import refuse_overlaps
+from .paths import refuse_overlaps, same_file
 
 AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
 
@@ -22,17 +22,26 @@ def _write_glb(args: argparse.Namespace) -> str:
     """The head (calibrated to --fdp) as GLB, the stream baked as ARKit morph weights or per-frame vertices."""
     from ..export.gltf import export_glb
     from ..formats import read_stream
-    from .model import face_from_args
+    from .play import _skin_texture
+    from .progress import ProgressBar
 
     stream, _ = read_stream(args.stream)
-    face = face_from_args(args)
+    face = posed_face(args)
     audio = _audio_for(args)
-    if audio is not None:
-        refuse_overlaps({"stream": args.stream, "--audio": audio}, {"-o": args.output})
-    result = export_glb(stream, face, args.output, animation=args.animation, audio=audio)
-    extra = f"; audio: {result.audio}" if result.audio else ""
-    return (f"{args.output}: {result.n_parts} parts, {result.n_targets} morph targets, "
-            f"{result.n_frames} frames ({result.duration:.2f} s, {args.animation} animation){extra}")
+    wav_out = args.output.with_suffix(".wav") if audio is not None else None
+    if wav_out is not None and same_file(audio, wav_out):
+        wav_out = None  # the speech is already beside the GLB under its name
+    refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--audio": audio, "--texture": args.texture},
+                    {"-o": args.output, "-o's speech": wav_out})
+    bar = ProgressBar("posing", unit="poses")
+    try:
+        result = export_glb(stream, face, args.output, animation=args.animation, audio=audio,
+                            texture=_skin_texture(args, face), progress=bar)
+    finally:
+        bar.close()
+    extra = f"; speech: {result.audio}" if result.audio else ""
+    return (f"{args.output}: {result.n_parts} parts, {result.n_targets} morph targets, {result.n_frames} key frames "
+            f"({result.duration:.2f} s, {args.animation} animation), {result.bytes / 1e6:.1f} MB{extra}")
 
 
 FORMATS: dict[str, tuple[tuple[str, ...], Callable[[argparse.Namespace], str]]] = {
@@ -67,6 +76,10 @@ def register(commands: Commands) -> None:
     audio.add_argument("--no-audio", action="store_true", help="do not look for a WAV beside the stream")
     face_options(p)
     deformer_option(p)
+    p.add_argument("--texture", type=Path, help="a UV texture image for the skin, embedded as PNG; wins over the "
+                                                "FDP's own texture")
+    p.add_argument("--no-fdp-texture", action="store_true",
+                   help="do not embed the texture the --fdp file carries (its front photo)")
     p.set_defaults(run=run_export)
 
 
@@ -95,6 +108,9 @@ def _audio_for(args: argparse.Namespace) -> Path | None:
 
 def run_export(args: argparse.Namespace) -> int:
     refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--audio": args.audio}, {"-o": args.output})
+    if args.animation == "morph" and args.deformer not in ("fap", "arkit"):
+        raise UsageError(f"--deformer {args.deformer} goes with --animation vertex",
+                         hint="morph animation shows the ARKit units as the arkit deformer drives them")
     _, writer = FORMATS[_format_of(args)]
     print(writer(args))
     return 0

@@ -1,0 +1,282 @@
+"""A decoded stream as a glTF binary (GLB): the head with its parts and looks, the FAPs baked as an animation.
+
+Why glTF: it is what web viewers, game engines and DCC tools load, and its morph
+targets with an animated ``weights`` channel play a talking face without any MPEG-4
+decoder. Two ways to bake the stream:
+
+* ``animation="morph"``: the head's 52 ARKit face units are the morph targets (named in
+  ``mesh.extras.targetNames``, which three.js reads), and one LINEAR ``weights`` channel
+  keyed at the frames' presentation times carries the weights the ARKit deformer gives
+  them (:mod:`.arkit_units`). The face moves as the ARKit deformer's sculpted units move
+  it: not the feature-point deformer's pose, and without its feature-point correction,
+  eyes, teeth, tongue and head turn. Needs a head with face units (the generic head).
+* ``animation="vertex"``: the face's own deformer poses every frame; each distinct pose is
+  one morph target (all parts), and the weights channel selects pose k at frame k
+  (LINEAR, so between two frames the vertices move straight from one pose to the next).
+  Exact for any head and deformer; the file grows with the number of distinct poses.
+
+Geometry is in metres (the model's millimetres / 1000), y up, the face looking along +z,
+one primitive per drawn part (skin, eyes, teeth, tongue) with its material: base colours
+of :mod:`mpeg4fa.render.materials`, the lip tint and the dark of the mouth baked into the
+skin's vertex colours (brows are the renderer's alone), iris and pupil into the eyes',
+and a skin texture (e.g. an FDP's) embedded as PNG. glTF carries no sound: the stream's
+WAV is written beside the GLB under its name (``head.glb`` -> ``head.wav``).
+"""
+from __future__ import annotations
+
+import io
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pygltflib as gl
+
+from mpeg4fa import __version__
+from mpeg4fa.atomic import atomic_outputs
+from mpeg4fa.decoded import resolve
+from mpeg4fa.errors import MpegFaError
+from mpeg4fa.export.arkit_units import arkit_units
+from mpeg4fa.export.glb_buffer import GlbBuffer
+from mpeg4fa.face.model import FaceModel
+from mpeg4fa.fba.stream import FapStream
+from mpeg4fa.render.materials import Material, Materials
+from mpeg4fa.render.scene import SceneLayout, build_layout, vertex_normals
+from mpeg4fa.render.timing import presentation_times
+
+ANIMATIONS = ("morph", "vertex")
+MM = 0.001  # model millimetres -> glTF metres
+PART_LOOK = {"skin": "skin", "eye_l": "sclera", "eye_r": "sclera", "teeth_upper": "teeth", "teeth_lower": "teeth",
+             "tongue": "tongue"}
+"""Drawn part -> the :class:`~mpeg4fa.render.materials.Materials` entry it wears, in the renderer's order."""
+Progress = Callable[[int, int], None]
+
+
+class ExportError(MpegFaError):
+    """A stream or head that cannot be written as asked."""
+
+
+@dataclass(frozen=True)
+class GlbExport:
+    path: Path
+    n_parts: int
+    n_targets: int
+    n_frames: int         # animation key frames (stream frames with distinct presentation times)
+    duration: float       # seconds, first to last key
+    animation: str
+    audio: Path | None    # the WAV beside the GLB, if any
+    bytes: int
+
+
+@dataclass(frozen=True)
+class _Part:
+    name: str
+    source: np.ndarray   # (n,) mesh vertex of each glTF vertex
+    uv: np.ndarray       # (n, 2) glTF texture coordinates (v down)
+    colour: np.ndarray   # (n, 3) linear vertex colour
+    indices: np.ndarray  # (t, 3) local vertex indices
+
+
+def export_glb(stream: FapStream, face: FaceModel, path: str | os.PathLike, *, animation: str = "morph",
+               audio: str | os.PathLike | None = None, texture: np.ndarray | None = None,
+               materials: Materials | None = None, progress: Progress | None = None) -> GlbExport:
+    """Write ``stream`` played on ``face`` as a GLB at ``path`` (and ``audio`` copied beside it as a WAV)."""
+    if animation not in ANIMATIONS:
+        raise ExportError(f"unknown animation {animation!r}", hint=f"one of {', '.join(ANIMATIONS)}")
+    target, audio_path = Path(path), Path(audio) if audio is not None else None
+    if audio_path is not None:
+        _check_wav(audio_path)
+    wav_out = target.with_suffix(".wav") if audio_path is not None else None
+    if wav_out is not None and _same_file(wav_out, audio_path):
+        wav_out = None  # the speech is already beside the GLB under its name
+    data, summary = build_glb(stream, face, animation=animation, texture=texture, materials=materials,
+                              progress=progress, name=target.stem)
+    with atomic_outputs(target, wav_out) as (glb_tmp, wav_tmp):
+        glb_tmp.write_bytes(data)
+        if wav_tmp is not None:
+            shutil.copyfile(audio_path, wav_tmp)
+    return GlbExport(path=target, audio=(target.with_suffix(".wav") if audio_path is not None else None),
+                     bytes=len(data), animation=animation, **summary)
+
+
+def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", texture: np.ndarray | None = None,
+              materials: Materials | None = None, progress: Progress | None = None,
+              name: str = "mpeg4fa") -> tuple[bytes, dict]:
+    """The GLB bytes and ``n_parts``/``n_targets``/``n_frames``/``duration`` (see :func:`export_glb`)."""
+    values, times = _keyed_frames(stream)
+    looks = materials or Materials()
+    layout = build_layout(face.mesh)
+    parts = _parts(face, layout, looks, texture is not None)
+    rest = face.mesh.vertices
+    if animation == "morph":
+        units = arkit_units(face, where=name)
+        shapes, names, weights = units.shapes, list(units.names), units.weights(values)
+        if progress:
+            progress(len(values), len(values))
+    else:
+        shapes, names, weights = _frame_poses(face, values, rest, progress)
+
+    gltf = gl.GLTF2(asset=gl.Asset(version="2.0", generator=f"mpeg4fa {__version__}"), scene=0)
+    buf = GlbBuffer(gltf)
+    skin_texture = _add_texture(gltf, buf, texture) if texture is not None else None
+    normals = vertex_normals(rest, layout.triangles, layout.incidence)
+    primitives = [_primitive(gltf, buf, part, rest, normals, shapes, looks, skin_texture) for part in parts]
+    gltf.meshes.append(gl.Mesh(name=name, primitives=primitives, weights=[0.0] * len(names),
+                               extras={"targetNames": names}))
+    gltf.nodes.append(gl.Node(name=name, mesh=0))
+    gltf.scenes.append(gl.Scene(name=name, nodes=[0]))
+    _add_animation(gltf, buf, name, times, weights)
+    gltf.buffers.append(gl.Buffer(byteLength=0))
+    blob = buf.blob()
+    gltf.buffers[0].byteLength = len(blob)
+    gltf.set_binary_blob(blob)
+    out = b"".join(gltf.save_to_bytes())
+    duration = float(times[-1] - times[0]) if len(times) else 0.0
+    return out, {"n_parts": len(parts), "n_targets": len(names), "n_frames": len(times), "duration": duration}
+
+
+def _keyed_frames(stream: FapStream) -> tuple[np.ndarray, np.ndarray]:
+    """Resolved values and presentation times, one per distinct time (the last frame shown at a time wins)."""
+    if not len(stream):
+        raise ExportError("the stream has no frames", hint="export a stream with at least one frame")
+    values, times = resolve(stream), presentation_times(stream)
+    keep = np.r_[np.diff(times) > 1e-9, True]
+    return values[keep], times[keep]
+
+
+def _frame_poses(face: FaceModel, values: np.ndarray, rest: np.ndarray,
+                 progress: Progress | None) -> tuple[np.ndarray, list[str], np.ndarray]:
+    """One target per distinct frame of values (its vertex deltas), and weights selecting it at its frames."""
+    distinct, first, which = np.unique(values, axis=0, return_index=True, return_inverse=True)
+    which = which.reshape(-1)
+    shapes = np.empty((len(distinct), len(rest), 3), np.float32)
+    for k, row in enumerate(distinct):
+        shapes[k] = face.pose_values(row).vertices - rest
+        if progress:
+            progress(k + 1, len(distinct))
+    weights = np.zeros((len(values), len(distinct)))
+    weights[np.arange(len(values)), which] = 1.0
+    return shapes, [f"frame {int(f)}" for f in first], weights
+
+
+def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, textured: bool) -> list[_Part]:
+    """The renderer's GL vertices (one per mesh vertex and UV) split into one set per drawn part."""
+    mesh = face.mesh
+    parts, tri_start = [], 0
+    for part in PART_LOOK:
+        tris = mesh.triangles.get(part)
+        if tris is None or not len(tris):
+            continue
+        a, b = mesh.part_ranges[part]
+        mine = np.flatnonzero((layout.source >= a) & (layout.source < b))
+        indices = layout.indices[tri_start:tri_start + len(tris)].astype(np.int64) - mine[0]
+        tri_start += len(tris)
+        uv = layout.uv[mine].astype(np.float64)
+        colour = _colours(face, part, layout, mine, looks, textured)
+        parts.append(_Part(part, layout.source[mine], np.c_[uv[:, 0], 1.0 - uv[:, 1]], colour, indices))
+    return parts
+
+
+def _colours(face: FaceModel, part: str, layout: SceneLayout, mine: np.ndarray, looks: Materials,
+             textured: bool) -> np.ndarray:
+    """Per-vertex linear colours, multiplied by the material's base colour (white where they are set here)."""
+    n = len(mine)
+    if part == "skin":
+        base = np.ones((n, 3)) if textured else np.tile(looks.skin.colour, (n, 1))
+        if not textured:
+            base += layout.lips[mine, None] * (np.asarray(looks.lips) - base)
+        cavity = np.asarray(looks.cavity) / (1.0 if not textured else np.asarray(looks.skin.colour))
+        return base + layout.cavity[mine, None] * (np.minimum(cavity, 1.0) - base)
+    if part in ("eye_l", "eye_r"):
+        return _eye_colours(face, part, layout.source[mine], looks)
+    return np.ones((n, 3))
+
+
+def _eye_colours(face: FaceModel, part: str, source: np.ndarray, looks: Materials) -> np.ndarray:
+    """Sclera, iris and pupil by distance from the eye's axis (through its pupil point), as the shader draws them."""
+    mesh = face.mesh
+    a, b = mesh.part_ranges[part]
+    centre = mesh.vertices[a:b].mean(axis=0)
+    pupil = mesh.fp("3.5" if part == "eye_l" else "3.6")
+    axis = (pupil - centre) / np.linalg.norm(pupil - centre)
+    offset = mesh.vertices[source] - centre
+    along = offset @ axis
+    across = np.linalg.norm(offset - along[:, None] * axis, axis=1)
+    iris_r = float(face.fapu.IRISD0) / 2.0
+    pupil_r = float(face.neutral().pupil_diameter[part]) / 2.0
+    colour = np.ones((len(source), 3))
+    front = along > 0
+    colour[front & (across <= iris_r)] = np.asarray(looks.iris) / np.asarray(looks.sclera.colour)
+    colour[front & (across <= pupil_r)] = np.asarray(looks.pupil) / np.asarray(looks.sclera.colour)
+    return np.minimum(colour, 1.0)
+
+
+def _material(gltf: gl.GLTF2, name: str, look: Material, texture: int | None, vertex_coloured: bool) -> int:
+    colour = [1.0, 1.0, 1.0] if texture is not None or (vertex_coloured and name == "skin") else list(look.colour)
+    pbr = gl.PbrMetallicRoughness(baseColorFactor=[*map(float, colour), 1.0], metallicFactor=0.0,
+                                  roughnessFactor=float(np.sqrt(2.0 / (look.shininess + 2.0))),
+                                  baseColorTexture=gl.TextureInfo(index=texture) if texture is not None else None)
+    gltf.materials.append(gl.Material(name=name, pbrMetallicRoughness=pbr, doubleSided=name == "skin"))
+    return len(gltf.materials) - 1
+
+
+def _primitive(gltf: gl.GLTF2, buf: GlbBuffer, part: _Part, rest: np.ndarray, normals: np.ndarray,
+               shapes: np.ndarray, looks: Materials, texture: int | None) -> gl.Primitive:
+    look_name = PART_LOOK[part.name]
+    names = [m.name for m in gltf.materials]
+    material = names.index(look_name) if look_name in names else _material(
+        gltf, look_name, getattr(looks, look_name), texture if part.name == "skin" else None, True)
+    attributes = gl.Attributes(
+        POSITION=buf.accessor((rest[part.source] * MM).astype(np.float32), target=gl.ARRAY_BUFFER, bounds=True),
+        NORMAL=buf.accessor(normals[part.source].astype(np.float32), target=gl.ARRAY_BUFFER),
+        COLOR_0=buf.accessor(part.colour.astype(np.float32), target=gl.ARRAY_BUFFER))
+    if texture is not None and part.name == "skin":
+        attributes.TEXCOORD_0 = buf.accessor(part.uv.astype(np.float32), target=gl.ARRAY_BUFFER)
+    index_type = np.uint16 if len(part.source) <= 0xFFFF else np.uint32
+    indices = buf.accessor(part.indices.reshape(-1).astype(index_type), target=gl.ELEMENT_ARRAY_BUFFER)
+    targets = [gl.Attributes(POSITION=buf.morph_target(shape[part.source] * MM)) for shape in shapes]
+    return gl.Primitive(attributes=attributes, indices=indices, material=material, mode=gl.TRIANGLES,
+                        targets=targets, extras={"part": part.name})
+
+
+def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray) -> int:
+    from PIL import Image
+
+    img = np.asarray(texture)
+    if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8:
+        raise ExportError(f"a skin texture is an (H, W, 3) uint8 image, got {img.shape} {img.dtype}",
+                          hint="convert it to 8-bit RGB first")
+    png = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(img[:, :, :3])).save(png, format="PNG")
+    gltf.samplers.append(gl.Sampler(magFilter=gl.LINEAR, minFilter=gl.LINEAR_MIPMAP_LINEAR,
+                                    wrapS=gl.CLAMP_TO_EDGE, wrapT=gl.CLAMP_TO_EDGE))
+    gltf.images.append(gl.Image(bufferView=buf.view(png.getvalue()), mimeType="image/png", name="skin"))
+    gltf.textures.append(gl.Texture(sampler=len(gltf.samplers) - 1, source=len(gltf.images) - 1))
+    return len(gltf.textures) - 1
+
+
+def _add_animation(gltf: gl.GLTF2, buf: GlbBuffer, name: str, times: np.ndarray, weights: np.ndarray) -> None:
+    """One LINEAR weights channel on the head's node, keyed at the frames' presentation times."""
+    t = buf.accessor(times.astype(np.float32), bounds=True)
+    w = buf.accessor(np.ascontiguousarray(weights, np.float32).reshape(-1))
+    gltf.animations.append(gl.Animation(
+        name=name, samplers=[gl.AnimationSampler(input=t, output=w, interpolation=gl.ANIM_LINEAR)],
+        channels=[gl.AnimationChannel(sampler=0, target=gl.AnimationChannelTarget(node=0, path=gl.WEIGHTS))]))
+
+
+def _check_wav(path: Path) -> None:
+    """Only a RIFF/WAVE file is copied beside the GLB (the name says .wav)."""
+    with open(path, "rb") as f:
+        head = f.read(12)
+    if len(head) < 12 or head[:4] != b"RIFF" or head[8:12] != b"WAVE":
+        raise ExportError("not a WAV file (no RIFF/WAVE header)", where=str(path),
+                          hint="convert the speech to WAV first, e.g. `ffmpeg -i IN -ac 1 OUT.wav`")
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
