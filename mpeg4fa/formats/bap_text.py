@@ -126,7 +126,8 @@ def _parse_mask(line: _Line, path: str) -> np.ndarray:
                               f"mask entry {i + 1} is {_short(token)!r}, expected 0 or 1",
                               "a mask line has one 0/1 per BAP; check that mask and frame lines alternate")
     if len(tokens) not in MASK_WIDTHS:
-        column = line.column(min(len(tokens), N_BAPS))
+        # past the end of a short line, else at the first entry beyond the nearest width below
+        column = line.column(max([w for w in MASK_WIDTHS if w < len(tokens)], default=len(tokens)))
         raise FormatError(path, line.number, column,
                           f"the mask line has {len(tokens)} entries, expected {N_ISO_BAPS} or {N_BAPS}",
                           f"give one 0/1 for each of BAPs 1..{N_ISO_BAPS} (as VREng writes) or 1..{N_BAPS} "
