@@ -105,7 +105,7 @@ def text_encoding_options(p: argparse.ArgumentParser) -> None:
     """The options of ``encode`` when INPUT is text (speech, FAP timeline, FDP of the speaker), or when a
     recording and its transcript stand in for it (INPUT is then left out: :data:`NO_INPUT`)."""
     text_flag(p)
-    added = recording_options(p)
+    added = recording_options(p) + viseme_event_options(p)
     g = p.add_argument_group("text input: speech and FAPs")
     added += [g.add_argument("--audio", type=Path, metavar="WAV", help="write the speech here (16-bit mono WAV)"),
              g.add_argument("--timings", type=Path, metavar="JSON",
@@ -140,6 +140,44 @@ def text_encoding_options(p: argparse.ArgumentParser) -> None:
 
 NO_INPUT = ""
 """What ``encode``'s INPUT holds when it is left out (with ``--speech``, the transcript is the text)."""
+
+
+def viseme_event_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
+    """``--visemes EVENTS.json`` and ``--format``: a cloud TTS's viseme events to encode instead of text."""
+    from ..speech.viseme_events import FORMATS
+
+    g = p.add_argument_group("viseme events: a cloud TTS's visemes as the stream",
+                             "Azure Speech VisemeReceived events or Amazon Polly viseme speech marks, encoded with "
+                             "the same transitions as text (no audio: the stream goes with the TTS's own)")
+    return [
+        g.add_argument("--visemes", type=Path, metavar="EVENTS.json",
+                       help='Azure events [{"AudioOffset": ticks, "VisemeId": 0-21}, ...] or Polly speech marks '
+                            '(JSON lines {"time": ms, "type": "viseme", "value": "p"})'),
+        g.add_argument("--format", dest="events_format", choices=FORMATS, default="auto",
+                       help="with --visemes: which of the two the file holds (default auto: by its keys)"),
+    ]
+
+
+def _encode_visemes(args: argparse.Namespace) -> int:
+    """``mpeg4fa encode --visemes EVENTS.json``: Azure/Polly viseme events -> FAP stream (+ timings, FDP)."""
+    from ..speech.viseme_events import encode_viseme_events, read_viseme_events
+
+    clash = [flag for flag, given in (("INPUT", args.input != NO_INPUT), ("--speech", args.speech is not None),
+                                      ("--audio", args.audio is not None)) if given]
+    if clash:
+        raise UsageError(f"--visemes encodes the events alone, so {', '.join(clash)} has no place beside it",
+                         hint="drop " + ", ".join(clash) + " (the TTS's audio goes with the stream as it is)")
+    inputs = {"--visemes": args.visemes, "--face-mesh": args.face_mesh, "--face-points": args.face_points,
+              "--front": args.front, "--front-points": args.front_points, "--side": args.side,
+              "--side-points": args.side_points}
+    refuse_overlaps(inputs, {"-o": args.output, "--timings": args.timings, "--fdp-out": args.fdp_out})
+    fdp = _speaker_fdp(args) if args.fdp_out is not None else None
+    kind, events = read_viseme_events(args.visemes, args.events_format)
+    fps = args.fps if args.fps is not None else 25.0
+    encoded = encode_viseme_events(events, engine=kind, fps=fps, level=args.level, idle=args.idle,
+                                   name=str(args.visemes))
+    print(f"{args.visemes}: {len(events)} {kind} viseme events", file=sys.stderr)
+    return _write_encoded(args, encoded, str(args.visemes), fps, fdp)
 
 
 def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
@@ -221,6 +259,10 @@ def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -
     """``mpeg4fa encode TEXT``: speech -> FAP stream (+ WAV, timings, FDP), all written or none."""
     from ..speech.encoder import encode_text
 
+    if args.visemes is not None:
+        return _encode_visemes(args)
+    if args.events_format != "auto":
+        raise UsageError("--format says what a --visemes file holds", hint="add --visemes EVENTS.json, or drop --format")
     if _recording_args(args, args.input != NO_INPUT, f"INPUT ({args.input})"):
         return _encode_recording(args)
     if args.input == NO_INPUT:
