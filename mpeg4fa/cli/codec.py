@@ -7,9 +7,10 @@ import os
 import sys
 from pathlib import Path
 
-from ..atomic import atomic_output
+from ..atomic import atomic_output, atomic_outputs
 from ..fba import EncodeOptions, FbaError, decode, demo_stream, describe, encode
-from ..formats import read_stream, write_fap
+from ..formats import (has_body, has_face, merge_face_body, read_bap, read_stream, split_face_body,
+                       write_bap, write_fap)
 from ..formats.sniff import sniff
 from . import speech, text_input, tracing
 from .coding import coding_flags, coding_options
@@ -19,10 +20,11 @@ from .paths import refuse_overlaps
 
 
 def register(commands: Commands) -> None:
-    p = commands.add_parser("info", help="show what a .fba or .fap stream holds",
+    p = commands.add_parser("info", help="show what a .fba, .fap or .bap stream holds",
                             description="Header, frames, frame rate, duration, masks, bits per frame and "
-                                        "bit rate of a binary FBA stream or a text .fap file.")
-    p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) file; the kind is read from the content")
+                                        "bit rate of a binary FBA stream or a text .fap or .bap file.")
+    p.add_argument("stream", type=Path,
+                   help="a .fba (binary), .fap or .bap (text) file; the kind is read from the content")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object instead of text (with --trace: one JSON object per element, "
                         "a line each, and at a fault a last {\"error\", \"bit_offset\", \"frame\"} line)")
@@ -35,16 +37,29 @@ def register(commands: Commands) -> None:
                    help="with --trace: only frames A to B-1 (A:, :B or one frame A)")
     p.set_defaults(run=run_info)
 
-    p = commands.add_parser("decode", help="decode a .fba stream to a .fap text file",
-                            description="Decode a binary FBA stream and write its FAPs as a 2.1 .fap text file "
-                                        "(skipped frames become gaps in the frame numbers).")
+    p = commands.add_parser(
+        "decode", help="decode a .fba stream to .fap (face) and .bap (body) text files",
+        description="Decode a binary FBA stream and write its FAPs as a 2.1 .fap text file and, when the stream "
+                    "carries body animation, its BAPs as a 3.1 .bap text file (VREng's format) beside it: "
+                    "-o OUT.fap also writes OUT.bap, or the file --bap names. -o OUT.bap (or --bap-only) writes "
+                    "the body alone. Both files number frames alike (skipped frames become gaps), so "
+                    "'encode OUT.fap --bap OUT.bap' joins them again. Both files are written or neither.",
+        epilog="examples:\n  mpeg4fa decode yes.fba -o yes.fap            # yes.fap, and yes.bap for a face+body stream"
+               "\n  mpeg4fa decode yes.fba -o yes.fap --bap body/yes.bap\n"
+               "  mpeg4fa decode basicMotion.fba -o motion.bap  # body only",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("input", type=Path, help="the .fba stream")
-    p.add_argument("-o", "--output", type=Path, required=True, help="the .fap file to write")
+    p.add_argument("-o", "--output", type=Path, required=True,
+                   help="the .fap file to write (a name ending in .bap: the .bap file, body only)")
+    p.add_argument("--bap", type=Path, metavar="FILE",
+                   help="where the BAPs of a face+body stream go (default: the -o name with .bap)")
+    p.add_argument("--bap-only", action="store_true", help="write only the body, as a .bap file, to -o")
     p.set_defaults(run=run_decode)
 
     p = commands.add_parser(
-        "encode", help="encode tagged text (speech -> FAPs), a .fap file or a .fba stream to .fba",
-        description="Encode FAPs into a binary FBA stream. INPUT is a .fap or .fba file (a .fba is re-encoded "
+        "encode", help="encode tagged text (speech -> FAPs), a .fap/.bap file or a .fba stream to .fba",
+        description="Encode FAPs and BAPs into a binary FBA stream. INPUT is a .fap, .bap or .fba file (a .bap "
+                    "alone gives a body-only stream; --bap joins a .bap body to a .fap face; a .fba is re-encoded "
                     "with the coding parameters it carries, the same bytes for a stream from a conforming "
                     "encoder, unless options override them), or text with expression tags such as "
                     "'(joy, 40, 0.5) Hello there': spoken by a TTS engine, turned into visemes and "
@@ -55,12 +70,15 @@ def register(commands: Commands) -> None:
         epilog='examples:\n  mpeg4fa encode "(joy, 40, 0.5) Hello there!" -o talk.fba --audio talk.wav '
                '--timings talk.json\n  mpeg4fa encode script.txt -o talk.fba --audio talk.wav --fdp-out face.fdp\n'
                '  echo "你好，世界" | mpeg4fa encode - -o nihao.fba --audio nihao.wav --level both\n'
-               '  mpeg4fa encode received.fap -o received.fba --optimize',
+               '  mpeg4fa encode received.fap -o received.fba --optimize\n'
+               '  mpeg4fa encode yes.fap --bap yes.bap -o yes.fba   # face + body',
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("input", nargs="?", default=speech.NO_INPUT,
-                   help="a .fap or .fba file, a text file, tagged text, @FILE or - (text from standard input); "
-                        "left out with --speech REC.wav --transcript TEXT")
+                   help="a .fap, .bap or .fba file, a text file, tagged text, @FILE or - (text from standard "
+                        "input); left out with --speech REC.wav --transcript TEXT")
     p.add_argument("-o", "--output", type=Path, required=True, help="the .fba stream to write")
+    p.add_argument("--bap", type=Path, metavar="FILE",
+                   help="with a .fap INPUT: the .bap file of its body animation, frames matched by frame number")
     coding_flags(p)
     speech.text_encoding_options(p)
     p.set_defaults(run=run_encode)
@@ -129,27 +147,61 @@ def _ranges(numbers: list[int]) -> str:
 
 
 def run_decode(args: argparse.Namespace) -> int:
-    refuse_overlaps({"input": args.input}, {"-o": args.output})
+    body_only = args.bap_only or args.output.suffix.lower() == ".bap"
+    if body_only and args.bap is not None:
+        raise UsageError("--bap names the body file beside a .fap; with a .bap -o (or --bap-only) -o is the body file",
+                         hint="drop --bap")
+    bap_path = args.output if body_only else (args.bap or args.output.with_suffix(".bap"))
+    refuse_overlaps({"input": args.input}, {"-o": args.output, "--bap": None if body_only else bap_path})
     stream = decode(args.input)
-    with atomic_output(args.output) as partial:
-        write_fap(stream, partial, name=args.output.name)
-    print(f"{args.input} -> {args.output}: {len(stream)} frames at {stream.fps:g} fps", file=sys.stderr)
+    face, body = split_face_body(stream)
+    if body_only or not has_face(stream):
+        if not has_body(stream):
+            raise UsageError(f"{args.input} carries no body animation (BAPs): there is nothing for a .bap file",
+                             hint="write its FAPs with -o OUT.fap")
+        if not body_only:
+            raise UsageError(f"{args.input} is body animation only (BAPs, no FAPs): there is nothing for a .fap file",
+                             hint=f"write it with -o {args.output.with_suffix('.bap')} (or --bap-only)")
+        with atomic_output(args.output) as partial:
+            write_bap(body, partial, name=args.output.name)
+        written = f"{args.output} (body)"
+    elif has_body(stream):
+        with atomic_outputs(args.output, bap_path) as (fap_partial, bap_partial):
+            write_fap(face, fap_partial, name=args.output.name)
+            write_bap(body, bap_partial, name=bap_path.name)
+        written = f"{args.output} (face) and {bap_path} (body)"
+    else:
+        if args.bap is not None:
+            raise UsageError(f"{args.input} carries no body animation (BAPs): there is nothing for --bap",
+                             hint="drop --bap")
+        with atomic_output(args.output) as partial:
+            write_fap(face, partial, name=args.output.name)
+        written = str(args.output)
+    print(f"{args.input} -> {written}: {len(stream)} frames at {stream.fps:g} fps", file=sys.stderr)
     return 0
 
 
 def is_stream_file(path: Path) -> bool:
-    """Whether an encode INPUT file is a .fba/.fap stream (else it holds text to speak)."""
-    return path.suffix.lower() in (".fap", ".fba") or sniff(path) == "fba"
+    """Whether an encode INPUT file is a .fba/.fap/.bap stream (else it holds text to speak)."""
+    return path.suffix.lower() in (".fap", ".bap", ".fba") or sniff(path) == "fba"
 
 
 def run_encode(args: argparse.Namespace) -> int:
     source = text_input.classify(args.input, as_text=args.as_text)
     if source.path is None or source.argument.startswith("@") or not is_stream_file(source.path):
+        if args.bap is not None:
+            raise UsageError("--bap joins a .bap body file to a .fap INPUT, not to text",
+                             hint="encode the text to .fba, decode it to .fap, then encode that with --bap")
         return speech.run_encode_text(args, source)
     speech.reject_text_options(args)
-    refuse_overlaps({"input": source.path}, {"-o": args.output})
+    refuse_overlaps({"input": source.path, "--bap": args.bap}, {"-o": args.output})
     stream, kind = read_stream(source.path)
-    options = coding_options(args, EncodeOptions() if kind == "fap" else None)
+    if args.bap is not None:
+        if kind != "fap":
+            raise UsageError(f"--bap joins a .bap body file to a .fap INPUT, and {args.input} is a .{kind} file",
+                             hint="give the .fap file as INPUT" if kind == "bap" else "drop --bap")
+        stream = merge_face_body(stream, read_bap(args.bap), body_label=str(args.bap))
+    options = coding_options(args, EncodeOptions() if kind in ("fap", "bap") else None)
     data = encode(stream, options)
     with atomic_output(args.output) as partial:
         partial.write_bytes(data)
