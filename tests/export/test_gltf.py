@@ -1,0 +1,231 @@
+"""The GLB export: structure, morph targets and weights read back from the file, validator, speech, CLI."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mpeg4fa.decoded import resolve
+from mpeg4fa.errors import MpegFaError
+from mpeg4fa.export.arkit_units import NoFaceUnitsError, arkit_units, base_unit
+from mpeg4fa.export.gltf import MM, PART_LOOK, ExportError, build_glb, export_glb
+from mpeg4fa.face.deformers.arkit import unit_weights
+from mpeg4fa.formats import write_fap
+from mpeg4fa.render.timing import presentation_times
+
+from export.gltf_files import OPEN_FRAME, load, read_accessor, talk_stream, validate
+
+
+@pytest.fixture(scope="module")
+def stream():
+    return talk_stream()
+
+
+def _export(tmp_path, stream, face, **options):
+    path = tmp_path / "head.glb"
+    result = export_glb(stream, face, path, **options)
+    return path, result, load(path)
+
+
+def _check_common(gltf, result, stream, face, n_targets):
+    mesh, = gltf.meshes
+    assert [p.extras["part"] for p in mesh.primitives] == list(PART_LOOK)
+    assert result.n_parts == len(mesh.primitives) == 6 and result.n_targets == n_targets
+    assert len(mesh.extras["targetNames"]) == len(mesh.weights) == n_targets
+    for prim in mesh.primitives:
+        assert len(prim.targets) == n_targets
+        position = read_accessor(gltf, prim.attributes.POSITION)
+        acc = gltf.accessors[prim.attributes.POSITION]
+        assert acc.min == position.min(axis=0).tolist() and acc.max == position.max(axis=0).tolist()
+        source = face.mesh.part(prim.extras["part"])
+        indices = read_accessor(gltf, prim.indices)
+        assert indices.max() < len(position) and len(indices) == 3 * len(face.mesh.triangles[prim.extras["part"]])
+        # every vertex of the primitive is a vertex of its part, at its rest position
+        part = face.mesh.vertices[source] * MM
+        nearest = np.abs(position[:, None, :] - part[None, :, :].astype(np.float32)).sum(-1).min(axis=1)
+        assert nearest.max() < 1e-6
+    animation, = gltf.animations
+    channel, = animation.channels
+    assert channel.target.path == "weights" and channel.target.node == 0 and gltf.nodes[0].mesh == 0
+    sampler = animation.samplers[channel.sampler]
+    assert sampler.interpolation == "LINEAR"
+    times = read_accessor(gltf, sampler.input)
+    assert np.allclose(times, presentation_times(stream)) and len(times) == result.n_frames == len(stream)
+    assert gltf.accessors[sampler.input].min == [float(times[0])] and gltf.accessors[sampler.input].max == [float(times[-1])]
+    weights = read_accessor(gltf, sampler.output)
+    assert len(weights) == len(times) * n_targets
+    return weights.reshape(len(times), n_targets)
+
+
+def _targets(gltf, prim_index):
+    prim = gltf.meshes[0].primitives[prim_index]
+    return np.stack([read_accessor(gltf, t["POSITION"]) for t in prim.targets])
+
+
+def test_morph_targets_are_the_arkit_units_driven_as_the_deformer_drives_them(generic_face, stream, tmp_path):
+    path, result, gltf = _export(tmp_path, stream, generic_face, animation="morph")
+    names = list(generic_face.mesh.face_units.names)
+    assert len(names) == 52
+    weights = _check_common(gltf, result, stream, generic_face, 52)
+    assert gltf.meshes[0].extras["targetNames"] == names
+    values = resolve(stream)
+    rig = generic_face.arkit_rig
+    driven = unit_weights(rig, values.T).T  # (n, 30) the deformer's own weights
+    for d, name in enumerate(rig.unit_names):
+        halves = [k for k, other in enumerate(rig.unit_names) if base_unit(other) == base_unit(name)]
+        expected = driven[:, halves].mean(axis=1)
+        assert np.allclose(weights[:, names.index(base_unit(name))], expected, atol=1e-6), name
+    undriven = [u for u, n in enumerate(names) if n not in {base_unit(d) for d in rig.unit_names}]
+    assert len(undriven) == 52 - 27 and not weights[:, undriven].any()
+    assert weights[OPEN_FRAME, names.index("jawOpen")] > 0.3 and not weights[0].any()
+    # the one-sided brow FAP drives the left half only: the unit shows it at half on both sides
+    brow = [k for k, n in enumerate(rig.unit_names) if n.startswith("browInnerUp")]
+    assert driven[-1, brow].max() > 0 and driven[-1, brow].min() == 0
+    # the skin primitive's targets are the driven shapes (halves summed) at its vertices, in metres
+    skin = _targets(gltf, 0)
+    units = arkit_units(generic_face)
+    position = read_accessor(gltf, gltf.meshes[0].primitives[0].attributes.POSITION)
+    source = _sources(generic_face, position, "skin")
+    assert np.allclose(skin, (units.shapes[:, source] * MM).astype(np.float32), atol=1e-7)
+    for k in range(1, 6):  # only the skin moves: the other parts' targets are all zero (no buffer view)
+        assert not _targets(gltf, k).any()
+        assert all(gltf.accessors[t["POSITION"]].bufferView is None for t in gltf.meshes[0].primitives[k].targets)
+    # frames without the one-sided brow: the skin is the ARKit deformer's sculpt before its correction
+    k = OPEN_FRAME
+    sculpt = generic_face.rig.rest[generic_face.mesh.part("skin")] + (rig.deltas @ driven[k]).reshape(-1, 3)
+    shown = position + np.tensordot(weights[k], skin, axes=1)
+    assert np.abs(shown - sculpt[source] * MM).max() < 1e-6
+
+
+def _sources(face, position, part):
+    """The mesh vertex of each glTF vertex of a part (nearest rest position: they coincide)."""
+    span = face.mesh.part(part)
+    rest = face.mesh.vertices[span] * MM
+    d = ((position[:, None, :] - rest[None].astype(np.float32)) ** 2).sum(-1)
+    return span.start + d.argmin(axis=1)
+
+
+def test_vertex_animation_is_the_face_pose_of_every_frame(procedural_face, stream, tmp_path):
+    path, result, gltf = _export(tmp_path, stream, procedural_face, animation="vertex")
+    values = resolve(stream)
+    distinct = len(np.unique(values, axis=0))
+    weights = _check_common(gltf, result, stream, procedural_face, distinct)
+    assert np.array_equal(weights.sum(axis=1), np.ones(len(stream))) and set(np.unique(weights)) == {0.0, 1.0}
+    for index, prim in enumerate(gltf.meshes[0].primitives):
+        position = read_accessor(gltf, prim.attributes.POSITION)
+        source = _sources(procedural_face, position, prim.extras["part"])
+        targets = _targets(gltf, index)
+        for k in (0, OPEN_FRAME, len(stream) - 1):
+            shown = position + np.tensordot(weights[k], targets, axes=1)
+            pose = procedural_face.pose_values(values[k]).vertices[source] * MM
+            assert np.abs(shown - pose).max() < 1e-6, (prim.extras["part"], k)
+    lower = _targets(gltf, list(PART_LOOK).index("teeth_lower"))
+    open_target = int(np.argmax(weights[OPEN_FRAME]))
+    assert np.abs(lower[open_target]).max() > 0.005  # the jaw drops the lower teeth by millimetres
+    names = gltf.meshes[0].extras["targetNames"]
+    assert names[int(np.argmax(weights[0]))] == "frame 0"
+
+
+def test_morph_animation_needs_face_units(procedural_face, stream, tmp_path):
+    with pytest.raises(NoFaceUnitsError, match="no ARKit face units") as err:
+        export_glb(stream, procedural_face, tmp_path / "head.glb")
+    assert "--animation vertex" in err.value.hint
+    assert not list(tmp_path.iterdir())
+
+
+def test_validator_finds_no_errors(face, stream, tmp_path):
+    """Morph animation on the generic head (vertex on both), and an embedded texture: 0 errors, 0 warnings."""
+    texture = np.zeros((64, 64, 3), np.uint8)
+    texture[..., 0] = np.arange(64)[:, None] * 4
+    animations = ("vertex", "morph") if face.mesh.face_units is not None else ("vertex",)
+    for animation in animations:
+        path = tmp_path / f"{animation}.glb"
+        export_glb(stream, face, path, animation=animation, texture=texture if animation == "vertex" else None)
+        report = validate(path)
+        issues = report["issues"]
+        assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"][:5]
+        info = report["info"]
+        assert info["hasMorphTargets"] and info["animationCount"] == 1 and info["drawCallCount"] == 6
+        assert info["hasTextures"] == (animation == "vertex")
+
+
+def test_texture_is_embedded_png_on_the_skin(procedural_face, stream, tmp_path):
+    import io
+
+    from PIL import Image
+    texture = np.random.default_rng(1).integers(0, 255, (32, 48, 3), dtype=np.uint8)
+    path, _, gltf = _export(tmp_path, stream, procedural_face, animation="vertex", texture=texture)
+    image, = gltf.images
+    view = gltf.bufferViews[image.bufferView]
+    png = gltf.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength]
+    assert image.mimeType == "image/png" and np.array_equal(np.asarray(Image.open(io.BytesIO(png))), texture)
+    skin = gltf.meshes[0].primitives[0]
+    assert gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture.index == 0
+    uv = read_accessor(gltf, skin.attributes.TEXCOORD_0)
+    assert uv.min() >= 0 and uv.max() <= 1
+    with pytest.raises(ExportError, match="uint8"):
+        build_glb(stream, procedural_face, animation="vertex", texture=texture.astype(np.float32))
+
+
+def test_speech_is_written_beside_the_glb(procedural_face, stream, tmp_path):
+    wav = tmp_path / "speech.wav"
+    wav.write_bytes(_tiny_wav())
+    path, result, _ = _export(tmp_path, stream, procedural_face, animation="vertex", audio=wav)
+    assert result.audio == tmp_path / "head.wav" and (tmp_path / "head.wav").read_bytes() == wav.read_bytes()
+    # already beside the GLB under its name: left as it is
+    result = export_glb(stream, procedural_face, tmp_path / "speech.glb", animation="vertex", audio=wav)
+    assert result.audio == wav
+    bad = tmp_path / "noise.wav"
+    bad.write_bytes(b"ID3 not a wav file")
+    with pytest.raises(ExportError, match="not a WAV"):
+        export_glb(stream, procedural_face, tmp_path / "other.glb", animation="vertex", audio=bad)
+    assert not (tmp_path / "other.glb").exists() and not (tmp_path / "other.wav").exists()
+
+
+def _tiny_wav() -> bytes:
+    import io
+    import wave
+    out = io.BytesIO()
+    with wave.open(out, "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(2)
+        w.setframerate(16000)
+        w.writeframes(np.zeros(1600, np.int16).tobytes())
+    return out.getvalue()
+
+
+def test_empty_stream_is_refused(procedural_face, tmp_path):
+    from mpeg4fa.fba.stream import FapStream
+    with pytest.raises(ExportError, match="no frames"):
+        export_glb(FapStream.empty(0), procedural_face, tmp_path / "x.glb", animation="vertex")
+
+
+def test_cli_export(cli, generic_face, stream, tmp_path):
+    fap = tmp_path / "talk.fap"
+    write_fap(stream, fap)
+    (tmp_path / "talk.wav").write_bytes(_tiny_wav())
+    code, out, err = cli("export", fap, "-o", tmp_path / "talk.glb")
+    assert code == 0, err
+    assert "52 morph targets" in out and "found beside the stream" in err
+    assert load(tmp_path / "talk.glb").meshes[0].extras["targetNames"] == list(generic_face.mesh.face_units.names)
+    assert not (tmp_path / "talk.glb.wav").exists()
+    code, out, err = cli("export", fap, "--no-audio", "--animation", "vertex", "-o", tmp_path / "v.glb")
+    assert code == 0 and "vertex animation" in out and not (tmp_path / "v.wav").exists()
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["-o", "x.obj"], "no export format for suffix '.obj'"),
+    (["-o", "x.glb", "--deformer", "muscle"], "--deformer muscle goes with --animation vertex"),
+])
+def test_cli_usage_errors(cli, stream, tmp_path, argv, said):
+    fap = tmp_path / "talk.fap"
+    write_fap(stream, fap)
+    code, out, err = cli("export", fap, *[str(tmp_path / a) if a.startswith("x.") else a for a in argv])
+    assert code == 2 and said in err and "Traceback" not in err
+
+
+def test_cli_refuses_to_overwrite_the_stream(cli, stream, tmp_path):
+    fap = tmp_path / "talk.fap"
+    write_fap(stream, fap)
+    code, _, err = cli("export", fap, "-o", fap, "--format", "glb")
+    assert code == 2 and "would be overwritten" in err
+    assert isinstance(NoFaceUnitsError("x"), MpegFaError)
