@@ -160,7 +160,7 @@ def from_azure(viseme_id: int) -> str:
     """The MPEG-4 viseme an Azure viseme ID becomes."""
     if isinstance(viseme_id, bool) or not isinstance(viseme_id, int) or not 0 <= viseme_id < len(AZURE_VISEMES):
         raise SpecError(f"Azure viseme ID {viseme_id!r} is not one of 0..{len(AZURE_VISEMES) - 1}",
-                        hint="Azure Speech sends VisemeId 0..21 (en-US)")
+                        hint="Azure Speech sends VisemeId 0..21")
     return AZURE_VISEMES[viseme_id].mpeg4
 
 

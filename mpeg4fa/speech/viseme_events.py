@@ -66,7 +66,9 @@ class VisemeEvent:
     source: str
     """What the file said: the Azure ID or Polly viseme, e.g. ``"21"`` or ``"p"``."""
     line: int | None = None
-    """The file's line of this event, where known (JSON lines)."""
+    """The file's line of this event, where known."""
+    index: int = 0
+    """Its index among the file's events or marks (0-based), as errors name it."""
 
 
 def _records(text: str, name: str) -> list[tuple[dict, int | None]]:
@@ -81,17 +83,28 @@ def _records(text: str, name: str) -> list[tuple[dict, int | None]]:
             raise FormatError(name, exc.lineno, exc.colno, f"not JSON: {exc.msg}",
                               hint="a JSON array of events, or JSON lines as Polly writes them") from None
         return _json_lines(text, name)
+    if isinstance(data, list):
+        return list(zip(data, _item_lines(text)))
     if isinstance(data, dict):
         for key in ("visemes", "events", "speechMarks", "marks"):
             if isinstance(data.get(key), list):
-                data = data[key]
-                break
-        else:
-            data = [data]
-    if not isinstance(data, list):
-        raise FormatError(name, 1, 1, f"JSON {type(data).__name__} where a list of events was expected",
-                          hint="a JSON array of events, or JSON lines")
-    return [(item, None) for item in data]
+                return [(item, None) for item in data[key]]
+        return [(data, 1)]
+    raise FormatError(name, 1, 1, f"JSON {type(data).__name__} where a list of events was expected",
+                      hint="a JSON array of events, or JSON lines")
+
+
+def _item_lines(text: str) -> list[int]:
+    """The line each item of a top-level JSON array (already parsed, so well formed) starts on."""
+    decoder = json.JSONDecoder()
+    lines, at = [], text.index("[") + 1
+    while True:
+        while text[at] in " \t\r\n,":
+            at += 1
+        if text[at] == "]":
+            return lines
+        lines.append(text.count("\n", 0, at) + 1)
+        at = decoder.raw_decode(text, at)[1]
 
 
 def _json_lines(text: str, name: str) -> list[tuple[dict, int | None]]:
@@ -151,7 +164,7 @@ def _azure_event(item: object, line: int | None, index: int, name: str) -> Visem
         viseme = from_azure(vid)
     except SpecError as exc:
         raise _place(name, line, index, exc.message, exc.hint) from None
-    return VisemeEvent(ticks / TICKS_PER_SECOND, viseme, str(vid), line)
+    return VisemeEvent(ticks / TICKS_PER_SECOND, viseme, str(vid), line, index)
 
 
 def _polly_event(item: object, line: int | None, index: int, name: str) -> VisemeEvent | None:
@@ -169,7 +182,7 @@ def _polly_event(item: object, line: int | None, index: int, name: str) -> Visem
         viseme = from_polly(item.get("value"))
     except SpecError as exc:
         raise _place(name, line, index, exc.message, exc.hint) from None
-    return VisemeEvent(time / 1000.0, viseme, str(item.get("value")), line)
+    return VisemeEvent(time / 1000.0, viseme, str(item.get("value")), line, index)
 
 
 def parse_viseme_events(text: str, name: str = "<events>", format: str = "auto") -> tuple[str, list[VisemeEvent]]:
@@ -186,7 +199,7 @@ def parse_viseme_events(text: str, name: str = "<events>", format: str = "auto")
     for k in range(1, len(events)):
         if events[k].time < events[k - 1].time:
             e = events[k]
-            raise _place(name, e.line, k, f"time {e.time:.3f} s is before the previous event's "
+            raise _place(name, e.line, e.index, f"time {e.time:.3f} s is before the previous event's "
                          f"{events[k - 1].time:.3f} s", "events must be in time order, as the TTS sends them")
     return kind, events
 
