@@ -44,6 +44,7 @@ import os
 import warnings
 from array import array
 from dataclasses import replace
+from pathlib import Path
 from typing import Iterator, NamedTuple, cast
 
 import numpy as np
@@ -53,7 +54,7 @@ from mpeg4fa.fba.stacking import StreamBuilder, no_body
 from mpeg4fa.fba.stream import BODY, FACE, N_BAPS, FapStream
 from mpeg4fa.formats.errors import FormatError, FormatWarning
 from mpeg4fa.formats.fap_text import (
-    INT32_MAX, INT32_MIN, MAX_LINE_CHARS, Source, Target, _fps, _frame_numbers, _header_name, _integer, _Line,
+    INT32_MAX, INT32_MIN, MAX_LINE_CHARS, Source, Target, _fps, _frame_numbers, _integer, _Line,
     _LineReader, _open_source, _short, _stream_label,
 )
 from mpeg4fa.formats.fap_text import SUPPORTED_VERSIONS as FAP_VERSIONS
@@ -252,7 +253,7 @@ def write_bap(stream: FapStream, target: Target, *, name: str | None = None, ver
     body = np.flatnonzero(np.asarray(stream.object_mask) & BODY)
     masks = np.asarray(stream.bap_mask[body], dtype=bool)
     width = _mask_width(masks, width, label)
-    clean = _header_name(name, label).strip()
+    clean = (name if name is not None else (Path(label).name if label != "<stream>" else "") or "stream.bap").strip()
     if not clean or "\n" in clean or "\r" in clean:
         raise FormatError(label, 1, None, f"header name {clean!r} is empty or spans lines",
                           "pass a one-line name, e.g. name='wave.bap'")

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from mpeg4fa import spec
 from mpeg4fa.errors import MpegFaError
@@ -121,6 +123,40 @@ def test_round_trip_is_lossless(extension: bool) -> None:
     for field in ("bap_mask", "bap_values", "skip", "object_mask"):
         assert (getattr(back, field) == getattr(s, field)).all(), field
     assert back.fps == s.fps
+
+
+@st.composite
+def body_streams(draw) -> FapStream:
+    n = draw(st.integers(0, 5))
+    s = FapStream.empty(n, object_mask=BODY)
+    s.source_fps = draw(st.sampled_from([25.0, 30.0, 15.0, 12.5, 29.97]))
+    width = draw(st.sampled_from([ISO, spec.N_BAPS]))
+    sent = draw(st.lists(st.integers(0, width - 1), max_size=12, unique=True))
+    int32 = st.integers(-(2**31), 2**31 - 1)
+    for k in range(n):
+        s.bap_mask[k, sent] = draw(st.lists(st.booleans(), min_size=len(sent), max_size=len(sent)))
+        s.bap_values[k, sent] = draw(st.lists(int32, min_size=len(sent), max_size=len(sent)))
+        s.skip[k] = draw(st.integers(0, 3)) if k < n - 1 else 0
+    s.bap_values[~s.bap_mask] = 0  # what .bap can hold: unmasked values are not written
+    s.timestamps[:] = np.concatenate([[0], np.cumsum(s.skip[:-1] + 1)]) / s.source_fps if n else []
+    return s
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(body_streams(), st.sampled_from(["3.1", "3.2"]))
+def test_round_trip_property(s: FapStream, version: str) -> None:
+    back = read_text(write_text(s, version=version))
+    for field in ("bap_mask", "bap_values", "skip", "object_mask", "timestamps"):
+        assert np.array_equal(getattr(back, field), getattr(s, field)), field
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.text(alphabet="01 -+.#x\n\r\t9", max_size=600))
+def test_garbage_raises_only_format_error(text: str) -> None:
+    try:
+        read_text("3.1 g 25 1\n" + text)
+    except FormatError:
+        pass
 
 
 def test_writer_refuses_what_it_cannot_write(tmp_path: Path) -> None:
