@@ -22,7 +22,7 @@ from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
 from mpeg4fa.web import edits, photos
-from mpeg4fa.web.files import FORMATS, output_path, read_mesh, save_model
+from mpeg4fa.web.files import FORMATS, output_path, read_mesh, read_model, save_model
 from mpeg4fa.web.posing import pose_values, posed_vertices
 from mpeg4fa.web.session import Session
 
@@ -152,7 +152,7 @@ Pixel = Annotated[list[float], Field(min_length=2, max_length=2)]
 class BoxRequest(_Strict):
     view: Literal["front", "side"]
     box: Annotated[list[float], Field(min_length=4, max_length=4)]
-    dragged: dict[str, Pixel] | None = None  # the view's points the user put by hand (they stay put); None: as before
+    dragged: dict[Literal["front", "side"], dict[str, Pixel]] = {}  # per view, the points put by hand (they stay put)
 
 
 class CalibrateRequest(_Strict):
@@ -201,7 +201,7 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
     app.state.session, app.state.out_dir = session, out
     if model_path is not None:
         path = Path(model_path)
-        session.load(read_mesh(path.read_bytes(), path.name))
+        session.load(read_model(path))
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError):
@@ -328,7 +328,7 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
                 return _error(413, f"upload larger than {upload_limit} bytes", key)
             images[key] = photos.decode_photo(data, key)
         sizes = {k: (int(im.shape[1]), int(im.shape[0])) for k, im in images.items()}
-        placed = photos.guess(the_head().mesh, sizes, side_view)
+        placed = photos.guess(the_head().mesh, sizes, side_view, photos.first_boxes(the_head().mesh, images, side_view))
         state["photos"] = {"images": images, "sizes": sizes, "side_view": side_view, "guess": placed,
                            "dragged": {"front": {}, "side": {}}}
         return {"front": {"size": list(sizes["front"])}, "side": {"size": list(sizes["side"])},
@@ -339,7 +339,7 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
         ph = need_photos()
         box = photos.check_box(req.box, ph["sizes"][req.view], "box")
         boxes = dict(ph["guess"]["box"], **{req.view: box})
-        dragged = dict(ph["dragged"], **({} if req.dragged is None else {req.view: dict(req.dragged)}))
+        dragged = {**ph["dragged"], **{view: dict(points) for view, points in req.dragged.items()}}
         ph["guess"] = photos.guess(the_head().mesh, ph["sizes"], ph["side_view"], boxes, dragged)
         ph["dragged"] = dragged
         return {"guess": ph["guess"]}

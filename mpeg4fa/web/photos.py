@@ -3,8 +3,8 @@
 A front and a side photo are orthographic views of the head: the front shows x (to the image's
 right) and y (up), the side z and y (a ``"left"`` photo has the nose toward the image's left, as
 :mod:`mpeg4fa.render.texture` has it). The first placement of the feature points is the head's
-own points projected into each photo and fitted to a box (:func:`default_box`,
-:func:`fit_to_box`); the user then drags the box and the points. :func:`calibrate_from_photos`
+own points projected into each photo and fitted to a box (around the head's silhouette on a plain
+background, :func:`silhouette_box`, else centred, :func:`default_box`; :func:`fit_to_box`); the user then drags the box and the points. :func:`calibrate_from_photos`
 turns the dragged points into 3D points (:func:`mpeg4fa.fdp.build.points_from_photos`), brought
 back to the head's scale and place (photos carry no absolute size), and calibrates the head on
 them (:meth:`mpeg4fa.face.FaceModel.calibrate`). :func:`bake` is
@@ -70,6 +70,46 @@ def default_box(size: tuple[int, int], outline_box: np.ndarray) -> list[float]:
     h = BOX_HEIGHT * height
     w = min(h * (a1 - a0) / (u1 - u0), 0.95 * width)
     return [(width - w) / 2.0, (height - h) / 2.0, (width + w) / 2.0, (height + h) / 2.0]
+
+
+PLAIN_BACKGROUND = 24
+"""How far (0..255, per channel) a photo's border pixels may stray from their median for it to count as plain."""
+FOREGROUND = 40
+"""How far from the background colour a pixel must be to belong to the head."""
+
+
+def silhouette_box(image: np.ndarray, outline_box: np.ndarray) -> list[float] | None:
+    """The head's box found on a photo with a plain background, or None (a busy background, nothing found).
+
+    The head's top, left and right are where its pixels start; the bottom follows from the head's own aspect
+    ratio, since a photo usually cuts the neck. A head that touches the photo's top or sides gives None."""
+    img = np.asarray(image, np.int16)
+    h, w = img.shape[:2]
+    border = np.concatenate([img[0], img[:, 0], img[:, -1]])  # not the bottom row: the neck or shoulders cross it
+    background = np.median(border, axis=0)
+    if np.percentile(np.abs(border - background).max(axis=1), 90) > PLAIN_BACKGROUND:
+        return None
+    head = np.abs(img - background).max(axis=2) > FOREGROUND
+    rows = np.flatnonzero(head.sum(axis=1) > max(2, 0.01 * w))
+    cols = np.flatnonzero(head.sum(axis=0) > max(2, 0.01 * h))
+    if len(rows) < 0.1 * h or len(cols) < 0.1 * w:
+        return None
+    top, left, right = float(rows[0]), float(cols[0]), float(cols[-1] + 1)
+    if top <= 0 or left <= 0 or right >= w:
+        return None
+    a0, u0, a1, u1 = outline_box
+    return [left, top, right, top + (right - left) * (u1 - u0) / (a1 - a0)]
+
+
+def first_boxes(head_mesh, images: Mapping[str, np.ndarray], side_view: str) -> dict[str, list[float]]:
+    """Each photo's first box: around the head where the background is plain (:func:`silhouette_box`),
+    else centred (:func:`default_box`)."""
+    boxes = {}
+    for key, view in (("front", "front"), ("side", side_view)):
+        _, outline = head_outline(head_mesh, view)
+        image = images[key]
+        boxes[key] = silhouette_box(image, outline) or default_box((image.shape[1], image.shape[0]), outline)
+    return boxes
 
 
 def check_box(box, size: tuple[int, int], where: str) -> list[float]:

@@ -186,7 +186,7 @@ function movedBox(box, edge, x, y) {
 
 async function refit(view) {
   try {
-    const { guess } = await call("/api/photos/box", { view, box: state.guess.box[view], dragged: state.dragged[view] });
+    const { guess } = await call("/api/photos/box", { view, box: state.guess.box[view], dragged: state.dragged });
     state.guess = guess;
     panel.dataset.refits = String(Number(panel.dataset.refits || 0) + 1);
     VIEWS.forEach(placeOverlay);
