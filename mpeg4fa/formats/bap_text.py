@@ -191,7 +191,11 @@ def _parse(source: Source, name: str | None) -> Iterator[BapHeader | BapRecord]:
 
 def read_bap_header(source: Source, *, name: str | None = None) -> BapHeader:
     """The header line alone (version, name, fps, claimed frame count), checked; the frames are not read."""
-    return cast(BapHeader, next(_parse(source, name)))
+    records = _parse(source, name)
+    try:
+        return cast(BapHeader, next(records))
+    finally:
+        records.close()  # closes the file now, not when the generator is collected
 
 
 def iter_bap(source: Source, *, name: str | None = None) -> Iterator[BapRecord]:

@@ -43,17 +43,17 @@ def write_text(stream: FapStream, **kwargs) -> str:
     return out.getvalue()
 
 
-# VREng's layout, as its data/bap files have it: '3.2 hello.bap 15 49' (hi.bap) sends the shoulders,
-# elbows, wrists, three cervical BAPs and the body rotations 184..186; 100.bap (3.1) ends its mask
-# lines with a space and turns BAP 100 in steps of 17453 (10 degrees at 1e-5 rad).
+# VREng's layout (our own numbers): its hi.bap has the header '3.2 hello.bap 15 49' and sends the
+# shoulders, elbows, wrists, three cervical BAPs and the body rotations 184..186; its 100.bap (3.1)
+# ends its mask lines with a space and turns BAP 100 in steps of 17453 (10 degrees at 1e-5 rad).
 HI = {32, 33, 34, 35, 36, 37, 38, 39, 42, 43, 44, 45, 46, 47, 69, 70, 71, 184, 185, 186}
 VRENG_LIKE = (
     "# a comment before the header\n"
     "3.2 hello.bap 15 49\n"
     f"{mask_line(HI)}\n"
-    "0 4167 -298 5425 -6624 67744 -8045 2557 3678 1264 2135 4337 4735 -1692 6260 -2886 108 6234 1391 2156 17\n"
+    "0 4100 4110 4120 4130 4140 4150 4160 4170 4180 4190 4200 4210 4220 4230 4240 4250 4260 4270 4280 17\n"
     f"{mask_line(HI - {186})}\n"
-    "1 5099 -869 5498 -7220 72699 -84912 2689 3103 2074 3143 4625 1456 -4757 5763 -3193 -3100 8912 4355 2079\n"
+    "1 -5000 -5010 -5020 -5030 -5040 -5050 -5060 -5070 -5080 -5090 -5100 -5110 -5120 -5130 -5140 -5150 -5160 -5170 -5180\n"
 )
 VRENG_31 = "3.1 100.bap 5 37\n" + "".join(f"{mask_line({100})} \n{k} {-17453 * k}\n" for k in range(3))
 
@@ -62,8 +62,9 @@ def test_vreng_layout_reads() -> None:
     s = read_text(VRENG_LIKE)
     assert len(s) == 2 and s.fps == 15 and set(s.object_mask.tolist()) == {BODY}
     assert sorted(np.flatnonzero(s.bap_mask[0]) + 1) == sorted(HI)
-    assert s.bap_values[0, 32 - 1] == 4167 and s.bap_values[0, 186 - 1] == 17 and s.bap_values[0, 38 - 1] == 2557 and s.bap_values[0, 47 - 1] == 6260
-    assert not s.bap_mask[1, 186 - 1] and s.bap_values[1, 185 - 1] == 2079
+    assert s.bap_values[0, 32 - 1] == 4100 and s.bap_values[0, 186 - 1] == 17 and s.bap_values[0, 38 - 1] == 4160 \
+        and s.bap_values[0, 47 - 1] == 4230
+    assert not s.bap_mask[1, 186 - 1] and s.bap_values[1, 185 - 1] == -5180
     assert not s.fap_mask.any() and not s.bap_mask[:, ISO:].any()
     assert read_bap_header(io.StringIO(VRENG_LIKE)) == ("3.2", "hello.bap", 15.0, 49)
 
