@@ -13,7 +13,10 @@ from .options import Commands
 def register(commands: Commands) -> None:
     p = commands.add_parser("edit", help="edit a head model and place its feature points in the browser",
                             description="Start the face model editor on 127.0.0.1 only and open its page. "
-                                        "MODEL: a mesh file (OBJ, GLB, glTF, OFF, PLY, STL); default the generic head.")
+                                        "MODEL: a mesh file (OBJ, VRML 97, GLB, glTF, OFF, PLY, STL); "
+                                        "default the generic head. "
+                                        "An OBJ saved by the editor gets its parts and feature points back "
+                                        "from NAME.parts.json and NAME.points.json beside it.")
     p.add_argument("model", nargs="?", type=Path, metavar="MODEL", help="mesh to edit (default: the generic head)")
     p.add_argument("--port", type=options.integer(1, 65535), default=8765, help="port (default 8765)")
     p.add_argument("--out", type=Path, default=Path("."), help="folder saved models are written into (default .)")

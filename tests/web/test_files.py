@@ -1,0 +1,195 @@
+"""The editor's mesh files: VRML 97 (VTK), glTF/GLB node scenes (trimesh), OBJ with its own indices, and an OBJ
+saved by the editor read back with its parts and feature points. Every file is written by the test itself."""
+import json
+
+import numpy as np
+import pytest
+import trimesh
+from fastapi.testclient import TestClient
+
+from mpeg4fa.errors import MpegFaError
+from mpeg4fa.web.app import create_app
+from mpeg4fa.web.edits import EditError, make_mesh
+from mpeg4fa.web.files import read_mesh, read_model, save_model
+
+# ---- VRML 97 --------------------------------------------------------------------------------------
+
+TWO_SHAPES = b"""#VRML V2.0 utf8
+# a skin quad and, under a Transform, a teeth triangle
+DEF Skin Shape {
+  appearance Appearance { material Material { diffuseColor 1 0.8 0.7 } }
+  geometry IndexedFaceSet {
+    coord Coordinate { point [ 0 0 0, 1 0 0, 1 1 0, 0 1 0 ] }
+    coordIndex [ 0 1 2 3 -1 ]
+  }
+}
+Transform {
+  translation 10 0 0
+  rotation 0 0 1 1.5707963267948966
+  scale 2 2 2
+  children [
+    DEF Teeth Shape {
+      geometry IndexedFaceSet {
+        coord Coordinate { point [ 0 0 0, 1 0 0, 0 1 0 ] }
+        coordIndex [ 0, 1, 2, -1 ]
+      }
+    }
+  ]
+}
+"""
+
+
+def _area(vertices, triangles):
+    a, b, c = (vertices[triangles[:, i]] for i in range(3))
+    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+
+def test_vrml_two_shapes_a_transform_and_a_quad():
+    mesh = read_mesh(TWO_SHAPES, "head.wrl")
+    assert mesh.part_names == ("skin", "teeth")
+    parts = np.array(mesh.parts)
+    skin, teeth = mesh.triangles[parts == "skin"], mesh.triangles[parts == "teeth"]
+    assert len(skin) == 2 and len(teeth) == 1  # the quad split into two triangles
+    assert sorted(np.unique(skin).tolist()) == [0, 1, 2, 3]
+    assert _area(mesh.vertices, skin).sum() == pytest.approx(1.0)
+    assert np.allclose(mesh.vertices[:4], [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    # scale 2, then a quarter turn about z, then +10 in x: (1,0,0) -> (10,2,0), (0,1,0) -> (8,0,0)
+    assert np.allclose(mesh.vertices[np.unique(teeth)], [[10, 0, 0], [10, 2, 0], [8, 0, 0]], atol=1e-9)
+
+
+def test_vrml_nested_transforms_and_a_use_become_parts(tmp_path):
+    text = b"""#VRML V2.0 utf8
+Transform { translation 0 5 0 children [
+  Transform { scale 3 3 3 children [
+    DEF Eye Shape { geometry IndexedFaceSet { coord Coordinate { point [ 0 0 0, 1 0 0, 0 1 0 ] } coordIndex [ 0 1 2 ] } }
+  ] }
+  Transform { translation 100 0 0 children [ USE Eye ] }
+] }
+"""
+    mesh = read_mesh(text, "eyes.vrml")
+    assert len(mesh.part_names) == 2 and mesh.part_names[0] == "eye" and len(mesh.triangles) == 2
+    assert np.allclose(mesh.vertices, [[0, 5, 0], [3, 5, 0], [0, 8, 0], [100, 5, 0], [101, 5, 0], [100, 6, 0]])
+
+
+def test_vrml_upload_through_the_api(tmp_path):
+    with TestClient(create_app(out_dir=tmp_path)) as client:
+        r = client.post("/api/upload", files={"file": ("head.wrl", TWO_SHAPES, "model/vrml")})
+        assert r.status_code == 200, r.text
+        assert sorted(r.json()["parts"]) == ["skin", "teeth"] and r.json()["counts"]["triangles"] == 3
+        bad = TWO_SHAPES.replace(b"1 1 0, 0 1 0", b"1 1 0, 0 x 0")
+        r = client.post("/api/upload", files={"file": ("bad.wrl", bad, "model/vrml")})
+        assert r.status_code == 400 and r.json()["where"] == "bad.wrl:6", r.json()
+
+
+@pytest.mark.parametrize("text, where, problem", [
+    (TWO_SHAPES.replace(b"1 1 0, 0 1 0", b"1 1 0, 0 x 0"), "f.wrl:6", "parse error"),
+    (TWO_SHAPES.replace(b"Transform {", b"Transfrom {"), "f.wrl:10", "Unknown node type Transfrom"),
+    (TWO_SHAPES[:-40], "f.wrl:18", "parse error"),  # cut short in line 18: the braces never close
+    (TWO_SHAPES.replace(b"[ 0, 1, 2, -1 ]", b"[ 0, 1, 7, -1 ]"), "f.wrl: shape 2", "coordIndex 7 is out of range"),
+    (b"#VRML V1.0 ascii\nSeparator { }\n", "f.wrl:1", "must begin with '#VRML V2.0"),
+    (b"#VRML V2.0 utf8\n", "f.wrl", "no IndexedFaceSet"),
+])
+def test_vrml_faults_are_one_located_error(text, where, problem):
+    with pytest.raises(EditError) as err:
+        read_mesh(text, "f.wrl")
+    assert err.value.where == where and problem in err.value.message, str(err.value)
+
+
+# ---- glTF / GLB -----------------------------------------------------------------------------------
+
+def _scene() -> trimesh.Scene:
+    """A skin box and one eye triangle used by two nodes with different transforms."""
+    scene = trimesh.Scene()
+    tri = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], process=False)
+    scene.add_geometry(trimesh.creation.box(), geom_name="Cube.001", node_name="Skin")
+    left = trimesh.transformations.translation_matrix([5, 0, 0]) @ trimesh.transformations.scale_matrix(2)
+    scene.add_geometry(tri, geom_name="eye", node_name="eye_l", transform=left)
+    scene.add_geometry(tri, geom_name="eye", node_name="eye_r",
+                       transform=trimesh.transformations.translation_matrix([-5, 0, 0]))
+    return scene
+
+
+def _check_scene_mesh(mesh):
+    assert sorted(mesh.part_names) == ["eye_l", "eye_r", "skin"]
+    parts = np.array(mesh.parts)
+    for part, corners in (("eye_l", [[5, 0, 0], [7, 0, 0], [5, 2, 0]]), ("eye_r", [[-5, 0, 0], [-4, 0, 0], [-5, 1, 0]])):
+        assert np.allclose(mesh.vertices[mesh.triangles[parts == part][0]], corners)
+    assert len(mesh.triangles[parts == "skin"]) == 12
+
+
+def test_glb_nodes_become_parts_with_their_transforms():
+    _check_scene_mesh(read_mesh(_scene().export(file_type="glb"), "head.glb"))
+
+
+def test_gltf_with_embedded_buffers_loads():
+    files = _scene().export(file_type="gltf", embed_buffers=True)
+    assert list(files) == ["model.gltf"] and b"data:" in files["model.gltf"]
+    _check_scene_mesh(read_mesh(files["model.gltf"], "head.gltf"))
+
+
+def test_gltf_with_external_buffers_upload_refused_but_read_beside_its_files(tmp_path):
+    files = _scene().export(file_type="gltf")
+    with pytest.raises(EditError, match="gltf_buffer_0.bin") as err:
+        read_mesh(files["model.gltf"], "head.gltf")
+    assert err.value.where == "head.gltf" and ".glb" in err.value.hint
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    _check_scene_mesh(read_model(tmp_path / "model.gltf"))
+
+
+# ---- OBJ and the editor's own saved model -----------------------------------------------------------
+
+def test_obj_upload_keeps_the_files_vertex_indices():
+    """Materials, normals and an unused vertex: trimesh alone would split or renumber; feature points need the file's."""
+    text = (b"v 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\n"
+            b"usemtl a\nf 2//1 3//1 4//1\nusemtl b\nf 3//1 5//1 4//1\n")
+    mesh = read_mesh(text, "m.obj")
+    assert len(mesh.vertices) == 5 and mesh.vertices[0].tolist() == [9, 9, 9]
+    assert mesh.triangles.tolist() == [[1, 2, 3], [2, 4, 3]] and mesh.part_names == ("skin",)
+    with pytest.raises(MpegFaError) as err:
+        read_mesh(b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", "bad.obj")
+    assert err.value.where == "bad.obj:3:7"
+
+
+def _edited():
+    ball = trimesh.creation.icosphere(1)
+    parts = ["skin"] * len(ball.faces)
+    parts[3] = parts[7] = "teeth_upper"
+    return make_mesh(ball.vertices, ball.faces, parts, {"2.1": 5, "9.3": 11})
+
+
+def test_saved_obj_reads_back_with_its_parts_and_points(tmp_path):
+    mesh = _edited()
+    save_model(mesh, tmp_path, "head", required_points=mesh.points)
+    back = read_model(tmp_path / "head.obj")
+    assert np.allclose(back.vertices, mesh.vertices) and np.array_equal(back.triangles, mesh.triangles)
+    assert back.parts == mesh.parts and back.points == mesh.points and back.source == "head.obj"
+    # and so does `mpeg4fa edit head.obj`
+    with TestClient(create_app(tmp_path / "head.obj", out_dir=tmp_path)) as client:
+        model = client.get("/api/model").json()
+        assert sorted(model["parts"]) == ["skin", "teeth_upper"]
+        assert client.app.state.session.mesh.points == {"2.1": 5, "9.3": 11}
+    # without the files beside it, it is one skin without points
+    (tmp_path / "head.parts.json").unlink()
+    (tmp_path / "head.points.json").unlink()
+    alone = read_model(tmp_path / "head.obj")
+    assert alone.part_names == ("skin",) and alone.points == {}
+
+
+@pytest.mark.parametrize("parts, points, where, problem", [
+    ({"parts": {"skin": [0, 1]}}, None, "head.parts.json", "is in no part"),
+    ({"parts": {"skin": list(range(80)), "teeth": [0]}}, None, "head.parts.json: parts/teeth", "repeats a triangle"),
+    ({"parts": {"skin": [10**6]}}, None, "head.parts.json: parts/skin", "outside 0..79"),
+    ("[1, 2", None, "head.parts.json:1:6", "malformed JSON"),
+    (None, {"2.1": 10**6}, "head.points.json", "vertex 1000000"),
+    (None, {"2.1": [0.1, 0.2, 0.3]}, "head.points.json", "a position, not a vertex index"),
+])
+def test_bad_files_beside_a_saved_obj_name_themselves(tmp_path, parts, points, where, problem):
+    save_model(_edited(), tmp_path, "head", required_points=["2.1", "9.3"])
+    if parts is not None:
+        (tmp_path / "head.parts.json").write_text(parts if isinstance(parts, str) else json.dumps(parts))
+    if points is not None:
+        (tmp_path / "head.points.json").write_text(json.dumps(points))
+    with pytest.raises(MpegFaError) as err:
+        read_model(tmp_path / "head.obj")
+    assert err.value.where.endswith(where) and problem in err.value.message, str(err.value)
