@@ -4,7 +4,8 @@ The app runs with uvicorn in a thread on a free 127.0.0.1 port, posing through t
 saving into ``tmp_path``. One scenario walks the page as a user would: load the head, click a face and
 delete it, box-select around the hole and fill it, grow a teeth face to its region and split it off,
 place feature points by clicking the mesh, mirror, read the FAPU table, move a FAP slider, undo and
-redo, save. Each step leaves a screenshot in ``test-artifacts/editor/`` (ignored by git).
+redo, select vertices (click, shift-click, Alt-box), drag them with the move gizmo and move them by
+numbers, undo and redo the moves (buttons and keys), rename a part, save. Each step leaves a screenshot in ``test-artifacts/editor/`` (ignored by git).
 Clicks go to screen positions computed with three's ``Vector3.project`` (``window.editor.screenOf*``);
 only the teeth, which no click reaches inside the closed mouth, are selected through a hook.
 """
@@ -270,6 +271,9 @@ def test_a_user_edits_the_head(server, page):
     assert "5.4" in model(api)["points"]
     assert page.locator("#btn-redo").is_disabled() and not page.locator("#btn-undo").is_disabled()
 
+    drag, moved = move_vertices(page, api)
+    rename_part(page, api, region)
+
     # save: validated, then written into the out folder
     page.fill("#save-name", "edited")
     page.click("#btn-save")
@@ -282,9 +286,147 @@ def test_a_user_edits_the_head(server, page):
     assert sum(line.startswith("f ") for line in obj) == final["counts"]["triangles"] == t0
     assert sum(line.startswith("v ") for line in obj) == final["counts"]["vertices"]
     points = json.loads((out / "edited.points.json").read_text())
-    assert "teeth" in json.loads((out / "edited.parts.json").read_text())["parts"]
+    parts = json.loads((out / "edited.parts.json").read_text())["parts"]
+    assert "upper_teeth" in parts and "teeth" not in parts and sorted(parts["upper_teeth"]) == sorted(region)
     assert len(points.get("points", points)) == 84
+    # the OBJ holds the dragged vertices where the drag left them, the cheek point among them
+    v_obj = np.array([[float(x) for x in line.split()[1:4]] for line in obj if line.startswith("v ")])
+    assert np.allclose(v_obj, np.reshape(final["positions"], (-1, 3)), atol=1e-5)
+    assert np.allclose(v_obj[moved], drag["after"][moved], atol=1e-5)
+    cheek = points.get("points", points)["5.3"]
+    assert cheek in moved and np.allclose(v_obj[cheek] - drag["before"][cheek], drag["delta"], atol=1e-5)
     assert page.errors == [], page.errors
+
+
+def positions(api) -> np.ndarray:
+    return np.reshape(model(api)["positions"], (-1, 3))
+
+
+def move_vertices(page, api):
+    """Vertices mode: click, shift-click and Alt-box vertices around the cheek point 5.3; drag them up with
+    the gizmo's Y arrow (real mouse events), move them along x by typing a centre, undo and redo.
+    Returns the drag ({before, after, delta}) and the moved vertices, for the checks on the saved files."""
+    page.click("#btn-mode-vertices")
+    assert page.locator("#sel-count").get_attribute("data-mode") == "vertices"
+    pos0 = positions(api)
+    cheek = model(api)["points"]["5.3"]
+    xy = page.evaluate(f"window.editor.screenOfVertex({cheek})")
+    x, y = xy["x"], xy["y"]
+    hit = page.evaluate(f"window.editor.pickAt({x}, {y})")["vertex"]
+    page.mouse.click(x, y)
+    assert page.evaluate("[...window.editor.state.vertices]") == [hit]
+    assert np.linalg.norm(pos0[hit] - pos0[cheek]) < 6.0
+    other = page.evaluate(f"window.editor.pickAt({x - 30}, {y})")["vertex"]
+    assert other != hit
+    page.keyboard.down("Shift")
+    page.mouse.click(x - 30, y)
+    page.keyboard.up("Shift")
+    assert sorted(page.evaluate("[...window.editor.state.vertices]")) == sorted([hit, other])
+    assert page.locator("#sel-count").get_attribute("data-count") == "2"
+    shot(page, "13-vertices-clicked")
+
+    half = 28
+    page.keyboard.down("Alt")
+    page.mouse.move(x - half, y - half)
+    page.mouse.down()
+    page.mouse.move(x + half, y + half, steps=6)
+    page.mouse.up()
+    page.keyboard.up("Alt")
+    chosen = sorted(page.evaluate("[...window.editor.state.vertices]"))
+    assert len(chosen) > 4 and cheek in chosen
+    # each one projects inside the box and is what three's own raycast meets first there (not hidden)
+    seen = page.evaluate("(vs) => vs.map((v) => { const s = window.editor.screenOfVertex(v);"
+                         " const h = window.editor.pickAt(s.x, s.y); return [s.x, s.y, h ? h.point : null]; })", chosen)
+    size = np.linalg.norm(pos0.max(axis=0) - pos0.min(axis=0))
+    for v, (sx, sy, point) in zip(chosen, seen):
+        assert abs(sx - x) <= half + 0.5 and abs(sy - y) <= half + 0.5
+        assert point is not None and np.linalg.norm(np.subtract(point, pos0[v])) < 2e-3 * size, v
+    assert page.evaluate("window.editor.view.selectedDots.geometry.attributes.position.count") == len(chosen)
+    shot(page, "14-vertices-box-selected")
+
+    # the gizmo on the selection's centre; drag its Y arrow 40 px up
+    page.click("#btn-move-mode")
+    assert page.locator("#btn-move-mode").get_attribute("aria-pressed") == "true"
+    centre = pos0[chosen].mean(axis=0)
+    shown = [float(page.locator(f"#move-{a}").input_value()) for a in "xyz"]
+    assert np.allclose(shown, centre, atol=1e-3)
+    assert np.allclose(page.evaluate("window.editor.view.pivot.position.toArray()"), centre, atol=1e-6)
+    shot(page, "15-move-gizmo")
+    handle = page.evaluate("window.editor.screenOfGizmoHandle('Y', 0.45)")
+    page.mouse.move(handle["x"], handle["y"])
+    assert page.evaluate("window.editor.view.gizmo.axis") == "Y", "the Y arrow is not under the pointer"
+    cam = np.array(page.evaluate("window.editor.view.camera.position.toArray()"))
+    target = np.array(page.evaluate("window.editor.view.controls.target.toArray()"))
+    fov = page.evaluate("window.editor.view.camera.fov")
+    height = page.locator("#canvas").bounding_box()["height"]
+    forward = (target - cam) / np.linalg.norm(target - cam)
+    per_pixel = 2 * np.dot(centre - cam, forward) * np.tan(np.radians(fov) / 2) / height
+    lift = 40
+    v = version(page)
+    page.mouse.down()
+    page.mouse.move(handle["x"], handle["y"] - lift / 2, steps=4)
+    page.mouse.move(handle["x"], handle["y"] - lift, steps=4)
+    preview = np.reshape(page.evaluate("Array.from(window.editor.view.positions)"), (-1, 3))
+    assert preview[cheek][1] > pos0[cheek][1]  # the shown mesh follows the drag before the release
+    shot(page, "16-dragging")
+    page.mouse.up()
+    settle(page, v)
+    pos1 = positions(api)
+    delta = pos1[chosen] - pos0[chosen]
+    assert np.allclose(delta, delta[0], atol=1e-5), "the selection moved as one"
+    dx, dy, dz = delta[0]
+    # along y only (the arrow's axis), by the 40 px at the selection's depth (the gizmo's drag plane
+    # is turned to face the eye only about y, hence the tolerance)
+    assert abs(dx) < 1e-5 and abs(dz) < 1e-5 and dy > 0
+    assert dy == pytest.approx(lift * per_pixel, rel=0.1), (dy, lift * per_pixel)
+    others = np.setdiff1d(np.arange(len(pos0)), chosen)
+    assert np.array_equal(pos1[others], pos0[others])
+    assert "dragged: moved" in status(page)[1]
+    assert sorted(page.evaluate("[...window.editor.state.vertices]")) == chosen  # the selection stays
+    shot(page, "17-dragged")
+
+    # numeric: type the centre's new x; y and z stay as shown, so only x moves
+    c1 = pos1[chosen].mean(axis=0)
+    assert float(page.locator("#move-y").input_value()) == pytest.approx(c1[1], abs=1e-3)
+    page.fill("#move-x", f"{c1[0] + 2.5:.6f}")
+    click_and_settle(page, "#btn-move-to")
+    pos2 = positions(api)
+    assert np.allclose(pos2[chosen] - pos1[chosen], [2.5, 0, 0], atol=1e-5)
+    assert np.array_equal(pos2[others], pos1[others])
+    shot(page, "18-numeric-move")
+
+    # undo the numeric move (button), the drag (Ctrl+Z); redo the drag (Ctrl+Y)
+    click_and_settle(page, "#btn-undo")
+    assert np.allclose(positions(api), pos1, atol=1e-6)
+    shot(page, "19-move-undone")
+    for key, want in (("Control+z", pos0), ("Control+y", pos1)):
+        v = version(page)
+        page.keyboard.press(key)
+        settle(page, v)
+        assert np.allclose(positions(api), want, atol=1e-6), key
+    page.click("#btn-move-mode")
+    page.click("#btn-mode-faces")
+    assert page.evaluate("window.editor.view.gizmo.object") is None
+    return {"before": pos0, "after": pos1, "delta": np.array([dx, dy, dz])}, chosen
+
+
+def rename_part(page, api, region) -> None:
+    """Rename the split-off teeth through the part list's controls; a bad name is refused."""
+    page.select_option("#part-select", "teeth")
+    page.fill("#rename-to", "Upper Teeth")
+    page.click("#btn-rename-part")
+    page.wait_for_selector("#status[data-kind='error']", timeout=10_000)
+    assert "bad part name" in status(page)[1]
+    page.fill("#rename-to", "upper_teeth")
+    click_and_settle(page, "#btn-rename-part")
+    m = model(api)
+    assert "upper_teeth" in m["parts"] and "teeth" not in m["parts"]
+    i = m["parts"].index("upper_teeth")
+    assert sorted(f for f, p in enumerate(m["triangle_parts"]) if p == i) == sorted(region)
+    assert page.locator("#parts li[data-part='upper_teeth']").count() == 1
+    assert page.locator("#parts li[data-part='teeth']").count() == 0
+    assert page.locator("#part-select").input_value() == "upper_teeth"
+    shot(page, "20-part-renamed")
 
 
 def test_static_files_and_errors_are_served(server):

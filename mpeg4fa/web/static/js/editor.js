@@ -97,6 +97,7 @@ function setMode(mode) {
     $(`btn-mode-${m}`).setAttribute("aria-pressed", String(m === mode));
   }
   view.showVertexDots(mode === "vertices");
+  $("labels").classList.toggle("dim", mode === "vertices");
   showSelection();
 }
 
@@ -121,7 +122,7 @@ function showMove(centre = null) {
   for (const [k, axis] of ["x", "y", "z"].entries()) {
     const input = $(`move-${axis}`);
     input.disabled = !c;
-    input.value = c ? c[k].toFixed(3) : "";
+    input.value = input.dataset.shown = c ? c[k].toFixed(3) : "";
   }
   $("btn-move-to").disabled = !c;
   if (!state.drag) view.placeGizmo(state.moveMode && c ? c : null);
@@ -140,10 +141,14 @@ function moveBy(vertices, delta, how) {
 function moveTo() {
   const vs = moveSet();
   if (!vs.length) { moveBy(vs, [0, 0, 0], ""); return; }
-  const target = ["x", "y", "z"].map((a) => Number($(`move-${a}`).value));
-  if (!target.every(Number.isFinite)) { setStatus("move: x, y and z must be numbers", "error"); return; }
+  const fields = ["x", "y", "z"].map((a) => $(`move-${a}`));
+  const target = fields.map((f) => Number(f.value));
+  if (!fields.every((f, k) => f.value.trim() !== "" && Number.isFinite(target[k]))) {
+    setStatus("move: x, y and z must be numbers", "error"); return;
+  }
   const c = centroid(vs);
-  moveBy(vs, target.map((t, k) => t - c[k]), "numeric move");
+  // a field left as shown (rounded to 3 decimals) moves nothing along its axis
+  moveBy(vs, fields.map((f, k) => (f.value === f.dataset.shown ? 0 : target[k] - c[k])), "numeric move");
 }
 
 // the gizmo's drag previews the move on the shown mesh; its release applies it through the API (undoable)

@@ -8,16 +8,23 @@ import { TransformControls } from "three/addons/controls/TransformControls.js";
 const PALETTE = [0x93c47d, 0x8e7cc3, 0xffd966, 0xb4a7d6, 0xa2c4c9, 0xea9999, 0xf9cb9c, 0x6aa84f, 0x45818e];
 const SELECTED = new THREE.Color(0xff6a00);
 const POINT = 0x1f4fff, POINT_PICKED = 0xff1f6a;
-const DOT = 0x1b1d22, DOT_SELECTED = 0xffe000;
+const DOT = 0x3b3530, DOT_SELECTED = 0xffe000;
+const BIN_PX = 16;  // the screen cells triangles are binned in for the box selection's visibility test
 const GIZMO_SIZE = 0.8;  // TransformControls' handle size (1 is its default)
 export const BACKGROUND = 0x2b2f36;
 
 const KNOWN = { skin: 0xd9b49c, eye_l: 0x6fa8dc, eye_r: 0x76a5af, teeth_upper: 0xf6f0d8, teeth_lower: 0xe3d9b8,
                 teeth: 0xf2e6b0, tongue: 0xc27ba0 };
 
-// a part keeps its colour through edits: known names have theirs, others one picked by their name
+// a part keeps its colour through edits: known names have theirs, names that say what they are (a
+// renamed "upper_teeth", "eye_left") that of the kind, others one picked by their name
+const KINDS = [[/teeth|tooth/, KNOWN.teeth], [/tongue/, KNOWN.tongue], [/(^|_)eyes?(_|$)/, KNOWN.eye_l],
+               [/skin/, KNOWN.skin]];
+
 export function partColor(name) {
   if (name in KNOWN) return KNOWN[name];
+  const kind = KINDS.find(([word]) => word.test(name));
+  if (kind) return kind[1];
   let h = 0;
   for (const ch of name) h = (h * 31 + ch.charCodeAt(0)) >>> 0;
   return PALETTE[h % PALETTE.length];
@@ -46,7 +53,7 @@ export class View {
     this.mesh = null;
     this.points = new THREE.Group();
     this.scene.add(this.points);
-    this.dots = this.makeDots(DOT, 3);             // every vertex, in vertex mode
+    this.dots = this.makeDots(DOT, 2);             // every vertex, in vertex mode
     this.selectedDots = this.makeDots(DOT_SELECTED, 7);
     this.selectedVertices = [];
     this.pivot = new THREE.Object3D();             // what the gizmo moves: placed on the selection's centre
@@ -330,28 +337,73 @@ export class View {
     return n.dot(this.camera.position.clone().sub(centre)) > 0;
   }
 
-  // vertices that project into the client rectangle and whose normal faces the camera
+  // A test of whether a model-space point is seen from the camera, not hidden behind another part of
+  // the mesh: the triangles are binned by their screen rectangles, so each test casts its ray only
+  // against the few triangles under the point.
+  visibilityTest() {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const n = this.positions.length / 3, sx = new Float32Array(n), sy = new Float32Array(n), ok = new Uint8Array(n);
+    for (let v = 0; v < n; v++) {
+      const s = this.screenOf(this.vertex(v));
+      sx[v] = s.x - r.left; sy[v] = s.y - r.top; ok[v] = s.z > -1 && s.z < 1 ? 1 : 0;
+    }
+    const cols = Math.ceil(r.width / BIN_PX) + 1, rows = Math.ceil(r.height / BIN_PX) + 1;
+    const bins = new Map(), idx = this.indices;
+    for (let f = 0; f < idx.length / 3; f++) {
+      const a = idx[f * 3], b = idx[f * 3 + 1], c = idx[f * 3 + 2];
+      if (!(ok[a] && ok[b] && ok[c])) continue;
+      const c0 = Math.max(0, Math.floor(Math.min(sx[a], sx[b], sx[c]) / BIN_PX));
+      const c1 = Math.min(cols - 1, Math.floor(Math.max(sx[a], sx[b], sx[c]) / BIN_PX));
+      const r0 = Math.max(0, Math.floor(Math.min(sy[a], sy[b], sy[c]) / BIN_PX));
+      const r1 = Math.min(rows - 1, Math.floor(Math.max(sy[a], sy[b], sy[c]) / BIN_PX));
+      for (let i = r0; i <= r1; i++) {
+        for (let j = c0; j <= c1; j++) {
+          const key = i * cols + j;
+          if (!bins.has(key)) bins.set(key, []);
+          bins.get(key).push(f);
+        }
+      }
+    }
+    const eye = this.camera.position.clone(), ray = new THREE.Ray(), hit = new THREE.Vector3();
+    const slack = this.size() * 1e-4;
+    return (point) => {
+      const s = this.screenOf(point);
+      const list = bins.get(Math.floor((s.y - r.top) / BIN_PX) * cols + Math.floor((s.x - r.left) / BIN_PX)) || [];
+      const dir = point.clone().sub(eye), dist = dir.length();
+      ray.set(eye, dir.divideScalar(dist));
+      for (const f of list) {
+        const at = ray.intersectTriangle(this.vertex(idx[f * 3]), this.vertex(idx[f * 3 + 1]),
+                                         this.vertex(idx[f * 3 + 2]), false, hit);
+        if (at && at.distanceTo(eye) < dist - slack - dist * 1e-5) return false;
+      }
+      return true;
+    };
+  }
+
+  // vertices that project into the client rectangle, face the camera and are not hidden behind the mesh
   verticesInRect(x0, y0, x1, y1) {
     const out = [];
     const [ax, bx] = [Math.min(x0, x1), Math.max(x0, x1)], [ay, by] = [Math.min(y0, y1), Math.max(y0, y1)];
     const used = new Uint8Array(this.positions.length / 3);
     for (const v of this.indices) used[v] = 1;
+    const seen = this.visibilityTest();
     for (let v = 0; v < used.length; v++) {
       if (!used[v]) continue;
-      const s = this.screenOf(this.vertex(v));
-      if (s.z < 1 && s.x >= ax && s.x <= bx && s.y >= ay && s.y <= by && this.facesCamera(v)) out.push(v);
+      const p = this.vertex(v), s = this.screenOf(p);
+      if (s.z < 1 && s.x >= ax && s.x <= bx && s.y >= ay && s.y <= by && this.facesCamera(v) && seen(p)) out.push(v);
     }
     return out;
   }
 
-  // faces whose projected centre lies in the client rectangle and that face the camera
+  // faces whose projected centre lies in the client rectangle, that face the camera and are not hidden
   facesInRect(x0, y0, x1, y1) {
     const out = [];
     const [ax, bx] = [Math.min(x0, x1), Math.max(x0, x1)], [ay, by] = [Math.min(y0, y1), Math.max(y0, y1)];
     const n = this.indices.length / 3;
+    const seen = this.visibilityTest();
     for (let f = 0; f < n; f++) {
-      const s = this.screenOf(this.faceCentre(f));
-      if (s.z < 1 && s.x >= ax && s.x <= bx && s.y >= ay && s.y <= by && this.faceFacesCamera(f)) out.push(f);
+      const c = this.faceCentre(f), s = this.screenOf(c);
+      if (s.z < 1 && s.x >= ax && s.x <= bx && s.y >= ay && s.y <= by && this.faceFacesCamera(f) && seen(c)) out.push(f);
     }
     return out;
   }
