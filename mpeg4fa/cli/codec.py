@@ -166,6 +166,9 @@ def run_decode(args: argparse.Namespace) -> int:
             write_bap(body, partial, name=args.output.name)
         written = f"{args.output} (body)"
     elif has_body(stream):
+        if args.bap is None and (args.output.is_symlink() or (args.output.exists() and not args.output.is_file())):
+            raise UsageError(f"-o {args.output} is a link or not a plain file: where its .bap would go is unclear",
+                             hint="name the body file with --bap FILE")
         with atomic_outputs(args.output, bap_path) as (fap_partial, bap_partial):
             write_fap(face, fap_partial, name=args.output.name)
             write_bap(body, bap_partial, name=bap_path.name)

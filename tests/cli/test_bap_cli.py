@@ -193,3 +193,16 @@ def test_real_face_body_stream_round_trips_through_the_cli(tmp_path: Path, capsy
     body = lambda p: p.read_text().split("\n", 1)[1]  # noqa: E731  (the header names the file)
     assert body(tmp_path / "a.bap") == body(tmp_path / "b.bap")
     assert body(tmp_path / "a.fap") == body(tmp_path / "b.fap")
+
+
+def test_linked_output_needs_an_explicit_bap(face_body: Path, tmp_path: Path, capsys) -> None:
+    target = tmp_path / "real.fap"
+    target.write_text("")
+    link = tmp_path / "link.fap"
+    link.symlink_to(target)
+    code, err = run(capsys, "decode", face_body, "-o", link)
+    assert code == 2 and "--bap FILE" in err and not (tmp_path / "link.bap").exists()
+    assert target.read_text() == ""
+    code, err = run(capsys, "decode", face_body, "-o", link, "--bap", tmp_path / "b.bap")
+    assert code == 0, err
+    assert target.read_text().startswith("2.1 ") and (tmp_path / "b.bap").is_file()
