@@ -44,8 +44,31 @@ def _write_glb(args: argparse.Namespace) -> str:
             f"({result.duration:.2f} s, {args.animation} animation), {result.bytes / 1e6:.1f} MB{extra}")
 
 
+def _write_weights(args: argparse.Namespace, kind: str) -> str:
+    """Per-frame ARKit-52 or OVR-15 weights as JSON (schema: :mod:`mpeg4fa.export.weights`)."""
+    from ..export import arkit_weights, oculus_weights, write_weights_json
+    from ..formats import read_stream
+
+    stream, _ = read_stream(args.stream)
+    weights = arkit_weights(stream, posed_face(args)) if kind == "arkit" else oculus_weights(stream)
+    write_weights_json(weights, args.output)
+    return f"{args.output}: {len(weights.times)} frames of {len(weights.names)} {kind} weights"
+
+
+def _write_azure(args: argparse.Namespace) -> str:
+    """Azure-style viseme events as JSON (schema: :mod:`mpeg4fa.export.events`)."""
+    from ..export import write_azure_json
+    from ..formats import read_stream
+
+    stream, _ = read_stream(args.stream)
+    return f"{args.output}: {write_azure_json(stream, args.output)} Azure viseme events"
+
+
 FORMATS: dict[str, tuple[tuple[str, ...], Callable[[argparse.Namespace], str]]] = {
     "glb": ((".glb",), _write_glb),
+    "arkit-json": ((), lambda args: _write_weights(args, "arkit")),
+    "oculus-json": ((), lambda args: _write_weights(args, "oculus")),
+    "azure-json": ((), _write_azure),
 }
 """Format name -> (output suffixes it is chosen by, writer returning the line to print)."""
 
@@ -61,9 +84,15 @@ def register(commands: Commands) -> None:
                     "deformer does (a head without ARKit units, e.g. a --face-mesh, cannot do this). "
                     "--animation vertex bakes every frame's vertex positions as one morph target per frame "
                     "(exact for any head and deformer; larger files). glTF has no audio: the stream's speech "
-                    "(--audio, or the WAV beside the stream) is copied next to OUT with OUT's name and .wav.",
+                    "(--audio, or the WAV beside the stream) is copied next to OUT with OUT's name and .wav. "
+                    "arkit-json / oculus-json (give --format): per-frame weights of the 52 ARKit blend shapes "
+                    "(as the arkit deformer drives them; needs the generic head) or of the 15 Oculus/OVR visemes; "
+                    "azure-json: Azure-style viseme events (AudioOffset in 100 ns ticks, VisemeId 0-21) at each "
+                    "change of the viseme shown, the form 'mpeg4fa encode --visemes' reads back (JSON schemas: "
+                    "mpeg4fa/export/weights.py and events.py).",
         epilog="examples:\n  mpeg4fa export talk.fba -o talk.glb\n"
-               "  mpeg4fa export talk.fap --fdp face.fdp --animation vertex --audio talk.wav -o talk.glb",
+               "  mpeg4fa export talk.fap --fdp face.fdp --animation vertex --audio talk.wav -o talk.glb\n"
+               "  mpeg4fa export talk.fba --format arkit-json -o talk.arkit.json",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) stream")
     p.add_argument("-o", "--output", type=Path, required=True, help="the file to write (format from its suffix)")
