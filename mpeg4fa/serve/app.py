@@ -1,0 +1,310 @@
+"""The live server (FastAPI): the player page, the head as GLB, and the ``/ws`` WebSocket of :mod:`.protocol`.
+
+Per connection two tasks run: one reads the client's messages (``say``, ``buffer``, ``stop``;
+malformed ones get an ``error`` and change nothing), one speaks the current utterance. That one
+is a pipeline of two: a producer makes sentence after sentence in a worker thread
+(:func:`.segments.make_segment`: speech, FBA stream, decoded frames, ARKit weights), at most
+one ready ahead of the one being sent, and the sender passes frames and audio out in media-time
+order as the client's buffer reports allow (:mod:`.flow`). So the first frame goes out once the
+first sentence is made, and a slow or stalled client costs the server one sentence of memory.
+
+HTTP routes: ``/`` (the player page), ``/static`` (its script), ``/vendor/three`` (three.js as
+vendored for the editor, served from there), ``/head.glb`` (the head with its ARKit morph targets,
+:func:`mpeg4fa.export.gltf.build_glb`, built once on first request), ``/api/info``. Unknown routes
+answer ``{"error", "where"}`` with 404.
+"""
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fastapi import FastAPI, Request, WebSocket
+from fastapi.responses import HTMLResponse, JSONResponse, Response
+from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from mpeg4fa.errors import MpegFaError
+from mpeg4fa.face.model import FaceModel
+from mpeg4fa.serve import protocol
+from mpeg4fa.serve.flow import Flow, Stalled
+from mpeg4fa.serve.protocol import AUDIO_KIND, FBA_KIND, Buffer, ProtocolError, Say, Stop, error_message, pack
+from mpeg4fa.serve.segments import Segment, chunks, make_segment
+from mpeg4fa.serve.sentences import split_sentences
+
+HOST = "127.0.0.1"
+STATIC = Path(__file__).with_name("static")
+THREE = Path(__file__).resolve().parents[1] / "web" / "static" / "vendor" / "three"
+WINDOW = 2.0  # s of media the server sends ahead of the client's playhead
+CHUNK = 0.2  # s of frames or audio per message
+STALL_TIMEOUT = 30.0
+CLOSE_POLICY = 1008  # WebSocket close code: policy violation (here: a stalled client)
+
+
+@dataclass
+class Settings:
+    engine: object
+    units: object | None  # ArkitUnits of the face, or None for a head without face units
+    face: FaceModel
+    fps: float = 25.0
+    window: float = WINDOW
+    chunk: float = CHUNK
+    stall_timeout: float = STALL_TIMEOUT
+    utterances: list[dict] = field(default_factory=list)  # one record per finished utterance (newest last)
+    connections: int = 0
+    _glb: bytes | None = None
+    _glb_lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def head_glb(self) -> bytes:
+        """The head as GLB (morph targets named as ``units``), built once."""
+        with self._glb_lock:
+            if self._glb is None:
+                self._glb = head_glb(self.face, self.units is not None)
+            return self._glb
+
+
+def head_glb(face: FaceModel, morph: bool) -> bytes:
+    """The head at rest as GLB: with its ARKit morph targets when it has face units, else plain."""
+    from mpeg4fa.export.gltf import build_glb
+    from mpeg4fa.fba.stream import FapStream
+
+    rest = FapStream.empty(2)  # a neutral still: the page drives the weights itself
+    rest.source_fps = 25.0
+    rest.timestamps[:] = (0.0, 0.04)
+    return build_glb(rest, face, animation="morph" if morph else "vertex", name="head")[0]
+
+
+def face_units(face: FaceModel):
+    """The face's ARKit units (the GLB's morph targets), or None when the head has none."""
+    from mpeg4fa.export.arkit_units import NoFaceUnitsError, arkit_units
+
+    try:
+        return arkit_units(face)
+    except NoFaceUnitsError:
+        return None
+
+
+def warm_up(settings: Settings) -> None:
+    """Load the speech engine and compile the codec once, so the first ``say`` is not the slow one."""
+    from mpeg4fa.serve.sentences import Sentence
+
+    make_segment(Sentence(0, "Hello.", "Hello.", 0), 0.0, engine=settings.engine, units=settings.units,
+                 fps=settings.fps)
+
+
+def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak", fps: float = 25.0,
+               window: float = WINDOW, chunk: float = CHUNK, stall_timeout: float = STALL_TIMEOUT,
+               warm: bool = False) -> FastAPI:
+    """The server's ASGI app. ``face``: the head to serve (default the generic head); ``engine``: a
+    speech engine or its name; ``window``/``chunk``/``stall_timeout`` as in :mod:`.protocol`."""
+    from mpeg4fa.speech.encoder import make_engine
+
+    if not (window > 0 and chunk > 0 and stall_timeout > 0 and fps > 0):
+        raise ValueError("window, chunk, stall_timeout and fps must be > 0")
+    face = face if face is not None else FaceModel.default()
+    settings = Settings(engine=make_engine(engine) if isinstance(engine, str) else engine, units=face_units(face),
+                        face=face, fps=float(fps), window=float(window), chunk=float(chunk),
+                        stall_timeout=float(stall_timeout))
+    if warm:
+        warm_up(settings)
+    app = FastAPI(title="mpeg4fa serve", docs_url=None, redoc_url=None, openapi_url=None)
+    app.state.live = settings
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException):
+        return JSONResponse({"error": str(exc.detail).lower(), "where": request.url.path}, status_code=exc.status_code)
+
+    @app.get("/", response_class=HTMLResponse)
+    def index():
+        return (STATIC / "player.html").read_text(encoding="utf-8")
+
+    @app.get("/head.glb")
+    def glb():
+        return Response(settings.head_glb(), media_type="model/gltf-binary")
+
+    @app.get("/api/info")
+    def info():
+        return hello(settings)
+
+    app.mount("/static", StaticFiles(directory=STATIC), name="static")
+    app.mount("/vendor/three", StaticFiles(directory=THREE), name="three")
+
+    @app.websocket("/ws")
+    async def ws(socket: WebSocket):
+        await socket.accept()
+        settings.connections += 1
+        try:
+            await Connection(socket, settings).run()
+        finally:
+            settings.connections -= 1
+
+    return app
+
+
+def hello(settings: Settings) -> dict:
+    return {"type": "hello", "protocol": protocol.PROTOCOL, "fps": settings.fps, "window": settings.window,
+            "chunk": settings.chunk, "stall_timeout": settings.stall_timeout,
+            "units": list(settings.units.names) if settings.units is not None else [],
+            "engine": getattr(settings.engine, "name", type(settings.engine).__name__)}
+
+
+class _Gone(Exception):
+    """The client went away (or was closed) while the server was sending."""
+
+
+class Connection:
+    """One client: its message loop, its flow control and its utterance task."""
+
+    def __init__(self, socket: WebSocket, settings: Settings) -> None:
+        self.socket, self.settings = socket, settings
+        self.flow = Flow(settings.window, settings.stall_timeout)
+        self.task: asyncio.Task | None = None
+        self.send_lock = asyncio.Lock()
+        self.closed = False
+
+    async def send(self, message: dict | bytes) -> None:
+        if self.closed:
+            raise _Gone
+        try:
+            async with self.send_lock:
+                if isinstance(message, bytes):
+                    await self.socket.send_bytes(message)
+                else:
+                    await self.socket.send_json(message)
+        except Exception as exc:  # the peer is gone: Starlette, uvicorn and websockets each say it their way
+            self.closed = True
+            raise _Gone from exc
+
+    async def run(self) -> None:
+        try:
+            await self.send(hello(self.settings))
+            while not self.closed:
+                message = await self.socket.receive()
+                if message["type"] == "websocket.disconnect":
+                    break
+                await self.handle(message.get("text"), message.get("bytes"))
+        except (_Gone, RuntimeError):  # RuntimeError: receive after the server closed a stalled client
+            pass
+        finally:
+            self.closed = True
+            await self.cancel()
+
+    async def handle(self, text: str | None, data: bytes | None) -> None:
+        try:
+            message = protocol.parse_client(text, data)
+        except ProtocolError as exc:
+            await self.send(error_message(exc.message, exc.where))
+            return
+        if isinstance(message, Buffer):
+            self.flow.report(message.received, message.buffered)
+        elif isinstance(message, Stop):
+            await self.cancel()
+        elif isinstance(message, Say):
+            if self.task is not None and not self.task.done():
+                await self.send(error_message("an utterance is playing: send stop first, or wait for its done",
+                                              "busy"))
+                return
+            self.task = asyncio.create_task(self.utter(message, time.monotonic()))
+
+    async def cancel(self) -> None:
+        task, self.task = self.task, None
+        if task is not None and not task.done():
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, _Gone):
+                await task
+
+    # ---- one utterance -------------------------------------------------------------------------
+    async def utter(self, say: Say, received_at: float) -> None:
+        record = {"id": say.id, "sentences": 0, "frames": 0, "duration": 0.0, "first_frame_after": None,
+                  "stopped": False, "stalled": False, "error": None}
+        produced: asyncio.Queue = asyncio.Queue(maxsize=1)  # one sentence made ahead of the one being sent
+        producer = None
+        try:
+            try:
+                sentences = split_sentences(say.text, name="text")
+            except MpegFaError as exc:
+                record["error"] = str(exc)
+                await self.send(error_message(f"{exc.message} ({exc.hint})" if exc.hint else exc.message,
+                                              exc.where or "text"))
+                return
+            if not sentences:
+                record["error"] = "nothing to say"
+                await self.send(error_message("the text has nothing to speak (only tags or spaces)", "text"))
+                return
+            record["sentences"] = len(sentences)
+            self.flow.restart()
+            await self.send({"type": "started", "id": say.id, "sentences": len(sentences)})
+            producer = asyncio.create_task(self.produce(sentences, say, produced))
+            while (segment := await produced.get()) is not None:
+                if isinstance(segment, BaseException):
+                    raise segment
+                await self.send_segment(segment, say, record, received_at)
+            await self.send({"type": "done", "id": say.id, "duration": record["duration"],
+                             "frames": record["frames"], "stopped": False,
+                             "first_frame_after": record["first_frame_after"]})
+        except MpegFaError as exc:  # the engine could not speak a sentence, say
+            record["error"] = str(exc)
+            with contextlib.suppress(_Gone):
+                await self.send(error_message(f"{exc.message} ({exc.hint})" if exc.hint else exc.message,
+                                              exc.where or "speech"))
+        except Stalled as exc:
+            record["stalled"] = True
+            with contextlib.suppress(_Gone):
+                await self.send(error_message(f"client stalled: {exc}", "flow"))
+            self.closed = True
+            with contextlib.suppress(Exception):
+                await self.socket.close(code=CLOSE_POLICY, reason="stalled")
+        except asyncio.CancelledError:
+            record["stopped"] = True
+            with contextlib.suppress(_Gone):
+                if not self.closed:
+                    await self.send({"type": "done", "id": say.id, "duration": record["duration"],
+                                     "frames": record["frames"], "stopped": True,
+                                     "first_frame_after": record["first_frame_after"]})
+            raise
+        except _Gone:
+            record["stopped"] = True
+        finally:
+            if producer is not None:
+                producer.cancel()
+                with contextlib.suppress(asyncio.CancelledError, Exception):
+                    await producer
+            record["waits"], record["reports"] = self.flow.waits, self.flow.reports
+            self.settings.utterances.append(record)
+
+    async def produce(self, sentences, say: Say, out: asyncio.Queue) -> None:
+        s = self.settings
+        start = 0.0
+        try:
+            for sentence in sentences:
+                segment = await asyncio.to_thread(make_segment, sentence, start, engine=s.engine, units=s.units,
+                                                  lang=say.lang, voice=say.voice, rate=say.rate, fps=s.fps)
+                start = segment.end
+                await out.put(segment)
+            await out.put(None)
+        except asyncio.CancelledError:
+            raise
+        except BaseException as exc:  # handed to the sender, which reports it
+            await out.put(exc)
+
+    async def send_segment(self, segment: Segment, say: Say, record: dict, received_at: float) -> None:
+        await self.flow.wait_for(segment.start)
+        await self.send({"type": "segment", "id": say.id, "index": segment.index, "start": segment.start,
+                         "duration": segment.duration, "frames": len(segment.times), "text": segment.text,
+                         "rate": segment.rate, "bytes": len(segment.fba)})
+        await self.send(pack(FBA_KIND, segment.start, segment.fba))
+        for t, kind, payload in chunks(segment, self.settings.chunk):
+            await self.flow.wait_for(t)
+            if kind == "frames":
+                times, weights = payload
+                await self.send({"type": "frames", "segment": segment.index, "times": times.tolist(),
+                                 "weights": weights.tolist()})
+                if record["first_frame_after"] is None:
+                    record["first_frame_after"] = time.monotonic() - received_at
+                record["frames"] += len(times)
+            else:
+                await self.send(pack(AUDIO_KIND, t, payload.tobytes()))
+        record["duration"] = segment.end

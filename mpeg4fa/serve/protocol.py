@@ -1,0 +1,146 @@
+"""The live protocol of ``mpeg4fa serve``: one WebSocket, ``/ws``, JSON text messages and two binary kinds.
+
+Client -> server (text, one JSON object each; anything else is answered with an ``error`` and
+the connection stays open):
+
+``{"type": "say", "text": "(joy, 40, 0.5) Hello there. How are you?", "id": "u1", "lang": "auto"}``
+    Speak tagged text (the markup of :mod:`mpeg4fa.speech.markup`). ``id`` (optional, echoed),
+    ``lang`` (``auto``, ``en``, ``zh``), ``voice`` and ``rate`` (espeak-ng words per minute) are
+    optional. One utterance at a time: a ``say`` while one plays is refused (``busy``) unless
+    a ``stop`` came first.
+``{"type": "buffer", "received": 3.2, "buffered": 1.1}``
+    Flow control. ``received``: the media time (s from the utterance's start) up to which the
+    client holds frames and audio; ``buffered``: how much of that it has not played yet. The
+    server takes ``received - buffered`` as the client's playhead and sends nothing that
+    starts later than the playhead plus its window (``hello.window``). Before the first report
+    the playhead is 0, so one window goes out at once. Report every ~100 ms of playing.
+``{"type": "stop"}``
+    End the current utterance now (a ``done`` with ``"stopped": true`` follows).
+
+Server -> client, text:
+
+``hello``      ``{"type": "hello", "protocol": 1, "fps": 25.0, "window": 2.0, "chunk": 0.2, "units": [...],
+               "targets": [...], "engine": "espeak", "stall_timeout": 30.0}`` on connecting. ``units``:
+               the ARKit face units the ``weights`` columns are, in order (a name ``unit[left]`` is
+               the unit cut to the face's left side); ``targets``: for each, the morph target of
+               the served GLB (``/head.glb``) it drives, or null.
+``started``    ``{"type": "started", "id": ..., "sentences": n}``: the text was read.
+``segment``    ``{"type": "segment", "id", "index", "start", "duration", "frames", "text", "rate",
+               "bytes"}``: sentence ``index`` begins at media time ``start``; the next binary
+               message is its FBA bitstream (``bytes`` long, a complete fba_object: decode it
+               with :func:`mpeg4fa.fba.iter_decode`; its frame timestamps plus ``start`` are media
+               times) and its audio follows in ``audio`` chunks at ``rate`` Hz.
+``frames``     ``{"type": "frames", "segment": i, "times": [t, ...], "weights": [[w, ...], ...]}``:
+               decoded frames (media times, the stream's own; frames the stream folds into a
+               skip are absent: hold the previous one) with the ARKit unit weights (0..1) of what
+               a decoder shows, for a client that does not decode FBA (the page does this).
+``done``       ``{"type": "done", "id", "duration", "frames", "stopped"}``: nothing more for it.
+``error``      ``{"type": "error", "error": one line, "where": the field, tag or step}``.
+
+Server -> client, binary (little-endian): 4 bytes of kind, a float64 media time, the payload:
+``FBA1`` + segment start + the segment's fba_object; ``AUD1`` + the chunk's start + signed
+16-bit mono PCM at the segment's ``rate``. Messages come in media-time order.
+
+A client that sends no ``buffer`` report for ``stall_timeout`` seconds while the server has
+something to send is told so (``error``, where ``flow``) and closed with code 1008; one that
+closes mid-utterance ends its synthesis after the sentence under way.
+"""
+from __future__ import annotations
+
+import json
+import math
+import struct
+from typing import Annotated, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+
+from mpeg4fa.speech.markup import MAX_TEXT_CHARS
+
+PROTOCOL = 1
+FBA_KIND, AUDIO_KIND = b"FBA1", b"AUD1"
+_HEAD = struct.Struct("<4sd")
+MAX_SAY_CHARS = 20_000
+"""The longest text one ``say`` may carry (a few minutes of speech); the markup reader's own limit is
+larger (:data:`MAX_TEXT_CHARS`)."""
+assert MAX_SAY_CHARS <= MAX_TEXT_CHARS
+
+
+class ProtocolError(Exception):
+    """A client message the server cannot take: answered with an ``error`` message, never a close."""
+
+    def __init__(self, message: str, where: str) -> None:
+        super().__init__(message)
+        self.message, self.where = message, where
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class Say(_Strict):
+    type: Literal["say"]
+    text: Annotated[str, Field(min_length=1, max_length=MAX_SAY_CHARS)]
+    id: Annotated[str, Field(max_length=200)] | None = None
+    lang: Literal["auto", "en", "zh"] = "auto"
+    voice: Annotated[str, Field(max_length=100)] | None = None
+    rate: Annotated[int, Field(ge=80, le=450)] | None = None
+
+
+class Buffer(_Strict):
+    type: Literal["buffer"]
+    received: Annotated[float, Field(ge=0, allow_inf_nan=False)]
+    buffered: Annotated[float, Field(ge=0, allow_inf_nan=False)]
+
+
+class Stop(_Strict):
+    type: Literal["stop"]
+
+
+ClientMessage = Annotated[Union[Say, Buffer, Stop], Field(discriminator="type")]
+_CLIENT = TypeAdapter(ClientMessage)
+
+
+def parse_client(text: str | None, data: bytes | None = None) -> Say | Buffer | Stop:
+    """One client message, validated; raises :class:`ProtocolError` saying what is wrong and where."""
+    if text is None:
+        raise ProtocolError(f"binary message of {len(data or b'')} bytes: the client sends JSON text only",
+                            "message")
+    try:
+        raw = json.loads(text)
+    except ValueError as exc:
+        raise ProtocolError(f"not JSON: {exc}", "message") from None
+    if not isinstance(raw, dict):
+        raise ProtocolError(f"a message is a JSON object, not {type(raw).__name__}", "message")
+    if "type" not in raw:
+        raise ProtocolError("no \"type\" (say, buffer or stop)", "type")
+    if raw["type"] not in ("say", "buffer", "stop"):
+        raise ProtocolError(f"unknown type {str(raw['type'])[:40]!r} (say, buffer or stop)", "type")
+    try:
+        return _CLIENT.validate_python(raw)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first["loc"][1:]) or "message"  # loc[0] is the union tag
+        return _raise(f"{first['msg']}", where)
+
+
+def _raise(message: str, where: str):
+    raise ProtocolError(message, where)
+
+
+def error_message(message: str, where: str) -> dict:
+    return {"type": "error", "error": " ".join(str(message).split()), "where": where}
+
+
+def pack(kind: bytes, t: float, payload: bytes) -> bytes:
+    """A binary message: kind, media time, payload."""
+    if not math.isfinite(t):
+        raise ValueError(f"media time {t!r} is not finite")
+    return _HEAD.pack(kind, t) + payload
+
+
+def unpack(message: bytes) -> tuple[bytes, float, bytes]:
+    """(kind, media time, payload) of a binary server message."""
+    if len(message) < _HEAD.size:
+        raise ValueError(f"binary message of {len(message)} bytes is shorter than its {_HEAD.size}-byte head")
+    kind, t = _HEAD.unpack_from(message)
+    return kind, t, message[_HEAD.size:]
