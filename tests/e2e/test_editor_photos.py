@@ -196,7 +196,8 @@ def test_a_user_calibrates_the_head_on_two_photos(server, page, photo_files):
         bx = page.locator(f"[data-testid=box-{view}]").bounding_box()
         sv = page.locator(f"#svg-{view}").bounding_box()
         assert sv["x"] <= bx["x"] and bx["x"] + bx["width"] <= sv["x"] + sv["width"] + 1  # the box on the photo
-    scale = PHOTO / page.locator("#svg-front").bounding_box()["width"]  # photo pixels per screen pixel
+    scale = {v: page.evaluate(f"window.photos.scale('{v}')") for v in ("front", "side")}  # photo px per screen px
+    assert 1.0 < scale["front"] < 2.0 and 1.0 < scale["side"] < 2.0
 
     # drag the front box's right edge 15 px right and the side box's top edge 10 px down
     refits = counter(page, "refits")
@@ -206,8 +207,8 @@ def test_a_user_calibrates_the_head_on_two_photos(server, page, photo_files):
     wait_counter(page, "refits", refits + 1)
     idle(page)
     g1 = api.get("/api/photos").json()["guess"]
-    assert g1["box"]["front"][2] - g0["box"]["front"][2] == pytest.approx(15 * scale, abs=1.5)
-    assert g1["box"]["side"][1] - g0["box"]["side"][1] == pytest.approx(10 * scale, abs=1.5)
+    assert g1["box"]["front"][2] - g0["box"]["front"][2] == pytest.approx(15 * scale["front"], abs=1.5)
+    assert g1["box"]["side"][1] - g0["box"]["side"][1] == pytest.approx(10 * scale["side"], abs=1.5)
     assert g1["front"]["10.10"][0] > g0["front"]["10.10"][0]  # the guessed points followed the box
     assert g1 == guess(page)
     shot(page, "03-boxes-dragged")
@@ -216,8 +217,8 @@ def test_a_user_calibrates_the_head_on_two_photos(server, page, photo_files):
     drag(page, point_at(page, "front", "2.1"), 0, 10)
     drag(page, point_at(page, "side", "9.3"), -12, 0)
     g2 = guess(page)
-    assert g2["front"]["2.1"][1] - g1["front"]["2.1"][1] == pytest.approx(10 * scale, abs=1.5)
-    assert g1["side"]["9.3"][0] - g2["side"]["9.3"][0] == pytest.approx(12 * scale, abs=1.5)
+    assert g2["front"]["2.1"][1] - g1["front"]["2.1"][1] == pytest.approx(10 * scale["front"], abs=1.5)
+    assert g1["side"]["9.3"][0] - g2["side"]["9.3"][0] == pytest.approx(12 * scale["side"], abs=1.5)
     assert page.locator("#svg-front circle.fp.dragged").count() == 1
     # a box refit now keeps them where they were put (only the guesses follow)
     drag(page, page.evaluate("window.photos.screenOfEdge('front', 'left', 0.2)"), -8, 0)

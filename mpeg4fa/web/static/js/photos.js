@@ -61,8 +61,8 @@ function svgOf(view) { return $(`svg-${view}`); }
 
 // photo pixels per screen pixel of a view's SVG (it is scaled to fit its box)
 function scaleOf(view) {
-  const r = svgOf(view).getBoundingClientRect();
-  return r.width > 0 ? state.sizes[view][0] / r.width : 1;
+  const svg = svgOf(view), r = svg.getBoundingClientRect();
+  return r.width > 0 && svg.viewBox.baseVal ? svg.viewBox.baseVal.width / r.width : 1;
 }
 
 function toPhoto(view, clientX, clientY) {
@@ -85,9 +85,8 @@ function drawPhoto(view) {
   const svg = svgOf(view);
   const [w, h] = state.sizes[view];
   svg.replaceChildren();
-  svg.setAttribute("viewBox", `0 0 ${w} ${h}`);
   svg.setAttribute("preserveAspectRatio", "xMidYMid meet");
-  svg.style.aspectRatio = `${w} / ${h}`;
+  fitViewBox(view);
   el("image", { href: state.urls[view], x: 0, y: 0, width: w, height: h, "data-testid": `photo-${view}-image` }, svg);
   el("rect", { class: "box", "data-testid": `box-${view}` }, svg);
   for (const edge of EDGES) el("line", { class: "edge", "data-edge": edge, "data-testid": `box-${view}-${edge}` }, svg);
@@ -99,6 +98,17 @@ function drawPhoto(view) {
   }
   el("text", { class: "drag-label" }, svg);
   placeOverlay(view);
+}
+
+// the photo and its box with a margin (a photo often cuts the neck: the box's bottom edge lies below it)
+function fitViewBox(view) {
+  const [w, h] = state.sizes[view];
+  const [x0, y0, x1, y1] = state.guess.box[view];
+  const m = 0.03 * Math.max(w, h);
+  const a = Math.min(0, x0 - m), b = Math.min(0, y0 - m), c = Math.max(w, x1 + m), d = Math.max(h, y1 + m);
+  const svg = svgOf(view);
+  svg.setAttribute("viewBox", `${a} ${b} ${c - a} ${d - b}`);
+  svg.style.aspectRatio = `${c - a} / ${d - b}`;
 }
 
 // move the box, its edges and the points to where the state has them
@@ -189,8 +199,10 @@ async function refit(view) {
     const { guess } = await call("/api/photos/box", { view, box: state.guess.box[view], dragged: state.dragged });
     state.guess = guess;
     panel.dataset.refits = String(Number(panel.dataset.refits || 0) + 1);
+    fitViewBox(view);
     VIEWS.forEach(placeOverlay);
-    setStatus(`${view} box refitted: the guessed points follow it, the ${guess.dragged[view].length} dragged stay put`, "ok");
+    const held = guess.dragged[view].length;
+    setStatus(`${view} box refitted: the guessed points follow it${held ? `; the ${held} dragged by hand stay put` : ""}`, "ok");
     scheduleCalibration();
   } catch (e) {
     const { guess } = await call("/api/photos").catch(() => ({ guess: null }));  // back to what the server has
@@ -215,7 +227,8 @@ async function loadPhotos() {
       state.urls[v] = URL.createObjectURL(files[v]);
       state.sizes[v] = answer[v].size;
     }
-    Object.assign(state, { loaded: true, sideView: answer.side_view, guess: answer.guess, dragged: { front: {}, side: {} } });
+    Object.assign(state, { loaded: true, sideView: answer.side_view, guess: answer.guess, dragged: { front: {}, side: {} },
+                           calibrations: 0 });  // new photos: nothing is recalibrated before Calibrate is pressed
     setCalibrated(false, null);
     VIEWS.forEach(drawPhoto);
     $("btn-calibrate").disabled = false;
@@ -436,7 +449,7 @@ panel.dataset.ready = "1";
 
 // for tests and the console: screen positions of what the page draws over the photos
 window.photos = {
-  state, live,
+  state, live, scale: scaleOf,
   screenOfPoint: (view, label) => toScreen(view, ...state.guess[view][label]),
   // t: how far along the edge (0: its top or left end)
   screenOfEdge: (view, edge, t = 0.5) => {
