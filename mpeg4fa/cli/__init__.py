@@ -17,7 +17,7 @@ import warnings
 
 from .. import __version__
 from ..errors import MpegFaError
-from . import batch, codec, conform, edit, export, model, play, speech, texture
+from . import batch, codec, conform, edit, export, model, play, serve, speech, texture
 from .errors import UsageError
 from .media import one_line
 
@@ -40,6 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     edit.register(commands)
     export.register(commands)
     batch.register(commands)
+    serve.register(commands)
     return parser
 
 

@@ -30,7 +30,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.serve import protocol
-from mpeg4fa.serve.flow import Flow, Stalled
+from mpeg4fa.serve.flow import STALL_TIMEOUT, WINDOW, Flow, Stalled
 from mpeg4fa.serve.protocol import AUDIO_KIND, FBA_KIND, Buffer, ProtocolError, Say, Stop, error_message, pack
 from mpeg4fa.serve.segments import Segment, chunks, make_segment
 from mpeg4fa.serve.sentences import split_sentences
@@ -38,9 +38,7 @@ from mpeg4fa.serve.sentences import split_sentences
 HOST = "127.0.0.1"
 STATIC = Path(__file__).with_name("static")
 THREE = Path(__file__).resolve().parents[1] / "web" / "static" / "vendor" / "three"
-WINDOW = 2.0  # s of media the server sends ahead of the client's playhead
 CHUNK = 0.2  # s of frames or audio per message
-STALL_TIMEOUT = 30.0
 CLOSE_POLICY = 1008  # WebSocket close code: policy violation (here: a stalled client)
 
 

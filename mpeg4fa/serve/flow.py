@@ -12,6 +12,9 @@ from __future__ import annotations
 import asyncio
 import time
 
+WINDOW = 2.0  # s of media the server sends ahead of the client's playhead
+STALL_TIMEOUT = 30.0  # s a client may leave the server waiting with no buffer report
+
 
 class Stalled(Exception):
     """No buffer report for ``stall_timeout`` s while the window was full."""

@@ -1,0 +1,59 @@
+"""``mpeg4fa serve``: the live streaming server on 127.0.0.1 (a thin shell over :mod:`mpeg4fa.serve`)."""
+from __future__ import annotations
+
+import argparse
+import socket
+import threading
+import webbrowser
+
+from . import options
+from .model import face_options
+from .options import Commands
+
+DEFAULT_PORT = 8766
+
+
+def register(commands: Commands) -> None:
+    from ..serve.flow import STALL_TIMEOUT, WINDOW
+    from ..speech.encoder import ENGINES
+
+    p = commands.add_parser(
+        "serve", help="speak tagged text live to a browser or any WebSocket client (127.0.0.1 only)",
+        description="Start the live server on 127.0.0.1 only and open its player page. A client sends tagged "
+                    "text over ws://127.0.0.1:PORT/ws; the server speaks it sentence by sentence and streams "
+                    "each sentence's FBA stream, its frames with their times and ARKit weights, and the audio, "
+                    "never more than --window seconds ahead of what the client reports it has played. The "
+                    "page (http://127.0.0.1:PORT/) plays them on the head as GLB with three.js and WebAudio. "
+                    "The protocol is documented in mpeg4fa/serve/protocol.py.")
+    p.add_argument("--port", type=options.integer(1, 65535), default=DEFAULT_PORT, help=f"port (default {DEFAULT_PORT})")
+    p.add_argument("--engine", choices=ENGINES, default="espeak", help="speech engine (default espeak)")
+    p.add_argument("--window", type=options.real(0.2, 60.0), default=WINDOW,
+                   help=f"seconds of media sent ahead of the client's playhead (default {WINDOW:g})")
+    p.add_argument("--stall-timeout", type=options.real(1.0, 3600.0), default=STALL_TIMEOUT,
+                   help=f"close a client silent this many seconds with the window full (default {STALL_TIMEOUT:g})")
+    face_options(p)
+    p.add_argument("--no-browser", action="store_true", help="do not open the page")
+    p.set_defaults(run=run_serve)
+
+
+def run_serve(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from ..serve.app import HOST, create_app
+    from .model import face_from_args
+
+    with socket.socket() as probe:  # a port in use is one line now, not a log from uvicorn after the set-up
+        try:
+            probe.bind((HOST, args.port))
+        except OSError as exc:
+            raise OSError(exc.errno, f"port {args.port} on {HOST}: {exc.strerror}") from None
+    app = create_app(face_from_args(args), engine=args.engine, window=args.window, stall_timeout=args.stall_timeout,
+                     warm=True)
+    url = f"http://{HOST}:{args.port}/"
+    units = app.state.live.units
+    print(f"mpeg4fa serve: serving {url} (WebSocket ws://{HOST}:{args.port}/ws; Ctrl-C stops); "
+          + (f"{len(units.names)} ARKit units" if units is not None else "this head has no ARKit units: no weights"))
+    if not args.no_browser:
+        threading.Timer(1.0, webbrowser.open, (url,)).start()
+    uvicorn.run(app, host=HOST, port=args.port, log_level="warning", ws_max_size=1 << 20)
+    return 0
