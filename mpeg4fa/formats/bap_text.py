@@ -20,7 +20,9 @@ Facts checked in those sources:
 * the numbers are written as integers; VREng turns an angle into degrees by dividing by 1745
   (``BAPV31_DIV``, pi x 1e5 / 180: the angle is in 1e-5 rad) in 3.1 files and by 555 (``BAPV32_DIV``,
   1e5 / 180) in 3.2 files, and the translations BAP 181..183 (``TR_VERTICAL``..``TR_FRONTAL``) not
-  at all. 100.bap (3.1) turns BAP 100 from 0 to -17453 ... 314159 in steps of 10 degrees at 1e-5 rad.
+  at all. 100.bap (3.1) turns BAP 100 a full circle, 0, -17453, ... -296705, 314159, 296706, ... 0:
+  steps of 10 degrees at 1e-5 rad;
+* ``Bap::parse`` skips empty lines and lines starting with ``#``.
 
 What this module chooses:
 
