@@ -271,8 +271,9 @@ def test_a_user_edits_the_head(server, page):
     assert "5.4" in model(api)["points"]
     assert page.locator("#btn-redo").is_disabled() and not page.locator("#btn-undo").is_disabled()
 
+    fill_from_vertices(page, api)
     drag, moved = move_vertices(page, api)
-    rename_part(page, api, region)
+    teeth_faces = rename_part(page, api)
 
     # save: validated, then written into the out folder
     page.fill("#save-name", "edited")
@@ -287,7 +288,7 @@ def test_a_user_edits_the_head(server, page):
     assert sum(line.startswith("v ") for line in obj) == final["counts"]["vertices"]
     points = json.loads((out / "edited.points.json").read_text())
     parts = json.loads((out / "edited.parts.json").read_text())["parts"]
-    assert "upper_teeth" in parts and "teeth" not in parts and sorted(parts["upper_teeth"]) == sorted(region)
+    assert "upper_teeth" in parts and "teeth" not in parts and parts["upper_teeth"] == teeth_faces
     assert len(points.get("points", points)) == 84
     # the OBJ holds the dragged vertices where the drag left them, the cheek point among them
     v_obj = np.array([[float(x) for x in line.split()[1:4]] for line in obj if line.startswith("v ")])
@@ -302,12 +303,48 @@ def positions(api) -> np.ndarray:
     return np.reshape(model(api)["positions"], (-1, 3))
 
 
+def fill_from_vertices(page, api) -> None:
+    """Delete a face on the right cheek with the Delete key, then click the hole's three corners in
+    Vertices mode and fill that boundary loop."""
+    m = model(api)
+    t0 = m["counts"]["triangles"]
+    xy = page.evaluate(f"window.editor.screenOfVertex({m['points']['5.4']})")
+    x, y = xy["x"] + 10, xy["y"] + 8
+    face = page.evaluate(f"window.editor.pickAt({x}, {y})")["face"]
+    corners = m["indices"][face * 3:face * 3 + 3]
+    page.mouse.click(x, y)
+    assert page.evaluate("[...window.editor.state.selected]") == [face]
+    v = version(page)
+    page.keyboard.press("Delete")
+    settle(page, v)
+    m = model(api)
+    assert m["counts"]["triangles"] == t0 - 1 and m["counts"]["vertices"] == len(m["positions"]) // 3
+    page.click("#btn-mode-vertices")
+    for k, c in enumerate(corners):  # the hole's corners keep their numbers: no vertex went with the face
+        s = page.evaluate(f"window.editor.screenOfVertex({c})")
+        if k:
+            page.keyboard.down("Shift")
+        page.mouse.click(s["x"], s["y"])
+        page.keyboard.up("Shift")
+    assert sorted(page.evaluate("[...window.editor.state.vertices]")) == sorted(corners)
+    shot(page, "13-hole-corners-selected")
+    click_and_settle(page, "#btn-fill-hole")
+    m = model(api)
+    assert m["counts"]["triangles"] == t0 and "fill hole: done" in status(page)[1]
+    new = m["indices"][-3:]
+    assert sorted(new) == sorted(corners)
+    page.click("#btn-mode-faces")
+
+
 def move_vertices(page, api):
-    """Vertices mode: click, shift-click and Alt-box vertices around the cheek point 5.3; drag them up with
-    the gizmo's Y arrow (real mouse events), move them along x by typing a centre, undo and redo.
-    Returns the drag ({before, after, delta}) and the moved vertices, for the checks on the saved files."""
+    """Vertices mode: click, shift-click, grow and Alt-box vertices around the cheek point 5.3; drag them
+    up with the gizmo's Y arrow and across with its centre (real mouse events), move them along x by
+    typing a centre, undo and redo. Returns the Y drag ({before, after, delta}) and the moved vertices,
+    for the checks on the saved files."""
     page.click("#btn-mode-vertices")
     assert page.locator("#sel-count").get_attribute("data-mode") == "vertices"
+    assert page.evaluate("window.editor.view.dots.visible")
+    m = model(api)
     pos0 = positions(api)
     cheek = model(api)["points"]["5.3"]
     xy = page.evaluate(f"window.editor.screenOfVertex({cheek})")
@@ -323,7 +360,20 @@ def move_vertices(page, api):
     page.keyboard.up("Shift")
     assert sorted(page.evaluate("[...window.editor.state.vertices]")) == sorted([hit, other])
     assert page.locator("#sel-count").get_attribute("data-count") == "2"
-    shot(page, "13-vertices-clicked")
+    shot(page, "14-vertices-clicked")
+
+    # grow within the part: the corners of the connected skin faces around the first vertex that uses them
+    page.check("#grow-same-part")
+    page.click("#btn-grow")
+    tris = np.reshape(m["indices"], (-1, 3))
+    seeds = sorted({int(np.flatnonzero((tris == u).any(axis=1))[0]) for u in (hit, other)})
+    region = set()
+    for f in seeds:
+        region |= set(api.post("/api/region", json={"face": f, "same_part": True}).json()["faces"])
+    want = sorted(set(tris[sorted(region)].ravel().tolist()))
+    page.wait_for_function(f"window.editor.state.vertices.size === {len(want)}", timeout=10_000)
+    assert sorted(page.evaluate("[...window.editor.state.vertices]")) == want
+    page.uncheck("#grow-same-part")
 
     half = 28
     page.keyboard.down("Alt")
@@ -342,7 +392,7 @@ def move_vertices(page, api):
         assert abs(sx - x) <= half + 0.5 and abs(sy - y) <= half + 0.5
         assert point is not None and np.linalg.norm(np.subtract(point, pos0[v])) < 2e-3 * size, v
     assert page.evaluate("window.editor.view.selectedDots.geometry.attributes.position.count") == len(chosen)
-    shot(page, "14-vertices-box-selected")
+    shot(page, "15-vertices-box-selected")
 
     # the gizmo on the selection's centre; drag its Y arrow 40 px up
     page.click("#btn-move-mode")
@@ -351,7 +401,7 @@ def move_vertices(page, api):
     shown = [float(page.locator(f"#move-{a}").input_value()) for a in "xyz"]
     assert np.allclose(shown, centre, atol=1e-3)
     assert np.allclose(page.evaluate("window.editor.view.pivot.position.toArray()"), centre, atol=1e-6)
-    shot(page, "15-move-gizmo")
+    shot(page, "16-move-gizmo")
     handle = page.evaluate("window.editor.screenOfGizmoHandle('Y', 0.45)")
     page.mouse.move(handle["x"], handle["y"])
     assert page.evaluate("window.editor.view.gizmo.axis") == "Y", "the Y arrow is not under the pointer"
@@ -368,7 +418,7 @@ def move_vertices(page, api):
     page.mouse.move(handle["x"], handle["y"] - lift, steps=4)
     preview = np.reshape(page.evaluate("Array.from(window.editor.view.positions)"), (-1, 3))
     assert preview[cheek][1] > pos0[cheek][1]  # the shown mesh follows the drag before the release
-    shot(page, "16-dragging")
+    shot(page, "17-dragging")
     page.mouse.up()
     settle(page, v)
     pos1 = positions(api)
@@ -383,22 +433,43 @@ def move_vertices(page, api):
     assert np.array_equal(pos1[others], pos0[others])
     assert "dragged: moved" in status(page)[1]
     assert sorted(page.evaluate("[...window.editor.state.vertices]")) == chosen  # the selection stays
-    shot(page, "17-dragged")
+    shot(page, "18-dragged")
+
+    # the gizmo's centre moves in the view plane: 30 px right and 20 px down
+    c1 = pos1[chosen].mean(axis=0)
+    at = page.evaluate("window.editor.view.gizmoHandle('X', 0)")
+    page.mouse.move(at["x"], at["y"])
+    assert page.evaluate("window.editor.view.gizmo.axis") == "XYZ", "the gizmo's centre is not under the pointer"
+    v = version(page)
+    page.mouse.down()
+    page.mouse.move(at["x"] + 15, at["y"] + 10, steps=4)
+    page.mouse.move(at["x"] + 30, at["y"] + 20, steps=4)
+    page.mouse.up()
+    settle(page, v)
+    pos_c = positions(api)
+    d = pos_c[chosen] - pos1[chosen]
+    assert np.allclose(d, d[0], atol=1e-5) and np.array_equal(pos_c[others], pos1[others])
+    per_pixel1 = 2 * np.dot(c1 - cam, forward) * np.tan(np.radians(fov) / 2) / height
+    assert d[0][0] == pytest.approx(30 * per_pixel1, rel=0.1) and d[0][1] == pytest.approx(-20 * per_pixel1, rel=0.1)
+    assert abs(d[0][2]) < 0.1 * np.linalg.norm(d[0][:2])  # the view plane faces the camera (looking along -z)
+    v = version(page)
+    page.keyboard.press("Control+z")
+    settle(page, v)
+    assert np.allclose(positions(api), pos1, atol=1e-6)
 
     # numeric: type the centre's new x; y and z stay as shown, so only x moves
-    c1 = pos1[chosen].mean(axis=0)
     assert float(page.locator("#move-y").input_value()) == pytest.approx(c1[1], abs=1e-3)
     page.fill("#move-x", f"{c1[0] + 2.5:.6f}")
     click_and_settle(page, "#btn-move-to")
     pos2 = positions(api)
     assert np.allclose(pos2[chosen] - pos1[chosen], [2.5, 0, 0], atol=1e-5)
     assert np.array_equal(pos2[others], pos1[others])
-    shot(page, "18-numeric-move")
+    shot(page, "19-numeric-move")
 
     # undo the numeric move (button), the drag (Ctrl+Z); redo the drag (Ctrl+Y)
     click_and_settle(page, "#btn-undo")
     assert np.allclose(positions(api), pos1, atol=1e-6)
-    shot(page, "19-move-undone")
+    shot(page, "20-move-undone")
     for key, want in (("Control+z", pos0), ("Control+y", pos1)):
         v = version(page)
         page.keyboard.press(key)
@@ -410,8 +481,15 @@ def move_vertices(page, api):
     return {"before": pos0, "after": pos1, "delta": np.array([dx, dy, dz])}, chosen
 
 
-def rename_part(page, api, region) -> None:
-    """Rename the split-off teeth through the part list's controls; a bad name is refused."""
+def part_faces(m: dict, name: str) -> list[int]:
+    i = m["parts"].index(name)
+    return [f for f, p in enumerate(m["triangle_parts"]) if p == i]
+
+
+def rename_part(page, api) -> list[int]:
+    """Rename the split-off teeth through the part list's controls (a bad name is refused); returns the
+    part's faces, which the rename keeps."""
+    faces = part_faces(model(api), "teeth")
     page.select_option("#part-select", "teeth")
     page.fill("#rename-to", "Upper Teeth")
     page.click("#btn-rename-part")
@@ -421,12 +499,12 @@ def rename_part(page, api, region) -> None:
     click_and_settle(page, "#btn-rename-part")
     m = model(api)
     assert "upper_teeth" in m["parts"] and "teeth" not in m["parts"]
-    i = m["parts"].index("upper_teeth")
-    assert sorted(f for f, p in enumerate(m["triangle_parts"]) if p == i) == sorted(region)
+    assert part_faces(m, "upper_teeth") == faces
     assert page.locator("#parts li[data-part='upper_teeth']").count() == 1
     assert page.locator("#parts li[data-part='teeth']").count() == 0
     assert page.locator("#part-select").input_value() == "upper_teeth"
-    shot(page, "20-part-renamed")
+    shot(page, "21-part-renamed")
+    return faces
 
 
 def test_static_files_and_errors_are_served(server):
