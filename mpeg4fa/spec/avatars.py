@@ -7,7 +7,7 @@ Loaded once from ``spec/`` (see its README, section "Avatar systems"):
 * ``oculus_visemes.csv``: the 15 Oculus/OVR lip-sync visemes (index 0..14), with the MPEG-4
   viseme each one is (the OVR set is the MPEG-4 set renamed, so this map is one-to-one);
 * ``azure_visemes.csv``: Azure Speech's 22 viseme IDs with their IPA and the MPEG-4 viseme an
-  incoming ID becomes (ours);
+  incoming ID becomes (ours; a diphthong's ID its nucleus, then its offglide);
 * ``polly_visemes.csv``: Amazon Polly's en-US viseme alphabet with its IPA and the MPEG-4 viseme
   an incoming speech mark becomes (ours);
 * ``viseme_targets.csv``: for every viseme of our two sets (``mpeg4``, ``zh``), the OVR name,
@@ -62,7 +62,9 @@ class AzureViseme:
     ipa: tuple[str, ...]
     """IPA of the en-US phonemes Azure shows with this ID (``silence`` for 0)."""
     mpeg4: str
-    """The MPEG-4 viseme an incoming event with this ID becomes."""
+    """The MPEG-4 viseme an incoming event with this ID becomes (a diphthong's nucleus)."""
+    offglide: str | None = None
+    """A diphthong's second viseme (9 aʊ, 10 ɔɪ, 11 aɪ), shown late in the event's time; None for the rest."""
 
 
 @dataclass(frozen=True)
@@ -99,8 +101,14 @@ def _oculus() -> tuple[OculusViseme, ...]:
 
 def _azure() -> tuple[AzureViseme, ...]:
     rows = read_table("azure_visemes.csv", "id,ipa,mpeg4")
-    out = tuple(AzureViseme(int(r["id"]), split_list(r["ipa"]), _mpeg4(r["mpeg4"], f"azure_visemes.csv line {line}"))
-                for line, r in enumerate(rows, start=2))
+    out = []
+    for line, r in enumerate(rows, start=2):
+        where = f"azure_visemes.csv line {line}"
+        shown = split_list(r["mpeg4"])
+        check(len(shown) in (1, 2), f"{where}: one viseme, or a diphthong's two")
+        out.append(AzureViseme(int(r["id"]), split_list(r["ipa"]), _mpeg4(shown[0], where),
+                               _mpeg4(shown[1], where) if len(shown) == 2 else None))
+    out = tuple(out)
     check([v.id for v in out] == list(range(len(out))), "azure_visemes.csv: id must count 0..n-1")
     return out
 

@@ -16,7 +16,9 @@ Accepted files (``format="auto"`` tells them apart by their keys):
   with the time in milliseconds; marks of other types (word, sentence, ssml) are skipped.
 
 IDs and Polly visemes become MPEG-4 visemes through ``spec/azure_visemes.csv`` and
-``spec/polly_visemes.csv`` (:mod:`mpeg4fa.spec.avatars`). Each event's viseme lasts until the next
+``spec/polly_visemes.csv`` (:mod:`mpeg4fa.spec.avatars`); Azure's diphthong IDs (9 aʊ, 10 ɔɪ, 11 aɪ)
+become two, the nucleus for the first :data:`~mpeg4fa.speech.ipa.FIRST_SHARE` of the event's time and
+the offglide for the rest, as the IPA route splits a diphthong. Each event's viseme lasts until the next
 event; silence (Azure 0, Polly ``sil``) is a pause; the last viseme lasts :data:`LAST_VISEME` unless
 an event ends it, and the stream runs :data:`TAIL` past the last event so the mouth comes to rest.
 There is no audio: the stream goes with the TTS's own.
@@ -35,11 +37,12 @@ from pathlib import Path
 import numpy as np
 
 from mpeg4fa.formats.errors import FormatError
-from mpeg4fa.spec.avatars import from_azure, from_polly
+from mpeg4fa.spec.avatars import AZURE_VISEMES, from_azure, from_polly
 from mpeg4fa.spec.errors import SpecError
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.tts.base import Speech
 from mpeg4fa.speech.utterance import Timing, Utterance
+from mpeg4fa.speech.ipa import FIRST_SHARE
 from mpeg4fa.speech.visemes import PAUSE
 
 __all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "TICKS_PER_SECOND", "parse_viseme_events",
@@ -69,6 +72,8 @@ class VisemeEvent:
     """The file's line of this event, where known."""
     index: int = 0
     """Its index among the file's events or marks (0-based), as errors name it."""
+    offglide: str | None = None
+    """A diphthong's second viseme (Azure 9, 10, 11): the last part of the event's time shows it."""
 
 
 def _records(text: str, name: str) -> list[tuple[dict, int | None]]:
@@ -164,7 +169,7 @@ def _azure_event(item: object, line: int | None, index: int, name: str) -> Visem
         viseme = from_azure(vid)
     except SpecError as exc:
         raise _place(name, line, index, exc.message, exc.hint) from None
-    return VisemeEvent(ticks / TICKS_PER_SECOND, viseme, str(vid), line, index)
+    return VisemeEvent(ticks / TICKS_PER_SECOND, viseme, str(vid), line, index, AZURE_VISEMES[vid].offglide)
 
 
 def _polly_event(item: object, line: int | None, index: int, name: str) -> VisemeEvent | None:
@@ -221,8 +226,14 @@ def events_utterance(events: list[VisemeEvent], engine: str = "events", name: st
     timings = []
     for k, e in enumerate(events):
         end = events[k + 1].time if k + 1 < len(events) else e.time + (0.0 if e.viseme == PAUSE else LAST_VISEME)
-        if end > e.time:
+        if end <= e.time:
+            continue
+        if e.offglide is None:
             timings.append(Timing(phoneme=e.source, viseme=e.viseme, start=e.time, end=end))
+        else:  # a diphthong: the nucleus first, the offglide late, as the IPA route splits one
+            split = e.time + FIRST_SHARE * (end - e.time)
+            timings += [Timing(phoneme=e.source, viseme=e.viseme, start=e.time, end=split),
+                        Timing(phoneme=e.source, viseme=e.offglide, start=split, end=end)]
     duration = (timings[-1].end if timings else events[-1].time) + TAIL
     speech = Speech(np.zeros(int(math.ceil(duration * _RATE)), np.int16), _RATE, (), engine, "")
     return Utterance(speech=speech, timings=tuple(timings), cues=(), markup=Markup("", (), name=name))

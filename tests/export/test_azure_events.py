@@ -60,12 +60,14 @@ def test_azure_events_through_fba_keep_their_ids_and_times():
     assert np.abs(got - sent).max() <= FRAME * 1e7
 
 
-def test_other_ids_come_back_as_their_viseme():
-    """A diphthong (11: aɪ) is shown by its nucleus (AA) and goes out as AA's ID (2)."""
-    assert from_azure(11) == "AA" and viseme_target("AA").azure == 2
+def test_a_diphthong_comes_back_as_its_two_visemes():
+    """11 (aɪ) is shown as its nucleus AA, then its offglide ih: it goes out as their IDs, 2 then 6."""
+    assert from_azure(11) == "AA" and AZURE_VISEMES[11].offglide == "ih"
     _, parsed = parse_viseme_events(json.dumps([{"AudioOffset": 0, "VisemeId": 11},
-                                                {"AudioOffset": 2_000_000, "VisemeId": 0}]))
-    assert [e["VisemeId"] for e in azure_events(_through_fba(parsed, "high"))] == [2, 0]
+                                                {"AudioOffset": 3_000_000, "VisemeId": 0}]))
+    out = azure_events(_through_fba(parsed, "high"))
+    assert [e["VisemeId"] for e in out] == [2, 6, 0]
+    assert abs(out[1]["AudioOffset"] - 0.7 * 3_000_000) <= FRAME * 1e7
 
 
 def test_the_events_end_at_rest_and_an_empty_stream_has_none():

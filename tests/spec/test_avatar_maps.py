@@ -21,6 +21,8 @@ def test_the_sets_have_their_published_sizes_and_names():
                                                 "E", "ih", "oh", "ou"]
     assert [v.id for v in AZURE_VISEMES] == list(range(22))
     assert AZURE_VISEMES[21].ipa == ("p", "b", "m") and AZURE_VISEMES[0].mpeg4 == "none"
+    glides = {v.id: (v.mpeg4, v.offglide) for v in AZURE_VISEMES if v.offglide}
+    assert glides == {9: ("AA", "ou"), 10: ("oh", "ih"), 11: ("AA", "ih")}  # aʊ ɔɪ aɪ
     assert [v.name for v in POLLY_VISEMES] == ["sil", "p", "t", "S", "T", "f", "k", "i", "r", "s", "u", "@", "a",
                                                "e", "E", "o", "O"]
 

@@ -65,6 +65,17 @@ def test_the_utterance_holds_each_viseme_until_the_next_event():
     assert events_utterance(open_end).timings[-1].end == pytest.approx(LAST_VISEME)
 
 
+def test_azure_diphthongs_split_as_the_ipa_route_splits_them():
+    from mpeg4fa.speech.ipa import FIRST_SHARE
+
+    _, events = parse_viseme_events(json.dumps([{"AudioOffset": 1_000_000, "VisemeId": 9},
+                                                {"AudioOffset": 3_000_000, "VisemeId": 0}]))
+    assert events[0].viseme == "AA" and events[0].offglide == "ou"
+    split = 0.1 + FIRST_SHARE * 0.2
+    assert [(t.viseme, t.start, t.end) for t in events_utterance(events).timings] == [
+        ("AA", 0.1, pytest.approx(split)), ("ou", pytest.approx(split), 0.3)]
+
+
 def test_events_encode_with_the_text_encoders_transitions():
     _, events = parse_viseme_events(POLLY)
     encoded = encode_viseme_events(events, fps=25)
