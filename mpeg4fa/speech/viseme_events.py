@@ -45,7 +45,7 @@ from mpeg4fa.speech.utterance import Timing, Utterance
 from mpeg4fa.speech.ipa import FIRST_SHARE
 from mpeg4fa.speech.visemes import PAUSE
 
-__all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "TICKS_PER_SECOND", "parse_viseme_events",
+__all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "MAX_SECONDS", "TICKS_PER_SECOND", "parse_viseme_events",
            "read_viseme_events", "events_utterance", "encode_viseme_events"]
 
 FORMATS = ("auto", "azure", "polly")
@@ -55,7 +55,9 @@ LAST_VISEME = 0.15
 """Seconds the last viseme lasts when no event (silence) ends it: about one spoken phoneme."""
 TAIL = 0.2
 """Seconds the stream runs past the end of the last viseme, long enough for the mouth to reach rest."""
-_RATE = 16000  # sample rate of the silent audio that gives the utterance its duration
+MAX_SECONDS = 6 * 3600.0
+"""Events later than this (6 h) are refused: a time that large is a unit mistake, and the stream would be huge."""
+_RATE = 1000  # sample rate of the silent audio that only gives the utterance its duration
 _AZURE_KEYS = (("AudioOffset", "VisemeId"), ("audioOffset", "visemeId"), ("audio_offset", "viseme_id"),
                ("privAudioOffset", "privVisemeId"))
 
@@ -147,11 +149,12 @@ def _place(name: str, line: int | None, index: int, problem: str, hint: str) -> 
     return FormatError(name, line, None, f"event {index}: {problem}", hint=hint)
 
 
-def _number(value: object) -> float | None:
+def _number(value: object, per_second: float) -> float | None:
+    """Seconds of a time given in units of 1/``per_second`` s, or None when it is no time up to MAX_SECONDS."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
-    value = float(value)
-    return value if math.isfinite(value) and value >= 0 else None
+    seconds = float(value) / per_second
+    return seconds if math.isfinite(seconds) and 0 <= seconds <= MAX_SECONDS else None
 
 
 def _azure_event(item: object, line: int | None, index: int, name: str) -> VisemeEvent:
@@ -161,15 +164,16 @@ def _azure_event(item: object, line: int | None, index: int, name: str) -> Visem
     keys = next(((t, v) for t, v in _AZURE_KEYS if t in item and v in item), None)
     if keys is None:
         raise _place(name, line, index, f"no audio offset and viseme ID among the keys {sorted(item)}", hint)
-    ticks = _number(item[keys[0]])
-    if ticks is None:
-        raise _place(name, line, index, f"{keys[0]} {item[keys[0]]!r} is not a time (ticks >= 0)", hint)
+    seconds = _number(item[keys[0]], TICKS_PER_SECOND)
+    if seconds is None:
+        raise _place(name, line, index, f"{keys[0]} {item[keys[0]]!r} is not a time (ticks 0..{MAX_SECONDS:g} s)",
+                     hint)
     vid = item[keys[1]]
     try:
         viseme = from_azure(vid)
     except SpecError as exc:
         raise _place(name, line, index, exc.message, exc.hint) from None
-    return VisemeEvent(ticks / TICKS_PER_SECOND, viseme, str(vid), line, index, AZURE_VISEMES[vid].offglide)
+    return VisemeEvent(seconds, viseme, str(vid), line, index, AZURE_VISEMES[vid].offglide)
 
 
 def _polly_event(item: object, line: int | None, index: int, name: str) -> VisemeEvent | None:
@@ -180,14 +184,14 @@ def _polly_event(item: object, line: int | None, index: int, name: str) -> Visem
         if "type" not in item:
             raise _place(name, line, index, "a speech mark without a type", hint)
         return None
-    time = _number(item.get("time"))
-    if time is None:
-        raise _place(name, line, index, f"time {item.get('time')!r} is not a time (ms >= 0)", hint)
+    seconds = _number(item.get("time"), 1000.0)
+    if seconds is None:
+        raise _place(name, line, index, f"time {item.get('time')!r} is not a time (ms 0..{MAX_SECONDS:g} s)", hint)
     try:
         viseme = from_polly(item.get("value"))
     except SpecError as exc:
         raise _place(name, line, index, exc.message, exc.hint) from None
-    return VisemeEvent(time / 1000.0, viseme, str(item.get("value")), line, index)
+    return VisemeEvent(seconds, viseme, str(item.get("value")), line, index)
 
 
 def parse_viseme_events(text: str, name: str = "<events>", format: str = "auto") -> tuple[str, list[VisemeEvent]]:

@@ -3,6 +3,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mpeg4fa.fba import decode
 from mpeg4fa.formats import FormatError
@@ -103,6 +105,9 @@ def test_events_encode_with_the_text_encoders_transitions():
      "Polly viseme 'B'"),
     ('{"time":0,"type":"viseme","value":"p"}\n{"time":NaN,"type":"viseme","value":"a"}\n', "f.json:2: event 1",
      "not a time"),
+    ('{"time":0,"type":"viseme","value":"p"}\n{"time":1e12,"type":"viseme","value":"a"}\n', "f.json:2: event 1",
+     "not a time"),
+    ('[{"AudioOffset": 1e300, "VisemeId": 1}]', "f.json:1: event 0", "ticks"),
     ('{"time":0,"type":"word","value":"hi"}\n', "f.json", "no polly viseme events"),
     ('[1, 2]', "f.json", "cannot tell"),
     ('[{"AudioOffset": 0, "VisemeId": 1}, 7]', "f.json:1: event 1", "not an event"),
@@ -150,3 +155,25 @@ def test_encode_visemes_usage_and_file_errors(cli, tmp_path):
     code, _, err = cli("encode", "--visemes", bad, "-o", out)
     assert code == 1 and err.count("\n") == 1 and f"{bad}:2: event 1" in err and "Traceback" not in err
     assert not out.exists()
+
+
+_JSON = st.recursive(st.none() | st.booleans() | st.integers(-10**12, 10**12) | st.floats(allow_nan=True)
+                     | st.text(max_size=4),
+                     lambda inner: st.lists(inner, max_size=4) | st.dictionaries(
+                         st.sampled_from(["AudioOffset", "VisemeId", "time", "type", "value", "visemes", "x"]),
+                         inner, max_size=4), max_leaves=12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(_JSON.map(json.dumps), st.lists(_JSON.map(json.dumps), max_size=4).map("\n".join),
+                 st.text(max_size=40)))
+def test_any_text_gives_events_or_one_located_error(text):
+    """Bad input never escapes as anything but FormatError; what parses is in time order with known visemes."""
+    try:
+        kind, events = parse_viseme_events(text, "f.json")
+    except FormatError as exc:
+        assert str(exc).startswith("f.json")
+        return
+    assert kind in ("azure", "polly") and events
+    assert all(a.time <= b.time for a, b in zip(events, events[1:]))
+    assert all(np.isfinite(e.time) and e.time >= 0 for e in events)
