@@ -30,6 +30,7 @@ class Played:
     underruns: int = 0  # items that came after the playhead had passed their time
     max_lateness: float = 0.0  # s of media by which the latest of them was late
     max_ahead: float = 0.0  # s of media the client held beyond its playhead, at most
+    min_margin: float = float("inf")  # s of media by which an item came before its time, at least (< 0: late)
     errors: list[dict] = field(default_factory=list)
     done: dict | None = None
     wall: float = 0.0  # s of real time from say to done
@@ -62,6 +63,8 @@ def play(url: str, text: str, *, speed: float = 1.0, prebuffer: float = 0.3, rep
         def arrived(t: float, end: float, now: float) -> None:
             nonlocal received
             head = playhead(now)
+            if play_start is not None and now >= play_start:
+                result.min_margin = min(result.min_margin, t - head)
             if play_start is not None and t < head:
                 result.underruns += 1
                 result.max_lateness = max(result.max_lateness, head - t)
