@@ -190,6 +190,7 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator:
         return
     env = {"LP_NUM_THREADS": os.environ.get("LP_NUM_THREADS") or str(max(default_workers() // n_workers, 1))}
     with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},  # no dashboard; its HTTP port free
                       silence_logs=logging.ERROR, env=env) as cluster, Client(cluster) as client:
         yield client
 
