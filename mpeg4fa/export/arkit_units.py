@@ -10,10 +10,13 @@ summed) and the weight the deformer gives it (the mean of its two halves', so a
 one-sided raise of a two-sided unit shows as half of it on both sides); a unit no
 FAP drives (``eyeBlinkLeft``, ``mouthClose`` ...) its sculpted shape and weight 0.
 
-What this leaves out of the ARKit deformer's pose: the correction that puts the
-skin's feature points exactly where the FAPs say, the eyes, lids, teeth and tongue
-(taken from the feature-point deformer there) and the head turn. The shapes move
-the skin only.
+The parts the deformer takes from the feature-point layer ride along where a unit's
+FAP moves them: each driven shape also holds the lower teeth and tongue as the
+deformer moves them under the shape's FAP (the jaw
+drops with ``jawOpen``, the tongue comes out with ``tongueOut``), linear in the weight
+through the pose at weight :data:`CARRY_AT`. Left out of the ARKit deformer's pose: the correction
+that puts the skin's feature points exactly where the FAPs say, the eyes and lids
+(no FAP drives the ``eyeLook*``/``eyeBlink*`` units) and the head turn.
 """
 from __future__ import annotations
 
@@ -22,9 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from mpeg4fa.errors import MpegFaError
-from mpeg4fa.face.deformers.arkit import ArkitRig, unit_weights
+from mpeg4fa.face.deformers.arkit import ArkitRig, deform_arkit, unit_weights
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.model import FaceModel
+from mpeg4fa.spec import N_FAPS
 
 
 class NoFaceUnitsError(MpegFaError):
@@ -70,8 +74,33 @@ def arkit_units(face: FaceModel, *, where: str | None = None) -> ArkitUnits:
         u = names.index(base_unit(name))
         shapes[u, skin] += driven[:, :, d]
         mixing[u, d] = 1.0
-    mixing /= np.maximum(mixing.sum(axis=1, keepdims=True), 1.0)
+    halves = np.maximum(mixing.sum(axis=1, keepdims=True), 1.0)
+    off_skin = np.ones(n_vertices, bool)
+    off_skin[skin] = False
+    carried = _carried(face, rig)[:, off_skin]  # (D, off-skin vertices, 3)
+    shapes[:, off_skin] = np.einsum("ud,dvk->uvk", mixing / halves, carried)
+    mixing /= halves
     for u, name in enumerate(names):
         if not mixing[u].any():
             shapes[u] = units.dense(name, n_vertices)
     return ArkitUnits(names=names, shapes=shapes, mixing=mixing, rig=rig)
+
+
+CARRY_AT = 0.5
+"""The weight at which the carried parts' motion is sampled (a secant: the jaw's path is curved, and
+speech keeps ``jawOpen`` mostly below this; at 0.4 the lower teeth are within 0.3 mm of the deformer's)."""
+
+
+def _carried(face: FaceModel, rig: ArkitRig) -> np.ndarray:
+    """(D, V, 3): what each driven shape's FAP does to every vertex in the ARKit deformer's pose, per unit of
+    the shape's weight, sampled at :data:`CARRY_AT` (the mean over its FAPs when it has several); used off
+    the skin."""
+    rest = deform_arkit(face.rig, rig, np.zeros(N_FAPS)).vertices
+    out = np.zeros((len(rig.unit_names), face.mesh.n_vertices, 3))
+    for d in range(len(rig.unit_names)):
+        faps = np.flatnonzero(rig.gains[d])
+        for f in faps:
+            values = np.zeros(N_FAPS)
+            values[f] = CARRY_AT / rig.gains[d, f]
+            out[d] += (deform_arkit(face.rig, rig, values).vertices - rest) / (CARRY_AT * len(faps))
+    return out

@@ -25,13 +25,14 @@ _WIDTH = {gl.SCALAR: 1, gl.VEC2: 2, gl.VEC3: 3, gl.VEC4: 4}
 
 
 def talk_stream(n: int = 13) -> FapStream:
-    """A jaw that opens and closes (FAP 3 up to 500), lips (FAPs 4, 5) and the left inner brow (FAP 31)."""
+    """A jaw that opens and closes (FAP 3 up to 700), lips parting with it (FAPs 4, 5) and the left inner brow
+    raised late (FAP 31, one-sided)."""
     s = FapStream.empty(n)
     s.source_fps = FPS
     s.timestamps[:] = np.arange(n) / FPS
-    jaw = np.round(500 * np.sin(np.pi * np.arange(n) / (2 * OPEN_FRAME)).clip(0)).astype(int)
+    jaw = np.round(700 * np.sin(np.pi * np.arange(n) / (2 * OPEN_FRAME)).clip(0)).astype(int)
     jaw[0] = 0
-    for fap, column in ((3, jaw), (4, -jaw // 5), (5, jaw // 4), (31, np.where(np.arange(n) > 8, 120, 0))):
+    for fap, column in ((3, jaw), (4, -jaw // 5), (5, -(jaw // 4)), (31, np.where(np.arange(n) > 8, 120, 0))):
         s.fap_mask[:, fap - 1] = True
         s.fap_values[:, fap - 1] = column
     return s

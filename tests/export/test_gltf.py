@@ -3,12 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from mpeg4fa.decoded import resolve
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.export.arkit_units import NoFaceUnitsError, arkit_units, base_unit
 from mpeg4fa.export.gltf import MM, PART_LOOK, ExportError, build_glb, export_glb
-from mpeg4fa.face.deformers.arkit import unit_weights
+from mpeg4fa.face.deformers.arkit import deform_arkit, unit_weights
 from mpeg4fa.formats import write_fap
 from mpeg4fa.render.timing import presentation_times
 
@@ -40,8 +41,7 @@ def _check_common(gltf, result, stream, face, n_targets):
         indices = read_accessor(gltf, prim.indices)
         assert indices.max() < len(position) and len(indices) == 3 * len(face.mesh.triangles[prim.extras["part"]])
         # every vertex of the primitive is a vertex of its part, at its rest position
-        part = face.mesh.vertices[source] * MM
-        nearest = np.abs(position[:, None, :] - part[None, :, :].astype(np.float32)).sum(-1).min(axis=1)
+        nearest, _ = cKDTree(face.mesh.vertices[source] * MM).query(position)
         assert nearest.max() < 1e-6
     animation, = gltf.animations
     channel, = animation.channels
@@ -86,9 +86,22 @@ def test_morph_targets_are_the_arkit_units_driven_as_the_deformer_drives_them(ge
     position = read_accessor(gltf, gltf.meshes[0].primitives[0].attributes.POSITION)
     source = _sources(generic_face, position, "skin")
     assert np.allclose(skin, (units.shapes[:, source] * MM).astype(np.float32), atol=1e-7)
-    for k in range(1, 6):  # only the skin moves: the other parts' targets are all zero (no buffer view)
+    parts = list(PART_LOOK)
+    for part in ("eye_l", "eye_r", "teeth_upper"):  # no driven unit moves them: all-zero targets, no buffer view
+        k = parts.index(part)
         assert not _targets(gltf, k).any()
         assert all(gltf.accessors[t["POSITION"]].bufferView is None for t in gltf.meshes[0].primitives[k].targets)
+    # the lower teeth ride on jawOpen as the deformer's jaw carries them (a turn: nearly linear in the FAP)
+    k = parts.index("teeth_lower")
+    teeth = _targets(gltf, k)
+    moving = {names[u] for u in np.flatnonzero(np.abs(teeth).max(axis=(1, 2)) > 0)}
+    assert "jawOpen" in moving and moving <= {"jawOpen", "jawForward", "jawLeft", "jawRight", "tongueOut"}
+    rest_teeth = read_accessor(gltf, gltf.meshes[0].primitives[k].attributes.POSITION)
+    shown = rest_teeth + np.tensordot(weights[OPEN_FRAME], teeth, axes=1)
+    posed = deform_arkit(generic_face.rig, rig, values[OPEN_FRAME]).vertices[_sources(generic_face, rest_teeth,
+                                                                                       "teeth_lower")] * MM
+    drop = np.abs(posed - rest_teeth).max()
+    assert drop > 0.004 and np.abs(shown - posed).max() < 0.05 * drop, (drop, np.abs(shown - posed).max())
     # frames without the one-sided brow: the skin is the ARKit deformer's sculpt before its correction
     k = OPEN_FRAME
     sculpt = generic_face.rig.rest[generic_face.mesh.part("skin")] + (rig.deltas @ driven[k]).reshape(-1, 3)
@@ -99,9 +112,9 @@ def test_morph_targets_are_the_arkit_units_driven_as_the_deformer_drives_them(ge
 def _sources(face, position, part):
     """The mesh vertex of each glTF vertex of a part (nearest rest position: they coincide)."""
     span = face.mesh.part(part)
-    rest = face.mesh.vertices[span] * MM
-    d = ((position[:, None, :] - rest[None].astype(np.float32)) ** 2).sum(-1)
-    return span.start + d.argmin(axis=1)
+    distance, nearest = cKDTree(face.mesh.vertices[span] * MM).query(position)
+    assert distance.max() < 1e-6
+    return span.start + nearest
 
 
 def test_vertex_animation_is_the_face_pose_of_every_frame(procedural_face, stream, tmp_path):
