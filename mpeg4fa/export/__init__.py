@@ -11,9 +11,10 @@ from __future__ import annotations
 
 from mpeg4fa.export.events import VisemeChange, azure_events, viseme_changes, write_azure_json
 from mpeg4fa.export.gltf import GlbExport, build_glb, export_glb
-from mpeg4fa.export.weights import Weights, arkit_weights, oculus_weights, viseme_weights, write_weights_json
+from mpeg4fa.export.weights import (Weights, arkit_weights, oculus_weights, viseme_arkit_table, viseme_weights,
+                                    write_weights_json)
 
 __all__ = [
-    "Weights", "arkit_weights", "oculus_weights", "viseme_weights", "write_weights_json",
+    "Weights", "arkit_weights", "oculus_weights", "viseme_arkit_table", "viseme_weights", "write_weights_json",
     "VisemeChange", "viseme_changes", "azure_events", "write_azure_json",
 ]

@@ -11,7 +11,8 @@ FAP 1/2 expanded, clamped), so a stream exports as it plays:
   lids to the feature-point layer, so ``eyeBlinkLeft``/``Right`` are the top lid FAPs
   (``close_t_l_eyelid``, ``close_t_r_eyelid``) over one IRISD0 (1024 IRISD units: the lid covers
   the iris), clipped to 0..1. Blend shapes nothing drives stay 0. Needs a head with the ARKit units
-  (the generic head).
+  (the generic head). :func:`viseme_arkit_table` gives every viseme's (both sets') ARKit weights
+  at full strength: the viseme -> ARKit map, read off the head.
 * **Oculus/OVR** (:func:`oculus_weights`): the 15 visemes' weights per frame, summing to 1. A
   stream that sends FAP 1 and no mouth FAPs gives them straight from FAP 1's fields (``select1``
   weighs ``blend/63``, ``select2`` the rest); any other stream (low-level visemes, Chinese visemes,
@@ -47,7 +48,8 @@ from mpeg4fa.spec.avatars import ARKIT_BLENDSHAPES, OCULUS_VISEMES
 from mpeg4fa.spec.errors import SpecError
 from mpeg4fa.spec.profiles import VISEME_PROFILES
 
-__all__ = ["Weights", "viseme_weights", "oculus_weights", "arkit_weights", "write_weights_json", "OCULUS_NAMES"]
+__all__ = ["Weights", "viseme_weights", "oculus_weights", "arkit_weights", "viseme_arkit_table", "write_weights_json",
+           "weights_document", "OCULUS_NAMES"]
 
 OCULUS_NAMES = tuple(v.name for v in OCULUS_VISEMES)
 """The 15 OVR viseme names in their index order."""
@@ -147,6 +149,21 @@ def arkit_weights(stream: FapStream, face, fps: float | None = None) -> Weights:
     for name, column in _LIDS.items():
         out[:, ARKIT_BLENDSHAPES.index(name)] = np.clip(values[:, column] / _LID_SHUT, 0.0, 1.0)
     return _resampled(Weights("arkit", ARKIT_BLENDSHAPES, _times(stream), out, stream.fps), stream, fps)
+
+
+def viseme_arkit_table(face) -> dict[tuple[str, str], np.ndarray]:
+    """``(set, viseme)`` -> its 52 ARKit weights at full strength on ``face``, for every viseme of every set
+    (``mpeg4`` and ``zh``): the map for driving an ARKit avatar from viseme events, as the head shows them."""
+    names = [(set_name, viseme) for set_name, visemes in VISEME_PROFILES.items() for viseme in visemes]
+    frames = np.stack([VISEME_PROFILES[s][v] for s, v in names]).astype(np.float64)
+    stream = FapStream.empty(len(names))
+    stream.source_fps = 1.0
+    stream.timestamps[:] = np.arange(len(names))
+    moved = np.flatnonzero(np.abs(frames).max(axis=0) > 0)
+    stream.fap_mask[:, moved] = True
+    stream.fap_values[:, moved] = frames[:, moved]
+    weights = arkit_weights(stream, face).values
+    return {key: weights[k] for k, key in enumerate(names)}
 
 
 def _resampled(weights: Weights, stream: FapStream, fps: float | None) -> Weights:

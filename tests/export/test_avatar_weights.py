@@ -160,3 +160,17 @@ def test_export_arkit_json_on_the_command_line(cli, tmp_path):
     assert code == 0, err
     doc = json.loads(out.read_text())
     assert doc["names"] == list(ARKIT_BLENDSHAPES) and doc["frames"][-1]["weights"][17] > 0.3
+
+
+def test_every_viseme_of_both_sets_has_arkit_weights(head):
+    from mpeg4fa.export import viseme_arkit_table
+
+    table = viseme_arkit_table(head)
+    assert set(table) == {(s, v) for s, names in VISEME_PROFILES.items() for v in names}
+    jaw, pucker = ARKIT_BLENDSHAPES.index("jawOpen"), ARKIT_BLENDSHAPES.index("mouthPucker")
+    for weights in table.values():
+        assert weights.shape == (52,) and (weights >= 0).all() and (weights <= 1).all()
+    assert not table[("mpeg4", "none")].any() and not table[("zh", "none")].any()
+    assert table[("mpeg4", "AA")][jaw] > 3 * table[("mpeg4", "PP")][jaw]
+    assert table[("zh", "a")][jaw] > 3 * table[("zh", "bpm")][jaw]
+    assert table[("zh", "uv")][pucker] > table[("zh", "i")][pucker]
