@@ -174,7 +174,7 @@ def test_a_user_calibrates_the_head_on_two_photos(server, page, photo_files):
     _, out, api = server
     synth, files = photo_files
     v = page.evaluate("window.editor.state.version")
-    page.click("#btn-load-head")
+    page.click("[data-testid=load-head]")
     page.wait_for_function(f"window.editor.state.version > {v}", timeout=15_000)
     model = api.get("/api/model").json()
     page.click("[data-testid=photos-toggle]")
@@ -288,7 +288,7 @@ def test_a_user_calibrates_the_head_on_two_photos(server, page, photo_files):
 
     # loading the head again makes the calibration stale: the panel says so and export is off
     v = page.evaluate("window.editor.state.version")
-    page.click("#btn-load-head")
+    page.click("[data-testid=load-head]")
     page.wait_for_function(f"window.editor.state.version > {v}", timeout=15_000)
     page.wait_for_selector("#panel-photos[data-cleared='1']", state="attached", timeout=15_000)
     assert "mesh changed" in page.locator("[data-testid=photos-state]").inner_text()

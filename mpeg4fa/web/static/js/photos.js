@@ -445,6 +445,12 @@ $("btn-calibrate").addEventListener("click", calibrate);
 $("btn-export").addEventListener("click", exportFdp);
 new ResizeObserver(() => { if (state.loaded) VIEWS.forEach(placeOverlay); }).observe(svgOf("front"));
 VIEWS.forEach(installDragging);
+for (const view of VIEWS) {  // until a photo is loaded
+  const svg = svgOf(view);
+  svg.setAttribute("viewBox", "0 0 100 100");
+  const t = el("text", { x: 50, y: 50, class: "placeholder", "text-anchor": "middle" }, svg);
+  t.textContent = `no ${view} photo`;
+}
 panel.dataset.ready = "1";
 
 // for tests and the console: screen positions of what the page draws over the photos
