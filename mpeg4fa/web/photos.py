@@ -4,7 +4,8 @@ A front and a side photo are orthographic views of the head: the front shows x (
 right) and y (up), the side z and y (a ``"left"`` photo has the nose toward the image's left, as
 :mod:`mpeg4fa.render.texture` has it). The first placement of the feature points is the head's
 own points projected into each photo and fitted to a box (around the head's silhouette on a plain
-background, :func:`silhouette_box`, else centred, :func:`default_box`; :func:`fit_to_box`); the user then drags the box and the points. :func:`calibrate_from_photos`
+background, :func:`silhouette_box`, else centred, :func:`default_box`; :func:`fit_to_box`); the
+user then drags the box (the points not yet dragged follow it) and the points. :func:`calibrate_from_photos`
 turns the dragged points into 3D points (:func:`mpeg4fa.fdp.build.points_from_photos`), brought
 back to the head's scale and place (photos carry no absolute size), and calibrates the head on
 them (:meth:`mpeg4fa.face.FaceModel.calibrate`). :func:`bake` is

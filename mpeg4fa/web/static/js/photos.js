@@ -38,7 +38,10 @@ async function postForm(path, form) {
     const r = await fetch(path, { method: "POST", body: form });
     let body = null;
     try { body = await r.json(); } catch { body = null; }
-    if (!r.ok) throw new ApiError(body && body.error ? body.error : `HTTP ${r.status}`, body && body.where ? body.where : path, r.status);
+    if (!r.ok) {
+      throw new ApiError(body && body.error ? body.error : `HTTP ${r.status}`, body && body.where ? body.where : path,
+                         r.status);
+    }
     return body;
   } finally { busy(-1); }
 }
