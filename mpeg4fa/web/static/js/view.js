@@ -30,6 +30,19 @@ export function partColor(name) {
   return PALETTE[h % PALETTE.length];
 }
 
+// a white disc on transparent, so that big point sprites draw round rather than square
+let disc = null;
+function roundDot() {
+  if (disc) return disc;
+  const c = document.createElement("canvas");
+  c.width = c.height = 32;
+  const g = c.getContext("2d");
+  g.fillStyle = "#fff";
+  g.beginPath(); g.arc(16, 16, 15, 0, 2 * Math.PI); g.fill();
+  disc = new THREE.CanvasTexture(c);
+  return disc;
+}
+
 export class View {
   constructor(container, overlay) {
     this.container = container;
@@ -86,7 +99,8 @@ export class View {
   makeDots(color, px) {
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(0), 3));
-    const dots = new THREE.Points(geometry, new THREE.PointsMaterial({ color, size: px, sizeAttenuation: false }));
+    const dots = new THREE.Points(geometry, new THREE.PointsMaterial({
+      color, size: px, sizeAttenuation: false, map: px > 3 ? roundDot() : null, alphaTest: 0.5 }));
     dots.visible = false;
     dots.renderOrder = 1;
     this.scene.add(dots);
