@@ -267,7 +267,8 @@ def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -
         return _encode_recording(args)
     if args.input == NO_INPUT:
         raise UsageError("INPUT missing: give the text to speak (or a .fap/.fba stream)",
-                         hint='or --speech REC.wav --transcript "TEXT" to animate a recording')
+                         hint='or --speech REC.wav --transcript "TEXT" to animate a recording, '
+                              'or --visemes EVENTS.json for a cloud TTS\'s visemes')
     if args.engine == "estimate" and args.audio is not None:
         raise UsageError("the estimate engine makes no audio, so there is nothing for --audio",
                          hint="drop --audio, or use --engine espeak or pyttsx3")
