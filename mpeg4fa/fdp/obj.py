@@ -46,7 +46,9 @@ _BAD_F = re.compile(rf"(?m)^{_WS}*f(?={_WS}|$)(?!(?:{_WS}+{_CORNER}){{3,}}{_WS}*
 _STATEMENT = {key: re.compile(rf"(?m)^{_WS}*{key}{_WS}") for key in ("v", "vt", "f")}
 _FACE_LINE = re.compile(rf"(?m)^{_WS}*f{_WS}[^\n]*")
 _IN_FACE = rf"(?m)^{_WS}*f{_WS}[^\n]*?"
+_ZERO_ANY = re.compile(r"[ \t\r/]-?0+(?![\w.])")  # fast pre-checks over the face lines alone
 _ZERO = re.compile(_IN_FACE + r"(?<![\w.-])(-?0+)(?![\w.])")
+_NEG_ANY = {"v": re.compile(r"[ \t\r]-\d"), "vt": re.compile(r"/-\d")}
 _NEG = {"v": re.compile(_IN_FACE + r"(?<![\w/-])(-\d+)"), "vt": re.compile(_IN_FACE + r"(?<![\w/-])-?\d+/(-\d+)")}
 _INDEX = {"v": re.compile(r"(?<![\w/-])(-?\d+)"), "vt": re.compile(r"(?<![\w/-])-?\d+/(-?\d+)")}
 _NAME = re.compile(rf"(?m)^{_WS}*o{_WS}+([^\n]*\S)")
@@ -70,10 +72,15 @@ def mesh_from_obj(text: str | bytes, path: str = "<string>") -> FdpMesh:
         raise FdpError.no_place(path, "no faces ('f' lines) in the OBJ file",
                                 "export the mesh with its faces (triangles or polygons), not only its points")
     faces_text = "\n".join(m.group() for m in _FACE_LINE.finditer(plain))
-    _check_indices(plain, faces_text, counts, path)
+    _check_indices(plain, faces_text, path)
     feed = re.sub(rf"(?m)^{_WS}+|^(?:usemtl|mtllib)\b[^\n]*", "", plain).replace("\t", " ").replace("\r", "")
-    feed = re.sub(r"(/-?\d+)/-?\d*|//-?\d*", r"\1", feed)  # v/vt/vn -> v/vt, v//vn -> v
-    triangles = sum(len(m.group().split()) - 3 for m in _FACE_LINE.finditer(plain))
+    sizes = [len(line.split()) - 1 for line in faces_text.split("\n")]
+    triangles = sum(sizes) - 2 * len(sizes)
+    slashes = faces_text.count("/")
+    if slashes == 2 * sum(sizes):  # every corner v/vt/vn or v//vn: drop the last part (and a bare //)
+        feed = re.sub(r"/-?\d*(?=[ \n]|$)", "", re.sub(r"//-?\d*", "", feed))
+    elif re.search(r"\d/-?\d*/", faces_text):  # some corners with normals: v/vt/vn -> v/vt, v//vn -> v
+        feed = re.sub(r"(/-?\d+)/-?\d*|//-?\d*", r"\1", feed)
     vertices, faces, _ = _trimesh_read(re.sub(r"/-?\d*", "", feed), plain, counts, triangles, path, uv=False)
     uvs = None
     if counts["vt"] and "/" in feed:
@@ -81,9 +88,10 @@ def mesh_from_obj(text: str | bytes, path: str = "<string>") -> FdpMesh:
             v_uv, f_uv, uv = _trimesh_read(feed, plain, counts, triangles, path, uv=True)
         except FdpError:
             uv = None  # no usable texture pairs (e.g. some corners have none): read without uvs
+        if uv is not None and len(v_uv) == len(vertices) and np.array_equal(f_uv, faces):
+            uvs = uv  # trimesh's (v, vt) pairs are exactly the file's vertices
         else:
-            if uv is not None and len(v_uv) == len(vertices) and np.array_equal(f_uv, faces):
-                uvs = uv  # trimesh's (v, vt) pairs are exactly the file's vertices
+            _locate_range(plain, counts, path)  # trimesh drops uvs it cannot index: say which one
     name = _NAME.search(plain)
     return FdpMesh(vertices, faces, uvs, name=name.group(1).strip() if name else "")
 
@@ -95,7 +103,7 @@ def _trimesh_read(feed: str, plain: str, counts: dict[str, int], triangles: int,
         scene = trimesh.load(io.StringIO(feed), file_type="obj", force="scene", process=False,
                              maintain_order=not uv, skip_materials=True, group_material=False)
         geoms = [g for g in scene.geometry.values() if isinstance(g, trimesh.Trimesh)]
-    except (IndexError, ValueError) as exc:  # an index out of range: find it for the message
+    except Exception as exc:  # any reader fault is the file's: an index out of range is found for the message
         _locate_range(plain, counts, path)
         raise FdpError.no_place(path, f"trimesh cannot read the OBJ file: {exc}", _INDEX_HINT) from None
     if len(geoms) != 1:
@@ -110,7 +118,9 @@ def _trimesh_read(feed: str, plain: str, counts: dict[str, int], triangles: int,
         raise FdpError.no_place(path, f"trimesh read {len(vertices)} vertices where the file has {counts['v']}"
                                 " 'v' lines, which would shift feature point indices",
                                 "report this file: trimesh did not keep the vertex order")
-    _locate_range(plain, counts, path) if len(faces) and faces.max() >= len(vertices) else None
+    if len(faces) and faces.max() >= len(vertices):
+        _locate_range(plain, counts, path)
+        raise FdpError.no_place(path, "trimesh read a face index past the last vertex", _INDEX_HINT)
     coords = getattr(mesh.visual, "uv", None)
     return vertices, faces, None if coords is None else np.asarray(coords, np.float64)[:, :2]
 
@@ -157,29 +167,29 @@ def _explain_face(tokens: list[re.Match[str]], line: str, path: str, number: int
                    "e.g. f 1 2 3")
 
 
-def _check_indices(plain: str, faces_text: str, counts: dict[str, int], path: str) -> None:
-    """Refuse the indices trimesh would silently read wrong: 0, negative ones above more v/vt lines, out of range."""
-    zero = _ZERO.search(plain)
-    if zero:
+def _check_indices(plain: str, faces_text: str, path: str) -> None:
+    """Refuse the indices trimesh would silently read wrong: 0, and negative ones above more v/vt lines.
+    (The cheap searches run over the face lines alone; the file is searched only to locate a hit.)"""
+    if _ZERO_ANY.search(faces_text):
+        zero = _ZERO.search(plain)
         number, _, offset = _line_at(plain, zero.start(1))
         raise FdpError(path, number, offset + 1, "index 0 does not exist", _INDEX_HINT)
     for key in ("v", "vt"):
-        neg = _NEG[key].search(plain)
-        last = max((m.start() for m in _STATEMENT[key].finditer(plain)), default=-1)
+        neg = _NEG[key].search(plain) if _NEG_ANY[key].search(faces_text) else None
+        last = max((m.start() for m in _STATEMENT[key].finditer(plain)), default=-1) if neg else -1
         if neg and neg.start(1) < last:
             number, _, offset = _line_at(plain, neg.start(1))
             raise FdpError(path, number, offset + 1,
                            f"a relative (negative) index in a face above further '{key}' lines: "
                            f"trimesh counts it back from the file's last '{key}'",
                            f"export with absolute indices, or put every '{key}' line above the faces")
-    _locate_range(plain, counts, path, faces_text)
 
 
-def _locate_range(plain: str, counts: dict[str, int], path: str, faces_text: str | None = None) -> None:
+def _locate_range(plain: str, counts: dict[str, int], path: str) -> None:
     """Raise at the first corner whose v or vt index is outside the file's vertices / texture coordinates."""
-    text = faces_text if faces_text is not None else "\n".join(m.group() for m in _FACE_LINE.finditer(plain))
+    text = "\n".join(m.group() for m in _FACE_LINE.finditer(plain))
     for key, what in (("v", "vertex"), ("vt", "texture coordinate")):
-        values = np.array([int(x) for x in _INDEX[key].findall(text)] or [1], np.int64)
+        values = np.array(_INDEX[key].findall(text) or ["1"]).astype(np.int64)
         bad = (values > counts[key]) | (values < -counts[key])
         if not bad.any():
             continue
