@@ -137,6 +137,7 @@ export class View {
     this.scene.add(this.mesh);
     this.selectedVertices = [];  // their numbers may not hold in the new mesh: the caller marks them again
     this.setPositions(positions);
+    this.setPoints(model.points);
     this.setColors(new Set());
     if (frame) this.frame();
     this.requestRender();
@@ -159,8 +160,16 @@ export class View {
     all.setAttribute("position", new THREE.BufferAttribute(Float32Array.from(positions), 3));
     all.computeBoundingSphere();
     this.markVertices(this.selectedVertices);
-    this.setPoints(this.model.points);
+    this.movePoints();
     this.requestRender();
+  }
+
+  // the feature-point spheres follow the shown positions (a pose, a drag) without being made again
+  movePoints() {
+    for (const m of this.points.children) {
+      const v = this.model.points[m.userData.label];
+      if (v !== undefined && v < this.positions.length / 3) m.position.copy(this.vertex(v));
+    }
   }
 
   // vertex mode shows every vertex as a dot; the selected vertices are bright dots in either mode
@@ -266,13 +275,16 @@ export class View {
   }
 
   setPoints(points) {
+    for (const m of this.points.children) m.material.dispose();
+    if (this.points.children.length) this.points.children[0].geometry.dispose();
     this.points.clear();
     const r = this.size() * 0.004;
     const geometry = new THREE.SphereGeometry(r, 10, 8);
     const seen = new Set();
     for (const [label, v] of Object.entries(points)) {
       const m = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
-        color: label === this.pickedLabel ? POINT_PICKED : POINT, depthTest: true }));
+        color: label === this.pickedLabel ? POINT_PICKED : POINT, depthTest: true,
+        depthWrite: false }));  // hidden by the mesh, but not hiding the selected-vertex dots drawn after them
       m.position.copy(this.vertex(v));
       m.userData.label = label;
       this.points.add(m);
