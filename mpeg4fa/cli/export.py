@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 from typing import Callable
 
+from . import options
 from .errors import UsageError
 from .model import deformer_option, face_options, posed_face
 from .options import Commands
@@ -50,7 +51,8 @@ def _write_weights(args: argparse.Namespace, kind: str) -> str:
     from ..formats import read_stream
 
     stream, _ = read_stream(args.stream)
-    weights = arkit_weights(stream, posed_face(args)) if kind == "arkit" else oculus_weights(stream)
+    weights = (arkit_weights(stream, posed_face(args), fps=args.fps) if kind == "arkit"
+               else oculus_weights(stream, fps=args.fps))
     write_weights_json(weights, args.output)
     return f"{args.output}: {len(weights.times)} frames of {len(weights.names)} {kind} weights"
 
@@ -60,6 +62,9 @@ def _write_azure(args: argparse.Namespace) -> str:
     from ..export import write_azure_json
     from ..formats import read_stream
 
+    if args.fps is not None:
+        raise UsageError("--fps samples per-frame weights; Azure events come at each change of viseme",
+                         hint="drop --fps")
     stream, _ = read_stream(args.stream)
     return f"{args.output}: {write_azure_json(stream, args.output)} Azure viseme events"
 
@@ -100,6 +105,9 @@ def register(commands: Commands) -> None:
     p.add_argument("--animation", choices=("morph", "vertex"), default="morph",
                    help="glb: ARKit morph-target weights (default; as the arkit deformer shows the face) or "
                         "per-frame vertex positions (the chosen --deformer, exact, bigger)")
+    p.add_argument("--fps", type=options.fps, metavar="FPS",
+                   help="arkit-json, oculus-json: the weights at this rate, each tick showing the frame a player "
+                        "would (default: one entry per stream frame)")
     audio = p.add_mutually_exclusive_group()
     audio.add_argument("--audio", type=Path, help="speech to copy next to the output (WAV)")
     audio.add_argument("--no-audio", action="store_true", help="do not look for a WAV beside the stream")
@@ -140,6 +148,9 @@ def run_export(args: argparse.Namespace) -> int:
     if args.animation == "morph" and args.deformer not in ("fap", "arkit"):
         raise UsageError(f"--deformer {args.deformer} goes with --animation vertex",
                          hint="morph animation shows the ARKit units as the arkit deformer drives them")
-    _, writer = FORMATS[_format_of(args)]
+    name = _format_of(args)
+    if args.fps is not None and name == "glb":
+        raise UsageError("--fps goes with arkit-json and oculus-json", hint="a GLB keys the stream's own frames")
+    _, writer = FORMATS[name]
     print(writer(args))
     return 0

@@ -148,6 +148,11 @@ def test_export_weights_on_the_command_line(cli, tmp_path):
     doc = json.loads(out.read_text())
     assert doc["format"] == "mpeg4fa-oculus-weights" and len(doc["frames"]) == 16 and "16 frames" in printed
     assert cli("export", src, "-o", tmp_path / "x.json")[0] == 2  # .json alone names no format
+    assert cli("export", src, "--format", "oculus-json", "--fps", "50", "-o", out)[0] == 0
+    doc = json.loads(out.read_text())
+    assert doc["fps"] == 50.0 and len(doc["frames"]) == 32
+    assert cli("export", src, "--format", "azure-json", "--fps", "50", "-o", tmp_path / "a.json")[0] == 2
+    assert cli("export", src, "--fps", "50", "-o", tmp_path / "a.glb")[0] == 2
     assert cli("export", src, "--format", "oculus-json", "-o", src)[0] != 0 and src.stat().st_size > 0
 
 
