@@ -62,7 +62,8 @@ def main() -> int:
     with running(app) as base:
         url = base.replace("http://", "ws://") + "/ws"
         print(f"latency from text to first frame ({args.runs} runs each; ms)")
-        print(f"{'first sentence':<18} {'client median':>13} {'client max':>10} {'server median':>13} {'sentence s':>10}")
+        print(f"{'first sentence':<18} {'client median':>13} {'client max':>10} {'server median':>13} "
+              f"{'sentence s':>10}")
         for name, first in FIRST.items():
             client, server, seconds = [], [], 0.0
             for _ in range(args.runs):

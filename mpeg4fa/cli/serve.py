@@ -25,7 +25,8 @@ def register(commands: Commands) -> None:
                     "never more than --window seconds ahead of what the client reports it has played. The "
                     "page (http://127.0.0.1:PORT/) plays them on the head as GLB with three.js and WebAudio. "
                     "The protocol is documented in mpeg4fa/serve/protocol.py.")
-    p.add_argument("--port", type=options.integer(1, 65535), default=DEFAULT_PORT, help=f"port (default {DEFAULT_PORT})")
+    p.add_argument("--port", type=options.integer(1, 65535), default=DEFAULT_PORT,
+                   help=f"port (default {DEFAULT_PORT})")
     p.add_argument("--engine", choices=ENGINES, default="espeak", help="speech engine (default espeak)")
     p.add_argument("--window", type=options.real(0.2, 60.0), default=WINDOW,
                    help=f"seconds of media sent ahead of the client's playhead (default {WINDOW:g})")

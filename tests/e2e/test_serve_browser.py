@@ -24,7 +24,8 @@ ARTEFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "serve"
 BACKGROUND = (0x2B, 0x2F, 0x36)
 TEXT = "(joy, 40, 0.5) Hello there. Open wide, and say ah. Thank you!"
 
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed (pip install playwright==1.65.2)")
+sync_api = pytest.importorskip("playwright.sync_api",
+                               reason="playwright not installed (pip install playwright==1.65.2)")
 if not os.access(CHROMIUM, os.X_OK):
     pytest.skip(f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium)", allow_module_level=True)
 
