@@ -79,11 +79,11 @@ def _mouth_box(page, face) -> tuple[int, int, int, int]:
     return int(x0), int(top[1]), int(x1) + 1, int(bottom[1] + 1.5 * (bottom[1] - top[1])) + 1
 
 
-def _play(browser, site, face, label: str):
+def _play(browser, site, face, label: str, texture: np.ndarray | None = None, points: tuple[str, ...] = ()):
     base, root = site
     stream = talk_stream()
     name = f"{label}.glb"
-    export_glb(stream, face, root / name, animation=label.partition("-")[0])
+    export_glb(stream, face, root / name, animation=label.partition("-")[0], texture=texture)
     page = browser.new_page(viewport={"width": 480, "height": 480})
     errors: list[str] = []
     page.on("pageerror", lambda e: errors.append(str(e)))
@@ -99,6 +99,8 @@ def _play(browser, site, face, label: str):
         shots[moment] = np.asarray(Image.open(path).convert("RGB")).astype(int)
     info = page.evaluate("({clip: window.viewer.clip, targets: window.viewer.targets})")
     box = _mouth_box(page, face)
+    info["points"] = {label: page.evaluate("p => window.viewer.project(p)", (face.mesh.fp(label) * MM).tolist())
+                      for label in points}
     page.close()
     assert not errors, errors
     return stream, root / name, shots, influences, info, box
@@ -150,3 +152,19 @@ def test_vertex_animation_plays_in_three(browser, site, request, which):
         x0, y0, x1, y1 = box
         changed = np.abs(shots["open"] - shots["neutral"]).sum(axis=2)[y0:y1, x0:x1] > 60
         assert changed.mean() > 0.2, changed.mean()
+
+
+def test_texture_lies_as_the_renderer_lays_it(browser, site, generic_face):
+    """The UV flip: the renderer reads image row 0 at v = 1 (:meth:`Renderer.set_texture`); glTF reads it at
+    v = 0. Image rows above the middle green, below red: the left ear (v 0.61 on the generic head's
+    atlas, image row 0.39) must come out green and the right ear (v 0.36, row 0.64) red in three.js."""
+    texture = np.zeros((256, 256, 3), np.uint8)
+    texture[:128, :, 1] = 230
+    texture[128:, :, 0] = 230
+    *_, shots, _, info, _ = _play(browser, site, generic_face, "vertex-textured", texture=texture,
+                                  points=("10.1", "10.2"))
+    def colour_at(label):
+        x, y = (int(round(c)) for c in info["points"][label])
+        return shots["neutral"][y - 2:y + 3, x - 2:x + 3].reshape(-1, 3).mean(axis=0)
+    left, right = colour_at("10.1"), colour_at("10.2")
+    assert left[1] > 2 * left[0] and right[0] > 2 * right[1], (left, right)
