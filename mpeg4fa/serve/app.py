@@ -19,6 +19,7 @@ import asyncio
 import contextlib
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,6 +40,7 @@ HOST = "127.0.0.1"
 STATIC = Path(__file__).with_name("static")
 THREE = Path(__file__).resolve().parents[1] / "web" / "static" / "vendor" / "three"
 CHUNK = 0.2  # s of frames or audio per message
+RECORDS = 100  # utterance records kept (for tests, benchmarks and a look at a running server)
 CLOSE_POLICY = 1008  # WebSocket close code: policy violation (here: a stalled client)
 
 
@@ -51,7 +53,7 @@ class Settings:
     window: float = WINDOW
     chunk: float = CHUNK
     stall_timeout: float = STALL_TIMEOUT
-    utterances: list[dict] = field(default_factory=list)  # one record per finished utterance (newest last)
+    utterances: deque = field(default_factory=lambda: deque(maxlen=RECORDS))  # the latest finished utterances
     connections: int = 0
     _glb: bytes | None = None
     _glb_lock: threading.Lock = field(default_factory=threading.Lock)
