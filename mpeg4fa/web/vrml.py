@@ -2,7 +2,8 @@
 
 trimesh has no VRML reader, so VTK (pinned in pyproject.toml) parses the file; every Shape whose geometry
 is an IndexedFaceSet becomes one part (named after the Shape's DEF name when it has one), its points
-moved by the Transforms above it and its polygons split into triangles by vtkTriangleFilter.
+moved by the Transforms above it and its polygons split into triangles by vtkTriangleFilter. VTK reads
+nothing but the file itself (no Inline, no texture images, no Script: checked with strace).
 
 VTK reports a syntax error only as text (the parser's own ``Error near line N``, counted from the line
 after the ``#VRML`` header, and vtkOutputWindow messages), so both are captured around the import and
@@ -34,8 +35,12 @@ def read_vrml(data: bytes, filename: str) -> list[tuple[str, np.ndarray, np.ndar
     if not data.lstrip(b"\xef\xbb\xbf").startswith(HEADER):
         raise EditError("not a VRML 97 file: it must begin with '#VRML V2.0 utf8'", where=f"{filename}:1",
                         hint="VRML 1.0 is not read; export VRML 97 (VRML 2.0)")
-    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (its overrides: without them a USE'd Shape crashes VTK)
-    from vtkmodules.vtkIOImport import vtkVRMLImporter  # VTK takes ~0.3 s to import: only when a .wrl comes
+    try:
+        import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (its overrides: without them a USE'd Shape crashes VTK)
+        from vtkmodules.vtkIOImport import vtkVRMLImporter  # VTK takes ~0.3 s to import: only when a .wrl comes
+    except ImportError as exc:
+        raise EditError(f"VTK, which reads VRML here, does not load: {exc}", where=filename,
+                        hint="reinstall mpeg4fa (it pins vtk), or convert the file to OBJ or GLB") from None
 
     with tempfile.TemporaryDirectory(prefix="mpeg4fa-vrml-") as tmp:
         path = Path(tmp) / "upload.wrl"  # vtkVRMLImporter reads files only
