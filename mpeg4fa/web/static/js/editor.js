@@ -87,10 +87,10 @@ function toggle(item) {
 }
 
 function setMode(mode) {
-  if (mode === state.mode || !state.model) { if (!state.model) state.mode = mode; return; }
+  if (mode === state.mode) return;
   // the selection carries over: faces give their corners, vertices the faces they wholly span
-  if (mode === "vertices") state.vertices = new Set(cornersOf(state.model.indices, state.selected));
-  else state.selected = new Set(facesWithin(state.model.indices, state.vertices));
+  if (state.model && mode === "vertices") state.vertices = new Set(cornersOf(state.model.indices, state.selected));
+  else if (state.model) state.selected = new Set(facesWithin(state.model.indices, state.vertices));
   state.mode = mode;
   for (const m of ["faces", "vertices"]) {
     $(`btn-mode-${m}`).classList.toggle("on", m === mode);
@@ -98,7 +98,7 @@ function setMode(mode) {
   }
   view.showVertexDots(mode === "vertices");
   $("labels").classList.toggle("dim", mode === "vertices");
-  showSelection();
+  if (state.model) showSelection();
 }
 
 // ---- moving vertices ------------------------------------------------------------------------------
