@@ -47,9 +47,20 @@ def digest(path: str | os.PathLike) -> str:
     return h.hexdigest()
 
 
-def job_key(job: Job) -> tuple[str, dict[str, str]]:
-    """``(key, digests)``: the key changes when any input's bytes, an option or the package version does."""
-    digests = {name: digest(path) for name, path in job.inputs().items()}
+def job_key(job: Job, seen: dict | None = None) -> tuple[str, dict[str, str]]:
+    """``(key, digests)``: the key changes when any input's bytes, an option or the package version does.
+
+    ``seen`` (a dict kept across calls) hashes a file many jobs share once: it is keyed by path,
+    size and modification time.
+    """
+    seen = {} if seen is None else seen
+    digests = {}
+    for name, path in job.inputs().items():
+        info = os.stat(path)
+        known = (str(path), info.st_size, info.st_mtime_ns)
+        if known not in seen:
+            seen[known] = digest(path)
+        digests[name] = seen[known]
     options = {k: v for k, v in job.options.items() if k not in PATH_OPTIONS}
     text = json.dumps({"version": __version__, "inputs": digests, "options": options}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest(), digests

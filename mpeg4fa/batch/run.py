@@ -101,9 +101,10 @@ def run_batch(manifest: Manifest | str | os.PathLike, outdir: str | os.PathLike,
     _check_outdir(manifest, out)
     results: dict[int, JobResult] = {}
     todo: list[tuple[Job, str, dict[str, str]]] = []
+    seen: dict = {}  # a face mesh or FDP that many jobs share is hashed once
     for job in manifest.jobs:
         try:
-            key, digests = job_key(job)
+            key, digests = job_key(job, seen)
         except OSError as exc:
             results[job.index] = JobResult(job.index, job.where, job.output, "failed",
                                            error=f"cannot read an input ({one_line(exc)})")
@@ -186,6 +187,11 @@ def _client(scheduler: str | None, n_workers: int) -> Iterator:
             raise BatchError(f"cannot reach the Dask scheduler ({one_line(exc)})", where=scheduler,
                              hint="start one with `dask scheduler` and give its tcp://HOST:PORT") from None
         with client:
+            try:
+                client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
+            except TimeoutError:
+                raise BatchError(f"the scheduler has had no workers for {CONNECT_TIMEOUT_S} s", where=scheduler,
+                                 hint="start some with `dask worker ADDRESS --nthreads 1`") from None
             yield client
         return
     env = {"LP_NUM_THREADS": os.environ.get("LP_NUM_THREADS") or str(max(default_workers() // n_workers, 1))}

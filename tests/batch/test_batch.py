@@ -105,13 +105,15 @@ def test_renders_on_two_workers_resumes_and_renders_only_what_changed(inputs, sc
 
 
 def test_failed_jobs_leave_no_output_and_stop_no_other(inputs, scheduler, tmp_path):
-    jobs = [{"stream": "s3.fba", "audio": "noise.wav"}, {"stream": "s2.fba", "output": "fine.mp4"},
+    write_tone(inputs / "long.wav", SECONDS + 0.5)
+    jobs = [{"stream": "s3.fba", "audio": "noise.wav"}, {"stream": "s2.fba", "output": "fine.mp4", "audio": "long.wav"},
             {"stream": "s1.fba", "texture": "points.json", "output": "textured.mp4"}]
     out = tmp_path / "out"
     summary = run_batch(manifest(inputs, jobs), out, scheduler=scheduler)
     done = by_output(summary)
     assert [j.status for j in summary.jobs] == ["failed", "rendered", "failed"]
     assert "noise.wav" in done["s3.mp4"].error
+    assert len(done["fine.mp4"].warnings) == 1 and "video padded with 13 frames" in done["fine.mp4"].warnings[0]
     assert "texture" in done["textured.mp4"].error and "points.json" in done["textured.mp4"].error
     assert sorted(p.name for p in out.iterdir()) == [".fine.mp4.batch.json", SUMMARY_NAME, "fine.mp4"]
 
