@@ -51,6 +51,7 @@ _ZERO = re.compile(_IN_FACE + r"(?<![\w.-])(-?0+)(?![\w.])")
 _NEG_ANY = {"v": re.compile(r"[ \t\r]-\d"), "vt": re.compile(r"/-\d")}
 _NEG = {"v": re.compile(_IN_FACE + r"(?<![\w/-])(-\d+)"), "vt": re.compile(_IN_FACE + r"(?<![\w/-])-?\d+/(-\d+)")}
 _INDEX = {"v": re.compile(r"(?<![\w/-])(-?\d+)"), "vt": re.compile(r"(?<![\w/-])-?\d+/(-?\d+)")}
+_GROUP, _OBJECT = re.compile(r"(?m)^g "), re.compile(r"(?m)^o ")
 _NAME = re.compile(rf"(?m)^{_WS}*o{_WS}+([^\n]*\S)")
 
 
@@ -63,6 +64,17 @@ def read_obj(path: str | os.PathLike[str]) -> FdpMesh:
 
 def mesh_from_obj(text: str | bytes, path: str = "<string>") -> FdpMesh:
     """Parse OBJ text (with trimesh); ``path`` only names the source in error messages."""
+    return _read(text, path, groups=False)[0]
+
+
+def mesh_and_groups_from_obj(text: str | bytes, path: str = "<string>") -> tuple[FdpMesh, list[str]]:
+    """:func:`mesh_from_obj` and, per triangle, the name of its ``g`` group (or, in a file without groups,
+    of its ``o`` object; ``""`` in a file with neither), as trimesh splits them: how a downloaded head names
+    its skin, eyes and teeth."""
+    return _read(text, path, groups=True)  # type: ignore[return-value]
+
+
+def _read(text: str | bytes, path: str, groups: bool) -> tuple[FdpMesh, list[str] | None]:
     if isinstance(text, (bytes, bytearray, memoryview)):
         text = bytes(text).decode("utf-8", errors="replace")  # only ASCII numbers matter; names may be anything
     plain = re.sub(r"#[^\n]*", "", text)  # same lines and columns as the file, for locating faults
@@ -81,7 +93,9 @@ def mesh_from_obj(text: str | bytes, path: str = "<string>") -> FdpMesh:
         feed = re.sub(r"/-?\d*(?=[ \n]|$)", "", re.sub(r"//-?\d*", "", feed))
     elif re.search(r"\d/-?\d*/", faces_text):  # some corners with normals: v/vt/vn -> v/vt, v//vn -> v
         feed = re.sub(r"(/-?\d+)/-?\d*|//-?\d*", r"\1", feed)
-    vertices, faces, _ = _trimesh_read(re.sub(r"/-?\d*", "", feed), plain, counts, triangles, path, uv=False)
+    plain_feed = re.sub(r"/-?\d*", "", feed)
+    vertices, faces, _ = _trimesh_read(plain_feed, plain, counts, triangles, path, uv=False)
+    names = _groups(plain_feed, faces, path) if groups else None
     uvs = None
     if counts["vt"] and "/" in feed:
         try:
@@ -93,7 +107,36 @@ def mesh_from_obj(text: str | bytes, path: str = "<string>") -> FdpMesh:
         else:
             _locate_range(plain, counts, path)  # trimesh drops uvs it cannot index: say which one
     name = _NAME.search(plain)
-    return FdpMesh(vertices, faces, uvs, name=name.group(1).strip() if name else "")
+    return FdpMesh(vertices, faces, uvs, name=name.group(1).strip() if name else ""), names
+
+
+def _groups(feed: str, faces: np.ndarray, path: str) -> list[str]:
+    """Per triangle of ``faces`` (the file's order), the name of the o/g group trimesh puts it in (matched by
+    corners: of a triangle repeated in two groups, either copy may take either name)."""
+    by_group = _GROUP.search(feed) is not None
+    if not by_group and not _OBJECT.search(feed):
+        return [""] * len(faces)
+    try:
+        scene = trimesh.load(io.StringIO(feed), file_type="obj", force="scene", process=False, maintain_order=True,
+                             skip_materials=True, group_material=False, split_objects=not by_group,
+                             split_groups=by_group)
+    except Exception as exc:  # the same text read once already: only a trimesh fault
+        raise FdpError.no_place(path, f"trimesh cannot split the OBJ file into its groups: {exc}") from None
+    parts = [(str(name), np.asarray(g.faces, np.int64)) for name, g in scene.geometry.items()
+             if isinstance(g, trimesh.Trimesh)]
+    rows = np.concatenate([faces] + [f for _, f in parts])
+    _, key = np.unique(rows, axis=0, return_inverse=True)
+    key = key.reshape(-1)
+    slots: dict[int, list[int]] = {}
+    for i, k in enumerate(key[:len(faces)].tolist()):
+        slots.setdefault(k, []).append(i)
+    out, at = [""] * len(faces), len(faces)
+    for name, f in parts:  # each group triangle takes the first file triangle with the same corners
+        for k in key[at:at + len(f)].tolist():
+            if slots.get(k):
+                out[slots[k].pop(0)] = name
+        at += len(f)
+    return out
 
 
 def _trimesh_read(feed: str, plain: str, counts: dict[str, int], triangles: int, path: str,

@@ -12,7 +12,7 @@ import trimesh
 
 from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.fdp.build import read_points_json
-from mpeg4fa.fdp.obj import mesh_from_obj
+from mpeg4fa.fdp.obj import mesh_and_groups_from_obj
 from mpeg4fa.web.edits import EditError, EditMesh, make_mesh, validate
 from mpeg4fa.web.vrml import read_vrml
 
@@ -26,15 +26,18 @@ SIDECARS = (".points.json", ".parts.json")
 
 def read_mesh(data: bytes, filename: str, resolver=None) -> EditMesh:
     """A mesh file's bytes as an :class:`EditMesh`: one part per Shape (VRML) or scene node (glTF...),
-    node transforms applied; a single one is ``skin``. An OBJ keeps its vertex indices and is all ``skin``.
+    node transforms applied; a single one is ``skin``. An OBJ keeps its vertex indices; its parts are its
+    ``g`` groups (or ``o`` objects).
     Nothing outside the bytes is read unless ``resolver`` (a trimesh resolver) is given, so an uploaded
     ``.gltf`` must embed its buffers (data: URIs); a ``.glb`` always does."""
     ext = filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
     if ext not in FORMATS:
         raise EditError(f"cannot read .{ext or '?'} files", where=filename, hint=f"formats: {', '.join(FORMATS)}")
-    if ext == "obj":
-        mesh = mesh_from_obj(data, filename)
-        return make_mesh(mesh.vertices, mesh.triangles, source=filename)
+    if ext == "obj":  # one part per g group (or o object), the vertices in the file's order
+        mesh, groups = mesh_and_groups_from_obj(data, filename)
+        several = len(set(groups)) > 1
+        return make_mesh(mesh.vertices, mesh.triangles, [_part_name(g) if several and g else "skin" for g in groups],
+                         source=filename)
     shapes = read_vrml(data, filename) if ext in ("wrl", "vrml") else _read_scene(data, filename, ext, resolver)
     verts, tris, parts, base = [], [], [], 0
     for name, v, t in shapes:

@@ -14,6 +14,8 @@ from mpeg4fa.fdp import (MIRROR_TWINS, Fdp, FdpError, FdpMesh, FdpValueError, Te
                          read_points_json, save_fdp, texture_from_file)
 from mpeg4fa.spec import FAPS
 
+from mpeg4fa.fdp.obj import mesh_and_groups_from_obj
+
 from .textpos import place
 
 # ---- OBJ ----------------------------------------------------------------------------------------
@@ -59,6 +61,16 @@ def test_obj_negative_indices_and_corner_forms():
     mesh = mesh_from_obj(text)
     assert mesh.triangles.tolist() == [[0, 1, 2], [1, 3, 2]]
     assert mesh.uvs is None  # trimesh pairs (-2, vt 1) and (3, vt 1) as two vertices, so such uvs are not kept
+
+
+def test_obj_groups_per_triangle_in_file_order():
+    text = ("v 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\no head\ng skin\nf 2 3 4\nf 2 3 5 4\n"
+            "g teeth\nusemtl x\nf 3 5 4\ng skin\nf 2 4 5\ng eye_l\nf 1 2 3\n")
+    mesh, groups = mesh_and_groups_from_obj(text)
+    assert mesh == mesh_from_obj(text)
+    assert groups == ["skin", "skin", "teeth", "skin", "skin", "eye_l"]  # a quad's halves: 2nd and 4th
+    assert mesh_and_groups_from_obj(text.replace("g ", "o "))[1] == groups
+    assert mesh_and_groups_from_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")[1] == [""]
 
 
 @pytest.mark.parametrize("text, needle, key", [

@@ -140,12 +140,17 @@ def test_gltf_with_external_buffers_upload_refused_but_read_beside_its_files(tmp
 # ---- OBJ and the editor's own saved model -----------------------------------------------------------
 
 def test_obj_upload_keeps_the_files_vertex_indices():
-    """Materials, normals and an unused vertex: trimesh alone would split or renumber; feature points need the file's."""
+    """Materials, normals and an unused vertex: trimesh alone would split or renumber; feature points need the file's.
+    Groups (or objects) become parts."""
     text = (b"v 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\n"
             b"usemtl a\nf 2//1 3//1 4//1\nusemtl b\nf 3//1 5//1 4//1\n")
     mesh = read_mesh(text, "m.obj")
     assert len(mesh.vertices) == 5 and mesh.vertices[0].tolist() == [9, 9, 9]
     assert mesh.triangles.tolist() == [[1, 2, 3], [2, 4, 3]] and mesh.part_names == ("skin",)
+    grouped = read_mesh(text.replace(b"usemtl a", b"g Skin").replace(b"usemtl b", b"g teeth upper"), "g.obj")
+    assert grouped.part_names == ("skin", "teeth_upper") and np.array_equal(grouped.triangles, mesh.triangles)
+    objects = read_mesh(b"o Head\n" + text.replace(b"usemtl b", b"o Eye.L"), "o.obj")
+    assert objects.parts == ["head", "eye_l"] and len(objects.vertices) == 5
     with pytest.raises(MpegFaError) as err:
         read_mesh(b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", "bad.obj")
     assert err.value.where == "bad.obj:3:7"
