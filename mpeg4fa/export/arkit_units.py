@@ -16,7 +16,8 @@ deformer moves them under the shape's FAP (the jaw
 drops with ``jawOpen``, the tongue comes out with ``tongueOut``), linear in the weight
 through the pose at weight :data:`CARRY_AT`. Left out of the ARKit deformer's pose: the correction
 that puts the skin's feature points exactly where the FAPs say, the eyes and lids
-(no FAP drives the ``eyeLook*``/``eyeBlink*`` units) and the head turn.
+(no FAP drives the ``eyeLook*``/``eyeBlink*`` units) and the head turn (a transform, not a shape:
+the glTF export animates it as a node's rotation).
 """
 from __future__ import annotations
 

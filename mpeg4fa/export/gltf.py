@@ -7,9 +7,12 @@ decoder. Two ways to bake the stream:
 * ``animation="morph"``: the head's 52 ARKit face units are the morph targets (named in
   ``mesh.extras.targetNames``, which three.js reads), and one LINEAR ``weights`` channel
   keyed at the frames' presentation times carries the weights the ARKit deformer gives
-  them (:mod:`.arkit_units`). The face moves as the ARKit deformer's sculpted units move
-  it: not the feature-point deformer's pose, and without its feature-point correction,
-  eyes, teeth, tongue and head turn. Needs a head with face units (the generic head).
+  them (:mod:`.arkit_units`; the lower teeth and tongue ride on the jaw and tongue units).
+  The face moves as the ARKit deformer's sculpted units move it: not the feature-point
+  deformer's pose, and without its feature-point correction, eye turns and lids. The head
+  turn (FAPs 48-50) is a rotation channel on a pivot node at feature point 7.1, so the
+  whole head and neck turn rigidly (the deformer fades the turn down the neck). Needs a
+  head with face units (the generic head).
 * ``animation="vertex"``: the face's own deformer poses every frame; each distinct pose is
   one morph target (all parts), and the weights channel selects pose k at frame k
   (LINEAR, so between two frames the vertices move straight from one pose to the next).
@@ -40,6 +43,7 @@ from mpeg4fa.decoded import resolve
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.export.arkit_units import arkit_units
 from mpeg4fa.export.glb_buffer import GlbBuffer
+from mpeg4fa.face import motion
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.render.materials import Material, Materials
@@ -52,6 +56,9 @@ PART_LOOK = {"skin": "skin", "eye_l": "sclera", "eye_r": "sclera", "teeth_upper"
              "tongue": "tongue"}
 """Drawn part -> the :class:`~mpeg4fa.render.materials.Materials` entry it wears, in the renderer's order."""
 Progress = Callable[[int, int], None]
+HEAD_CENTRE = "7.1"
+"""The feature point the head turns about (the rig's ``head_fp``)."""
+_TURN_ORDER = {"pitch": 0, "yaw": 1, "roll": 2}
 
 
 class ExportError(MpegFaError):
@@ -125,9 +132,15 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     primitives = [_primitive(gltf, buf, part, rest, normals, shapes, looks, skin_texture) for part in parts]
     gltf.meshes.append(gl.Mesh(name=name, primitives=primitives, weights=[0.0] * len(names),
                                extras={"targetNames": names}))
-    gltf.nodes.append(gl.Node(name=name, mesh=0))
+    turns = head_turns(face, values) if animation == "morph" else None
+    if turns is None:
+        gltf.nodes.append(gl.Node(name=name, mesh=0))
+    else:  # the turn about the head's centre: a pivot node there, the mesh node moved back under it
+        centre = (face.mesh.fp(HEAD_CENTRE) * MM).tolist()
+        gltf.nodes.append(gl.Node(name=f"{name} head turn", translation=centre, children=[1]))
+        gltf.nodes.append(gl.Node(name=name, mesh=0, translation=[-c for c in centre]))
     gltf.scenes.append(gl.Scene(name=name, nodes=[0]))
-    _add_animation(gltf, buf, name, times, weights)
+    _add_animation(gltf, buf, name, times, weights, turns)
     gltf.buffers.append(gl.Buffer(byteLength=0))
     blob = buf.blob()
     gltf.buffers[0].byteLength = len(blob)
@@ -257,13 +270,37 @@ def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray) -> int:
     return len(gltf.textures) - 1
 
 
-def _add_animation(gltf: gl.GLTF2, buf: GlbBuffer, name: str, times: np.ndarray, weights: np.ndarray) -> None:
-    """One LINEAR weights channel on the head's node, keyed at the frames' presentation times."""
+def _add_animation(gltf: gl.GLTF2, buf: GlbBuffer, name: str, times: np.ndarray, weights: np.ndarray,
+                   turns: np.ndarray | None) -> None:
+    """A LINEAR weights channel on the mesh's node, keyed at the frames' presentation times, and the head
+    turn's rotation channel (spherical interpolation) on its pivot node when there is one."""
     t = buf.accessor(times.astype(np.float32), bounds=True)
     w = buf.accessor(np.ascontiguousarray(weights, np.float32).reshape(-1))
-    gltf.animations.append(gl.Animation(
-        name=name, samplers=[gl.AnimationSampler(input=t, output=w, interpolation=gl.ANIM_LINEAR)],
-        channels=[gl.AnimationChannel(sampler=0, target=gl.AnimationChannelTarget(node=0, path=gl.WEIGHTS))]))
+    samplers = [gl.AnimationSampler(input=t, output=w, interpolation=gl.ANIM_LINEAR)]
+    mesh_node = len(gltf.nodes) - 1
+    channels = [gl.AnimationChannel(sampler=0, target=gl.AnimationChannelTarget(node=mesh_node, path=gl.WEIGHTS))]
+    if turns is not None:
+        samplers.append(gl.AnimationSampler(input=t, output=buf.accessor(turns.astype(np.float32)),
+                                            interpolation=gl.ANIM_LINEAR))
+        channels.append(gl.AnimationChannel(sampler=1, target=gl.AnimationChannelTarget(node=0, path=gl.ROTATION)))
+    gltf.animations.append(gl.Animation(name=name, samplers=samplers, channels=channels))
+
+
+def head_turns(face: FaceModel, values: np.ndarray) -> np.ndarray | None:
+    """(n, 4) unit quaternions (x, y, z, w) of the head turn of FAPs 48-50 at each frame, about
+    :data:`HEAD_CENTRE` (the deformer's own rotation, :func:`~mpeg4fa.face.motion.head_rotation`), each on
+    the side of the previous one so that interpolation takes the short way; None when the head never turns."""
+    from scipy.spatial.transform import Rotation
+
+    columns = [number - 1 for number, kind in sorted(motion.HEAD.items(), key=lambda item: _TURN_ORDER[item[1]])]
+    angles = values[:, columns] * motion.ANGLE_UNIT_RAD  # pitch, yaw, roll
+    if not np.any(angles):
+        return None
+    matrices = np.stack([motion.head_rotation(*row) for row in angles])
+    quats = Rotation.from_matrix(matrices).as_quat()
+    flips = np.cumprod(np.r_[1.0, np.sign(np.einsum("ij,ij->i", quats[1:], quats[:-1]) + 1e-12)])
+    quats *= flips[:, None]
+    return quats / np.linalg.norm(quats, axis=1, keepdims=True)
 
 
 def _check_wav(path: Path) -> None:

@@ -79,9 +79,10 @@ def _mouth_box(page, face) -> tuple[int, int, int, int]:
     return int(x0), int(top[1]), int(x1) + 1, int(bottom[1] + 1.5 * (bottom[1] - top[1])) + 1
 
 
-def _play(browser, site, face, label: str, texture: np.ndarray | None = None, points: tuple[str, ...] = ()):
+def _play(browser, site, face, label: str, texture: np.ndarray | None = None, points: tuple[str, ...] = (),
+          stream=None):
     base, root = site
-    stream = talk_stream()
+    stream = talk_stream() if stream is None else stream
     name = f"{label}.glb"
     export_glb(stream, face, root / name, animation=label.partition("-")[0], texture=texture)
     page = browser.new_page(viewport={"width": 480, "height": 480})
@@ -168,3 +169,16 @@ def test_texture_lies_as_the_renderer_lays_it(browser, site, generic_face):
         return shots["neutral"][y - 2:y + 3, x - 2:x + 3].reshape(-1, 3).mean(axis=0)
     left, right = colour_at("10.1"), colour_at("10.2")
     assert left[1] > 2 * left[0] and right[0] > 2 * right[1], (left, right)
+
+
+def test_head_turn_plays_in_three(browser, site, generic_face):
+    """Yaw (FAP 49) rising to 0.5 rad: the pivot node turns the head, and the face's pixels move sideways."""
+    stream = talk_stream()
+    stream.fap_mask[:, 48] = True
+    stream.fap_values[:, 48] = np.round(np.linspace(0, 50000, len(stream)))
+    *_, shots, _, _, _ = _play(browser, site, generic_face, "morph-turn", stream=stream)
+    def centre_x(img):
+        _, xs = np.nonzero(np.abs(img - BACKGROUND).sum(axis=2) > 12)
+        return xs.mean()
+    # OPEN_FRAME is about half way: yaw 0.25 rad, the face turned toward its left (+x, the image's right)
+    assert centre_x(shots["open"]) - centre_x(shots["neutral"]) > 4

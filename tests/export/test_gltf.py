@@ -44,8 +44,8 @@ def _check_common(gltf, result, stream, face, n_targets):
         nearest, _ = cKDTree(face.mesh.vertices[source] * MM).query(position)
         assert nearest.max() < 1e-6
     animation, = gltf.animations
-    channel, = animation.channels
-    assert channel.target.path == "weights" and channel.target.node == 0 and gltf.nodes[0].mesh == 0
+    channel = animation.channels[0]
+    assert channel.target.path == "weights" and gltf.nodes[channel.target.node].mesh == 0
     sampler = animation.samplers[channel.sampler]
     assert sampler.interpolation == "LINEAR"
     times = read_accessor(gltf, sampler.input)
@@ -242,3 +242,41 @@ def test_cli_refuses_to_overwrite_the_stream(cli, stream, tmp_path):
     code, _, err = cli("export", fap, "-o", fap, "--format", "glb")
     assert code == 2 and "would be overwritten" in err
     assert isinstance(NoFaceUnitsError("x"), MpegFaError)
+
+
+def test_head_turn_is_a_rotation_about_the_head_centre(generic_face, tmp_path):
+    """FAPs 48-50 in morph animation: the pivot node's rotation channel; a point far from the neck goes where the
+    ARKit deformer turns it."""
+    from scipy.spatial.transform import Rotation
+
+    stream = talk_stream()
+    turn = np.linspace(0, 1, len(stream))
+    for fap, peak in ((48, 40000), (49, -60000), (50, 20000)):  # pitch, yaw, roll in 1e-5 rad
+        stream.fap_mask[:, fap - 1] = True
+        stream.fap_values[:, fap - 1] = np.round(peak * turn)
+    path, result, gltf = _export(tmp_path, stream, generic_face, animation="morph")
+    assert validate(path)["issues"]["numErrors"] == 0
+    pivot, mesh_node = gltf.nodes
+    assert pivot.children == [1] and mesh_node.mesh == 0
+    assert np.allclose(pivot.translation, generic_face.mesh.fp("7.1") * MM)
+    assert np.allclose(mesh_node.translation, -generic_face.mesh.fp("7.1") * MM)
+    animation, = gltf.animations
+    rotation = [c for c in animation.channels if c.target.path == "rotation"]
+    assert len(rotation) == 1 and rotation[0].target.node == 0
+    quats = read_accessor(gltf, animation.samplers[rotation[0].sampler].output)
+    assert quats.shape == (len(stream), 4) and np.allclose(np.linalg.norm(quats, axis=1), 1, atol=1e-6)
+    assert np.all(np.einsum("ij,ij->i", quats[1:], quats[:-1]) > 0)
+    values = resolve(stream)
+    k = len(stream) - 1
+    rig = generic_face.arkit_rig
+    posed = deform_arkit(generic_face.rig, rig, values[k]).vertices
+    unturned = values[k].copy()
+    unturned[47:50] = 0
+    flat = deform_arkit(generic_face.rig, rig, unturned).vertices
+    centre = generic_face.mesh.fp("7.1")
+    for label in ("9.3", "4.1", "11.1"):  # nose tip, brow, hairline: far from the neck's fade
+        i = generic_face.mesh.fp_vertex[generic_face.mesh.fp_index(label)]
+        node = centre + Rotation.from_quat(quats[k]).apply(flat[i] - centre)
+        assert np.abs(node - posed[i]).max() < 1e-3, label
+    assert np.abs(posed[generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("9.3")]]
+                  - flat[generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("9.3")]]).max() > 20
