@@ -68,7 +68,7 @@ def test_obj_groups_per_triangle_in_file_order():
             "g teeth\nusemtl x\nf 3 5 4\ng skin\nf 2 4 5\ng eye_l\nf 1 2 3\n")
     mesh, groups = mesh_and_groups_from_obj(text)
     assert mesh == mesh_from_obj(text)
-    assert groups == ["skin", "skin", "teeth", "skin", "skin", "eye_l"]  # a quad's halves: 2nd and 4th
+    assert groups == ["skin", "skin", "skin", "teeth", "skin", "eye_l"]  # the quad's two halves: 2nd and 3rd
     assert mesh_and_groups_from_obj(text.replace("g ", "o "))[1] == groups
     assert mesh_and_groups_from_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")[1] == [""]
 
