@@ -14,13 +14,18 @@ the file's own, and refuses, at the line:column of the statement, what trimesh w
 * Texture coordinates come from a second read with the ``vt`` references: trimesh then gives one vertex
   per distinct (v, vt) pair, and its uvs are kept only when that is exactly the file's vertex list, i.e.
   every vertex is used by a face and all its corners carry the same uv (an FdpMesh has one uv per vertex).
-  A mesh whose uvs are split along seams (or that has none) is read without uvs.
+  A mesh whose uvs are split along seams (or that has none) is read without uvs, and so is one whose faces
+  use negative indices (trimesh pairs ``-2/1`` and ``3/1`` as two vertices).
 * trimesh counts a negative (relative) index back from the file's last ``v``/``vt``, not from the face's
   place; such a face above more ``v``/``vt`` lines is refused, as are index 0, a malformed ``v``/``vt``/``f``
   statement and an index out of range.
 
-Polygons are triangulated by trimesh (a fan from the first corner; a quad as (0,1,2), (2,3,0)). The
-first ``o`` names the mesh; ``vn``, ``g``, ``s``, ``l`` and other statements are ignored.
+Polygons are triangulated by trimesh (a fan from the first corner; a quad as (0,1,2), (2,3,0); in a file
+of quads only, all first halves come before all second halves). The first ``o`` names the mesh;
+:func:`mesh_and_groups_from_obj` also names each triangle's ``g`` group (or ``o`` object); ``vn``, ``s``,
+``l`` and other statements are ignored. The statement checks are regular expressions over the text (they
+locate faults; trimesh reads); a disagreement between trimesh's result and the file's counts, which the
+checks should make impossible, is reported for the whole file (trimesh gives no line).
 """
 from __future__ import annotations
 
