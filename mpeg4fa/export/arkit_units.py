@@ -8,16 +8,21 @@ mirror-symmetric unit, so the two halves sum to the whole). Here every ARKit uni
 gets one shape and one weight: a driven unit its driven shape (the two halves
 summed) and the weight the deformer gives it (the mean of its two halves', so a
 one-sided raise of a two-sided unit shows as half of it on both sides); a unit no
-FAP drives (``eyeBlinkLeft``, ``mouthClose`` ...) its sculpted shape and weight 0.
+FAP drives (``eyeLookInLeft``, ``mouthClose`` ...) its sculpted shape and weight 0.
 
 The parts the deformer takes from the feature-point layer ride along where a unit's
 FAP moves them: each driven shape also holds the lower teeth and tongue as the
 deformer moves them under the shape's FAP (the jaw
 drops with ``jawOpen``, the tongue comes out with ``tongueOut``), linear in the weight
 through the pose at weight :data:`CARRY_AT`. Left out of the ARKit deformer's pose: the correction
-that puts the skin's feature points exactly where the FAPs say, the eyes and lids
-(no FAP drives the ``eyeLook*``/``eyeBlink*`` units) and the head turn (a transform, not a shape:
-the glTF export animates it as a node's rotation).
+that puts the skin's feature points exactly where the FAPs say, the eye turns (no FAP
+drives the ``eyeLook*`` units) and the head turn (a transform, not a shape: the glTF export
+animates it as a node's rotation).
+
+The lids are the exception to "sculpted shape": the deformer turns them over the eyeball
+itself (the sculpted ``eyeBlink*`` units push them straight through it), so ``eyeBlinkLeft``
+and ``eyeBlinkRight`` are the deformer's own lid turn at the top lid FAP's (19, 20) value of
+:data:`LID_SHUT` (one IRISD0: the lid covers the iris), weighted by the FAP over that, 0..1.
 """
 from __future__ import annotations
 
@@ -29,11 +34,18 @@ from mpeg4fa.errors import MpegFaError
 from mpeg4fa.face.deformers.arkit import ArkitRig, deform_arkit, unit_weights
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.model import FaceModel
-from mpeg4fa.spec import N_FAPS
+from mpeg4fa.spec import FAP_BY_NAME, FAPU, N_FAPS
 
 
 class NoFaceUnitsError(MpegFaError):
     """The head carries no ARKit face units, so they cannot be exported or driven."""
+
+
+LID_UNITS = {"eyeBlinkLeft": FAP_BY_NAME["close_t_l_eyelid"].number,
+             "eyeBlinkRight": FAP_BY_NAME["close_t_r_eyelid"].number}
+"""The blink units and the top lid FAP that drives each."""
+LID_SHUT = float(FAPU["IRISD"].divisor)
+"""The lid FAP value (IRISD units) at which a blink unit's weight is 1: the lid moved by one IRISD0."""
 
 
 @dataclass(frozen=True)
@@ -42,11 +54,15 @@ class ArkitUnits:
     shapes: np.ndarray       # (U, V, 3) float64 vertex deltas in mm, every mesh vertex (0 off the skin)
     mixing: np.ndarray       # (U, D): driven-shape weights -> unit weights (1 or 1/2 per driven shape)
     rig: ArkitRig
+    lids: tuple[tuple[int, int], ...] = ()  # (unit, FAP column) of the blink units the lid FAPs weigh
 
     def weights(self, values: np.ndarray) -> np.ndarray:
         """(n, U) unit weights in 0..1 for (n, 68) resolved FAP rows, as the ARKit deformer drives them."""
-        driven = unit_weights(self.rig, np.atleast_2d(np.asarray(values, np.float64)).T).T  # (n, D)
-        return driven @ self.mixing.T
+        rows = np.atleast_2d(np.asarray(values, np.float64))
+        out = unit_weights(self.rig, rows.T).T @ self.mixing.T  # (n, D) driven -> (n, U)
+        for unit, column in self.lids:
+            out[:, unit] = np.clip(rows[:, column] / LID_SHUT, 0.0, 1.0)
+        return out
 
 
 def base_unit(driven: str) -> str:
@@ -84,7 +100,13 @@ def arkit_units(face: FaceModel, *, where: str | None = None) -> ArkitUnits:
     for u, name in enumerate(names):
         if not mixing[u].any():
             shapes[u] = units.dense(name, n_vertices)
-    return ArkitUnits(names=names, shapes=shapes, mixing=mixing, rig=rig)
+    lids = tuple((names.index(name), fap - 1) for name, fap in LID_UNITS.items() if name in names)
+    rest = deform_arkit(face.rig, rig, np.zeros(N_FAPS)).vertices
+    for unit, column in lids:
+        shut = np.zeros(N_FAPS)
+        shut[column] = LID_SHUT
+        shapes[unit] = deform_arkit(face.rig, rig, shut).vertices - rest
+    return ArkitUnits(names=names, shapes=shapes, mixing=mixing, rig=rig, lids=lids)
 
 
 CARRY_AT = 0.5

@@ -280,3 +280,32 @@ def test_head_turn_is_a_rotation_about_the_head_centre(generic_face, tmp_path):
         assert np.abs(node - posed[i]).max() < 1e-3, label
     assert np.abs(posed[generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("9.3")]]
                   - flat[generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("9.3")]]).max() > 20
+
+
+def test_blink_is_the_deformers_lid_turn(generic_face, tmp_path):
+    """FAP 19 (close_t_l_eyelid) weighs eyeBlinkLeft (value over one IRISD0); at weight 1 the target puts the skin
+    where the ARKit deformer turns the lid over the eyeball."""
+    from mpeg4fa.export.arkit_units import LID_SHUT
+
+    stream = talk_stream()
+    stream.fap_mask[:, 18] = True
+    stream.fap_values[:, 18] = np.round(np.linspace(0, 1.25 * LID_SHUT, len(stream)))
+    path, result, gltf = _export(tmp_path, stream, generic_face, animation="morph")
+    names = gltf.meshes[0].extras["targetNames"]
+    weights = read_accessor(gltf, gltf.animations[0].samplers[0].output).reshape(len(stream), -1)
+    values = resolve(stream)
+    blink = weights[:, names.index("eyeBlinkLeft")]
+    assert np.allclose(blink, np.clip(values[:, 18] / LID_SHUT, 0, 1), atol=1e-6) and blink[-1] == 1.0
+    assert not weights[:, names.index("eyeBlinkRight")].any()
+    skin = _targets(gltf, 0)[names.index("eyeBlinkLeft")]
+    position = read_accessor(gltf, gltf.meshes[0].primitives[0].attributes.POSITION)
+    source = _sources(generic_face, position, "skin")
+    shut = np.zeros(68)
+    shut[18] = LID_SHUT
+    rig = generic_face.arkit_rig
+    lid = deform_arkit(generic_face.rig, rig, shut).vertices[source] * MM
+    assert np.abs(position + skin - lid).max() < 1e-6
+    upper_lid = generic_face.mesh.fp("3.1") * MM
+    moved = np.linalg.norm(skin, axis=1) > 1e-4
+    assert moved.any() and np.all(position[moved, 0] > 0)  # the left lid (+x) only
+    assert np.linalg.norm(position[moved] - upper_lid, axis=1).max() < 0.03
