@@ -7,9 +7,10 @@ decoder. Two ways to bake the stream:
 * ``animation="morph"``: the head's 52 ARKit face units are the morph targets (named in
   ``mesh.extras.targetNames``, which three.js reads), and one LINEAR ``weights`` channel
   keyed at the frames' presentation times carries the weights the ARKit deformer gives
-  them (:mod:`.arkit_units`; the lower teeth and tongue ride on the jaw and tongue units).
-  The face moves as the ARKit deformer's sculpted units move it: not the feature-point
-  deformer's pose, and without its feature-point correction, eye turns and lids. The head
+  them (:mod:`.arkit_units`; the lower teeth and tongue ride on the jaw and tongue units,
+  the blink units are the deformer's lid turns). The face moves as the ARKit deformer's
+  sculpted units move it: not the feature-point deformer's pose, and without its
+  feature-point correction and eye turns. The head
   turn (FAPs 48-50) is a rotation channel on a pivot node at feature point 7.1, so the
   whole head and neck turn rigidly (the deformer fades the turn down the neck). Needs a
   head with face units (the generic head).
