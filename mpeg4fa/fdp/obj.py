@@ -247,7 +247,8 @@ def _locate_range(plain: str, counts: dict[str, int], path: str) -> None:
             if hit:
                 number, _, offset = _line_at(plain, face.start() + hit.start(1))
                 problem = (f"{what} index {written} points before the first {what}" if written < 0 else
-                           f"{what} index {written} is out of range: the file has {counts[key]} {what}s")
+                           f"{what} index {written} is out of range: the file has {counts[key]} "
+                           f"{'vertices' if key == 'v' else what + 's'}")
                 raise FdpError(path, number, offset + 1, problem, _INDEX_HINT)
 
 
