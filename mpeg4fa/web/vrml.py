@@ -1,7 +1,8 @@
 """VRML 97 meshes (``.wrl``) read by VTK's vtkVRMLImporter: one triangle mesh per Shape, Transforms applied.
 
 trimesh has no VRML reader, so VTK (pinned in pyproject.toml) parses the file; every Shape whose geometry
-is an IndexedFaceSet becomes one part (named after the Shape's DEF name when it has one), its points
+is an IndexedFaceSet becomes one part (named after the Shape's DEF name when it has one, a USE of it
+``NAME_2``...), its points
 moved by the Transforms above it and its polygons split into triangles by vtkTriangleFilter. VTK reads
 nothing but the file itself (no Inline, no texture images, no Script: checked with strace).
 
@@ -17,6 +18,7 @@ import re
 import sys
 import tempfile
 import threading
+from collections import Counter
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -51,21 +53,23 @@ def read_vrml(data: bytes, filename: str) -> list[tuple[str, np.ndarray, np.ndar
             importer.Update()
     renderer = importer.GetRenderer()
     _raise_reported(messages, filename)
-    names = {}
+    names = {}  # the geometry a DEF'd Shape's actor draws -> the DEF name (a USE'd copy draws the same one)
     for raw in _DEF_SHAPE.findall(data):
         actor = importer.GetVRMLDEFObject(raw.decode("utf-8", "replace"))
-        if actor is not None:
-            names[actor.GetAddressAsString("vtkObject")] = raw.decode("utf-8", "replace")
-    shapes = []
+        if actor is not None and actor.GetMapper() is not None and actor.GetMapper().GetInput() is not None:
+            names[actor.GetMapper().GetInput().GetAddressAsString("vtkObject")] = raw.decode("utf-8", "replace")
+    shapes, seen = [], Counter()
     actors = renderer.GetActors() if renderer is not None else None
     if actors is not None:
         actors.InitTraversal()
         for number in range(1, actors.GetNumberOfItems() + 1):
             actor = actors.GetNextActor()
-            name = names.get(actor.GetAddressAsString("vtkObject"), f"shape_{number}")
             mesh = _triangles(actor, filename, number)
-            if mesh is not None:
-                shapes.append((name, *mesh))
+            if mesh is None:
+                continue
+            name = names.get(actor.GetMapper().GetInput().GetAddressAsString("vtkObject"), f"shape_{number}")
+            seen[name] += 1
+            shapes.append((name if seen[name] == 1 else f"{name}_{seen[name]}", *mesh))
     if not shapes:
         raise EditError("the VRML file holds no IndexedFaceSet with faces", where=filename,
                         hint="each Shape needs geometry IndexedFaceSet "

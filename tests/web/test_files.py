@@ -67,7 +67,7 @@ Transform { translation 0 5 0 children [
 ] }
 """
     mesh = read_mesh(text, "eyes.vrml")
-    assert len(mesh.part_names) == 2 and mesh.part_names[0] == "eye" and len(mesh.triangles) == 2
+    assert mesh.part_names == ("eye", "eye_2") and len(mesh.triangles) == 2
     assert np.allclose(mesh.vertices, [[0, 5, 0], [3, 5, 0], [0, 8, 0], [100, 5, 0], [101, 5, 0], [100, 6, 0]])
 
 
