@@ -116,7 +116,8 @@ def main() -> None:
     for r in rows:
         warm_x = f"{r['warm_speedup']:.2f}" if r["warm_speedup"] else "-"
         print(f"{r['workers']:>7} {r['lp_num_threads']:>6} {r['wall_s']:>7.1f} {r['frames_per_s']:>8.1f} "
-              f"{r['speedup']:>8.2f} {r['first_job_s']:>9.1f} {r['warm_s']:>7.1f} {warm_x:>6} {r['cores_busy']:>10.2f}  "
+              f"{r['speedup']:>8.2f} {r['first_job_s']:>9.1f} {r['warm_s']:>7.1f} {warm_x:>6} "
+              f"{r['cores_busy']:>10.2f}  "
               f"{sorted(r['jobs_per_worker'].values())}")
     result = {"streams": args.streams, "seconds": args.seconds, "size": args.size, "face": face,
               "cores": default_workers(), "load_average": os.getloadavg(), "machine": platform.platform(),

@@ -207,7 +207,8 @@ def _render(state: _ProcessState, job: Job, outdir: Path, key: str, digests: dic
             try:
                 stream, _ = read_stream(job.stream)
             except MpegFaError as exc:  # the codec's errors name the bit, not always the file
-                raise _InStream(f"{job.stream}: {one_line(exc)}" if str(job.stream) not in str(exc) else str(exc)) from None
+                text = one_line(exc)
+                raise _InStream(text if str(job.stream) in text else f"{job.stream}: {text}") from None
             renderer, reused, renderer_key = state.renderer(job, digests)
             target.parent.mkdir(parents=True, exist_ok=True)
             o = job.options

@@ -280,7 +280,8 @@ def _csv_entries(text: str, path: Path) -> list[tuple[int, dict]]:
     except csv.Error as exc:
         raise BatchError(f"not valid CSV: {exc}", where=f"{path}:{reader.line_num}") from None
     if header is None:
-        raise BatchError("the manifest is empty", where=str(path), hint="a header row (stream,output,...) and one row a job")
+        raise BatchError("the manifest is empty", where=str(path),
+                         hint="a header row (stream,output,...) and one row a job")
     return entries
 
 
