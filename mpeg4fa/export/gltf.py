@@ -44,7 +44,7 @@ from mpeg4fa.decoded import resolve
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.export.arkit_units import arkit_units
 from mpeg4fa.export.glb_buffer import GlbBuffer
-from mpeg4fa.face import motion
+from mpeg4fa.export.gltf_motion import EYES, HEAD_CENTRE, eye_turns, head_turns
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.render.materials import Material, Materials
@@ -57,9 +57,6 @@ PART_LOOK = {"skin": "skin", "eye_l": "sclera", "eye_r": "sclera", "teeth_upper"
              "tongue": "tongue"}
 """Drawn part -> the :class:`~mpeg4fa.render.materials.Materials` entry it wears, in the renderer's order."""
 Progress = Callable[[int, int], None]
-HEAD_CENTRE = "7.1"
-"""The feature point the head turns about (the rig's ``head_fp``)."""
-_TURN_ORDER = {"pitch": 0, "yaw": 1, "roll": 2}
 
 
 class ExportError(MpegFaError):
@@ -130,18 +127,23 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     buf = GlbBuffer(gltf)
     skin_texture = _add_texture(gltf, buf, texture) if texture is not None else None
     normals = vertex_normals(rest, layout.triangles, layout.incidence)
-    primitives = [_primitive(gltf, buf, part, rest, normals, shapes, looks, skin_texture) for part in parts]
-    gltf.meshes.append(gl.Mesh(name=name, primitives=primitives, weights=[0.0] * len(names),
-                               extras={"targetNames": names}))
-    turns = head_turns(face, values) if animation == "morph" else None
-    if turns is None:
-        gltf.nodes.append(gl.Node(name=name, mesh=0))
-    else:  # the turn about the head's centre: a pivot node there, the mesh node moved back under it
-        centre = (face.mesh.fp(HEAD_CENTRE) * MM).tolist()
-        gltf.nodes.append(gl.Node(name=f"{name} head turn", translation=centre, children=[1]))
-        gltf.nodes.append(gl.Node(name=name, mesh=0, translation=[-c for c in centre]))
+
+    def mesh(mesh_name: str, members: list[_Part], targets: np.ndarray | None) -> int:
+        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, skin_texture) for part in members]
+        extra = ({"weights": [0.0] * len(names), "extras": {"targetNames": names}} if targets is not None
+                 else {"weights": None})
+        gltf.meshes.append(gl.Mesh(name=mesh_name, primitives=prims, **extra))
+        return len(gltf.meshes) - 1
+
+    if animation == "vertex":  # one mesh, every part baked
+        gltf.nodes.append(gl.Node(name=name, mesh=mesh(name, parts, shapes)))
+        channels = [(0, gl.WEIGHTS, weights)]
+    else:
+        channels = _rigid_scene(gltf, face, values, parts, name, lambda n, members, morph: mesh(
+            n, members, shapes if morph else None))
+        channels.insert(0, (1, gl.WEIGHTS, weights))
     gltf.scenes.append(gl.Scene(name=name, nodes=[0]))
-    _add_animation(gltf, buf, name, times, weights, turns)
+    _add_animation(gltf, buf, name, times, channels)
     gltf.buffers.append(gl.Buffer(byteLength=0))
     blob = buf.blob()
     gltf.buffers[0].byteLength = len(blob)
@@ -237,7 +239,7 @@ def _material(gltf: gl.GLTF2, name: str, look: Material, texture: int | None, ve
 
 
 def _primitive(gltf: gl.GLTF2, buf: GlbBuffer, part: _Part, rest: np.ndarray, normals: np.ndarray,
-               shapes: np.ndarray, looks: Materials, texture: int | None) -> gl.Primitive:
+               shapes: np.ndarray | None, looks: Materials, texture: int | None) -> gl.Primitive:
     look_name = PART_LOOK[part.name]
     names = [m.name for m in gltf.materials]
     material = names.index(look_name) if look_name in names else _material(
@@ -250,7 +252,8 @@ def _primitive(gltf: gl.GLTF2, buf: GlbBuffer, part: _Part, rest: np.ndarray, no
         attributes.TEXCOORD_0 = buf.accessor(part.uv.astype(np.float32), target=gl.ARRAY_BUFFER)
     index_type = np.uint16 if len(part.source) <= 0xFFFF else np.uint32
     indices = buf.accessor(part.indices.reshape(-1).astype(index_type), target=gl.ELEMENT_ARRAY_BUFFER)
-    targets = [gl.Attributes(POSITION=buf.morph_target(shape[part.source] * MM)) for shape in shapes]
+    targets = None if shapes is None else [gl.Attributes(POSITION=buf.morph_target(shape[part.source] * MM))
+                                           for shape in shapes]
     return gl.Primitive(attributes=attributes, indices=indices, material=material, mode=gl.TRIANGLES,
                         targets=targets, extras={"part": part.name})
 
@@ -271,37 +274,52 @@ def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray) -> int:
     return len(gltf.textures) - 1
 
 
-def _add_animation(gltf: gl.GLTF2, buf: GlbBuffer, name: str, times: np.ndarray, weights: np.ndarray,
-                   turns: np.ndarray | None) -> None:
-    """A LINEAR weights channel on the mesh's node, keyed at the frames' presentation times, and the head
-    turn's rotation channel (spherical interpolation) on its pivot node when there is one."""
+def _rigid_scene(gltf: gl.GLTF2, face: FaceModel, values: np.ndarray, parts: list[_Part], name: str,
+                 mesh) -> list[tuple[int, str, np.ndarray]]:
+    """Nodes for morph animation: a head node turning about 7.1 (node 0), the face mesh under it (node 1: the
+    morph targets), and each eyeball as its own mesh under a pivot node at its joint; the channels
+    (node, path, values per key frame) of the turns that happen."""
+    head = head_turns(face, values)
+    centre = face.mesh.fp(HEAD_CENTRE) if head is not None else np.zeros(3)
+    gltf.nodes.append(gl.Node(name=f"{name} head", translation=_metres(centre) if head is not None else None))
+    channels = [] if head is None else [(0, gl.ROTATION, head.rotations)]
+    face_parts = [p for p in parts if p.name not in EYES]
+    gltf.nodes.append(gl.Node(name=name, mesh=mesh(name, face_parts, True),
+                              translation=_metres(-centre) if head is not None else None))
+    children = [1]
+    for part in (p for p in parts if p.name in EYES):
+        eye = eye_turns(face, values, part.name)
+        pivot = len(gltf.nodes)
+        at = _metres(eye.centre - centre)
+        gltf.nodes.append(gl.Node(name=f"{name} {part.name}", translation=at, children=[pivot + 1]))
+        gltf.nodes.append(gl.Node(name=part.name, mesh=mesh(part.name, [part], False),
+                                  translation=_metres(-eye.centre)))
+        children.append(pivot)
+        if eye.rotations is not None:
+            channels.append((pivot, gl.ROTATION, eye.rotations))
+        if eye.offsets is not None:
+            channels.append((pivot, gl.TRANSLATION, np.asarray(at) + eye.offsets * MM))
+    gltf.nodes[0].children = children
+    return channels
+
+
+def _metres(point_mm: np.ndarray) -> list[float]:
+    return [float(c) * MM for c in point_mm]
+
+
+def _add_animation(gltf: gl.GLTF2, buf: GlbBuffer, name: str, times: np.ndarray,
+                   channels: list[tuple[int, str, np.ndarray]]) -> None:
+    """One animation, every channel keyed at the frames' presentation times, LINEAR (rotations: spherical)."""
     t = buf.accessor(times.astype(np.float32), bounds=True)
-    w = buf.accessor(np.ascontiguousarray(weights, np.float32).reshape(-1))
-    samplers = [gl.AnimationSampler(input=t, output=w, interpolation=gl.ANIM_LINEAR)]
-    mesh_node = len(gltf.nodes) - 1
-    channels = [gl.AnimationChannel(sampler=0, target=gl.AnimationChannelTarget(node=mesh_node, path=gl.WEIGHTS))]
-    if turns is not None:
-        samplers.append(gl.AnimationSampler(input=t, output=buf.accessor(turns.astype(np.float32)),
+    samplers, targets = [], []
+    for node, path, keyed in channels:
+        output = np.ascontiguousarray(keyed, np.float32)
+        samplers.append(gl.AnimationSampler(input=t, output=buf.accessor(output.reshape(-1) if path == gl.WEIGHTS
+                                                                          else output),
                                             interpolation=gl.ANIM_LINEAR))
-        channels.append(gl.AnimationChannel(sampler=1, target=gl.AnimationChannelTarget(node=0, path=gl.ROTATION)))
-    gltf.animations.append(gl.Animation(name=name, samplers=samplers, channels=channels))
-
-
-def head_turns(face: FaceModel, values: np.ndarray) -> np.ndarray | None:
-    """(n, 4) unit quaternions (x, y, z, w) of the head turn of FAPs 48-50 at each frame, about
-    :data:`HEAD_CENTRE` (the deformer's own rotation, :func:`~mpeg4fa.face.motion.head_rotation`), each on
-    the side of the previous one so that interpolation takes the short way; None when the head never turns."""
-    from scipy.spatial.transform import Rotation
-
-    columns = [number - 1 for number, kind in sorted(motion.HEAD.items(), key=lambda item: _TURN_ORDER[item[1]])]
-    angles = values[:, columns] * motion.ANGLE_UNIT_RAD  # pitch, yaw, roll
-    if not np.any(angles):
-        return None
-    matrices = np.stack([motion.head_rotation(*row) for row in angles])
-    quats = Rotation.from_matrix(matrices).as_quat()
-    flips = np.cumprod(np.r_[1.0, np.sign(np.einsum("ij,ij->i", quats[1:], quats[:-1]) + 1e-12)])
-    quats *= flips[:, None]
-    return quats / np.linalg.norm(quats, axis=1, keepdims=True)
+        targets.append(gl.AnimationChannel(sampler=len(samplers) - 1,
+                                           target=gl.AnimationChannelTarget(node=node, path=path)))
+    gltf.animations.append(gl.Animation(name=name, samplers=samplers, channels=targets))
 
 
 def _check_wav(path: Path) -> None:

@@ -71,3 +71,49 @@ def validate(path: Path) -> dict:
         pytest.skip("gltf-validator not installed: run tools/dev.sh test (npm ci in tools/npm)")
     done = subprocess.run([node, str(VALIDATOR), str(path)], capture_output=True, text=True, timeout=120, check=True)
     return json.loads(done.stdout)
+
+
+def _local(node: gl.Node, overrides: dict) -> np.ndarray:
+    """A node's 4x4 local matrix from translation, rotation (x, y, z, w) and scale (animated values win)."""
+    from scipy.spatial.transform import Rotation
+
+    m = np.eye(4)
+    rotation = overrides.get("rotation", node.rotation)
+    scale = node.scale or [1.0, 1.0, 1.0]
+    m[:3, :3] = (Rotation.from_quat(rotation).as_matrix() if rotation else np.eye(3)) * np.asarray(scale)
+    translation = overrides.get("translation", node.translation)
+    if translation:
+        m[:3, 3] = translation
+    return m
+
+
+def world_positions(gltf: gl.GLTF2, key: int) -> dict[str, np.ndarray]:
+    """Part -> (n, 3) world positions (metres) of its primitive's vertices at key frame ``key`` of the first
+    animation: its channels' values at that key (weights, rotations, translations) applied through the scene."""
+    animated: dict[int, dict] = {}
+    animation = gltf.animations[0]
+    for channel in animation.channels:
+        sampler = animation.samplers[channel.sampler]
+        n_keys = gltf.accessors[sampler.input].count
+        output = read_accessor(gltf, sampler.output)
+        animated.setdefault(channel.target.node, {})[channel.target.path] = output.reshape(n_keys, -1)[key].tolist()
+    out: dict[str, np.ndarray] = {}
+
+    def visit(index: int, parent: np.ndarray) -> None:
+        node = gltf.nodes[index]
+        world = parent @ _local(node, animated.get(index, {}))
+        if node.mesh is not None:
+            mesh = gltf.meshes[node.mesh]
+            weights = animated.get(index, {}).get("weights", mesh.weights or [])
+            for prim in mesh.primitives:
+                p = read_accessor(gltf, prim.attributes.POSITION).astype(np.float64)
+                for w, target in zip(weights, prim.targets or []):
+                    if w:
+                        p = p + w * read_accessor(gltf, target["POSITION"])
+                out[prim.extras["part"]] = p @ world[:3, :3].T + world[:3, 3]
+        for child in node.children or []:
+            visit(child, world)
+
+    for root in gltf.scenes[gltf.scene].nodes:
+        visit(root, np.eye(4))
+    return out

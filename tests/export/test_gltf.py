@@ -13,7 +13,7 @@ from mpeg4fa.face.deformers.arkit import deform_arkit, unit_weights
 from mpeg4fa.formats import write_fap
 from mpeg4fa.render.timing import presentation_times
 
-from export.gltf_files import OPEN_FRAME, load, read_accessor, talk_stream, validate
+from export.gltf_files import OPEN_FRAME, load, read_accessor, talk_stream, validate, world_positions
 
 
 @pytest.fixture(scope="module")
@@ -27,27 +27,33 @@ def _export(tmp_path, stream, face, **options):
     return path, result, load(path)
 
 
+def _primitives(gltf) -> dict:
+    """Part -> (mesh index, primitive), across the meshes."""
+    return {prim.extras["part"]: (m, prim) for m, mesh in enumerate(gltf.meshes) for prim in mesh.primitives}
+
+
 def _check_common(gltf, result, stream, face, n_targets):
-    mesh, = gltf.meshes
-    assert [p.extras["part"] for p in mesh.primitives] == list(PART_LOOK)
-    assert result.n_parts == len(mesh.primitives) == 6 and result.n_targets == n_targets
+    prims = _primitives(gltf)
+    assert sorted(prims) == sorted(PART_LOOK) and result.n_parts == 6 and result.n_targets == n_targets
+    animation, = gltf.animations
+    channel = animation.channels[0]
+    assert channel.target.path == "weights"
+    morphed = gltf.nodes[channel.target.node].mesh
+    mesh = gltf.meshes[morphed]
     assert len(mesh.extras["targetNames"]) == len(mesh.weights) == n_targets
-    for prim in mesh.primitives:
-        assert len(prim.targets) == n_targets
+    for part, (m, prim) in prims.items():
+        assert len(prim.targets or []) == (n_targets if m == morphed else 0)
         position = read_accessor(gltf, prim.attributes.POSITION)
         acc = gltf.accessors[prim.attributes.POSITION]
         assert acc.min == position.min(axis=0).tolist() and acc.max == position.max(axis=0).tolist()
-        source = face.mesh.part(prim.extras["part"])
         indices = read_accessor(gltf, prim.indices)
-        assert indices.max() < len(position) and len(indices) == 3 * len(face.mesh.triangles[prim.extras["part"]])
+        assert indices.max() < len(position) and len(indices) == 3 * len(face.mesh.triangles[part])
         # every vertex of the primitive is a vertex of its part, at its rest position
-        nearest, _ = cKDTree(face.mesh.vertices[source] * MM).query(position)
+        nearest, _ = cKDTree(face.mesh.vertices[face.mesh.part(part)] * MM).query(position)
         assert nearest.max() < 1e-6
-    animation, = gltf.animations
-    channel = animation.channels[0]
-    assert channel.target.path == "weights" and gltf.nodes[channel.target.node].mesh == 0
+    assert {c.target.path for c in animation.channels} <= {"weights", "rotation", "translation"}
     sampler = animation.samplers[channel.sampler]
-    assert sampler.interpolation == "LINEAR"
+    assert all(s.interpolation == "LINEAR" and s.input == sampler.input for s in animation.samplers)
     times = read_accessor(gltf, sampler.input)
     assert np.allclose(times, presentation_times(stream)) and len(times) == result.n_frames == len(stream)
     assert gltf.accessors[sampler.input].min == [float(times[0])] and gltf.accessors[sampler.input].max == [float(times[-1])]
@@ -56,9 +62,14 @@ def _check_common(gltf, result, stream, face, n_targets):
     return weights.reshape(len(times), n_targets)
 
 
-def _targets(gltf, prim_index):
-    prim = gltf.meshes[0].primitives[prim_index]
+def _targets(gltf, part):
+    _, prim = _primitives(gltf)[part]
     return np.stack([read_accessor(gltf, t["POSITION"]) for t in prim.targets])
+
+
+def _rest(gltf, part):
+    _, prim = _primitives(gltf)[part]
+    return read_accessor(gltf, prim.attributes.POSITION)
 
 
 def test_morph_targets_are_the_arkit_units_driven_as_the_deformer_drives_them(generic_face, stream, tmp_path):
@@ -81,22 +92,20 @@ def test_morph_targets_are_the_arkit_units_driven_as_the_deformer_drives_them(ge
     brow = [k for k, n in enumerate(rig.unit_names) if n.startswith("browInnerUp")]
     assert driven[-1, brow].max() > 0 and driven[-1, brow].min() == 0
     # the skin primitive's targets are the driven shapes (halves summed) at its vertices, in metres
-    skin = _targets(gltf, 0)
+    skin = _targets(gltf, "skin")
     units = arkit_units(generic_face)
-    position = read_accessor(gltf, gltf.meshes[0].primitives[0].attributes.POSITION)
+    position = _rest(gltf, "skin")
     source = _sources(generic_face, position, "skin")
     assert np.allclose(skin, (units.shapes[:, source] * MM).astype(np.float32), atol=1e-7)
-    parts = list(PART_LOOK)
-    for part in ("eye_l", "eye_r", "teeth_upper"):  # no driven unit moves them: all-zero targets, no buffer view
-        k = parts.index(part)
-        assert not _targets(gltf, k).any()
-        assert all(gltf.accessors[t["POSITION"]].bufferView is None for t in gltf.meshes[0].primitives[k].targets)
+    prims = _primitives(gltf)
+    assert not _targets(gltf, "teeth_upper").any()  # no unit moves it: all-zero targets without buffer views
+    assert all(gltf.accessors[t["POSITION"]].bufferView is None for t in prims["teeth_upper"][1].targets)
+    assert prims["eye_l"][0] != 0 and not prims["eye_l"][1].targets  # the eyes turn as nodes of their own
     # the lower teeth ride on jawOpen as the deformer's jaw carries them (a turn: nearly linear in the FAP)
-    k = parts.index("teeth_lower")
-    teeth = _targets(gltf, k)
+    teeth = _targets(gltf, "teeth_lower")
     moving = {names[u] for u in np.flatnonzero(np.abs(teeth).max(axis=(1, 2)) > 0)}
     assert "jawOpen" in moving and moving <= {"jawOpen", "jawForward", "jawLeft", "jawRight", "tongueOut"}
-    rest_teeth = read_accessor(gltf, gltf.meshes[0].primitives[k].attributes.POSITION)
+    rest_teeth = _rest(gltf, "teeth_lower")
     shown = rest_teeth + np.tensordot(weights[OPEN_FRAME], teeth, axes=1)
     posed = deform_arkit(generic_face.rig, rig, values[OPEN_FRAME]).vertices[_sources(generic_face, rest_teeth,
                                                                                        "teeth_lower")] * MM
@@ -123,15 +132,12 @@ def test_vertex_animation_is_the_face_pose_of_every_frame(procedural_face, strea
     distinct = len(np.unique(values, axis=0))
     weights = _check_common(gltf, result, stream, procedural_face, distinct)
     assert np.array_equal(weights.sum(axis=1), np.ones(len(stream))) and set(np.unique(weights)) == {0.0, 1.0}
-    for index, prim in enumerate(gltf.meshes[0].primitives):
-        position = read_accessor(gltf, prim.attributes.POSITION)
-        source = _sources(procedural_face, position, prim.extras["part"])
-        targets = _targets(gltf, index)
-        for k in (0, OPEN_FRAME, len(stream) - 1):
-            shown = position + np.tensordot(weights[k], targets, axes=1)
-            pose = procedural_face.pose_values(values[k]).vertices[source] * MM
-            assert np.abs(shown - pose).max() < 1e-6, (prim.extras["part"], k)
-    lower = _targets(gltf, list(PART_LOOK).index("teeth_lower"))
+    for k in (0, OPEN_FRAME, len(stream) - 1):
+        pose = procedural_face.pose_values(values[k]).vertices
+        for part, shown in world_positions(gltf, k).items():
+            source = _sources(procedural_face, _rest(gltf, part), part)
+            assert np.abs(shown - pose[source] * MM).max() < 1e-6, (part, k)
+    lower = _targets(gltf, "teeth_lower")
     open_target = int(np.argmax(weights[OPEN_FRAME]))
     assert np.abs(lower[open_target]).max() > 0.005  # the jaw drops the lower teeth by millimetres
     names = gltf.meshes[0].extras["targetNames"]
@@ -171,7 +177,7 @@ def test_texture_is_embedded_png_on_the_skin(procedural_face, stream, tmp_path):
     view = gltf.bufferViews[image.bufferView]
     png = gltf.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength]
     assert image.mimeType == "image/png" and np.array_equal(np.asarray(Image.open(io.BytesIO(png))), texture)
-    skin = gltf.meshes[0].primitives[0]
+    skin = _primitives(gltf)["skin"][1]
     assert gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture.index == 0
     uv = read_accessor(gltf, skin.attributes.TEXCOORD_0)
     assert uv.min() >= 0 and uv.max() <= 1
@@ -244,42 +250,49 @@ def test_cli_refuses_to_overwrite_the_stream(cli, stream, tmp_path):
     assert isinstance(NoFaceUnitsError("x"), MpegFaError)
 
 
-def test_head_turn_is_a_rotation_about_the_head_centre(generic_face, tmp_path):
-    """FAPs 48-50 in morph animation: the pivot node's rotation channel; a point far from the neck goes where the
-    ARKit deformer turns it."""
-    from scipy.spatial.transform import Rotation
-
+def test_head_and_eye_turns_are_node_rotations(generic_face, tmp_path):
+    """FAPs 48-50 (head) and 23-28 (eyeballs) in morph animation: rotation and translation channels on pivot
+    nodes; the eyes land where the ARKit deformer puts them, the face turns as the deformer turns it."""
     stream = talk_stream()
-    turn = np.linspace(0, 1, len(stream))
-    for fap, peak in ((48, 40000), (49, -60000), (50, 20000)):  # pitch, yaw, roll in 1e-5 rad
+    ramp = np.linspace(0, 1, len(stream))
+    for fap, peak in ((48, 40000), (49, -60000), (50, 20000),  # head pitch, yaw, roll in 1e-5 rad
+                      (23, 30000), (24, 30000), (25, -15000), (26, -15000), (27, 300)):  # eyes; left thrust
         stream.fap_mask[:, fap - 1] = True
-        stream.fap_values[:, fap - 1] = np.round(peak * turn)
+        stream.fap_values[:, fap - 1] = np.round(peak * ramp)
     path, result, gltf = _export(tmp_path, stream, generic_face, animation="morph")
     assert validate(path)["issues"]["numErrors"] == 0
-    pivot, mesh_node = gltf.nodes
-    assert pivot.children == [1] and mesh_node.mesh == 0
-    assert np.allclose(pivot.translation, generic_face.mesh.fp("7.1") * MM)
-    assert np.allclose(mesh_node.translation, -generic_face.mesh.fp("7.1") * MM)
+    head = gltf.nodes[0]
+    assert np.allclose(head.translation, generic_face.mesh.fp("7.1") * MM) and head.children[0] == 1
     animation, = gltf.animations
-    rotation = [c for c in animation.channels if c.target.path == "rotation"]
-    assert len(rotation) == 1 and rotation[0].target.node == 0
-    quats = read_accessor(gltf, animation.samplers[rotation[0].sampler].output)
-    assert quats.shape == (len(stream), 4) and np.allclose(np.linalg.norm(quats, axis=1), 1, atol=1e-6)
-    assert np.all(np.einsum("ij,ij->i", quats[1:], quats[:-1]) > 0)
+    paths = sorted((c.target.node, c.target.path) for c in animation.channels)
+    eye_pivots = head.children[1:]
+    assert paths == sorted([(1, "weights"), (0, "rotation")] + [(n, "rotation") for n in eye_pivots]
+                           + [(eye_pivots[0], "translation")])
+    for channel in animation.channels:
+        if channel.target.path == "rotation":
+            quats = read_accessor(gltf, animation.samplers[channel.sampler].output)
+            assert quats.shape == (len(stream), 4) and np.allclose(np.linalg.norm(quats, axis=1), 1, atol=1e-6)
+            assert np.all(np.einsum("ij,ij->i", quats[1:], quats[:-1]) > 0)
     values = resolve(stream)
-    k = len(stream) - 1
     rig = generic_face.arkit_rig
-    posed = deform_arkit(generic_face.rig, rig, values[k]).vertices
-    unturned = values[k].copy()
-    unturned[47:50] = 0
-    flat = deform_arkit(generic_face.rig, rig, unturned).vertices
-    centre = generic_face.mesh.fp("7.1")
-    for label in ("9.3", "4.1", "11.1"):  # nose tip, brow, hairline: far from the neck's fade
-        i = generic_face.mesh.fp_vertex[generic_face.mesh.fp_index(label)]
-        node = centre + Rotation.from_quat(quats[k]).apply(flat[i] - centre)
-        assert np.abs(node - posed[i]).max() < 1e-3, label
-    assert np.abs(posed[generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("9.3")]]
-                  - flat[generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("9.3")]]).max() > 20
+    for k in (0, OPEN_FRAME, len(stream) - 1):
+        shown = world_positions(gltf, k)
+        posed = deform_arkit(generic_face.rig, rig, values[k]).vertices
+        for eye in ("eye_l", "eye_r"):
+            source = _sources(generic_face, _rest(gltf, eye), eye)
+            assert np.abs(shown[eye] - posed[source] * MM).max() < 1e-6, (eye, k)
+        # the face: the unturned morph result turned about 7.1 as the deformer turns it (away from the neck)
+        unturned = values[k].copy()
+        unturned[47:50] = 0
+        flat = deform_arkit(generic_face.rig, rig, unturned).vertices
+        skin = _sources(generic_face, _rest(gltf, "skin"), "skin")
+        nose = np.flatnonzero(skin == generic_face.mesh.fp_vertex[generic_face.mesh.fp_index("9.3")])[0]
+        centre = generic_face.mesh.fp("7.1")
+        turn = posed[skin[nose]] - flat[skin[nose]]  # what the turn does to the nose tip in the deformer
+        moved = shown["skin"][nose] / MM - _rest(gltf, "skin")[nose] / MM - (
+            flat[skin[nose]] - generic_face.mesh.vertices[skin[nose]])
+        assert np.abs(moved - turn).max() < 1.0, (k, moved, turn)  # mm; the morph lacks the skin correction
+    assert np.abs(turn).max() > 20 and centre[1] > 0
 
 
 def test_blink_is_the_deformers_lid_turn(generic_face, tmp_path):
@@ -297,8 +310,8 @@ def test_blink_is_the_deformers_lid_turn(generic_face, tmp_path):
     blink = weights[:, names.index("eyeBlinkLeft")]
     assert np.allclose(blink, np.clip(values[:, 18] / LID_SHUT, 0, 1), atol=1e-6) and blink[-1] == 1.0
     assert not weights[:, names.index("eyeBlinkRight")].any()
-    skin = _targets(gltf, 0)[names.index("eyeBlinkLeft")]
-    position = read_accessor(gltf, gltf.meshes[0].primitives[0].attributes.POSITION)
+    skin = _targets(gltf, "skin")[names.index("eyeBlinkLeft")]
+    position = _rest(gltf, "skin")
     source = _sources(generic_face, position, "skin")
     shut = np.zeros(68)
     shut[18] = LID_SHUT
