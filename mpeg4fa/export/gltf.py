@@ -10,17 +10,18 @@ decoder. Two ways to bake the stream:
   them (:mod:`.arkit_units`; the lower teeth and tongue ride on the jaw and tongue units,
   the blink units are the deformer's lid turns). The face moves as the ARKit deformer's
   sculpted units move it: not the feature-point deformer's pose, and without its
-  feature-point correction and eye turns. The head
-  turn (FAPs 48-50) is a rotation channel on a pivot node at feature point 7.1, so the
-  whole head and neck turn rigidly (the deformer fades the turn down the neck). Needs a
-  head with face units (the generic head).
+  feature-point correction of the skin. The turns are node animation
+  (:mod:`.gltf_motion`): the head turns (FAPs 48-50) about feature point 7.1, rigidly with
+  its neck (the deformer fades the turn down the neck), and each eyeball, a mesh of its
+  own, about its joint. Needs a head with face units (the generic head).
 * ``animation="vertex"``: the face's own deformer poses every frame; each distinct pose is
   one morph target (all parts), and the weights channel selects pose k at frame k
   (LINEAR, so between two frames the vertices move straight from one pose to the next).
   Exact for any head and deformer; the file grows with the number of distinct poses.
 
 Geometry is in metres (the model's millimetres / 1000), y up, the face looking along +z,
-one primitive per drawn part (skin, eyes, teeth, tongue) with its material: base colours
+one primitive per drawn part (skin, eyes, teeth, tongue; in morph animation the eyes in
+meshes of their own) with its material: base colours
 of :mod:`mpeg4fa.render.materials`, the lip tint and the dark of the mouth baked into the
 skin's vertex colours (brows are the renderer's alone), iris and pupil into the eyes',
 and a skin texture (e.g. an FDP's) embedded as PNG. glTF carries no sound: the stream's
