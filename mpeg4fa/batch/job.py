@@ -16,7 +16,9 @@ what they are built from, so the jobs that share a face and image options reuse 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
+import glob
 import hashlib
 import json
 import os
@@ -29,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from mpeg4fa import __version__
-from mpeg4fa.atomic import atomic_output
+from mpeg4fa.atomic import PARTIAL_MARK, atomic_output
 from mpeg4fa.batch.manifest import PATH_OPTIONS, Job
 from mpeg4fa.errors import MpegFaError, MpegFaWarning
 
@@ -81,6 +83,22 @@ def completed(target: Path, key: str) -> dict | None:
     if not isinstance(record, dict) or record.get("key") != key or record.get("bytes") != size:
         return None
     return record
+
+
+def remove_leftovers(target: Path) -> list[Path]:
+    """Remove what a killed render of ``target`` left: its temporaries and its record's (no cleanup ran).
+
+    Only names of the form :func:`mpeg4fa.atomic.partial_path` gives ``target`` and its record
+    are touched; called when the job starts again, as then no other render of it runs.
+    """
+    removed = []
+    for path in (target, record_path(target)):
+        stem = path.name[: len(path.name) - len(path.suffix)][:100]
+        for found in path.parent.glob(f".{glob.escape(stem)}{PARTIAL_MARK}{'[0-9a-f]' * 8}{glob.escape(path.suffix)}"):
+            with contextlib.suppress(OSError):
+                found.unlink()
+                removed.append(found)
+    return removed
 
 
 def one_line(message: object) -> str:
@@ -211,6 +229,7 @@ def _render(state: _ProcessState, job: Job, outdir: Path, key: str, digests: dic
                 raise _InStream(text if str(job.stream) in text else f"{job.stream}: {text}") from None
             renderer, reused, renderer_key = state.renderer(job, digests)
             target.parent.mkdir(parents=True, exist_ok=True)
+            remove_leftovers(target)
             o = job.options
             played = play(stream, target, renderer=renderer, audio=job.audio, fps=o["fps"], fit=o["fit"],
                           writer_options={"crf": o["crf"]})

@@ -89,12 +89,16 @@ def test_renders_on_two_workers_resumes_and_renders_only_what_changed(inputs, sc
     assert [j.frames for j in again.jobs[:4]] == [25] * 4
     assert {p: p.stat().st_mtime_ns for p in out.rglob("*.mp4")} == stamps
 
+    killed = [out / ".s2.partial-0123abcd.mp4", out / "..s2.mp4.batch.partial-4567cdef.json"]
+    for path in killed:  # what a worker killed in the middle of s2 would leave
+        path.write_bytes(b"half")
     write_stream(inputs / "s2.fba", SECONDS, phase=2.5)  # new bytes for s2; a new option for s3
     changed = [*GOOD[:3], {**GOOD[3], "crf": 30}]
     third = run_batch(manifest(inputs, changed), out, scheduler=scheduler)
     assert [j.status for j in third.jobs] == ["skipped", "skipped", "rendered", "rendered"]
     assert (out / "s0.mp4").stat().st_mtime_ns == stamps[out / "s0.mp4"]
     assert (out / "s2.mp4").stat().st_mtime_ns != stamps[out / "s2.mp4"]
+    assert leftovers(out) == []
 
     # a hand-replaced output is not complete any more; nothing left to render starts no cluster
     (out / "s1.mp4").write_bytes(b"not the video")
