@@ -53,6 +53,8 @@ from mpeg4fa.render.scene import SceneLayout, build_layout, vertex_normals
 from mpeg4fa.render.timing import presentation_times
 
 ANIMATIONS = ("morph", "vertex")
+RENDER_GAMMA = 1.15
+"""The face shader's output curve (``pow(rgb, 1 / 1.15)`` in ``render/shaders/face.frag.glsl``)."""
 MM = 0.001  # model millimetres -> glTF metres
 PART_LOOK = {"skin": "skin", "eye_l": "sclera", "eye_r": "sclera", "teeth_upper": "teeth", "teeth_lower": "teeth",
              "tongue": "tongue"}
@@ -201,14 +203,22 @@ def _colours(face: FaceModel, part: str, layout: SceneLayout, mine: np.ndarray, 
     """Per-vertex linear colours, multiplied by the material's base colour (white where they are set here)."""
     n = len(mine)
     if part == "skin":
-        base = np.ones((n, 3)) if textured else np.tile(looks.skin.colour, (n, 1))
+        base = np.ones((n, 3)) if textured else np.tile(shown_colour(looks.skin.colour), (n, 1))
         if not textured:
-            base += layout.lips[mine, None] * (np.asarray(looks.lips) - base)
-        cavity = np.asarray(looks.cavity) / (1.0 if not textured else np.asarray(looks.skin.colour))
+            base += layout.lips[mine, None] * (shown_colour(looks.lips) - base)
+        cavity = shown_colour(looks.cavity) / (1.0 if not textured else shown_colour(looks.skin.colour))
         return base + layout.cavity[mine, None] * (np.minimum(cavity, 1.0) - base)
     if part in ("eye_l", "eye_r"):
         return _eye_colours(face, part, layout.source[mine], looks)
     return np.ones((n, 3))
+
+
+def shown_colour(colour) -> np.ndarray:
+    """A :mod:`~mpeg4fa.render.materials` colour as the glTF linear colour that a viewer shows as our renderer
+    does: the face shader writes ``rgb ** (1 / RENDER_GAMMA)`` straight to 8-bit pixels, a glTF viewer
+    sRGB-encodes its linear result, so the colour shown is decoded from sRGB."""
+    shown = np.asarray(colour, np.float64) ** (1.0 / RENDER_GAMMA)
+    return np.where(shown <= 0.04045, shown / 12.92, ((shown + 0.055) / 1.055) ** 2.4)
 
 
 def _eye_colours(face: FaceModel, part: str, source: np.ndarray, looks: Materials) -> np.ndarray:
@@ -225,13 +235,15 @@ def _eye_colours(face: FaceModel, part: str, source: np.ndarray, looks: Material
     pupil_r = float(face.neutral().pupil_diameter[part]) / 2.0
     colour = np.ones((len(source), 3))
     front = along > 0
-    colour[front & (across <= iris_r)] = np.asarray(looks.iris) / np.asarray(looks.sclera.colour)
-    colour[front & (across <= pupil_r)] = np.asarray(looks.pupil) / np.asarray(looks.sclera.colour)
+    sclera = shown_colour(looks.sclera.colour)
+    colour[front & (across <= iris_r)] = shown_colour(looks.iris) / sclera
+    colour[front & (across <= pupil_r)] = shown_colour(looks.pupil) / sclera
     return np.minimum(colour, 1.0)
 
 
 def _material(gltf: gl.GLTF2, name: str, look: Material, texture: int | None, vertex_coloured: bool) -> int:
-    colour = [1.0, 1.0, 1.0] if texture is not None or (vertex_coloured and name == "skin") else list(look.colour)
+    colour = ([1.0, 1.0, 1.0] if texture is not None or (vertex_coloured and name == "skin")
+              else shown_colour(look.colour).tolist())
     pbr = gl.PbrMetallicRoughness(baseColorFactor=[*map(float, colour), 1.0], metallicFactor=0.0,
                                   roughnessFactor=float(np.sqrt(2.0 / (look.shininess + 2.0))),
                                   baseColorTexture=gl.TextureInfo(index=texture) if texture is not None else None)
