@@ -58,6 +58,13 @@ def leftovers(out: Path) -> list[str]:
     return sorted(p.name for p in out.rglob("*") if PARTIAL_MARK in p.name)
 
 
+def frames(path: Path) -> list[bytes]:
+    import av
+
+    with av.open(str(path)) as container:
+        return [f.to_ndarray(format="rgb24").tobytes() for f in container.decode(video=0)]
+
+
 def by_output(summary) -> dict:
     return {j.output: j for j in summary.jobs}
 
@@ -197,6 +204,11 @@ def test_cli(cli, inputs, scheduler, tmp_path):
     assert summary["counts"] == {"rendered": 1, "skipped": 0, "failed": 1} and summary["scheduler"] == scheduler
     assert summary["jobs"][0]["frames"] == 25 and os.path.isfile(out / "two.mp4") and leftovers(out) == []
     assert stderr.count("\n") == 1 and stderr.startswith("mpeg4fa batch: error: bad.mp4 (job 1 at line 3): ")
+    # the pixels `mpeg4fa play` gives with the same options
+    code, _, stderr = cli("play", inputs / "s2.fba", "--face-mesh", inputs / "head.obj", "--face-points",
+                          inputs / "points.json", "--size", SIZE, "--no-audio", "-o", tmp_path / "played.mp4")
+    assert code == 0, stderr
+    assert frames(out / "two.mp4") == frames(tmp_path / "played.mp4")
     # the default: a local cluster made for the run (only the bad job is left to do)
     code, stdout, stderr = cli("batch", csv_path, "-o", out, "--workers", "1")
     assert code == 1 and stdout.startswith("0 rendered, 1 skipped, 1 failed in ") and " on 1 worker; " in stdout
