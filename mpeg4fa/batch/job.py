@@ -119,7 +119,6 @@ class _ProcessState:
         self.gl = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mpeg4fa-gl")
         self.faces: OrderedDict[tuple, Any] = OrderedDict()
         self.renderers: OrderedDict[tuple, Any] = OrderedDict()
-        self.jobs_done = 0
 
     def face(self, job: Job, digests: dict[str, str]):
         from mpeg4fa.cli.model import posed_face
@@ -217,7 +216,7 @@ def _render(state: _ProcessState, job: Job, outdir: Path, key: str, digests: dic
 
     started = time.perf_counter()
     target = outdir / job.output
-    done = {"pid": os.getpid(), "jobs_before": state.jobs_done}
+    done = {"pid": os.getpid()}
     renderer_key = None
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -240,7 +239,6 @@ def _render(state: _ProcessState, job: Job, outdir: Path, key: str, digests: dic
                   "finished": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
         with atomic_output(record_path(target)) as partial:
             partial.write_text(json.dumps(record, indent=1), encoding="utf-8")
-        state.jobs_done += 1
         return {**done, "status": "rendered", "frames": played.n_frames, "duration": played.duration,
                 "seconds": seconds, "renderer_reused": reused,
                 "warnings": [one_line(w.message) for w in caught if issubclass(w.category, MpegFaWarning)]}

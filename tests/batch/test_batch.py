@@ -192,7 +192,10 @@ def test_an_unreachable_scheduler_is_one_error(inputs, tmp_path, monkeypatch):
     assert caught.value.where == "tcp://127.0.0.1:9"
 
 
-def test_cli(cli, inputs, scheduler, tmp_path):
+def test_cli(cli, capsys, inputs, scheduler, tmp_path):
+    with pytest.raises(SystemExit) as caught:
+        cli("batch", "--help")
+    assert caught.value.code == 0 and "--scheduler ADDRESS" in capsys.readouterr().out
     out = tmp_path / "videos"
     csv_path = inputs / "jobs.csv"
     csv_path.write_text("stream,output,size,face_mesh,face_points\n"
