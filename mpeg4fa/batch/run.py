@@ -57,7 +57,7 @@ class BatchSummary:
     manifest: str
     outdir: str
     scheduler: str | None             # the address given, else None (a local cluster)
-    workers: int                      # worker processes the jobs ran on (0 when nothing was rendered)
+    workers: int                      # worker processes this run's jobs ran on (0 when all were skipped)
     seconds: float
     jobs: list[JobResult]
 
@@ -117,16 +117,15 @@ def run_batch(manifest: Manifest | str | os.PathLike, outdir: str | os.PathLike,
     total = len(manifest.jobs)
     if progress is not None:
         progress(len(results), total)
-    used = 0
     if todo:
         if scheduler is None:
             _generic_head_first(todo)
         with _client(scheduler, min(workers or default_workers(), len(todo))) as client:
-            used = len(client.scheduler_info().get("workers", {}))
             for job, result in _submitted(client, todo, out):
                 results[job.index] = result
                 if progress is not None:
                     progress(len(results), total)
+    used = len({r.worker for r in results.values() if r.worker is not None})
     summary = BatchSummary(str(manifest.path), str(out), scheduler, used, time.perf_counter() - started,
                            [results[j.index] for j in manifest.jobs])
     write_summary(summary, out / SUMMARY_NAME)
