@@ -113,6 +113,8 @@ def test_renders_on_two_workers_resumes_and_renders_only_what_changed(inputs, sc
     assert [j.status for j in fourth.jobs] == ["skipped", "rendered", "skipped", "skipped"]
     fifth = run_batch(manifest(inputs, changed), out, scheduler="tcp://127.0.0.1:9")  # unreachable: not needed
     assert fifth.count("skipped") == 4 and fifth.workers == 0
+    forced = run_batch(manifest(inputs, changed[2:3]), out, scheduler=scheduler, force=True)
+    assert [j.status for j in forced.jobs] == ["rendered"]
 
 
 def test_failed_jobs_leave_no_output_and_stop_no_other(inputs, scheduler, tmp_path):
@@ -171,6 +173,30 @@ def test_manifest_faults_are_all_located_at_once(inputs):
     csv_path.write_text("stream,colour\ns0.fba,red\n")
     with pytest.raises(BatchError, match="unknown column 'colour'"):
         load_manifest(csv_path)
+
+
+def test_manifest_values_are_read_as_play_reads_its_options(inputs):
+    path = inputs / "nested.json"
+    path.write_text(json.dumps({"defaults": {"crf": "23"}, "jobs": [
+        {"stream": "s0.fba", "options": {"size": [96, 64], "view": "left", "fdp_texture": "no", "fps": 50}},
+        {"stream": "s1.fba", "audio": "s0.wav", "output": "b/one.mov", "size": 128, "aa": 4, "deformer": "blocks",
+         "blocks": "lip_t,lip_b"}]}))
+    first, second = load_manifest(path).jobs
+    assert first.output == "s0.mp4" and first.stream == inputs / "s0.fba" and first.audio is None
+    assert first.options["size"] == (96, 64) and first.options["view"] == "left" and first.options["crf"] == 23
+    assert first.options["fdp_texture"] is False and first.options["fps"] == 50.0 and first.options["fit"] == "pad"
+    assert second.output == "b/one.mov" and second.audio == inputs / "s0.wav" and second.options["size"] == (128, 128)
+    assert second.options["blocks"] == ("lip_t", "lip_b") and second.options["aa"] == 4
+    path.write_text(json.dumps([{"stream": "s0.fba", "view": "left", "options": {"view": "right"}},
+                                {"stream": "s1.fba", "blocks": "lip_t"},
+                                {"stream": "s2.fba", "face_mesh": "head.obj"}]))
+    with pytest.raises(BatchError) as caught:
+        load_manifest(path)
+    assert caught.value.problems == (
+        "job 0 at line 1: 'view' is given both in the job and in its options",
+        "job 1 at line 1: blocks goes with deformer blocks, not fap",
+        "job 2 at line 1: face_mesh and face_points go together (an OBJ and its feature points, JSON label -> "
+        "vertex index or [x, y, z])")
 
 
 def test_an_output_may_not_overwrite_an_input(inputs, tmp_path):
