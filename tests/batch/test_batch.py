@@ -30,7 +30,8 @@ def scheduler():
     from distributed import LocalCluster
 
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                      silence_logs=logging.ERROR, env={"LP_NUM_THREADS": "1"}) as cluster:
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR,
+                      env={"LP_NUM_THREADS": "1"}) as cluster:
         yield cluster.scheduler_address
 
 
