@@ -15,7 +15,6 @@ what they are built from, so the jobs that share a face and image options reuse 
 """
 from __future__ import annotations
 
-import argparse
 import contextlib
 import datetime
 import glob
@@ -121,15 +120,15 @@ class _ProcessState:
         self.renderers: OrderedDict[tuple, Any] = OrderedDict()
 
     def face(self, job: Job, digests: dict[str, str]):
-        from mpeg4fa.cli.model import posed_face
+        from mpeg4fa.face.assemble import assemble_face
 
         o = job.options
         key = (digests.get("face_mesh"), digests.get("face_points"), digests.get("fdp"), o["method"], o["skull"],
                o["deformer"], o["blocks"])
         if key not in self.faces:  # the same rules as `mpeg4fa play`'s face options
-            self.faces[key] = posed_face(argparse.Namespace(
+            self.faces[key] = assemble_face(
                 fdp=job.fdp, method=o["method"], skull=o["skull"], deformer=o["deformer"], blocks=o["blocks"],
-                face_mesh=o["face_mesh"], face_points=o["face_points"]))
+                face_mesh=o["face_mesh"], face_points=o["face_points"])
             while len(self.faces) > FACES_KEPT:
                 self.faces.popitem(last=False)
         self.faces.move_to_end(key)
@@ -169,7 +168,7 @@ def _skin_texture(job: Job, face, skin: tuple | None):
     if skin is None:
         return None
     if skin[0] == "texture":
-        from mpeg4fa.cli.media import read_image
+        from mpeg4fa.render.images import read_image
         return read_image(job.options["texture"], "texture image")
     from mpeg4fa.fdp import load_fdp
     from mpeg4fa.render.fdp_texture import fdp_skin_texture

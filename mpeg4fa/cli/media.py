@@ -1,4 +1,4 @@
-"""What the rendering commands share: reading images, checking video sizes, and rendering with a progress bar."""
+"""What the rendering commands share: checking video sizes, and rendering with a progress bar."""
 from __future__ import annotations
 
 import contextlib
@@ -7,24 +7,11 @@ import warnings
 from pathlib import Path
 from typing import Iterator
 
-import numpy as np
 
 from ..errors import MpegFaWarning
 from ..render import RenderError
 from .errors import UsageError
 from .progress import ProgressBar
-
-
-def read_image(path: Path, what: str) -> np.ndarray:
-    """An image file as (H, W, 3) uint8 RGB; RenderError naming the file otherwise."""
-    from PIL import Image, UnidentifiedImageError
-    try:
-        with Image.open(path) as img:
-            return np.asarray(img.convert("RGB"))
-    except FileNotFoundError:
-        raise RenderError(f"no such {what}", where=str(path)) from None
-    except (OSError, UnidentifiedImageError, ValueError) as exc:
-        raise RenderError(f"cannot read the {what} ({exc})", where=str(path)) from None
 
 
 def check_video_size(output: Path, size: tuple[int, int]) -> None:

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..decoded import shown_values
 from ..face import FaceError, FaceModel, asset, calibrate, deformers
+from ..face.assemble import assemble_face
 from ..spec import EXPRESSION_PROFILES, FAPS, FAPU_NAMES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
 from . import options
 from .errors import UsageError
@@ -76,11 +77,7 @@ def posed_face(args: argparse.Namespace) -> FaceModel:
     """The face of ``face_options`` under the deformer of ``deformer_option``."""
     if args.blocks is not None and args.deformer != "blocks":
         raise UsageError(f"--blocks goes with --deformer blocks, not {args.deformer}")
-    options = {"regions": args.blocks} if args.blocks is not None else {}
-    face = face_from_args(args)
-    if face.deformer == "tables" and args.deformer == "fap":  # FDP case 4: the sender's tables stay
-        return face
-    return face.with_deformer(args.deformer, **options)
+    return _assembled(args, deformer=args.deformer, blocks=args.blocks)
 
 
 def _fap_value(text: str) -> tuple[int, float]:
@@ -103,39 +100,19 @@ def _expression(text: str) -> tuple[str, int]:
 
 
 def face_from_args(args: argparse.Namespace) -> FaceModel:
-    """The generic head, or ``--face-mesh`` rigged where the command has it; calibrated to ``--fdp``
-    (without --face-mesh, a case-4 FDP plays its own mesh: :func:`~mpeg4fa.face.sent.played_face`);
-    the NURBS skull if asked."""
-    mesh_face = _mesh_face(args)
-    face = mesh_face or FaceModel.default()
-    if args.fdp is not None:
-        from ..face.sent import played_face
-        from ..fdp import load_fdp
-        fdp = load_fdp(args.fdp)
-        face = face.calibrate(fdp, method=args.method) if mesh_face else played_face(fdp, method=args.method)
-    if getattr(args, "skull", "triangles") == "nurbs":
-        face = face.with_nurbs_skull()
-    return face
+    """The face of ``face_options`` (and ``--face-mesh``/``--face-points`` where the command has them),
+    with the face's own deformer: :func:`mpeg4fa.face.assemble.assemble_face`."""
+    return _assembled(args)
 
 
-def _mesh_face(args: argparse.Namespace) -> FaceModel | None:
-    """``--face-mesh OBJ --face-points JSON`` rigged (:meth:`FaceModel.from_mesh`), or None without them."""
+def _assembled(args: argparse.Namespace, **deformer) -> FaceModel:
     mesh_path, points_path = getattr(args, "face_mesh", None), getattr(args, "face_points", None)
-    if mesh_path is None:
-        if points_path is not None:
-            raise UsageError("--face-points goes with --face-mesh")
-        return None
-    if points_path is None:
+    if mesh_path is None and points_path is not None:
+        raise UsageError("--face-points goes with --face-mesh")
+    if mesh_path is not None and points_path is None:
         raise UsageError("--face-mesh needs --face-points", hint="a JSON file: label -> vertex index or [x, y, z]")
-    from ..fdp import FdpError, FdpValueError, read_obj
-    from ..fdp.build import read_points_json
-
-    mesh = read_obj(mesh_path)
-    points = read_points_json(points_path)
-    try:
-        return FaceModel.from_mesh(mesh.vertices, mesh.triangles, points, uvs=mesh.uvs, name=mesh_path.stem)
-    except FdpValueError as exc:
-        raise FdpError.no_place(str(points_path), exc.message) from None
+    return assemble_face(fdp=args.fdp, method=args.method, skull=getattr(args, "skull", "triangles"),
+                         face_mesh=mesh_path, face_points=points_path, **deformer)
 
 
 def run_install(args: argparse.Namespace) -> int:

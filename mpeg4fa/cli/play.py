@@ -11,7 +11,8 @@ from ..render.camera import VIEWS
 from ..render.video import AUDIO_WAV, writes_folder
 from . import options
 from .errors import UsageError
-from .media import check_video_size, read_image, render_with_progress, save_image
+from ..render.images import read_image
+from .media import check_video_size, render_with_progress, save_image
 from .model import deformer_option, face_options, posed_face
 from .options import Commands
 from .paths import refuse_overlaps

@@ -12,7 +12,7 @@ from ..atomic import atomic_outputs
 from ..render import RenderError
 from . import options
 from .errors import UsageError
-from .media import read_image
+from ..render.images import read_image
 from .model import face_from_args, face_options
 from .options import Commands
 from .paths import refuse_overlaps

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from .errors import ClampWarning, FapValueError
 from .limits import LOWER, UPPER, Clamped, check_finite, clamp, clamp_and_warn
-from .resolve import FrameResolver, ResolveState, explicit, resolve, shown_frame, shown_values
+from .resolve import FrameResolver, ResolveState, explicit, held_high_level, resolve, shown_frame, shown_values
 
-__all__ = ["resolve", "explicit", "shown_frame", "shown_values", "FrameResolver", "ResolveState", "clamp", "clamp_and_warn",
+__all__ = ["resolve", "explicit", "held_high_level", "shown_frame", "shown_values", "FrameResolver", "ResolveState", "clamp", "clamp_and_warn",
            "check_finite", "Clamped", "LOWER", "UPPER", "ClampWarning", "FapValueError"]

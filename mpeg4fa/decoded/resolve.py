@@ -97,10 +97,7 @@ def resolve(stream: FapStream, state: ResolveState | None = None) -> np.ndarray:
     low_level_known = (last >= 0) | state.known
     low_level_known[:, :2] = False
 
-    vis_last = np.repeat(_last_sent(mask[:, :1]), 4, axis=1)
-    exp_last = np.repeat(_last_sent(mask[:, 1:2]), 6, axis=1)
-    viseme = _held(vis_last, stream.viseme, state.viseme, np.ones(4, bool)).astype(np.int64)
-    expression = _held(exp_last, stream.expression, state.expression, np.ones(6, bool)).astype(np.int64)
+    viseme, expression = held_high_level(stream, state)
     if viseme.any() or expression.any():
         out = _over_high_level(out, low_level_known, expand_high_level(viseme, expression))
     out[:, :2] = 0.0
@@ -113,6 +110,18 @@ def resolve(stream: FapStream, state: ResolveState | None = None) -> np.ndarray:
     state.viseme, state.expression = viseme[-1].copy(), expression[-1].copy()
     state.frames += n
     return out
+
+
+def held_high_level(stream: FapStream, state: ResolveState | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(n, 4)`` FAP 1 and ``(n, 6)`` FAP 2 fields each frame shows: the last sent, held across frames that
+    do not send them (from ``state``'s, else zeros, before the first); ``state`` is not changed."""
+    state = ResolveState() if state is None else state
+    mask = stream.fap_mask.astype(bool)
+    vis_last = np.repeat(_last_sent(mask[:, :1]), 4, axis=1)
+    exp_last = np.repeat(_last_sent(mask[:, 1:2]), 6, axis=1)
+    viseme = _held(vis_last, stream.viseme, state.viseme, np.ones(4, bool)).astype(np.int64)
+    expression = _held(exp_last, stream.expression, state.expression, np.ones(6, bool)).astype(np.int64)
+    return viseme, expression
 
 
 def _interpolate(mask: np.ndarray, values: np.ndarray, group_types: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -2,6 +2,8 @@
 
 * :mod:`.weights`: per-frame ARKit-52 blend-shape weights (as the ARKit deformer drives the head)
   and Oculus/OVR-15 viseme weights, and their JSON;
+* :mod:`.gltf`: the (calibrated) head as a GLB, its parts and materials, the stream baked as ARKit-named
+  morph-target weights or per-frame vertex targets (:func:`export_glb`);
 * :mod:`.events`: Azure-style viseme events (``AudioOffset`` ticks, ``VisemeId``) at each change of
   the viseme shown, and their JSON.
 
@@ -16,5 +18,5 @@ from mpeg4fa.export.weights import (Weights, arkit_weights, oculus_weights, vise
 
 __all__ = [
     "Weights", "arkit_weights", "oculus_weights", "viseme_arkit_table", "viseme_weights", "write_weights_json",
-    "VisemeChange", "viseme_changes", "azure_events", "write_azure_json",
+    "VisemeChange", "viseme_changes", "azure_events", "write_azure_json", "GlbExport", "build_glb", "export_glb",
 ]

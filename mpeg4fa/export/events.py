@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from mpeg4fa.atomic import atomic_output
-from mpeg4fa.export.weights import _times, viseme_weights
+from mpeg4fa.export.weights import viseme_weights
+from mpeg4fa.render.timing import presentation_times
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.spec import VISEMES
 from mpeg4fa.spec.avatars import viseme_target
@@ -50,7 +51,7 @@ def viseme_changes(stream: FapStream) -> list[VisemeChange]:
     if not len(stream):
         return []
     shown = viseme_weights(stream).argmax(axis=1)
-    times = _times(stream)
+    times = presentation_times(stream)
     starts = np.r_[0, np.flatnonzero(np.diff(shown)) + 1]
     changes = [VisemeChange(float(times[k]), VISEMES[int(shown[k])].name) for k in starts]
     if shown[-1] != 0:

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deformers.feature_points import _EYE_JOINT as EYE_JOINT  # the deformer's eye pivots
+from mpeg4fa.face.deformers.feature_points import EYE_JOINT  # the deformer's eye pivots
 from mpeg4fa.face.model import FaceModel
 
 HEAD_CENTRE = "7.1"

@@ -40,9 +40,9 @@ import numpy as np
 from scipy.optimize import nnls
 
 from mpeg4fa.atomic import atomic_output
-from mpeg4fa.decoded import resolve
-from mpeg4fa.decoded.resolve import _held, _last_sent  # the decoder's hold rule, applied to FAP 1's fields
+from mpeg4fa.decoded import held_high_level, resolve
 from mpeg4fa.fba.stream import FapStream
+from mpeg4fa.render.timing import presentation_times
 from mpeg4fa.spec import FAP_BY_NAME, FAPU, FULL_INTENSITY, VISEMES
 from mpeg4fa.spec.avatars import ARKIT_BLENDSHAPES, OCULUS_VISEMES
 from mpeg4fa.spec.errors import SpecError
@@ -75,16 +75,10 @@ class Weights:
     fps: float
 
 
-def _times(stream: FapStream) -> np.ndarray:
-    from mpeg4fa.render.timing import presentation_times
-    return presentation_times(stream)
-
-
 def _fap1_weights(stream: FapStream) -> np.ndarray:
     """(n, 15) MPEG-4 viseme weights from FAP 1's fields as the decoder holds them."""
     n = len(stream)
-    last = np.repeat(_last_sent(stream.fap_mask[:, :1].astype(bool)), 4, axis=1)
-    fields = _held(last, stream.viseme, np.zeros(4), np.ones(4, bool)).astype(np.int64)
+    fields = held_high_level(stream)[0]
     bad = np.flatnonzero((fields[:, :2] < 0).any(axis=1) | (fields[:, :2] >= len(_MPEG4_NAMES)).any(axis=1))
     if len(bad):
         k = int(bad[0])
@@ -129,7 +123,7 @@ def viseme_weights(stream: FapStream, values: np.ndarray | None = None) -> np.nd
 def oculus_weights(stream: FapStream, fps: float | None = None) -> Weights:
     """The 15 OVR visemes' weights per frame (``fps``: resampled to that rate, else the stream's frames)."""
     w = viseme_weights(stream)[:, _OVR_ORDER]
-    return _resampled(Weights("oculus", OCULUS_NAMES, _times(stream), w, stream.fps), stream, fps)
+    return _resampled(Weights("oculus", OCULUS_NAMES, presentation_times(stream), w, stream.fps), stream, fps)
 
 
 def arkit_weights(stream: FapStream, face, fps: float | None = None) -> Weights:
@@ -148,7 +142,7 @@ def arkit_weights(stream: FapStream, face, fps: float | None = None) -> Weights:
         out[:, [ARKIT_BLENDSHAPES.index(n) for n in units.names]] = units.weights(values)
     for name, column in _LIDS.items():
         out[:, ARKIT_BLENDSHAPES.index(name)] = np.clip(values[:, column] / _LID_SHUT, 0.0, 1.0)
-    return _resampled(Weights("arkit", ARKIT_BLENDSHAPES, _times(stream), out, stream.fps), stream, fps)
+    return _resampled(Weights("arkit", ARKIT_BLENDSHAPES, presentation_times(stream), out, stream.fps), stream, fps)
 
 
 def viseme_arkit_table(face) -> dict[tuple[str, str], np.ndarray]:

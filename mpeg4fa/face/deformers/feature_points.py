@@ -15,7 +15,7 @@ from mpeg4fa.face.lids import turn_lid
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.rig import Rig
 
-_EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
+EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
 _JAW_FAP = {kind: fap for fap, kind in motion.JAW.items()}  # "open" -> 3, "thrust" -> 14, "shift" -> 15
 
 
@@ -70,7 +70,7 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[n
         _rotate_rows(p, rows, w, pivot, motion.rotation_matrix(0, angle), offset)
 
     pupils = {}
-    for eye, joint in _EYE_JOINT.items():
+    for eye, joint in EYE_JOINT.items():
         faps = {kind: f for f, (e, kind) in motion.EYE_ROTATION.items() if e == eye}
         yaw, pitch = v[faps["yaw"] - 1] * motion.ANGLE_UNIT_RAD, v[faps["pitch"] - 1] * motion.ANGLE_UNIT_RAD
         thrust_fap = next(f for f, e in motion.EYE_THRUST.items() if e == eye)
