@@ -6,29 +6,27 @@ the parsed arguments and does its work through a library call in :mod:`mpeg4fa.e
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Callable
 
 from . import options
 from .errors import UsageError
+from .media import audio_beside, skin_texture
 from .model import deformer_option, face_options, posed_face
 from .options import Commands
 from .paths import refuse_overlaps, same_file
 
-AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
 
 
 def _write_glb(args: argparse.Namespace) -> str:
     """The head (calibrated to --fdp) as GLB, the stream baked as ARKit morph weights or per-frame vertices."""
     from ..export.gltf import export_glb
     from ..formats import read_stream
-    from .play import _skin_texture
     from .progress import ProgressBar
 
     stream, _ = read_stream(args.stream)
     face = posed_face(args)
-    audio = _audio_for(args)
+    audio = audio_beside(args)
     wav_out = args.output.with_suffix(".wav") if audio is not None else None
     if wav_out is not None and same_file(audio, wav_out):
         wav_out = None  # the speech is already beside the GLB under its name
@@ -37,7 +35,7 @@ def _write_glb(args: argparse.Namespace) -> str:
     bar = ProgressBar("posing", unit="poses")
     try:
         result = export_glb(stream, face, args.output, animation=args.animation, audio=audio,
-                            texture=_skin_texture(args, face), progress=bar)
+                            texture=skin_texture(args, face), progress=bar)
     finally:
         bar.close()
     extra = f"; speech: {result.audio}" if result.audio else ""
@@ -131,17 +129,6 @@ def _format_of(args: argparse.Namespace) -> str:
     known = ", ".join(s for suffixes, _ in FORMATS.values() for s in suffixes)
     raise UsageError(f"-o {args.output}: no export format for suffix {suffix or '(none)'!r}",
                      hint=f"name the output with one of {known}, or give --format")
-
-
-def _audio_for(args: argparse.Namespace) -> Path | None:
-    if args.audio is not None or args.no_audio:
-        return args.audio
-    for suffix in AUDIO_SUFFIXES:
-        candidate = args.stream.with_suffix(suffix)
-        if candidate.is_file():
-            print(f"audio: {candidate} (found beside the stream; --no-audio to leave it out)", file=sys.stderr)
-            return candidate
-    return None
 
 
 def run_export(args: argparse.Namespace) -> int:

@@ -1,6 +1,8 @@
-"""What the rendering commands share: checking video sizes, and rendering with a progress bar."""
+"""What the rendering commands share: the skin texture and speech they find, checking video sizes, and rendering
+with a progress bar."""
 from __future__ import annotations
 
+import argparse
 import contextlib
 import sys
 import warnings
@@ -10,6 +12,7 @@ from typing import Iterator
 
 from ..errors import MpegFaWarning
 from ..render import RenderError
+from ..render.images import read_image
 from .errors import UsageError
 from .progress import ProgressBar
 
@@ -60,3 +63,36 @@ def save_image(image, path: Path) -> None:
             image.save(partial)
     except (OSError, ValueError) as exc:
         raise RenderError(f"cannot write the image ({exc})", where=str(path)) from None
+
+
+AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
+
+
+def skin_texture(args: argparse.Namespace, face):
+    """--texture, else the texture the FDP carries (mapped through its points' texture coordinates), else None."""
+    if args.texture is not None:
+        return read_image(args.texture, "texture image")
+    if args.fdp is None or args.no_fdp_texture:
+        return None
+    from ..fdp import load_fdp
+    from ..render.fdp_texture import fdp_skin_texture
+
+    sent = fdp_skin_texture(face.mesh, load_fdp(args.fdp), source=str(args.fdp))
+    if sent is None:
+        return None
+    width, height = sent.map.size
+    print(f"texture: {sent.name} ({width}x{height}) from {args.fdp}, mapped through {len(sent.map.labels)} feature "
+          f"points onto {sent.coverage:.0%} of the skin (--no-fdp-texture to leave it out)", file=sys.stderr)
+    return sent.image
+
+
+def audio_beside(args: argparse.Namespace) -> Path | None:
+    """--audio, else nothing with --no-audio, else a WAV beside the stream (said on stderr), else None."""
+    if args.audio is not None or args.no_audio:
+        return args.audio
+    for suffix in AUDIO_SUFFIXES:
+        candidate = args.stream.with_suffix(suffix)
+        if candidate.is_file():
+            print(f"audio: {candidate} (found beside the stream; --no-audio to leave it out)", file=sys.stderr)
+            return candidate
+    return None

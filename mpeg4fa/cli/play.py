@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from ..formats import read_stream
@@ -11,13 +10,11 @@ from ..render.camera import VIEWS
 from ..render.video import AUDIO_WAV, writes_folder
 from . import options
 from .errors import UsageError
-from ..render.images import read_image
-from .media import check_video_size, render_with_progress, save_image
+from .media import audio_beside, check_video_size, render_with_progress, save_image, skin_texture
 from .model import deformer_option, face_options, posed_face
 from .options import Commands
 from .paths import refuse_overlaps
 
-AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
 
 
 def register(commands: Commands) -> None:
@@ -83,39 +80,10 @@ def _render_options(p: argparse.ArgumentParser) -> None:
 
 def _renderer_options(args: argparse.Namespace, face) -> dict:
     chosen = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
-    texture = _skin_texture(args, face)
+    texture = skin_texture(args, face)
     if texture is not None:
         chosen["texture"] = texture
     return chosen
-
-
-def _skin_texture(args: argparse.Namespace, face):
-    """--texture, else the texture the FDP carries (mapped through its points' texture coordinates), else None."""
-    if args.texture is not None:
-        return read_image(args.texture, "texture image")
-    if args.fdp is None or args.no_fdp_texture:
-        return None
-    from ..fdp import load_fdp
-    from ..render.fdp_texture import fdp_skin_texture
-
-    sent = fdp_skin_texture(face.mesh, load_fdp(args.fdp), source=str(args.fdp))
-    if sent is None:
-        return None
-    width, height = sent.map.size
-    print(f"texture: {sent.name} ({width}x{height}) from {args.fdp}, mapped through {len(sent.map.labels)} feature "
-          f"points onto {sent.coverage:.0%} of the skin (--no-fdp-texture to leave it out)", file=sys.stderr)
-    return sent.image
-
-
-def _audio_for(args: argparse.Namespace) -> Path | None:
-    if args.audio is not None or args.no_audio:
-        return args.audio
-    for suffix in AUDIO_SUFFIXES:
-        candidate = args.stream.with_suffix(suffix)
-        if candidate.is_file():
-            print(f"audio: {candidate} (found beside the stream; --no-audio to leave it out)", file=sys.stderr)
-            return candidate
-    return None
 
 
 def run_play(args: argparse.Namespace) -> int:
@@ -123,7 +91,7 @@ def run_play(args: argparse.Namespace) -> int:
 
     if args.output is None and not args.show:
         raise UsageError("say where the frames go", hint="-o OUT.mp4, -o FOLDER for PNG frames, or --show")
-    audio = _audio_for(args) if args.output is not None else None
+    audio = audio_beside(args) if args.output is not None else None
     if args.output is not None:
         inputs = {"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture,
                   "--face-mesh": args.face_mesh, "--face-points": args.face_points}
