@@ -14,9 +14,7 @@ lives on the main thread, which Playwright holds.
 from __future__ import annotations
 
 import io
-import os
 import shutil
-import socket
 import subprocess
 import sys
 import textwrap
@@ -26,11 +24,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from e2e.test_editor_browser import ARGS, CHROMIUM
+from e2e.browser import ARGS, CHROMIUM, free_port, require_browser
 
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed (pip install playwright==1.65.2)")
-if not os.access(CHROMIUM, os.X_OK):
-    pytest.skip(f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium)", allow_module_level=True)
+
+sync_api = require_browser()
 
 import httpx  # noqa: E402
 from PIL import Image  # noqa: E402
@@ -53,12 +50,6 @@ SERVER = textwrap.dedent("""
     app = create_app(out_dir=sys.argv[2], head=FaceModel(build_procedural_head()))
     uvicorn.run(app, host="127.0.0.1", port=int(sys.argv[3]), log_level="warning", lifespan="off")
 """)
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.fixture(scope="module")

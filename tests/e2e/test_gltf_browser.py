@@ -11,7 +11,6 @@ Morph animation runs on the generic head (skips when it is not built), vertex an
 from __future__ import annotations
 
 import functools
-import os
 import shutil
 import threading
 from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
@@ -20,9 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--no-sandbox", "--disable-gpu", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"]
+from e2e.browser import ARGS, CHROMIUM, require_browser
+
 ROOT = Path(__file__).resolve().parents[2]
 ARTEFACTS = ROOT / "test-artifacts" / "gltf"
 THREE = ROOT / "mpeg4fa" / "web" / "static" / "vendor" / "three"
@@ -31,9 +29,7 @@ BACKGROUND = 0x20
 DARK = 45  # luma below this: the mouth's cavity (the lit skin, lips and teeth are far brighter)
 TEETH_MIN, TEETH_SPREAD = 150, 40  # teeth: every channel above this, channels within this of each other
 
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed (pip install playwright==1.65.2)")
-if not os.access(CHROMIUM, os.X_OK):
-    pytest.skip(f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium)", allow_module_level=True)
+sync_api = require_browser()
 
 from PIL import Image  # noqa: E402
 

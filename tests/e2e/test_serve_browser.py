@@ -9,25 +9,20 @@ audio output runs it) and shows the face. Screenshots go to ``test-artifacts/ser
 """
 from __future__ import annotations
 
-import os
 import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--no-sandbox", "--disable-gpu", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run",
-        "--autoplay-policy=no-user-gesture-required"]
+from e2e.browser import ARGS, CHROMIUM, require_browser
+
 ARTEFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "serve"
 BACKGROUND = (0x2B, 0x2F, 0x36)
 TEXT = "(joy, 40, 0.5) Hello there. Open wide, and say ah. Thank you!"
 
-sync_api = pytest.importorskip("playwright.sync_api",
-                               reason="playwright not installed (pip install playwright==1.65.2)")
-if not os.access(CHROMIUM, os.X_OK):
-    pytest.skip(f"{CHROMIUM} not found: install Debian's chromium (apt-get install chromium)", allow_module_level=True)
+sync_api = require_browser()
+ARGS = ARGS + ["--autoplay-policy=no-user-gesture-required"]  # the page plays speech unprompted
 
 from PIL import Image  # noqa: E402
 
