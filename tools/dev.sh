@@ -4,7 +4,8 @@
 #                       build the generic head and pose it)
 #   tools/dev.sh test   install what is missing, then run the test suite
 # Installing is idempotent: Debian packages only when missing (python3 and venv; Mesa's EGL and
-# GL for headless rendering; for the tests, Chromium, which the editor's browser tests drive), the virtual environment in .venv, the project and its pinned
+# GL for headless rendering; for the tests, Chromium, which the browser tests drive, and Node.js/npm for
+# the glTF validator, pinned in tools/npm), the virtual environment in .venv, the project and its pinned
 # dependencies (pyproject.toml) into it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -53,11 +54,14 @@ ensure_browser() {
 ensure_npm_tools() {
     # node tools the tests run (the Khronos glTF validator), pinned in tools/npm/package-lock.json;
     # without node or network their tests skip, saying so
+    if ! command -v npm >/dev/null; then
+        echo "installing Debian's nodejs and npm for the glTF validator..." >&2
+        { as_root apt-get update -qq && as_root apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null; } \
+            || echo "warning: npm not installed; the glTF validator tests will skip" >&2
+    fi
     if command -v npm >/dev/null; then
         [ -d tools/npm/node_modules/gltf-validator ] || (cd tools/npm && npm ci --no-audit --no-fund --silent) \
             || echo "warning: npm tools not installed; the glTF validator tests will skip" >&2
-    else
-        echo "warning: npm not found; the glTF validator tests will skip" >&2
     fi
 }
 
