@@ -35,31 +35,28 @@ What this module chooses:
 * the writer writes 186-entry masks (VREng reads them) unless an extension BAP is sent, then 296.
 
 The reader is lenient about layout and strict about numbers, as :mod:`mpeg4fa.formats.fap_text`
-is (the same line reader: CRLF, trailing spaces, ``#`` comments, a BOM, the same limits on line
-length, frame rate, frame numbers and int32 values): every problem is one :class:`FormatError` at
-``path:line:column``. A ``.bap`` stream has body frames only (object mask 2); a face and a body
-file are joined by :func:`merge_face_body` and a stream split by :func:`split_face_body`.
+is (the same grammar, :mod:`mpeg4fa.formats.masked_text`: CRLF, trailing spaces, ``#`` comments,
+a BOM, the same limits on line length, frame rate, frame numbers and int32 values): every problem
+is one :class:`FormatError` at ``path:line:column``. A ``.bap`` stream has body frames only (object
+mask 2); a face and a body file are joined by :func:`merge_face_body` and a stream split by
+:func:`split_face_body`.
 """
 from __future__ import annotations
 
-import os
 import warnings
-from array import array
 from dataclasses import replace
-from pathlib import Path
 from typing import Iterator, NamedTuple, cast
 
 import numpy as np
 
-from mpeg4fa.fba.limits import fps_problem, frame_limit
 from mpeg4fa.fba.stacking import StreamBuilder, no_body
 from mpeg4fa.fba.stream import BODY, FACE, N_BAPS, FapStream
 from mpeg4fa.formats.errors import FormatError, FormatWarning
-from mpeg4fa.formats.fap_text import (
-    INT32_MAX, INT32_MIN, MAX_LINE_CHARS, Source, Target, _fps, _frame_numbers, _integer, _Line,
-    _LineReader, _open_source, _short, _stream_label,
-)
 from mpeg4fa.formats.fap_text import SUPPORTED_VERSIONS as FAP_VERSIONS
+from mpeg4fa.formats.masked_text import (
+    Dialect, Header, Line, Source, Target, build_stream, check_version, frame_number, frame_numbers, frame_text,
+    frame_values, header_name, header_text, mask_entries, mask_text, parse, stream_fps, target_label, write_lines,
+)
 from mpeg4fa.spec import N_ISO_BAPS
 
 SUPPORTED_VERSIONS = ("3.1", "3.2")
@@ -69,13 +66,10 @@ MASK_WIDTHS = (N_ISO_BAPS, N_BAPS)
 """Entries a mask line may have: the ISO BAPs (VREng's files), or all of them with the extension BAPs."""
 
 
-class BapHeader(NamedTuple):
-    """The header line. ``n_frames`` is what the writer claimed; readers do not rely on it."""
+class BapHeader(Header):
+    """A ``.bap`` header line (:class:`~mpeg4fa.formats.masked_text.Header`); readers do not rely on ``n_frames``."""
 
-    version: str
-    name: str
-    fps: float
-    n_frames: int
+    __slots__ = ()
 
 
 class BapRecord(NamedTuple):
@@ -86,114 +80,41 @@ class BapRecord(NamedTuple):
     values: np.ndarray  # (296,) int32, zero where not masked
 
 
-class _BapLineReader(_LineReader):
-    """The ``.fap`` line reader, its messages about ``.bap`` files."""
-
-    def _check_text(self, text: str) -> None:
-        if len(text) > MAX_LINE_CHARS:
-            raise FormatError(self.path, self.count, None, f"line is longer than {MAX_LINE_CHARS:,} characters",
-                              "a .bap line holds the header, a mask or one frame; is this a .bap file?")
-        nul = text.find("\x00")
-        if nul >= 0:
-            raise FormatError(self.path, self.count, nul + 1, "NUL byte: this is not a text .bap file",
-                              "an .fba stream is read by decode() or read_stream(); UTF-16 text must be saved "
-                              "as UTF-8")
-
-
 # ---- reading ------------------------------------------------------------------------
 
 
-def _parse_header(line: _Line, path: str) -> BapHeader:
-    tokens = line.tokens
-    if tokens[0] not in SUPPORTED_VERSIONS:
-        hint = (f"version {tokens[0]} is a .fap (face) file: read it with read_fap"
-                if tokens[0] in FAP_VERSIONS else
-                f"the first line must be the header '<version> <name> <fps> <number_of_frames>' "
-                f"with version one of {', '.join(SUPPORTED_VERSIONS)}")
-        raise FormatError(path, line.number, line.column(0), f"unsupported .bap version {_short(tokens[0])!r}", hint)
-    if len(tokens) < 4:
-        raise FormatError(path, line.number, line.column(len(tokens)),
-                          f"the header has {len(tokens)} fields, expected 4",
-                          "write '<version> <name> <fps> <number_of_frames>', e.g. '3.1 wave.bap 25 108'")
-    fps = _fps(line, len(tokens) - 2, path)
-    n_frames = _integer(line, len(tokens) - 1, path, "frame count", 0, INT32_MAX,
-                        "the last header field is the number of frames, a whole number")
-    return BapHeader(tokens[0], line.span_text(1, len(tokens) - 3), fps, n_frames)
-
-
-def _parse_mask(line: _Line, path: str) -> np.ndarray:
-    tokens = line.tokens
-    for i, token in enumerate(tokens):
-        if token != "0" and token != "1":
-            raise FormatError(path, line.number, line.column(i),
-                              f"mask entry {i + 1} is {_short(token)!r}, expected 0 or 1",
-                              "a mask line has one 0/1 per BAP; check that mask and frame lines alternate")
-    if len(tokens) not in MASK_WIDTHS:
+def _parse_mask(line: Line, path: str) -> np.ndarray:
+    entries = mask_entries(line, path, "BAP")
+    if len(entries) not in MASK_WIDTHS:
         # past the end of a short line, else at the first entry beyond the nearest width below
-        column = line.column(max([w for w in MASK_WIDTHS if w < len(tokens)], default=len(tokens)))
+        column = line.column(max([w for w in MASK_WIDTHS if w < len(entries)], default=len(entries)))
         raise FormatError(path, line.number, column,
-                          f"the mask line has {len(tokens)} entries, expected {N_ISO_BAPS} or {N_BAPS}",
+                          f"the mask line has {len(entries)} entries, expected {N_ISO_BAPS} or {N_BAPS}",
                           f"give one 0/1 for each of BAPs 1..{N_ISO_BAPS} (as VREng writes) or 1..{N_BAPS} "
                           "(with the extension BAPs)")
     mask = np.zeros(N_BAPS, dtype=bool)
-    mask[:len(tokens)] = [t == "1" for t in tokens]
+    mask[:len(entries)] = entries
     return mask
 
 
-def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int, path: str, fps: float,
+def _parse_frame(line: Line, mask: np.ndarray, mask_line: Line, previous: int, path: str, fps: float,
                  limit: int) -> BapRecord:
-    number = _integer(line, 0, path, "frame number", 0, INT32_MAX,
-                      "a frame line starts with its frame number, a whole number >= 0")
-    if number >= limit:
-        raise FormatError(path, line.number, line.column(0),
-                          f"frame number {number:,} lies {number / fps / 3600:,.1f} h into the stream at {fps:g} fps, "
-                          "past the span a stream may have",
-                          f"frame numbers run below {limit:,} at {fps:g} fps; renumber the frames or split the file")
-    if number <= previous:
-        raise FormatError(path, line.number, line.column(0),
-                          f"frame number {number} does not increase (the previous frame is {previous})",
-                          "frame numbers must increase; renumber the frames or remove the duplicate")
-    expected = int(mask.sum())
-    got = len(line.tokens) - 1
-    if got != expected:
-        raise FormatError(path, line.number, line.column(min(got, expected) + 1),
-                          f"frame {number} has {got} values, expected {expected} for the mask at line "
-                          f"{mask_line.number}",
-                          "give one whole number per masked BAP, in BAP order")
+    number = frame_number(line, path, previous, fps, limit, past="past the span a stream may have")
     values = np.zeros(N_BAPS, dtype=np.int32)
-    values[mask] = [_integer(line, i, path, "value", INT32_MIN, INT32_MAX,
-                             "BAP values are whole numbers in BAP units (angles 1e-5 rad)")
-                    for i in range(1, got + 1)]
+    values[mask] = frame_values(line, path, number, int(mask.sum()), mask_line,
+                                "give one whole number per masked BAP, in BAP order",
+                                "BAP values are whole numbers in BAP units (angles 1e-5 rad)")
     return BapRecord(number, mask, values)
 
 
-def _parse(source: Source, name: str | None) -> Iterator[BapHeader | BapRecord]:
-    """The one parser: yields the header, then one record per frame, reading line by line."""
-    with _open_source(source, name) as (handle, path):
-        lines = _BapLineReader(handle, path)
-        header_line = lines.next()
-        if header_line is None:
-            raise lines.error_at_end("the file has no header",
-                                     "start with '<version> <name> <fps> <number_of_frames>', e.g. '3.1 a.bap 25 0'")
-        header = _parse_header(header_line, path)
-        limit = frame_limit(header.fps)
-        yield header
-        previous = -1
-        while (mask_line := lines.next()) is not None:
-            mask = _parse_mask(mask_line, path)
-            frame_line = lines.next()
-            if frame_line is None:
-                raise lines.error_at_end(f"the file ends after the mask line at line {mask_line.number}",
-                                         "add its frame line (frame number, then the masked values) "
-                                         "or delete the mask line")
-            record = _parse_frame(frame_line, mask, mask_line, previous, path, header.fps, limit)
-            previous = record.frame_number
-            yield record
+_BAP = Dialect(suffix=".bap", versions=SUPPORTED_VERSIONS, default_version="3.1", example_name="wave.bap",
+               header=BapHeader, mask=_parse_mask, frame=_parse_frame, other_versions=FAP_VERSIONS,
+               other_hint="version {version} is a .fap (face) file: read it with read_fap")
 
 
 def read_bap_header(source: Source, *, name: str | None = None) -> BapHeader:
     """The header line alone (version, name, fps, claimed frame count), checked; the frames are not read."""
-    records = _parse(source, name)
+    records = parse(source, name, _BAP)
     try:
         return cast(BapHeader, next(records))
     finally:
@@ -205,9 +126,18 @@ def iter_bap(source: Source, *, name: str | None = None) -> Iterator[BapRecord]:
 
     The header is checked first; ``name`` replaces the path in error messages.
     """
-    records = _parse(source, name)
+    records = parse(source, name, _BAP)
     next(records)  # the header
     yield from records  # type: ignore[misc]
+
+
+_NO_FACE = FapStream.empty(1)  # the face rows of a body-only frame: nothing sent
+
+
+def _add_body(builder: StreamBuilder, record: BapRecord, timestamp: float) -> None:
+    builder.add(fap_mask=_NO_FACE.fap_mask[0], fap_values=_NO_FACE.fap_values[0], viseme=_NO_FACE.viseme[0],
+                expression=_NO_FACE.expression[0], timestamp=timestamp, object_mask=BODY,
+                bap_mask=record.mask, bap_values=record.values)
 
 
 def read_bap(source: Source, *, name: str | None = None) -> FapStream:
@@ -216,22 +146,9 @@ def read_bap(source: Source, *, name: str | None = None) -> FapStream:
     Gaps in the frame numbers become ``skip`` on the frame before the gap; timestamps are
     ``frame_number / fps``. The header's frame count is not trusted.
     """
-    records = _parse(source, name)
+    records = parse(source, name, _BAP)
     header = cast(BapHeader, next(records))
-    builder = StreamBuilder()
-    numbers = array("q")
-    no_face = FapStream.empty(1)  # the face rows of every frame: nothing sent
-    for record in cast("Iterator[BapRecord]", records):
-        numbers.append(record.frame_number)
-        builder.add(fap_mask=no_face.fap_mask[0], fap_values=no_face.fap_values[0], viseme=no_face.viseme[0],
-                    expression=no_face.expression[0],
-                    timestamp=record.frame_number / header.fps, object_mask=BODY,
-                    bap_mask=record.mask, bap_values=record.values)
-    stream = builder.build()
-    stream.source_fps = header.fps
-    if len(numbers) > 1:
-        stream.skip[:-1] = np.diff(np.frombuffer(numbers, dtype=np.int64)) - 1
-    return stream
+    return build_stream(cast("Iterator[BapRecord]", records), header.fps, _add_body)
 
 
 # ---- writing ------------------------------------------------------------------------
@@ -247,34 +164,19 @@ def write_bap(stream: FapStream, target: Target, *, name: str | None = None, ver
     no place in the format: they are dropped with a :class:`FormatWarning`. Everything is checked
     before the first byte is written, so a bad stream leaves no partial file.
     """
-    label = os.fsdecode(target) if isinstance(target, (str, bytes, os.PathLike)) else _stream_label(target)
-    if version not in SUPPORTED_VERSIONS:
-        raise FormatError(label, 1, 1, f"cannot write .bap version {version!r}",
-                          f"use one of {', '.join(SUPPORTED_VERSIONS)}")
-    fps = float(stream.fps)
-    problem = fps_problem(fps)
-    if problem is not None:
-        raise FormatError(label, 1, None, problem, "set stream.source_fps (or an intra frame rate) to the real rate")
-    numbers = _frame_numbers(stream, label, fps)
+    label = target_label(target)
+    check_version(label, ".bap", SUPPORTED_VERSIONS, version)
+    fps = stream_fps(stream, label)
+    numbers = frame_numbers(stream, label, fps)
     body = np.flatnonzero(np.asarray(stream.object_mask) & BODY)
     masks = np.asarray(stream.bap_mask[body], dtype=bool)
     width = _mask_width(masks, width, label)
-    clean = (name if name is not None else (Path(label).name if label != "<stream>" else "") or "stream.bap").strip()
-    if not clean or "\n" in clean or "\r" in clean:
-        raise FormatError(label, 1, None, f"header name {clean!r} is empty or spans lines",
-                          "pass a one-line name, e.g. name='wave.bap'")
-    fps_text = str(int(fps)) if fps.is_integer() else f"{fps:g}"
     n_frames = int(numbers[-1]) + 1 if len(numbers) else 0
+    header = header_text(label, header_name(name, label, ".bap").strip(), _BAP.example_name, version, fps, n_frames)
     if np.asarray(stream.fap_mask, dtype=bool).any():
         warnings.warn(f"{int(np.asarray(stream.fap_mask).any(axis=1).sum())} frames carry FAPs (face animation); "
                       ".bap holds body parameters only, so the FAPs are dropped", FormatWarning, stacklevel=2)
-    lines = _format_lines(f"{version} {clean} {fps_text} {n_frames}", numbers[body], masks,
-                          stream.bap_values[body], width)
-    if isinstance(target, (str, bytes, os.PathLike)):
-        with open(target, "w", encoding="utf-8", newline="") as handle:
-            handle.writelines(lines)
-    else:
-        target.writelines(lines)
+    write_lines(target, _format_lines(header, numbers[body], masks, stream.bap_values[body], width))
 
 
 def _mask_width(masks: np.ndarray, width: int | None, label: str) -> int:
@@ -297,8 +199,8 @@ def _format_lines(header: str, numbers: np.ndarray, masks: np.ndarray, values: n
                   width: int) -> Iterator[str]:
     yield header + "\n"
     for number, mask, row in zip(numbers.tolist(), masks, values):
-        yield " ".join("1" if m else "0" for m in mask[:width].tolist()) + "\n"
-        yield " ".join([str(number), *map(str, row[mask].tolist())]) + "\n"
+        yield mask_text(mask[:width])
+        yield frame_text(number, row[mask].tolist())
 
 
 # ---- face + body --------------------------------------------------------------------

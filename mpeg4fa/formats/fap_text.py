@@ -24,56 +24,43 @@ a gap between frame numbers is a ``skip`` count, never materialised frames); FAP
 values fit int32 and FAP 1/FAP 2 fields their ranges
 (:func:`mpeg4fa.spec.profiles.high_level_problem`). The header's frame count is
 not trusted and allocates nothing. Files are read as UTF-8 (a BOM is skipped);
-UTF-16 text or NUL bytes are refused as "not a text .fap file".
+UTF-16 text or NUL bytes are refused as "not a text .fap file". The grammar (lines, numbers,
+header, mask/frame pairs, the writer's layout) is the one ``.bap`` files share,
+:mod:`mpeg4fa.formats.masked_text`; what is the face's own (68-entry masks, the FAP 1/FAP 2 fields,
+the versions) is here.
 """
 from __future__ import annotations
 
-import io
-import os
-import re
 import warnings
-from array import array
-from contextlib import contextmanager
-from pathlib import Path
-from typing import IO, Iterable, Iterator, NamedTuple, Union, cast
+from typing import Iterator, NamedTuple, cast
 
 import numpy as np
 
 from mpeg4fa.decoded import explicit
-from mpeg4fa.fba.limits import MAX_SPAN_SECONDS, fps_problem, frame_limit
 from mpeg4fa.fba.stacking import StreamBuilder
 from mpeg4fa.fba.stream import N_FAPS, FapStream
 from mpeg4fa.formats.errors import FormatError, FormatWarning
+from mpeg4fa.formats.masked_text import (
+    INT32_MAX, INT32_MIN, MAX_LINE_CHARS, Dialect, Header, Line, Source, Target, build_stream, check_version,
+    frame_number, frame_numbers, frame_text, frame_values, header_name, header_text, mask_entries, mask_text, parse,
+    stream_fps, target_label, write_lines,
+)
 from mpeg4fa.spec.profiles import first_high_level_fault, high_level_problem
+
+__all__ = ["EXPRESSION_WIDTH", "INT32_MAX", "INT32_MIN", "MAX_LINE_CHARS", "SUPPORTED_VERSIONS", "VISEME_WIDTH",
+           "FapHeader", "FapRecord", "Source", "Target", "iter_fap", "read_fap", "write_fap"]
 
 SUPPORTED_VERSIONS = ("1.1", "2.0", "2.1", "2.2")
 """Header versions read (all with the same layout) and accepted by :func:`write_fap`."""
 
 VISEME_WIDTH = 4
 EXPRESSION_WIDTH = 6
-INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
-
-Source = Union[str, "os.PathLike[str]", IO[str]]
-Target = Union[str, "os.PathLike[str]", IO[str]]
-
-_TOKEN = re.compile(r"\S+")
-_INT = re.compile(r"[+-]?[0-9]+\Z")
-_FLOAT = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")
-_MAX_INT_DIGITS = 12  # longer than any int32, short enough for int() to stay cheap and safe
-_MAX_TOKEN = 24
-"""Longest number token read; an int32 with sign takes 11 characters, a few leading zeros are tolerated."""
-MAX_LINE_CHARS = 1 << 16
-"""Longest line read (65,536 characters): a frame line of all 68 FAPs takes about 1,000."""
-_UTF16_BOMS = (b"\xff\xfe", b"\xfe\xff")
 
 
-class FapHeader(NamedTuple):
-    """The header line. ``n_frames`` is what the writer claimed; readers do not rely on it."""
+class FapHeader(Header):
+    """A ``.fap`` header line (:class:`~mpeg4fa.formats.masked_text.Header`); readers do not rely on ``n_frames``."""
 
-    version: str
-    name: str
-    fps: float
-    n_frames: int
+    __slots__ = ()
 
 
 class FapRecord(NamedTuple):
@@ -86,185 +73,17 @@ class FapRecord(NamedTuple):
     expression: np.ndarray  # (6,) int32
 
 
-# ---- reading: lines -----------------------------------------------------------------
+# ---- reading ------------------------------------------------------------------------
 
 
-class _Line:
-    """A content line with its 1-based number; columns are computed only for errors."""
-
-    __slots__ = ("number", "text", "tokens")
-
-    def __init__(self, number: int, text: str) -> None:
-        self.number = number
-        self.text = text
-        self.tokens: list[str] = _TOKEN.findall(text)
-
-    def column(self, index: int) -> int:
-        """Column of token ``index``, or just past the last token when there is none."""
-        spans = [m.span() for m in _TOKEN.finditer(self.text)]
-        if index < len(spans):
-            return spans[index][0] + 1
-        return (spans[-1][1] if spans else 0) + 1
-
-    def span_text(self, first: int, last: int) -> str:
-        """The raw text from token ``first`` to token ``last`` inclusive (keeps inner spaces)."""
-        spans = [m.span() for m in _TOKEN.finditer(self.text)]
-        return self.text[spans[first][0]:spans[last][1]]
-
-
-def _bounded_lines(handle: Iterable[str | bytes]) -> Iterator[str | bytes]:
-    """The handle's lines, none longer than :data:`MAX_LINE_CHARS` + 1 (so a file without line ends
-    cannot fill memory): ``readline`` with a limit where the handle has one."""
-    readline = getattr(handle, "readline", None)
-    if readline is None:
-        yield from handle
-        return
-    while line := readline(MAX_LINE_CHARS + 1):
-        yield line
-
-
-class _LineReader:
-    """Skips blank and ``#`` lines, and counts lines so that end-of-file errors can say where."""
-
-    def __init__(self, handle: Iterable[str | bytes], path: str) -> None:
-        self._lines = _bounded_lines(handle)
-        self.path = path
-        self.count = 0
-
-    def next(self) -> _Line | None:
-        while True:
-            try:
-                raw = next(self._lines)
-            except StopIteration:
-                return None
-            except UnicodeDecodeError as exc:
-                raise FormatError(self.path, self.count + 1, None, f"the line is not valid text ({exc.reason})",
-                                  "save the file as ASCII or UTF-8") from None
-            except OSError as exc:
-                raise FormatError.from_os_error(self.path, exc) from None
-            self.count += 1
-            text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else raw
-            if self.count == 1:
-                text = text.lstrip("\ufeff")  # a byte-order mark is not part of the header
-            self._check_text(text)
-            stripped = text.strip()
-            if stripped and not stripped.startswith("#"):
-                return _Line(self.count, text.rstrip("\r\n"))
-
-    def _check_text(self, text: str) -> None:
-        if len(text) > MAX_LINE_CHARS:
-            raise FormatError(self.path, self.count, None, f"line is longer than {MAX_LINE_CHARS:,} characters",
-                              "a .fap line holds the header, a mask or one frame; is this a .fap file?")
-        nul = text.find("\x00")
-        if nul >= 0:
-            raise FormatError(self.path, self.count, nul + 1, "NUL byte: this is not a text .fap file",
-                              "an .fba stream is read by decode() or read_stream(); UTF-16 text must be saved "
-                              "as UTF-8")
-
-    def error_at_end(self, problem: str, hint: str) -> FormatError:
-        return FormatError(self.path, self.count + 1, None, problem, hint)
-
-
-@contextmanager
-def _open_source(source: Source, name: str | None) -> Iterator[tuple[Iterable[str], str]]:
-    """Yield (lines, label for messages); close the file only if we opened it."""
-    if isinstance(source, (str, bytes, os.PathLike)):
-        label = name if name is not None else os.fsdecode(source)
-        try:
-            raw = open(source, "rb")
-        except OSError as exc:
-            raise FormatError.from_os_error(label, exc) from None
-        with raw:
-            try:
-                head = raw.peek(2)[:2] if hasattr(raw, "peek") else b""
-            except OSError as exc:
-                raise FormatError.from_os_error(label, exc) from None
-            if head in _UTF16_BOMS:
-                raise FormatError(label, 1, 1, "the file is UTF-16 text", "save it as ASCII or UTF-8")
-            # errors="replace": a stray byte in the free-text name must not stop the read
-            yield io.TextIOWrapper(raw, encoding="utf-8-sig", errors="replace"), label
-    else:
-        stream_name = getattr(source, "name", None)
-        label = name if name is not None else (stream_name if isinstance(stream_name, str) else "<stream>")
-        yield source, label
-
-
-# ---- reading: numbers ---------------------------------------------------------------
-
-
-def _short(token: str) -> str:
-    """A token as messages quote it: a runaway token must not flood the message."""
-    return token if len(token) <= 24 else token[:20] + "..."
-
-
-def _integer(line: _Line, index: int, path: str, what: str, low: int, high: int, hint: str) -> int:
-    token = line.tokens[index]
-    if not _INT.match(token):
-        raise FormatError(path, line.number, line.column(index), f"{what} {_short(token)!r} is not an integer", hint)
-    if len(token) > _MAX_TOKEN:  # 4,301 zeros would also trip int()'s digit limit
-        raise FormatError(path, line.number, line.column(index),
-                          f"{what} {_short(token)} is {len(token):,} characters long, too long for a number in "
-                          f"{low}..{high}", hint)
-    digits = token.lstrip("+-").lstrip("0") or "0"
-    value = int(digits) if len(digits) <= _MAX_INT_DIGITS else None
-    if value is not None and token.startswith("-"):
-        value = -value
-    if value is None or not low <= value <= high:
-        raise FormatError(path, line.number, line.column(index),
-                          f"{what} {_short(token)} is out of range {low}..{high}", hint)
-    return value
-
-
-def _fps(line: _Line, index: int, path: str) -> float:
-    token = line.tokens[index]
-    hint = "the third header field is frames per second, e.g. 25 or 29.97"
-    if not _FLOAT.match(token) or len(token) > 64:
-        raise FormatError(path, line.number, line.column(index), f"frame rate {_short(token)!r} is not a number", hint)
-    value = float(token)
-    problem = fps_problem(value)
-    if problem is not None:
-        raise FormatError(path, line.number, line.column(index), problem,
-                          "an FBA stream carries 1/16 to 255 15/16 frames per second")
-    return value
-
-
-# ---- reading: records ---------------------------------------------------------------
-
-
-def _parse_header(line: _Line, path: str) -> FapHeader:
-    tokens = line.tokens
-    if tokens[0] not in SUPPORTED_VERSIONS:
-        raise FormatError(path, line.number, line.column(0),
-                          f"unsupported .fap version {_short(tokens[0])!r}",
-                          f"the first line must be the header '<version> <name> <fps> <number_of_frames>' "
-                          f"with version one of {', '.join(SUPPORTED_VERSIONS)}")
-    if len(tokens) < 4:
-        raise FormatError(path, line.number, line.column(len(tokens)),
-                          f"the header has {len(tokens)} fields, expected 4",
-                          "write '<version> <name> <fps> <number_of_frames>', e.g. '2.1 joy.fap 25 108'")
-    # Version 2.0: VREng divides its values by 20 (FAPV20_DIV); what that means was never checked,
-    # so 2.0 files are read exactly like 2.1 (values as written, in FAPU).
-    fps = _fps(line, len(tokens) - 2, path)
-    n_frames = _integer(line, len(tokens) - 1, path, "frame count", 0, INT32_MAX,
-                        "the last header field is the number of frames, a whole number")
-    # the name may contain spaces (Greta: 'AU Interpolation_1111.fap'): it is all between version and fps
-    name = line.span_text(1, len(tokens) - 3)
-    return FapHeader(tokens[0], name, fps, n_frames)
-
-
-def _parse_mask(line: _Line, path: str) -> np.ndarray:
-    tokens = line.tokens
-    for i, token in enumerate(tokens):
-        if token != "0" and token != "1":
-            raise FormatError(path, line.number, line.column(i),
-                              f"mask entry {i + 1} is {_short(token)!r}, expected 0 or 1",
-                              "a mask line has one 0/1 per FAP 1..68; check that mask and frame lines alternate")
-    if len(tokens) < N_FAPS:
-        raise FormatError(path, line.number, line.column(len(tokens)),
-                          f"the mask line has {len(tokens)} entries, expected {N_FAPS}",
+def _parse_mask(line: Line, path: str) -> np.ndarray:
+    entries = mask_entries(line, path, "FAP 1..68")
+    if len(entries) < N_FAPS:
+        raise FormatError(path, line.number, line.column(len(entries)),
+                          f"the mask line has {len(entries)} entries, expected {N_FAPS}",
                           "give one 0/1 entry for each of FAPs 1..68")
     # Greta writes 69 entries: anything after the 68th is ignored
-    return np.array([t == "1" for t in tokens[:N_FAPS]], dtype=bool)
+    return np.array(entries[:N_FAPS], dtype=bool)
 
 
 def _value_count(mask: np.ndarray) -> int:
@@ -272,29 +91,12 @@ def _value_count(mask: np.ndarray) -> int:
     return VISEME_WIDTH * int(mask[0]) + EXPRESSION_WIDTH * int(mask[1]) + int(mask[2:].sum())
 
 
-def _parse_frame(line: _Line, mask: np.ndarray, mask_line: _Line, previous: int, path: str, fps: float,
+def _parse_frame(line: Line, mask: np.ndarray, mask_line: Line, previous: int, path: str, fps: float,
                  limit: int) -> FapRecord:
-    number = _integer(line, 0, path, "frame number", 0, INT32_MAX,
-                      "a frame line starts with its frame number, a whole number >= 0")
-    if number >= limit:
-        raise FormatError(path, line.number, line.column(0),
-                          f"frame number {number:,} lies {number / fps / 3600:,.1f} h into the stream at {fps:g} fps, "
-                          f"past the {MAX_SPAN_SECONDS // 3600} h a stream may span",
-                          f"frame numbers run below {limit:,} at {fps:g} fps; renumber the frames or "
-                          "split the file")
-    if number <= previous:
-        raise FormatError(path, line.number, line.column(0),
-                          f"frame number {number} does not increase (the previous frame is {previous})",
-                          "frame numbers must increase; renumber the frames or remove the duplicate")
-    expected = _value_count(mask)
-    got = len(line.tokens) - 1
-    if got != expected:
-        raise FormatError(path, line.number, line.column(min(got, expected) + 1),
-                          f"frame {number} has {got} values, expected {expected} for the mask at line "
-                          f"{mask_line.number}",
-                          "give one value per masked FAP, 4 for FAP 1 and 6 for FAP 2, in FAP order")
-    ints = [_integer(line, i, path, "value", INT32_MIN, INT32_MAX, "FAP values are whole numbers in FAPU")
-            for i in range(1, got + 1)]
+    number = frame_number(line, path, previous, fps, limit)
+    ints = frame_values(line, path, number, _value_count(mask), mask_line,
+                        "give one value per masked FAP, 4 for FAP 1 and 6 for FAP 2, in FAP order",
+                        "FAP values are whole numbers in FAPU")
     first = 1  # token index of the FAP 1 fields, then of the FAP 2 fields
     for fap, width in ((1, VISEME_WIDTH), (2, EXPRESSION_WIDTH)):
         if mask[fap - 1]:
@@ -322,28 +124,10 @@ def _record(number: int, mask: np.ndarray, flat: np.ndarray) -> FapRecord:
     return FapRecord(number, mask, values, viseme, expression)
 
 
-def _parse(source: Source, name: str | None) -> Iterator[FapHeader | FapRecord]:
-    """The one parser: yields the header, then one record per frame, reading line by line."""
-    with _open_source(source, name) as (handle, path):
-        lines = _LineReader(handle, path)
-        header_line = lines.next()
-        if header_line is None:
-            raise lines.error_at_end("the file has no header",
-                                     "start with '<version> <name> <fps> <number_of_frames>', e.g. '2.1 a.fap 25 0'")
-        header = _parse_header(header_line, path)
-        limit = frame_limit(header.fps)
-        yield header
-        previous = -1
-        while (mask_line := lines.next()) is not None:
-            mask = _parse_mask(mask_line, path)
-            frame_line = lines.next()
-            if frame_line is None:
-                raise lines.error_at_end(f"the file ends after the mask line at line {mask_line.number}",
-                                         "add its frame line (frame number, then the masked values) "
-                                         "or delete the mask line")
-            record = _parse_frame(frame_line, mask, mask_line, previous, path, header.fps, limit)
-            previous = record.frame_number
-            yield record
+# Version 2.0: VREng divides its values by 20 (FAPV20_DIV); what that means was never checked,
+# so 2.0 files are read exactly like 2.1 (values as written, in FAPU).
+_FAP = Dialect(suffix=".fap", versions=SUPPORTED_VERSIONS, default_version="2.1", example_name="joy.fap",
+               header=FapHeader, mask=_parse_mask, frame=_parse_frame)
 
 
 def iter_fap(source: Source, *, name: str | None = None) -> Iterator[FapRecord]:
@@ -353,9 +137,14 @@ def iter_fap(source: Source, *, name: str | None = None) -> Iterator[FapRecord]:
     at a time, so long files stream. The header is still checked. ``name`` replaces
     the path in error messages (useful for streams).
     """
-    records = _parse(source, name)
+    records = parse(source, name, _FAP)
     next(records)  # the header
     yield from records  # type: ignore[misc]
+
+
+def _add_face(builder: StreamBuilder, record: FapRecord, timestamp: float) -> None:
+    builder.add(fap_mask=record.mask, fap_values=record.values, viseme=record.viseme,
+                expression=record.expression, timestamp=timestamp)
 
 
 def read_fap(source: Source, *, name: str | None = None) -> FapStream:
@@ -365,19 +154,9 @@ def read_fap(source: Source, *, name: str | None = None) -> FapStream:
     timestamps are ``frame_number / fps``. The header's frame count is not
     trusted: the frames found are what is returned.
     """
-    records = _parse(source, name)
+    records = parse(source, name, _FAP)
     header = cast(FapHeader, next(records))
-    builder = StreamBuilder()
-    numbers = array("q")
-    for record in cast("Iterator[FapRecord]", records):  # one record at a time: memory is the stream's arrays
-        numbers.append(record.frame_number)
-        builder.add(fap_mask=record.mask, fap_values=record.values, viseme=record.viseme,
-                    expression=record.expression, timestamp=record.frame_number / header.fps)
-    stream = builder.build()
-    stream.source_fps = header.fps
-    if len(numbers) > 1:
-        stream.skip[:-1] = np.diff(np.frombuffer(numbers, dtype=np.int64)) - 1
-    return stream
+    return build_stream(cast("Iterator[FapRecord]", records), header.fps, _add_face)
 
 
 # ---- writing ------------------------------------------------------------------------
@@ -393,65 +172,18 @@ def write_fap(stream: FapStream, target: Target, *, name: str | None = None, ver
     they are dropped with a warning. Everything is
     checked before the first byte is written, so a bad stream leaves no partial file.
     """
-    label = os.fsdecode(target) if isinstance(target, (str, bytes, os.PathLike)) else _stream_label(target)
+    label = target_label(target)
     stream = explicit(stream)  # a .fap cannot say "interpolate": FAPs a decoder copies are written out
-    fps = float(stream.fps)
-    problem = fps_problem(fps)
-    if problem is not None:
-        raise FormatError(label, 1, None, problem, "set stream.source_fps (or an intra frame rate) to the real rate")
-    numbers = _frame_numbers(stream, label, fps)
+    fps = stream_fps(stream, label)
+    numbers = frame_numbers(stream, label, fps)
     _check_high_level(stream, label)
     n_frames = int(numbers[-1]) + 1 if len(numbers) else 0
-    header = _format_header(label, _header_name(name, label), version, fps, n_frames)
+    check_version(label, ".fap", SUPPORTED_VERSIONS, version)
+    header = header_text(label, header_name(name, label, ".fap"), _FAP.example_name, version, fps, n_frames)
     if stream.bap_mask.any():
         warnings.warn(f"{int(stream.bap_mask.any(axis=1).sum())} frames carry BAPs (body animation); "
                       ".fap holds face parameters only, so the BAPs are dropped", FormatWarning, stacklevel=2)
-    lines = _format_lines(stream, header, numbers)
-    if isinstance(target, (str, bytes, os.PathLike)):
-        with open(target, "w", encoding="utf-8", newline="") as handle:
-            handle.writelines(lines)
-    else:
-        target.writelines(lines)
-
-
-def _stream_label(target: IO[str]) -> str:
-    stream_name = getattr(target, "name", None)
-    return stream_name if isinstance(stream_name, str) else "<stream>"
-
-
-def _header_name(name: str | None, label: str) -> str:
-    """The header's name field: as given, else the target's file name."""
-    if name is not None:
-        return name
-    return (Path(label).name if label != "<stream>" else "") or "stream.fap"
-
-
-def _format_header(label: str, name: str, version: str, fps: float, n_frames: int) -> str:
-    if version not in SUPPORTED_VERSIONS:
-        raise FormatError(label, 1, 1, f"cannot write .fap version {version!r}",
-                          f"use one of {', '.join(SUPPORTED_VERSIONS)}")
-    clean = name.strip()
-    if not clean or "\n" in clean or "\r" in clean:
-        raise FormatError(label, 1, None, f"header name {name!r} is empty or spans lines",
-                          "pass a one-line name, e.g. name='joy.fap'")
-    fps_text = str(int(fps)) if fps.is_integer() else f"{fps:g}"
-    return f"{version} {clean} {fps_text} {n_frames}"
-
-
-def _frame_numbers(stream: FapStream, label: str, fps: float) -> np.ndarray:
-    """0, then previous + skip[previous] + 1: skipped frames become gaps."""
-    skip = np.asarray(stream.skip, dtype=np.int64)
-    if len(skip) and skip.min() < 0:
-        k = int(np.argmax(skip < 0))
-        raise FormatError(label, 2 * k + 3, 1, f"frame {k} has skip {int(skip[k])} < 0",
-                          "skip counts frames left out after a frame and cannot be negative")
-    numbers = np.concatenate([[0], np.cumsum(skip[:-1] + 1)]) if len(skip) else skip
-    if len(numbers) and numbers[-1] >= frame_limit(fps):
-        k = int(np.argmax(numbers >= frame_limit(fps)))
-        raise FormatError(label, 2 * k + 3, 1, f"frame number {int(numbers[k]):,} is past the "
-                          f"{MAX_SPAN_SECONDS // 3600} h a stream may span at {fps:g} fps",
-                          "reduce the skip counts or split the stream")
-    return numbers.astype(np.int64)
+    write_lines(target, _format_lines(stream, header, numbers))
 
 
 def _check_high_level(stream: FapStream, label: str) -> None:
@@ -469,11 +201,11 @@ def _format_lines(stream: FapStream, header: str, numbers: np.ndarray) -> Iterat
     masks = np.asarray(stream.fap_mask, dtype=bool)
     for k in range(len(numbers)):
         mask = masks[k]
-        yield " ".join("1" if m else "0" for m in mask.tolist()) + "\n"
-        parts = [str(int(numbers[k]))]
+        yield mask_text(mask)
+        values: list[int] = []
         if mask[0]:
-            parts += map(str, stream.viseme[k].tolist())
+            values += stream.viseme[k].tolist()
         if mask[1]:
-            parts += map(str, stream.expression[k].tolist())
-        parts += map(str, stream.fap_values[k, 2:][mask[2:]].tolist())
-        yield " ".join(parts) + "\n"
+            values += stream.expression[k].tolist()
+        values += stream.fap_values[k, 2:][mask[2:]].tolist()
+        yield frame_text(int(numbers[k]), values)
