@@ -57,6 +57,16 @@ def test_vrml_two_shapes_a_transform_and_a_quad():
     assert np.allclose(mesh.vertices[np.unique(teeth)], [[10, 0, 0], [10, 2, 0], [8, 0, 0]], atol=1e-9)
 
 
+def test_reading_vrml_leaves_the_renderers_gl_context_working():
+    """VTK's OpenGL module takes the thread's current GL context away: it runs in a child process, so the
+    process's shared EGL context still draws after a VRML upload (it failed with 'cannot create texture')."""
+    from mpeg4fa.render.context import gl_context
+    ctx = gl_context()
+    ctx.texture((8, 8), 4, dtype="f4").release()
+    read_mesh(TWO_SHAPES, "head.wrl")
+    ctx.texture((8, 8), 4, dtype="f4").release()
+
+
 def test_vrml_nested_transforms_and_a_use_become_parts(tmp_path):
     text = b"""#VRML V2.0 utf8
 Transform { translation 0 5 0 children [
