@@ -83,15 +83,17 @@ def test_text_to_frames_latency_and_what_the_frames_are(app, base):
 
 def test_sixty_seconds_of_speech_delivered_in_real_time(app, base):
     text = " ".join(SENTENCES * 4)  # about 60 s at espeak's default rate
-    played = play(ws_url(base), text, speed=3.0, prebuffer=0.5, timeout=120)
+    # at real time (1x): a faster client clock made the test a throughput race on a loaded 2-core machine
+    # (CI saw 4 items up to 0.34 s late at 3x); at 1x the producer has ~50x headroom
+    played = play(ws_url(base), text, speed=1.0, prebuffer=0.5, timeout=180)
     media = played.done["duration"]
-    print(f"\n{media:.1f} s of speech in {played.wall:.1f} s at 3x: {played.frames} frames, "
+    print(f"\n{media:.1f} s of speech in {played.wall:.1f} s at 1x: {played.frames} frames, "
           f"{played.underruns} underruns (max {played.max_lateness * 1e3:.0f} ms late), "
           f"at most {played.max_ahead:.2f} s held ahead, {played.reports} reports")
     assert not played.errors and not played.done["stopped"] and media > 50
     assert played.underruns == 0, f"{played.underruns} items came after their time (worst {played.max_lateness:.3f} s)"
     assert played.max_ahead <= WINDOW + CHUNK + 1e-6  # flow control: never more than the window ahead
-    assert played.wall >= (media - WINDOW - CHUNK) / 3.0  # paced by the client, not sent at once
+    assert played.wall >= media - WINDOW - CHUNK  # paced by the client, not sent at once
     record = app.state.live.utterances[-1]
     assert record["sentences"] == 16 and record["waits"] > 0
 
