@@ -2,8 +2,7 @@
 
 Speech is real (espeak-ng); the head is the generic one when built (ARKit weights), else the
 procedural head (no units: weights are empty rows, everything else the same). The long test plays
-60 s of speech with the client's clock at 3x real time (the server paces by the client's buffer
-reports only, so the protocol cannot tell), so it takes about 20 s.
+60 s of speech at real time, so it takes about a minute (mostly waiting on the client's clock).
 """
 from __future__ import annotations
 
