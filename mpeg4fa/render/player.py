@@ -201,8 +201,9 @@ def play_live(frames: Iterable[Frame], renderer: Renderer, *, face: FaceModel | 
     socket's file object: ``sock.makefile("rb")`` with its default buffering works (the bit reader
     takes what has arrived, ``read1``). For the lowest latency decode a live source with
     ``backend="python"``: the compiled path decodes a P plane only once a worst-case margin of bits
-    has arrived after it (about 100 bytes, seconds at the rates of streams made from text). Every frame is resolved in the source thread, because unsent FAPs
-    hold their values across frames, even across frames that are dropped for lateness.
+    has arrived after it (about 100 bytes, seconds at the rates of streams made from text). Every
+    frame is resolved in the source thread, because unsent FAPs hold their values across frames,
+    even across frames that are dropped for lateness.
     """
     face = face or renderer.face
     resolver = FrameResolver()
