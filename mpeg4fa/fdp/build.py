@@ -109,8 +109,11 @@ def read_points_json(path: str | os.PathLike[str]) -> dict[str, int | tuple[floa
     The two kinds are not mixed in one file: photo points have no depth and
     mesh points no pixels. Every fault is an :class:`FdpError` at its line:column.
     """
-    name = str(path)
-    data = read_bytes(path)
+    return parse_points_json(read_bytes(path), str(path))
+
+
+def parse_points_json(data: bytes, name: str) -> dict[str, int | tuple[float, ...]]:
+    """:func:`read_points_json` on bytes already in memory (an upload); ``name`` locates the faults."""
     text = _decode(data, name)
     doc = _Doc(text, name)
     points = doc.obj(_parse(text, name), (), "a feature points file", ())

@@ -22,7 +22,7 @@ from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
 from mpeg4fa.web import edits, photos
-from mpeg4fa.web.files import FORMATS, output_path, read_mesh, read_model, save_model
+from mpeg4fa.web.files import FORMATS, output_path, read_model, read_upload, save_model
 from mpeg4fa.web.posing import pose_values, posed_vertices
 from mpeg4fa.web.session import Session
 
@@ -241,11 +241,16 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
         return model_json(session.mesh, session)
 
     @app.post("/api/upload")
-    async def upload(request: Request, file: UploadFile):
-        data = await file.read(upload_limit + 1)
-        if len(data) > upload_limit:
-            return _error(413, f"upload larger than {upload_limit} bytes", "file")
-        session.load(read_mesh(data, Path(file.filename or "upload").name))
+    async def upload(request: Request, file: list[UploadFile]):
+        """One model file and its companions (multipart ``file``, repeated): see :func:`read_upload`."""
+        files, total = [], 0
+        for part in file:
+            data = await part.read(upload_limit + 1 - total)
+            total += len(data)
+            if total > upload_limit:
+                return _error(413, f"upload larger than {upload_limit} bytes (all files together)", "file")
+            files.append((part.filename or "upload", data))
+        session.load(read_upload(files))
         return model_json(session.mesh, session)
 
     @app.post("/api/edit")

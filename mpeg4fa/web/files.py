@@ -5,13 +5,15 @@ import io
 import json
 import os
 import re
+from collections.abc import Sequence
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 import trimesh
 
 from mpeg4fa.atomic import atomic_outputs
-from mpeg4fa.fdp.build import read_points_json
+from mpeg4fa.fdp.build import parse_points_json
 from mpeg4fa.fdp.obj import mesh_and_groups_from_obj
 from mpeg4fa.web.edits import EditError, EditMesh, make_mesh, validate
 from mpeg4fa.web.vrml import read_vrml
@@ -28,8 +30,8 @@ def read_mesh(data: bytes, filename: str, resolver=None) -> EditMesh:
     """A mesh file's bytes as an :class:`EditMesh`: one part per Shape (VRML) or scene node (glTF...),
     node transforms applied; a single one is ``skin``. An OBJ keeps its vertex indices; its parts are its
     ``g`` groups (or ``o`` objects).
-    Nothing outside the bytes is read unless ``resolver`` (a trimesh resolver) is given, so an uploaded
-    ``.gltf`` must embed its buffers (data: URIs); a ``.glb`` always does."""
+    Nothing outside the bytes is read unless ``resolver`` (a trimesh resolver) is given: a ``.gltf`` without
+    one must embed its buffers (data: URIs); :func:`read_upload` gives it the uploaded files."""
     ext = filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
     if ext not in FORMATS:
         raise EditError(f"cannot read .{ext or '?'} files", where=filename, hint=f"formats: {', '.join(FORMATS)}")
@@ -73,19 +75,119 @@ def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[st
     return out
 
 
-def _refuse_external(data: bytes, filename: str) -> None:
-    """An uploaded .gltf comes alone: refuse one whose buffers or images are files beside it."""
+def _gltf_external(data: bytes, filename: str) -> list[str]:
+    """The URIs of a .gltf's buffers and images that are files (not data: URIs), as written in its JSON."""
     try:
         doc = json.loads(data)
     except (ValueError, UnicodeDecodeError) as exc:
         raise EditError(f"a .gltf file is JSON: {exc}", where=filename) from None
     items = [item for key in ("buffers", "images") for item in (doc.get(key) or [] if isinstance(doc, dict) else [])]
     uris = [item.get("uri") for item in items if isinstance(item, dict)]
-    external = [u for u in uris if isinstance(u, str) and not u.startswith("data:")]
+    return list(dict.fromkeys(u for u in uris if isinstance(u, str) and not u.startswith("data:")))
+
+
+def _refuse_external(data: bytes, filename: str) -> None:
+    """A .gltf read from bytes alone: refuse one whose buffers or images are other files."""
+    external = _gltf_external(data, filename)
     if external:
-        raise EditError(f"the .gltf needs {', '.join(external[:3])} beside it, which an upload cannot bring",
-                        where=filename, hint="upload a .glb, or a .gltf with its buffers embedded (data: URIs), "
-                        "or start 'mpeg4fa edit FILE.gltf' to read the files beside it")
+        raise EditError(f"the .gltf needs {', '.join(external[:3])}, which were not given with it",
+                        where=filename, hint="upload it together with the files it names (several files at once), "
+                        "or a .glb, or start 'mpeg4fa edit FILE.gltf' to read the files beside it")
+
+
+# ---- an upload: one model file and the files it names, looked up among the uploaded ones only ----------------
+
+def _plain_name(name: str) -> str:
+    """An uploaded file's name without any folders (browsers send none; a client might): a key, never a path."""
+    return re.split(r"[/\\]", str(name))[-1].strip() or "upload"
+
+
+def _ext(name: str) -> str:
+    return name.rsplit(".", 1)[-1].lower() if "." in name else ""
+
+
+class _UploadResolver(trimesh.resolvers.Resolver):
+    """trimesh's resolver over the uploaded files: a URI is looked up by its (percent-decoded) last name among
+    them; nothing is opened on disk, so ``../`` or an absolute URI finds at most an uploaded file of that name."""
+
+    def __init__(self, files: dict[str, bytes]):
+        self.files = files
+
+    def get(self, key: str) -> bytes:
+        name = _plain_name(unquote(key))
+        if name not in self.files:
+            raise KeyError(key)
+        return self.files[name]
+
+    def keys(self):
+        return self.files.keys()
+
+    def write(self, name, data):
+        raise EditError("an upload is read only", where=name)
+
+    def namespaced(self, namespace):
+        return self
+
+
+def _obj_companions(data: bytes, model: str, files: dict[str, bytes]) -> list[str]:
+    """The names an OBJ may bring: its sidecars (``NAME.points.json``, ``NAME.parts.json``), the ``mtllib``
+    files it names and the texture maps those name (accepted, not read: parts come from groups or the sidecar)."""
+    stem = model[: -len(".obj")]
+    names = [stem + s for s in SIDECARS]
+    text = data.decode("utf-8", "replace")
+    mtls = [_plain_name(n) for line in text.splitlines() if line.startswith("mtllib") for n in line.split()[1:]]
+    names += mtls
+    for mtl in mtls:
+        for line in files.get(mtl, b"").decode("utf-8", "replace").splitlines():
+            words = line.split()
+            if words and (words[0].lower().startswith("map_") or words[0].lower() in ("bump", "disp", "norm")):
+                names.append(_plain_name(words[-1]))
+    return names
+
+
+def read_upload(files: Sequence[tuple[str, bytes]]) -> EditMesh:
+    """One uploaded model file and its companions as an :class:`EditMesh`, as :func:`read_model` reads the same
+    files from a folder: a ``.gltf`` gets the buffers and images its JSON names, an OBJ saved by
+    :func:`save_model` its ``NAME.parts.json`` and ``NAME.points.json``. Names are keys among the uploaded
+    files only, never paths (folders in a name are dropped). Refused, naming the files: no model file or several,
+    two files of one name, a buffer or image the .gltf names but the upload lacks, and any file the model does
+    not refer to (a stray file is more often a mistake, such as sidecars of another model, than a wish)."""
+    by_name: dict[str, bytes] = {}
+    for raw, data in files:
+        name = _plain_name(raw)
+        if name in by_name:
+            raise EditError(f"two uploaded files are named {name}", where=name, hint="upload each file once")
+        by_name[name] = data
+    models = [n for n in by_name if _ext(n) in FORMATS]
+    if len(models) != 1:
+        problem = (f"{len(models)} model files ({', '.join(models)})" if models else "no model file")
+        raise EditError(f"an upload holds one model file, here {problem}", where=", ".join(by_name) or "upload",
+                        hint=f"choose one {'/'.join('.' + f for f in FORMATS)} file and the files it names "
+                        "(.bin and images of a .gltf; NAME.points.json and NAME.parts.json of an OBJ)")
+    model = models[0]
+    data, ext = by_name[model], _ext(model)
+    wanted: list[str] = []
+    if ext == "gltf":
+        external = _gltf_external(data, model)
+        missing = [u for u in external if _plain_name(unquote(u)) not in by_name]
+        if missing:
+            raise EditError(f"{model} names {', '.join(missing)}, not among the uploaded files", where=model,
+                            hint="choose the .gltf together with its buffers and images (several files at once), "
+                            "or upload a .glb")
+        wanted = [_plain_name(unquote(u)) for u in external]
+    elif ext == "obj":
+        wanted = _obj_companions(data, model, by_name)
+    extra = [n for n in by_name if n != model and n not in wanted]
+    if extra:
+        uses = f"it takes {', '.join(dict.fromkeys(wanted))}" if wanted else "it takes no other files"
+        raise EditError(f"{', '.join(extra)} not used by {model}", where=extra[0],
+                        hint=f"upload only {model} and the files it names ({uses})")
+    resolver = _UploadResolver(by_name) if ext == "gltf" else None
+    mesh = read_mesh(data, model, resolver)
+    if ext != "obj":
+        return mesh
+    stem = model[: -len(".obj")]
+    return _with_sidecars(mesh, model, {s: (by_name[stem + s], stem + s) for s in SIDECARS if stem + s in by_name})
 
 
 def _part_name(name: str) -> str:
@@ -106,29 +208,43 @@ def read_model(path: str | os.PathLike) -> EditMesh:
     mesh = read_mesh(data, path.name, resolver)
     if path.suffix.lower() != ".obj":
         return mesh
-    points_path, parts_path = (path.with_name(path.stem + s) for s in SIDECARS)
-    if parts_path.exists():
-        mesh = make_mesh(mesh.vertices, mesh.triangles, _read_parts(parts_path, len(mesh.triangles)),
+    sidecars = {}
+    for suffix in SIDECARS:
+        side = path.with_name(path.stem + suffix)
+        if side.exists():
+            try:
+                sidecars[suffix] = (side.read_bytes(), str(side))
+            except OSError as exc:
+                raise EditError(f"cannot read the file: {exc.strerror or exc}", where=str(side)) from None
+    return _with_sidecars(mesh, path.name, sidecars)
+
+
+def _with_sidecars(mesh: EditMesh, model: str, sidecars: dict[str, tuple[bytes, str]]) -> EditMesh:
+    """``mesh`` (read from the OBJ ``model``) with the parts and points of its sidecars: suffix -> (bytes, where),
+    whether they came from the folder (:func:`read_model`) or the upload (:func:`read_upload`)."""
+    if ".parts.json" in sidecars:
+        data, where = sidecars[".parts.json"]
+        mesh = make_mesh(mesh.vertices, mesh.triangles, _read_parts(data, where, len(mesh.triangles)),
                          source=mesh.source)
-    if points_path.exists():
-        points = read_points_json(points_path)
+    if ".points.json" in sidecars:
+        data, where = sidecars[".points.json"]
+        points = parse_points_json(data, where)
         for label, vertex in points.items():
             if not isinstance(vertex, int):
-                raise EditError(f"feature point {label} is a position, not a vertex index", where=str(points_path),
+                raise EditError(f"feature point {label} is a position, not a vertex index", where=where,
                                 hint="the editor places feature points on vertices")
             if not 0 <= vertex < len(mesh.vertices):
-                raise EditError(f"feature point {label} is vertex {vertex}, but {path.name} has "
-                                f"{len(mesh.vertices)} vertices", where=str(points_path))
+                raise EditError(f"feature point {label} is vertex {vertex}, but {model} has "
+                                f"{len(mesh.vertices)} vertices", where=where)
         mesh = make_mesh(mesh.vertices, mesh.triangles, mesh.parts, points, source=mesh.source)
     return mesh
 
 
-def _read_parts(path: Path, n_triangles: int) -> list[str]:
+def _read_parts(data: bytes, where: str, n_triangles: int) -> list[str]:
     """Per-triangle part names from a ``{"parts": {name: [triangle, ...]}}`` file covering every triangle once."""
-    where = str(path)
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
+        doc = json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
         raise EditError(f"cannot read the parts file: {exc}", where=where) from None
     except json.JSONDecodeError as exc:
         raise EditError(f"malformed JSON: {exc.msg}", where=f"{where}:{exc.lineno}:{exc.colno}") from None

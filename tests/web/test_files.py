@@ -1,5 +1,6 @@
-"""The editor's mesh files: VRML 97 (VTK), glTF/GLB node scenes (trimesh), OBJ with its own indices, and an OBJ
-saved by the editor read back with its parts and feature points. Every file is written by the test itself."""
+"""The editor's mesh files: VRML 97 (VTK), glTF/GLB node scenes (trimesh), OBJ with its own indices, an OBJ
+saved by the editor read back with its parts and feature points, and uploads of a model with its companion files.
+Every file is written by the test itself."""
 import json
 
 import numpy as np
@@ -10,7 +11,7 @@ from fastapi.testclient import TestClient
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.web.app import create_app
 from mpeg4fa.web.edits import EditError, make_mesh
-from mpeg4fa.web.files import read_mesh, read_model, save_model
+from mpeg4fa.web.files import read_mesh, read_model, read_upload, save_model
 
 # ---- VRML 97 --------------------------------------------------------------------------------------
 
@@ -137,11 +138,11 @@ def test_gltf_with_embedded_buffers_loads():
     _check_scene_mesh(read_mesh(files["model.gltf"], "head.gltf"))
 
 
-def test_gltf_with_external_buffers_upload_refused_but_read_beside_its_files(tmp_path):
+def test_gltf_with_external_buffers_needs_them_given_and_reads_beside_its_files(tmp_path):
     files = _scene().export(file_type="gltf")
     with pytest.raises(EditError, match="gltf_buffer_0.bin") as err:
         read_mesh(files["model.gltf"], "head.gltf")
-    assert err.value.where == "head.gltf" and ".glb" in err.value.hint
+    assert err.value.where == "head.gltf" and "together with" in err.value.hint
     for name, data in files.items():
         (tmp_path / name).write_bytes(data)
     _check_scene_mesh(read_model(tmp_path / "model.gltf"))
@@ -208,3 +209,130 @@ def test_bad_files_beside_a_saved_obj_name_themselves(tmp_path, parts, points, w
     with pytest.raises(MpegFaError) as err:
         read_model(tmp_path / "head.obj")
     assert err.value.where.endswith(where) and problem in err.value.message, str(err.value)
+
+
+# ---- uploads of several files: the model and the files it names -------------------------------------
+
+def _png() -> bytes:
+    import io
+
+    from PIL import Image
+    out = io.BytesIO()
+    Image.new("RGB", (4, 4), (200, 150, 120)).save(out, format="PNG")
+    return out.getvalue()
+
+
+def _gltf_files(image="skin.png") -> dict[str, bytes]:
+    """The scene as a .gltf with two external buffers and, named in its JSON, an external image."""
+    files = dict(_scene().export(file_type="gltf"))
+    doc = json.loads(files.pop("model.gltf"))
+    doc["images"] = [{"uri": image}]
+    doc["textures"] = [{"source": 0}]
+    files["head.gltf"] = json.dumps(doc).encode()
+    files[image.rsplit("/", 1)[-1]] = _png()
+    return files
+
+
+def _post(client, files: dict[str, bytes] | list[tuple[str, bytes]]):
+    items = files.items() if isinstance(files, dict) else files
+    return client.post("/api/upload", files=[("file", (name, data, "application/octet-stream")) for name, data in items])
+
+
+@pytest.fixture
+def client(tmp_path):
+    with TestClient(create_app(out_dir=tmp_path / "out", upload_limit=200_000)) as c:
+        yield c
+
+
+def test_gltf_uploaded_with_its_buffers_and_image_loads(client):
+    files = _gltf_files()
+    assert sorted(files) == [f"gltf_buffer_{i}.bin" for i in range(4)] + ["head.gltf", "skin.png"]
+    r = _post(client, files)
+    assert r.status_code == 200, r.text
+    assert sorted(r.json()["parts"]) == ["eye_l", "eye_r", "skin"] and r.json()["source"] == "head.gltf"
+    _check_scene_mesh(client.app.state.session.mesh)
+    assert r.json()["counts"]["triangles"] == 14
+
+
+def test_gltf_upload_without_a_buffer_names_it(client):
+    files = _gltf_files()
+    del files["gltf_buffer_1.bin"], files["gltf_buffer_3.bin"], files["skin.png"]
+    r = _post(client, files)
+    assert r.status_code == 400 and r.json()["where"] == "head.gltf", r.json()
+    error = r.json()["error"]
+    assert "names gltf_buffer_1.bin, gltf_buffer_3.bin, skin.png, not among the uploaded files" in error, error
+
+
+def test_obj_uploaded_with_its_sidecars_is_as_read_by_path(client, tmp_path):
+    mesh = _edited()
+    paths = save_model(mesh, tmp_path, "head", required_points=mesh.points)
+    by_path = read_model(tmp_path / "head.obj")
+    r = _post(client, {p.name: p.read_bytes() for p in paths})
+    assert r.status_code == 200, r.text
+    up = client.app.state.session.mesh
+    assert up.parts == by_path.parts == mesh.parts and up.points == by_path.points == {"2.1": 5, "9.3": 11}
+    assert np.array_equal(up.vertices, by_path.vertices) and np.array_equal(up.triangles, by_path.triangles)
+    assert sorted(r.json()["parts"]) == ["skin", "teeth_upper"] and r.json()["points"] == {"2.1": 5, "9.3": 11}
+    # the OBJ alone is one skin without points, as read by path without its sidecars
+    alone = _post(client, {"head.obj": paths[0].read_bytes()}).json()
+    assert alone["parts"] == ["skin"] and alone["points"] == {}
+    # a bad sidecar names itself, the uploaded name
+    r = _post(client, {"head.obj": paths[0].read_bytes(), "head.points.json": b'{"2.1": 100000}'})
+    assert r.status_code == 400 and r.json()["where"] == "head.points.json" and "vertex 100000" in r.json()["error"]
+
+
+def test_obj_upload_takes_its_mtl_and_texture():
+    obj = b"mtllib head.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl skin\nf 1 2 3\n"
+    mtl = b"newmtl skin\nKd 1 1 1\nmap_Kd -s 1 1 1 skin.png\n"
+    mesh = read_upload([("head.obj", obj), ("head.mtl", mtl), ("skin.png", _png())])
+    assert len(mesh.triangles) == 1 and mesh.part_names == ("skin",)
+
+
+@pytest.mark.parametrize("files, where, problem", [
+    ([("a.obj", b"v 0 0 0\n"), ("b.glb", b"glTF")], "a.obj, b.glb", "here 2 model files (a.obj, b.glb)"),
+    ([("head.points.json", b"{}")], "head.points.json", "here no model file"),
+    ([], "upload", "here no model file"),
+    ([("head.obj", b"v 0 0 0\n"), ("other.points.json", b"{}")], "other.points.json",
+     "other.points.json not used by head.obj"),
+    ([("head.stl", b"solid x\nendsolid x\n"), ("head.parts.json", b"{}")], "head.parts.json", "not used by head.stl"),
+    ([("head.obj", b"v 0 0 0\n"), ("x/head.obj", b"v 0 0 0\n")], "head.obj", "two uploaded files are named head.obj"),
+])
+def test_upload_sets_refused_with_one_error(files, where, problem):
+    with pytest.raises(EditError) as err:
+        read_upload(files)
+    assert err.value.where == where and problem in err.value.message, str(err.value)
+
+
+def test_upload_refusals_through_the_api(client):
+    r = _post(client, [("a.obj", b"v 0 0 0\n"), ("b.obj", b"v 0 0 0\n")])
+    assert r.status_code == 400 and "2 model files" in r.json()["error"], r.json()
+    # the limit is on the whole request: two files each under it, together over it
+    big = b"v 0 0 0\n" * 13_000
+    r = _post(client, [("head.obj", big), ("head.points.json", big)])
+    assert r.status_code == 413 and "all files together" in r.json()["error"], r.json()
+    assert client.get("/api/model").status_code == 400  # nothing was loaded
+
+
+def test_traversal_looking_names_are_only_keys_among_the_uploaded_files(client, tmp_path):
+    """Folders in an uploaded name are dropped; a URI finds only an uploaded file of its last name: a real file
+    on disk at the URI's path is never read."""
+    mesh = _edited()
+    paths = save_model(mesh, tmp_path, "head", required_points=mesh.points)
+    r = _post(client, [("../../head.obj", paths[0].read_bytes()), ("..\\..\\head.parts.json", paths[2].read_bytes()),
+                       ("/etc/head.points.json", paths[1].read_bytes())])
+    assert r.status_code == 200, r.text
+    assert r.json()["source"] == "head.obj" and r.json()["points"] == {"2.1": 5, "9.3": 11}
+    files = _gltf_files()
+    doc = json.loads(files["head.gltf"])
+    doc["buffers"][0]["uri"] = "../../../gltf_buffer_0.bin"
+    doc["buffers"][1]["uri"] = "%2E%2E/gltf%5Fbuffer%5F1.bin"
+    files["head.gltf"] = json.dumps(doc).encode()
+    assert _post(client, files).status_code == 200
+    _check_scene_mesh(client.app.state.session.mesh)
+    # a buffer at an absolute path that exists on disk: refused as missing from the upload, not read
+    on_disk = tmp_path / "gltf_buffer_0.bin"
+    on_disk.write_bytes(files.pop("gltf_buffer_0.bin"))
+    doc["buffers"][0]["uri"] = str(on_disk)
+    files["head.gltf"] = json.dumps(doc).encode()
+    r = _post(client, files)
+    assert r.status_code == 400 and str(on_disk) in r.json()["error"], r.json()
