@@ -134,8 +134,8 @@ def _obj_companions(data: bytes, model: str, files: dict[str, bytes]) -> list[st
     files it names and the texture maps those name (accepted, not read: parts come from groups or the sidecar)."""
     stem = model[: -len(".obj")]
     names = [stem + s for s in SIDECARS]
-    text = data.decode("utf-8", "replace")
-    mtls = [_plain_name(n) for line in text.splitlines() if line.startswith("mtllib") for n in line.split()[1:]]
+    lines = re.findall(rb"^[ \t]*mtllib[ \t]+([^\r\n]+)", data, re.M)
+    mtls = [_plain_name(n) for line in lines for n in line.decode("utf-8", "replace").split()]
     names += mtls
     for mtl in mtls:
         for line in files.get(mtl, b"").decode("utf-8", "replace").splitlines():

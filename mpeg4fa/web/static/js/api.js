@@ -49,11 +49,13 @@ export async function api(path, body, { quiet = false } = {}) {
   }
 }
 
-export async function upload(file) {
+// One model file and its companions (a .gltf's .bin and images; NAME.points.json / NAME.parts.json of an OBJ
+// saved by the editor), all in one request: the server finds each by name among them.
+export async function upload(files) {
   busy(+1);
   try {
     const form = new FormData();
-    form.append("file", file, file.name);
+    for (const file of files) form.append("file", file, file.name);
     return await answer(await fetch("/api/upload", { method: "POST", body: form }));
   } catch (e) {
     setStatus(e instanceof ApiError ? `error in ${e.where}: ${e.error}` : `error: ${e.message}`, "error");

@@ -364,9 +364,14 @@ function wire() {
     try { show(await api("/api/load", { source: "head" }), { frame: true }); setStatus("loaded the head", "ok"); } catch { /* shown */ }
   });
   $("upload-file").addEventListener("change", async (e) => {
-    const file = e.target.files[0];
-    if (!file) return;
-    try { show(await upload(file), { frame: true }); setStatus(`loaded ${file.name}`, "ok"); } catch { /* shown */ }
+    const files = [...e.target.files];
+    if (!files.length) return;
+    try {
+      const model = await upload(files);
+      show(model, { frame: true });
+      const others = files.length - 1;
+      setStatus(`loaded ${model.source}${others ? ` with ${others} more file${others > 1 ? "s" : ""}` : ""}`, "ok");
+    } catch { /* shown */ }
     e.target.value = "";
   });
   $("btn-frame").addEventListener("click", () => view.frame());
