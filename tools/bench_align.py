@@ -17,6 +17,12 @@ word onsets found here (each word's first aligned phone) are compared with those
 route that checks what the mapping onto espeak-ng's phones keeps of pocketsphinx's answer; for DTW it
 is an independent aligner's word times. A hand-made reference it is not; that is :data:`HAND_ONSETS`, nine
 phone onsets of one recording read off its spectrogram, against which both aligners are scored too.
+
+Fit (``fit`` in the JSON): every recording (the synthetic ones in two voices, and the LibriVox ones
+with ``--human``) aligned with the fit check off to (a) its own transcript, (b) another sentence's of
+about the same length (each of the others), (c) its own words rotated by three; each aligner's fit score
+(:attr:`~mpeg4fa.speech.align.Alignment.fit`), and for DTW its ratio to a baseline, the path to the
+reference played backwards. What chose :data:`~mpeg4fa.speech.align.core.FIT_LIMITS`.
 """
 from __future__ import annotations
 
@@ -31,7 +37,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from mpeg4fa.speech.align import Recording, align_recording  # noqa: E402
+from mpeg4fa.speech.align import Recording, align_recording, read_recording  # noqa: E402
 from mpeg4fa.speech.tts.espeak import EspeakEngine  # noqa: E402
 
 STOPS = {"P", "B", "T", "D", "K", "G", "CH", "JH"}
@@ -158,6 +164,84 @@ def run_human(folder: Path) -> list[dict]:
     return rows
 
 
+FIT_CASES = [("en-gb", 140), ("en-us+f3", 210)]
+
+
+def _reversed_baseline(al, rec) -> float:
+    """DTW's fit relative to a baseline of the same recording and voice with nothing in common: its path
+    cost over the cost of the path to the reference played backwards (the same frames, in no useful order)."""
+    from mpeg4fa.speech.align import dtw
+    from mpeg4fa.speech.align.recording import resample
+
+    ref = resample(al.reference.speech.samples.astype(np.float64) / 32768.0, al.reference.speech.rate, dtw.RATE)
+    path, alpha, cost = dtw.align(ref, resample(rec.floats(), rec.rate, dtw.RATE))
+    a = dtw.features(ref)[::-1]
+    b = dtw.features(resample(rec.floats(), rec.rate, dtw.RATE), dtw.RATE, alpha)
+    back = dtw.dtw_path(a, b)
+    return cost / float(np.sqrt(((a[back[:, 0]] - b[back[:, 1]]) ** 2).sum(axis=1)).mean())
+
+
+def _fit_of(rec, text: str, method: str) -> tuple[float | str, float | None]:
+    """The alignment's fit score (check off) or why it was refused before the fit was scored (no path,
+    or a length that does not fit); for DTW also :func:`_reversed_baseline`."""
+    from mpeg4fa.speech.align import AlignError
+
+    try:
+        al = align_recording(rec, text, lang="en", method=method, fit_check=False)
+    except AlignError as exc:
+        return ("no path" if "no path" in str(exc) or "words" in str(exc) else "length"), None
+    return al.fit, (_reversed_baseline(al, rec) if method == "dtw" else None)
+
+
+def _shuffled(text: str) -> str:
+    """The transcript's words rotated by three: the same phones, in the wrong order."""
+    words = text.rstrip(".?!").split()
+    return " ".join(words[3:] + words[:3]) if len(words) > 3 else " ".join(reversed(words))
+
+
+def run_fit(sentences: list[str], human: Path | None) -> list[dict]:
+    """The fit score (mpeg4fa.speech.align.core.FIT_LIMITS) of each recording aligned to (a) its own
+    transcript, (b) each other sentence's / recording's (other words, about the same length), (c) its own
+    words rotated by three (the same phones, in the wrong order); per aligner, a row each."""
+    items = []
+    for voice, rate in FIT_CASES:
+        for text in sentences:
+            rec, _ = recording(text, voice, rate)
+            items.append((f"{voice}@{rate}", rec, text, [s for s in sentences if s != text]))
+    if human:
+        wavs = sorted(w for w in human.glob("*.wav") if w.with_suffix(".txt").exists())
+        texts = [w.with_suffix(".txt").read_text(encoding="utf-8").strip() for w in wavs]
+        for wav, text in zip(wavs, texts):
+            items.append(("librivox", read_recording(wav), text, [t for t in texts if t != text]))
+    rows = []
+    for source, rec, right, wrongs in items:
+        for method in ("pocketsphinx", "dtw"):
+            for kind, text in [("right", right)] + [("wrong", w) for w in wrongs] + [("rotated", _shuffled(right))]:
+                fit, relative = _fit_of(rec, text, method)
+                rows.append({"source": source, "recording": Path(rec.name).name, "method": method, "kind": kind,
+                             "transcript": text, "fit": fit, "fit_vs_reversed": relative})
+    return rows
+
+
+def _fit_summary(rows: list[dict]) -> list[dict]:
+    """Per aligner, measure and source: the worst score of the right transcripts, the best of the wrong and
+    rotated ones that got a score (pocketsphinx's is a log-likelihood ratio, higher is better; DTW's are
+    a distance and a ratio of distances, lower is better), and how many were refused before scoring."""
+    out = []
+    for method, measure in (("pocketsphinx", "fit"), ("dtw", "fit"), ("dtw", "fit_vs_reversed")):
+        worst, best = (min, max) if method == "pocketsphinx" else (max, min)
+        for source in sorted({r["source"] for r in rows}):
+            mine = [r for r in rows if r["method"] == method and r["source"] == source]
+            row = {"method": method, "measure": measure, "source": source}
+            for kind, pick in (("right", worst), ("wrong", best), ("rotated", best)):
+                these = [r for r in mine if r["kind"] == kind]
+                scored = [r[measure] for r in these if isinstance(r["fit"], float)]
+                row[kind] = {"n": len(these), "refused": len(these) - len(scored),
+                             "worst" if kind == "right" else "best": pick(scored) if scored else None}
+            out.append(row)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--json", type=Path, help="write the rows here")
@@ -177,6 +261,20 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{voice:<10} {rate:>4}  {method:<13} {str(r['reference_rate']):>7}  {100 * r['within_30ms']:5.1f}%  "
                   f"{r['mean_ms']:4.0f}ms  {r['p90_ms']:4.0f}ms  {r['paired']:>4}/{r['phones']:<6}  "
                   f"{r['x_real_time']:11.1f}", flush=True)
+    fit = run_fit(sentences, args.human)
+    fit_rows = _fit_summary(fit)
+    print("\nfit (mpeg4fa.speech.align.core.FIT_LIMITS): each recording aligned to its own transcript, to another")
+    print("sentence's, to its own words rotated by three. pocketsphinx: per-frame log-likelihood ratio of the forced")
+    print("alignment to a free phone decoding (higher: better fit); dtw: mean path distance, and that over the path's")
+    print("to the reference played backwards (lower: better). refused: no path, or the length check")
+    print(f"{'aligner':<13} {'measure':<16} {'source':<13} {'right: worst':>13} {'wrong: best':>11} {'refused':>9}  "
+          f"{'rotated: best':>13} {'refused':>7}")
+    fmt = lambda v: "-" if v is None else f"{v:.2f}"  # noqa: E731
+    for r in fit_rows:
+        w, o = r["wrong"], r["rotated"]
+        print(f"{r['method']:<13} {r['measure']:<16} {r['source']:<13} {fmt(r['right']['worst']):>13} "
+              f"{fmt(w['best']):>11} {w['refused']:>3} of {w['n']:<3}  {fmt(o['best']):>13} {o['refused']:>2} of "
+              f"{o['n']:<3}", flush=True)
     human, hand = [], []
     if args.human:
         human = run_human(args.human)
@@ -195,7 +293,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{r['method']:<13} {r['onsets']:>6}  {100 * r['within_30ms']:5.1f}%  {r['median_ms']:4.0f}ms  "
                   f"{r['max_ms']:4.0f}ms")
     if args.json:
-        args.json.write_text(json.dumps({"synthetic": rows, "human": human, "hand": hand}, indent=1) + "\n",
+        args.json.write_text(json.dumps({"synthetic": rows, "human": human, "hand": hand, "fit": fit,
+                                          "fit_summary": fit_rows}, indent=1) + "\n",
                              encoding="utf-8")
         print(f"wrote {args.json}")
     return 0

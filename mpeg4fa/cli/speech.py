@@ -181,7 +181,8 @@ def _encode_visemes(args: argparse.Namespace) -> int:
 
 
 def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
-    """``--speech``, ``--transcript``, ``--aligner``: a recording to animate instead of text to speak."""
+    """``--speech``, ``--transcript``, ``--aligner``, ``--no-fit-check``: a recording to animate instead of
+    text to speak."""
     from ..speech.align import METHODS
 
     g = p.add_argument_group("recorded speech: lip sync to a recording",
@@ -195,14 +196,18 @@ def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
         g.add_argument("--aligner", choices=METHODS, default="auto",
                        help="auto (default: pocketsphinx for English, else dtw), pocketsphinx (English) or dtw "
                             "(any language: warping against espeak-ng's rendering)"),
+        g.add_argument("--no-fit-check", dest="fit_check", action="store_false",
+                       help="align even when pocketsphinx finds the transcript's words are not what the "
+                            "recording says (its acoustic fit below the limit)"),
     ]
 
 
 def _recording_args(args: argparse.Namespace, given_text: bool, what: str) -> bool:
     """Whether a recording is to be animated; UsageError for options that clash with one (or lack it)."""
     if args.speech is None:
-        if args.transcript is not None or args.aligner != "auto":
-            flag = "--transcript" if args.transcript is not None else "--aligner"
+        if args.transcript is not None or args.aligner != "auto" or not args.fit_check:
+            flag = ("--transcript" if args.transcript is not None else
+                    "--aligner" if args.aligner != "auto" else "--no-fit-check")
             raise UsageError(f"{flag} goes with --speech REC.wav", hint="add --speech, or drop " + flag)
         return False
     if args.transcript is None:
@@ -225,7 +230,7 @@ def _aligned(args: argparse.Namespace, inputs: dict, outputs: dict):
     refuse_overlaps({**inputs, "--speech": args.speech, "--transcript": source.path}, outputs)
     text, name = text_input.read_text(source)
     return align_recording(args.speech, text, lang=args.lang, voice=args.voice, rate=args.rate,
-                           method=args.aligner, name=name), name
+                           method=args.aligner, name=name, fit_check=args.fit_check), name
 
 
 def speech_options(g) -> list[argparse.Action]:

@@ -115,17 +115,19 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
 def encode_recording(recording, transcript: str, *, lang: str = "auto", voice: str | None = None,
                      rate: int | None = None, method: str = "auto", fps: float = 25.0, level: str = "high",
                      idle: bool = False, seed: int = 0, name: str = "<transcript>", fold: bool = True,
-                     compact: bool = True) -> Encoded:
+                     compact: bool = True, fit_check: bool = True) -> Encoded:
     """A recording (WAV path or :class:`~mpeg4fa.speech.align.Recording`) and its tagged transcript -> the
     FapStream of the face saying it in time with the recording (:func:`mpeg4fa.speech.align.align_recording`:
-    ``method`` auto, pocketsphinx or dtw; ``voice``/``rate`` espeak-ng's reference). The Encoded's speech is
+    ``method`` auto, pocketsphinx or dtw; ``voice``/``rate`` espeak-ng's reference; ``fit_check`` False aligns
+    a transcript whose words do not fit the recording anyway). The Encoded's speech is
     the recording's own audio (mono, at its rate); the rest is :func:`encode_text`'s path.
     """
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
     from mpeg4fa.speech.align import align_recording
 
-    aligned = align_recording(recording, transcript, lang=lang, voice=voice, rate=rate, method=method, name=name)
+    aligned = align_recording(recording, transcript, lang=lang, voice=voice, rate=rate, method=method, name=name,
+                              fit_check=fit_check)
     return encode_utterance(aligned.utterance, fps=fps, level=level, idle=idle, seed=seed, fold=fold,
                             compact=compact)
 

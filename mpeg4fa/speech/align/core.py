@@ -19,6 +19,13 @@ time to the recording's, and every phoneme, viseme, word, mark and expression cu
 
 ``auto`` takes pocketsphinx for English transcripts of letter words (a word the CMU dictionary lacks is
 added, pronounced as espeak-ng says it), DTW for the rest.
+
+Either aligner finds some path for a transcript of about the right length, so the length and coverage
+checks pass other words too. pocketsphinx mostly finds none for them (its beam loses the path: "no path");
+where it does, the fit check refuses them (:func:`check_fit`): the forced alignment's acoustic score
+against a free phone decoding's, per frame, right transcripts -3 to -28, wrong ones -51 and below
+(tools/bench_align.py). DTW's mean path cost is reported but not judged: on human speech the right
+transcript's overlaps a wrong one's, against any baseline tried.
 """
 from __future__ import annotations
 
@@ -57,6 +64,10 @@ class Alignment:
     anchors: tuple[np.ndarray, np.ndarray]
     coverage: float
     seconds: float
+    fit: float = float("nan")
+    """How well the transcript fits the recording (:data:`FIT_LIMITS`): pocketsphinx's per-frame
+    log-likelihood ratio of the forced alignment to a free phone decoding, or DTW's mean distance
+    along the path."""
 
     def warp(self, t):
         """Reference time(s) -> recording time(s)."""
@@ -164,12 +175,12 @@ def _monotone(ref: np.ndarray, rec: np.ndarray, ref_end: float, rec_end: float) 
     return uniq, np.maximum.accumulate(out)
 
 
-def _sphinx_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray]:
+def _sphinx_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray, float]:
     from mpeg4fa.speech.align.sphinx import ESPEAK_ARPABET, STOPS, align_words
 
     text = ref.markup.text
     tokens = word_tokens(text)
-    aligned = align_words(rec, [w.lower() for _, _, w in tokens])
+    aligned, fit = align_words(rec, [w.lower() for _, _, w in tokens])
     phones = [e for e in ref.speech.phonemes() if not e.text.startswith("_")]
     words = sorted(ref.speech.words(), key=lambda e: e.start)
     first = snap_to_tokens([w.position for w in words], tokens)
@@ -198,15 +209,15 @@ def _sphinx_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndar
         if not after or after[0][0] not in STOPS:  # a word's end, unless it is the next stop's closure
             ref_t.append(mine[-1].end)
             rec_t.append(aligned[stop_k - 1].end)
-    return np.array(ref_t), np.array(rec_t)
+    return np.array(ref_t), np.array(rec_t), fit
 
 
-def _dtw_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray]:
+def _dtw_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray, float]:
     from mpeg4fa.speech.align import dtw
 
-    path, _, _ = dtw.align(resample(ref.speech.samples.astype(np.float64) / 32768.0, ref.speech.rate, dtw.RATE),
-                           resample(rec.floats(), rec.rate, dtw.RATE))
-    return dtw.warp_anchors(path)
+    path, _, cost = dtw.align(resample(ref.speech.samples.astype(np.float64) / 32768.0, ref.speech.rate, dtw.RATE),
+                              resample(rec.floats(), rec.rate, dtw.RATE))
+    return (*dtw.warp_anchors(path), cost)
 
 
 def _warped(ref: Utterance, rec: Recording, anchors, engine: str) -> Utterance:
@@ -224,12 +235,30 @@ def _no_fit(rec: Recording, why: str) -> AlignError:
                       hint="check the transcript is what the recording says (and --lang its language)")
 
 
+FIT_LIMITS = {"pocketsphinx": -40.0, "dtw": None}
+"""The worst fit score each aligner accepts (None: no check; see :func:`check_fit`)."""
+
+
+def check_fit(method: str, fit: float, rec: Recording, name: str) -> None:
+    """Raise :class:`AlignError` if the transcript's words are not what the recording says: the
+    aligners always find some path, so a wrong transcript of about the right length passes the
+    length and coverage checks; its acoustic fit does not (figures: tools/bench_align.py)."""
+    limit = FIT_LIMITS.get(method)
+    if limit is None or fit >= limit:
+        return
+    raise AlignError(f"the transcript does not fit the recording: {method}'s fit score {fit:.1f} is below "
+                     f"{limit:.1f} (the words aligned are not what is said)", where=f"{rec.name} / {name}",
+                     hint="check that the transcript is what is said in the recording; --no-fit-check to "
+                          "align anyway")
+
+
 def align_recording(recording: Recording | str | os.PathLike, transcript: str | Markup, *, lang: str = "auto",
                     voice: str | None = None, rate: int | None = None, method: str = "auto",
-                    name: str = "<transcript>") -> Alignment:
+                    name: str = "<transcript>", fit_check: bool = True) -> Alignment:
     """Time ``transcript`` (tagged text or a parsed :class:`Markup`) on ``recording`` (a WAV path or a
     :class:`Recording`); see the module docstring. ``voice``/``rate``: espeak-ng's reference (default
-    the language's voice at 175 wpm; DTW picks its own rate unless ``rate`` is given).
+    the language's voice at 175 wpm; DTW picks its own rate unless ``rate`` is given). ``fit_check``:
+    refuse a transcript whose words are not what the recording says (:func:`check_fit`).
 
     Raises :class:`AlignError` for a missing, unreadable or silent recording and a transcript that
     does not fit it, :class:`~mpeg4fa.speech.errors.TTSError` for an unknown language,
@@ -257,7 +286,9 @@ def align_recording(recording: Recording | str | os.PathLike, transcript: str | 
         wpm = int(np.clip(round(DEFAULT_RATE / ratio), *RATE_RANGE))
         if abs(wpm - DEFAULT_RATE) > 5:
             ref = speak(markup, engine, lang=lang, voice=voice, rate=wpm)
-    anchors = _sphinx_anchors(rec, ref) if how == "pocketsphinx" else _dtw_anchors(rec, ref)
+    *anchors, fit = _sphinx_anchors(rec, ref) if how == "pocketsphinx" else _dtw_anchors(rec, ref)
+    if fit_check:
+        check_fit(how, fit, rec, name)
     anchors = _monotone(*anchors, ref.speech.duration, rec.duration)
     utterance = _warped(ref, rec, anchors, "recording")
     start, end, _ = _speech_seconds(utterance)
@@ -266,4 +297,4 @@ def align_recording(recording: Recording | str | os.PathLike, transcript: str | 
     if inside < MIN_COVERAGE:
         raise _no_fit(rec, f"the aligned transcript spans {100 * inside:.0f} % of the recording's speech "
                            f"({lo:.2f}-{hi:.2f} s)")
-    return Alignment(utterance, ref, how, anchors, float(inside), time.perf_counter() - began)
+    return Alignment(utterance, ref, how, anchors, float(inside), time.perf_counter() - began, float(fit))

@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -101,24 +102,68 @@ def pcm16k(x: np.ndarray, rate: int, seed: int = 0) -> bytes:
     return np.clip(np.rint(y), -32768, 32767).astype("<i2").tobytes()
 
 
+@lru_cache(maxsize=1)
+def free_decoder():
+    """A second decoder on the same model, searching a phone loop (the bundled phone trigram LM,
+    ``allphone``): the best the model can say of the audio when it need not say the transcript."""
+    from pocketsphinx import Decoder, get_model_path
+
+    phone_lm = Path(get_model_path()) / "en-us" / "en-us-phone.lm.bin"
+    return Decoder(samprate=RATE, allphone=str(phone_lm), bestpath=False, loglevel="FATAL")
+
+
+def _acoustic_score(decoder) -> tuple[float, int]:
+    """The last search's acoustic log-likelihood (pocketsphinx's log units) summed over its segments,
+    and the frames of its segments that are words (not silence or a filler)."""
+    logmath = decoder.get_logmath()
+    segments = list(decoder.seg())
+    words = sum(s.end_frame - s.start_frame + 1 for s in segments
+                if s.word not in _FILLERS and s.word[:1] not in "<[+")
+    return float(sum(logmath.log(s.ascore) for s in segments)), words
+
+
+def fit_score(pcm: bytes, forced: tuple[float, int]) -> float:
+    """The forced alignment's acoustic log-likelihood (``forced``: it and its word frames, from
+    :func:`force_align_scored`) minus a free phone-loop decoding's of the same audio (:func:`free_decoder`),
+    per frame of the aligned words: near 0 when the transcript is what is said, far below when the
+    alignment had to force other words onto the audio (silences score alike in both and would only
+    dilute it). Units: pocketsphinx's log scores (base 1.0001, of its scaled senone scores) per 10 ms."""
+    decoder = free_decoder()
+    decoder.start_utt()
+    decoder.process_raw(pcm, full_utt=True)
+    decoder.end_utt()
+    return (forced[0] - _acoustic_score(decoder)[0]) / max(forced[1], 1)
+
+
 def force_align(pcm: bytes, words: list[str]):
     """pocketsphinx's alignment of ``words`` (lower case, in its dictionary) to ``pcm`` (:func:`pcm16k`):
     words first, then the phones inside them; raises ``RuntimeError`` when it finds no path."""
+    return force_align_scored(pcm, words)[0]
+
+
+def force_align_scored(pcm: bytes, words: list[str]):
+    """:func:`force_align`, and the word pass's acoustic score (for :func:`fit_score`)."""
     decoder = shared_decoder()
     decoder.set_align_text(" ".join(words))
+    forced = (0.0, 0)
     for second_pass in (False, True):
         if second_pass:
+            if decoder.hyp() is None:
+                raise RuntimeError("no path through the transcript's words")
+            forced = _acoustic_score(decoder)
             decoder.set_alignment()
         decoder.start_utt()
         decoder.process_raw(pcm, full_utt=True)
         decoder.end_utt()
-    return decoder.get_alignment()
+    return decoder.get_alignment(), forced
 
 
-def align_words(rec: Recording, words: list[str]) -> list[Word]:
-    """Force-align ``words`` (lower case, in the CMU dictionary) to the recording."""
+def align_words(rec: Recording, words: list[str]) -> tuple[list[Word], float]:
+    """Force-align ``words`` (lower case, in the CMU dictionary) to the recording: the words, and how
+    well they fit it (:func:`fit_score`)."""
+    pcm = pcm16k(rec.floats(), rec.rate)
     try:
-        alignment = force_align(pcm16k(rec.floats(), rec.rate), words)
+        alignment, forced = force_align_scored(pcm, words)
     except RuntimeError as exc:
         raise AlignError(f"the transcript does not fit the recording: pocketsphinx found no path through it ({exc})",
                          where=rec.name, hint="check the transcript is what the recording says") from None
@@ -134,4 +179,4 @@ def align_words(rec: Recording, words: list[str]) -> list[Word]:
         raise AlignError("the transcript does not fit the recording: pocketsphinx aligned "
                          f"{len(out)} of its {len(words)} words", where=rec.name,
                          hint="check the transcript is what the recording says")
-    return out
+    return out, fit_score(pcm, forced)
