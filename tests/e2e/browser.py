@@ -3,8 +3,12 @@ the flags it needs on a headless machine with a closed network, and the module-l
 to install when either is missing."""
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
 import socket
+from pathlib import Path
+from typing import Iterator
 
 import pytest
 
@@ -28,3 +32,32 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def fresh_folder(path: Path) -> Path:
+    """An empty artefact folder (the screenshots of the last run removed)."""
+    if path.exists():
+        shutil.rmtree(path)
+    path.mkdir(parents=True)
+    return path
+
+
+@contextlib.contextmanager
+def editor_page(base: str, *, height: int = 820) -> Iterator:
+    """The editor page at ``base`` in a new headless chromium, ready; ``page.errors`` collects script faults
+    (the 400s a scenario provokes are logged by chromium as failed loads: those do not count)."""
+    sync_api = require_browser()
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        page = browser.new_page(viewport={"width": 1280, "height": height})
+        errors: list[str] = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.on("console", lambda m: errors.append(m.text)
+                if m.type == "error" and not m.text.startswith("Failed to load resource") else None)
+        page.goto(base + "/")
+        page.wait_for_selector("body[data-ready='1']", timeout=15_000)
+        page.errors = errors
+        try:
+            yield page
+        finally:
+            browser.close()

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import threading
 import time
 from pathlib import Path
@@ -21,12 +20,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from e2e.browser import ARGS, CHROMIUM, free_port, require_browser
+from e2e.browser import editor_page, free_port, fresh_folder, require_browser
 
 ARTEFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "editor"
 BACKGROUND = (0x2B, 0x2F, 0x36)
 
-sync_api = require_browser()
+require_browser()  # skips the module, saying what to install, without playwright or chromium
 
 import httpx  # noqa: E402
 import uvicorn  # noqa: E402
@@ -57,22 +56,9 @@ def server(tmp_path_factory, procedural_face):
 
 @pytest.fixture(scope="module")
 def page(server):
-    if ARTEFACTS.exists():
-        shutil.rmtree(ARTEFACTS)
-    ARTEFACTS.mkdir(parents=True)
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = browser.new_page(viewport={"width": 1280, "height": 820})
-        errors: list[str] = []
-        pg.on("pageerror", lambda e: errors.append(str(e)))
-        # the 400s the scenario provokes are logged by chromium as failed loads: only script faults count
-        pg.on("console", lambda m: errors.append(m.text)
-              if m.type == "error" and not m.text.startswith("Failed to load resource") else None)
-        pg.goto(server[0] + "/")
-        pg.wait_for_selector("body[data-ready='1']", timeout=15_000)
-        pg.errors = errors
+    fresh_folder(ARTEFACTS)
+    with editor_page(server[0]) as pg:
         yield pg
-        browser.close()
 
 
 def shot(page, name: str) -> Path:

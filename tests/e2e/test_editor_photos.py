@@ -14,7 +14,6 @@ lives on the main thread, which Playwright holds.
 from __future__ import annotations
 
 import io
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -24,10 +23,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from e2e.browser import ARGS, CHROMIUM, free_port, require_browser
+from e2e.browser import editor_page, free_port, fresh_folder, require_browser
 
 
-sync_api = require_browser()
+require_browser()  # skips the module, saying what to install, without playwright or chromium
 
 import httpx  # noqa: E402
 from PIL import Image  # noqa: E402
@@ -94,22 +93,10 @@ def photo_files(tmp_path_factory, procedural_face):
 
 @pytest.fixture(scope="module")
 def page(server):
-    if ARTEFACTS.exists():
-        shutil.rmtree(ARTEFACTS)
-    ARTEFACTS.mkdir(parents=True)
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        pg = browser.new_page(viewport={"width": 1280, "height": 860})
-        errors: list[str] = []
-        pg.on("pageerror", lambda e: errors.append(str(e)))
-        pg.on("console", lambda m: errors.append(m.text)
-              if m.type == "error" and not m.text.startswith("Failed to load resource") else None)
-        pg.goto(server[0] + "/")
-        pg.wait_for_selector("body[data-ready='1']", timeout=15_000)
+    fresh_folder(ARTEFACTS)
+    with editor_page(server[0], height=860) as pg:
         pg.wait_for_selector("#panel-photos[data-ready='1']", state="attached", timeout=15_000)
-        pg.errors = errors
         yield pg
-        browser.close()
 
 
 def shot(page, name: str) -> Path:

@@ -5,7 +5,6 @@ the buffer. Screenshots go to ``test-artifacts/editor-upload/`` (ignored by git)
 from __future__ import annotations
 
 import json
-import shutil
 import threading
 import time
 from pathlib import Path
@@ -13,12 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from e2e.browser import ARGS, CHROMIUM, free_port, require_browser
+from e2e.browser import editor_page, free_port, fresh_folder, require_browser
 
 ARTEFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "editor-upload"
 BACKGROUND = (0x2B, 0x2F, 0x36)
 
-sync_api = require_browser()
+require_browser()  # skips the module, saying what to install, without playwright or chromium
 
 import trimesh  # noqa: E402
 import uvicorn  # noqa: E402
@@ -55,18 +54,8 @@ def test_upload_an_obj_with_its_sidecars_and_a_gltf_without_its_buffer(base, tmp
     by_path = read_model(paths[0])
     assert len(by_path.part_names) > 1 and len(by_path.points) == 81
 
-    if ARTEFACTS.exists():
-        shutil.rmtree(ARTEFACTS)
-    ARTEFACTS.mkdir(parents=True)
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        page = browser.new_page(viewport={"width": 1280, "height": 820})
-        errors: list[str] = []
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.on("console", lambda m: errors.append(m.text)
-                if m.type == "error" and not m.text.startswith("Failed to load resource") else None)
-        page.goto(base + "/")
-        page.wait_for_selector("body[data-ready='1']", timeout=15_000)
+    fresh_folder(ARTEFACTS)
+    with editor_page(base) as page:
         assert page.locator("#upload-file").get_attribute("multiple") is not None
 
         page.set_input_files("#upload-file", [str(q) for q in paths])
@@ -101,5 +90,5 @@ def test_upload_an_obj_with_its_sidecars_and_a_gltf_without_its_buffer(base, tmp
         text = page.locator("#status").inner_text()
         assert doc["buffers"][-1]["uri"] in text and "box.gltf" in text, text
         assert page.evaluate("window.editor.state.model.source") == "myhead.obj"
-        browser.close()
+        errors = page.errors
     assert not errors, errors
