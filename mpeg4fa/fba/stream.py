@@ -19,6 +19,7 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from mpeg4fa.fba.errors import FbaError
+from mpeg4fa.spec.frame_rate import FPS_MAX, FPS_MIN, FPS_RANGE_TEXT, FPS_STEPS, FRAME_RATE_BITS
 from mpeg4fa.spec import FAP_GROUP_SLICES, N_BAP_GROUPS, N_BAPS, N_FAP_GROUPS, N_FAPS  # noqa: F401  (the codec's vocabulary)
 
 FACE = 1
@@ -45,7 +46,7 @@ class FrameRate:
     @property
     def fps(self) -> float:
         """Frames per second, computed in floating point (never 0 for 29.97-type rates)."""
-        fps = self.frame_rate + self.seconds / 16.0
+        fps = self.frame_rate + self.seconds / FPS_STEPS
         return fps * 1000.0 / 1001.0 if self.frequency_offset else fps
 
     @classmethod
@@ -53,19 +54,26 @@ class FrameRate:
         """The closest representable rate: integer + sixteenths, with the 1000/1001 flag if it fits better.
 
         Raises :class:`~mpeg4fa.fba.errors.FbaError` for a rate the header cannot carry (not a finite
-        number, <= 0, below 1/16 or above 255 15/16 frames per second).
+        number, <= 0, or outside ``FPS_MIN``..``FPS_MAX`` of ``spec/frame_rate.csv``: 1/16 to
+        255 15/16 frames per second). The one home of this rule: every reader and the encoder call it.
         """
-        hint = "an intra header carries 1/16 to 255 15/16 frames per second"
+        hint = f"an intra header carries {FPS_RANGE_TEXT} frames per second"
         if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)):
             raise FbaError(f"frame rate {fps!r} is not a number", hint=hint)
+        fps = float(fps)
         if not math.isfinite(fps) or fps <= 0:
             raise FbaError(f"frame rate {fps:g} is not a positive finite number", hint=hint)
+        # checked before any arithmetic: 1e308 * 16 is infinity, which round() cannot make an integer
+        slack = 1.0 / (2 * FPS_STEPS)
+        if fps > FPS_MAX + slack or fps < (FPS_MIN - slack) * 1000.0 / 1001.0:
+            side = "more" if fps > 1 else "less"
+            raise FbaError(f"frame rate {fps:g} is {side} than the bitstream can carry", hint=hint)
         candidates = []
         for offset in (0, 1):
             nominal = fps * 1001.0 / 1000.0 if offset else fps
-            sixteenths = int(round(nominal * 16))
-            rate, seconds = divmod(sixteenths, 16)
-            if 0 < sixteenths and rate <= 255:
+            steps = int(round(nominal * FPS_STEPS))
+            rate, seconds = divmod(steps, FPS_STEPS)
+            if 0 < steps and rate < 1 << FRAME_RATE_BITS:
                 candidate = cls(rate, seconds, offset)
                 candidates.append((abs(candidate.fps - fps), offset, candidate))
         if not candidates:

@@ -16,6 +16,8 @@ import numpy as np
 from .bits import BitReader, BitWriter
 from .errors import FbaError, UnsupportedFeature
 from .params import PartSpec
+from mpeg4fa.spec.frame_rate import FRAME_RATE_BITS, FREQUENCY_OFFSET_BITS, SECONDS_BITS
+
 from .stream import FrameRate, PartParams, RangeSet, TimeCode
 
 MASK_NONE, MASK_HOLD, MASK_INTERPOLATE, MASK_ALL = 0, 1, 2, 3
@@ -163,8 +165,8 @@ def frame_rate(io, fr: FrameRate | None) -> FrameRate | None:
     if not io.flag(fr is not None, "is_frame_rate"):
         return None
     fr = fr or FrameRate(0)
-    return FrameRate(io.u(8, fr.frame_rate, "frame_rate"), io.u(4, fr.seconds, "seconds"),
-                     io.u(1, fr.frequency_offset, "frequency_offset"))
+    return FrameRate(io.u(FRAME_RATE_BITS, fr.frame_rate, "frame_rate"), io.u(SECONDS_BITS, fr.seconds, "seconds"),
+                     io.u(FREQUENCY_OFFSET_BITS, fr.frequency_offset, "frequency_offset"))
 
 
 def time_code(io, tc: TimeCode | None) -> TimeCode | None:
