@@ -66,10 +66,10 @@ def refuse_foreign(head: bytes, expected: str, fail: Callable[[str, str], Except
                    allowed: tuple[str, ...] = ()) -> None:
     """Raise ``fail(problem, hint)`` when ``head`` is a known kind other than ``expected`` (and not in ``allowed``).
 
-    ``problem`` reads ``"not EXPECTED: starts with 0x..., the signature of KIND"``.
+    ``problem`` reads ``"not EXPECTED: starts with 0xFFD8FFE0 (a JPEG image)"``, as the decoder's message does.
     """
     kind = foreign_kind(head)
     if kind is None or kind in allowed:
         return
-    raise fail(f"not {expected}: starts with {head_hex(head)}, the signature of {kind}",
-               f"give {expected}; the file's content, not its name, says what it is")
+    raise fail(f"not {expected}: starts with {head_hex(head)} ({kind})",
+               "a file's content, not its name, says what it is")

@@ -11,6 +11,7 @@ import numpy as np
 from . import syntax
 from .arith import decode_segment
 from .bits import BitReader
+from ..filetype import foreign_kind
 from .errors import FbaError
 from .params import BODY, FACE, FieldCoder, ValueCoder
 from .stacking import ZERO_BAP_MASK, ZERO_BAP_VALUES, StreamBuilder
@@ -69,8 +70,10 @@ class _Decoder:
             raise FbaError("stream is shorter than a start code: not an FBA stream", 0)
         code = r.read(32)
         if code not in (OBJECT_START_CODE, OBJECT_START_CODE_OLD):
-            raise FbaError(f"not an FBA stream: starts with 0x{code:08X}, expected the "
-                           f"fba_object_start_code 0x{OBJECT_START_CODE:08X}", 0)
+            more = next(n for n in (96, 64, 32, 0) if r.available(n))  # enough to tell MP4 and WAV too
+            kind = foreign_kind(code.to_bytes(4, "big") + (r.read(more).to_bytes(more // 8, "big") if more else b""))
+            raise FbaError(f"not an FBA stream: starts with 0x{code:08X}{f' ({kind})' if kind else ''}, expected "
+                           f"the fba_object_start_code 0x{OBJECT_START_CODE:08X}", 0)
         self.object_start_code = code
 
     def items(self) -> Iterator[Frame]:

@@ -5,6 +5,7 @@ import os
 from pathlib import Path
 
 from ..fba import FapStream, decode
+from ..filetype import refuse_foreign
 from ..fba.bits import START_CODE_PREFIX
 from .bap_text import SUPPORTED_VERSIONS as BAP_VERSIONS
 from .bap_text import read_bap
@@ -19,7 +20,10 @@ def sniff(path: str | os.PathLike) -> str:
     """'fba' when the file starts with a start code prefix; for text, 'bap' when the header line's version
     is a .bap one (3.1, 3.2), else 'fap' (whose reader then says what is wrong).
 
-    A missing or unreadable path (a directory) is a :class:`FormatError` naming it.
+    The one place a stream file's kind is told (every command reads streams through it): a file that
+    starts with another format's signature (JPEG, PNG, WAV, MP4, ZIP/GLB, gzip, PDF...,
+    :mod:`mpeg4fa.filetype`) is a :class:`FormatError` that names the format and the bytes, as the
+    decoder does. A missing or unreadable path (a directory) is a :class:`FormatError` naming it.
     """
     try:
         with open(path, "rb") as fh:
@@ -28,6 +32,9 @@ def sniff(path: str | os.PathLike) -> str:
         raise FormatError.from_os_error(os.fsdecode(path), exc) from None
     if len(head) >= 4 and int.from_bytes(head[:3], "big") == START_CODE_PREFIX:
         return "fba"
+    name = os.fsdecode(path)
+    refuse_foreign(head, "an FBA stream or a .fap/.bap text file",
+                   lambda problem, hint: FormatError.no_place(name, problem, hint), allowed=("UTF-16 text",))
     return "bap" if _text_version(head) in BAP_VERSIONS else "fap"
 
 
