@@ -11,7 +11,9 @@ first sentence is made, and a slow or stalled client costs the server one senten
 HTTP routes: ``/`` (the player page), ``/static`` (its script), ``/vendor/three`` (three.js as
 vendored for the editor, served from there), ``/head.glb`` (the head with its ARKit morph targets,
 :func:`mpeg4fa.export.gltf.build_glb`, built once on first request), ``/api/info``. Unknown routes
-answer ``{"error", "where"}`` with 404.
+answer ``{"error", "where"}`` with 404. Only the server's own page and loopback clients get in
+(:class:`mpeg4fa.guard.LocalOnly`): a foreign ``Host`` or ``Origin``, or a WebSocket handshake without
+``Origin``, is answered 403 before anything runs.
 """
 from __future__ import annotations
 
@@ -30,6 +32,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.face.model import FaceModel
+from mpeg4fa.guard import LocalOnly
 from mpeg4fa.serve import protocol
 from mpeg4fa.serve.flow import STALL_TIMEOUT, WINDOW, Flow, Stalled
 from mpeg4fa.serve.protocol import AUDIO_KIND, FBA_KIND, Buffer, ProtocolError, Say, Stop, error_message, pack
@@ -42,6 +45,7 @@ THREE = Path(__file__).resolve().parents[1] / "web" / "static" / "vendor" / "thr
 CHUNK = 0.2  # s of frames or audio per message
 RECORDS = 100  # utterance records kept (for tests, benchmarks and a look at a running server)
 CLOSE_POLICY = 1008  # WebSocket close code: policy violation (here: a stalled client)
+BODY_LIMIT = 65536  # bytes of an HTTP request body (no route takes one)
 
 
 @dataclass
@@ -112,6 +116,7 @@ def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak"
         warm_up(settings)
     app = FastAPI(title="mpeg4fa serve", docs_url=None, redoc_url=None, openapi_url=None)
     app.state.live = settings
+    app.add_middleware(LocalOnly, body_limit=BODY_LIMIT)
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException):

@@ -5,13 +5,16 @@ clock that starts ``prebuffer`` seconds (media) after the first frame and runs `
 time, reports its buffer every ``report_every`` seconds of real time, and counts *underruns*:
 frames or audio that arrive after their media time has already been played. ``speed > 1`` plays
 a long speech in less time: the server paces by the client's reports only, so it cannot tell.
-Used by the tests and ``tools/bench_serve.py``.
+Used by the tests and ``tools/bench_serve.py``. It sends the server's own origin (:func:`origin`) on
+the handshake, as the server's page does: the server refuses a WebSocket without one
+(:mod:`mpeg4fa.guard`).
 """
 from __future__ import annotations
 
 import json
 import time
 from dataclasses import dataclass, field
+from urllib.parse import urlsplit
 
 import numpy as np
 
@@ -42,12 +45,19 @@ class Played:
         return sum(len(b) for _, b in self.audio) / 2 / rate
 
 
+def origin(url: str) -> str:
+    """The web origin of the server at ``url`` (``ws://127.0.0.1:8766/ws`` -> ``http://127.0.0.1:8766``): what its
+    own page sends as ``Origin``, and so what a client outside a browser sends to be let in."""
+    parts = urlsplit(url)
+    return f"{'https' if parts.scheme in ('wss', 'https') else 'http'}://{parts.netloc}"
+
+
 def play(url: str, text: str, *, speed: float = 1.0, prebuffer: float = 0.3, report_every: float = 0.1,
          timeout: float = 120.0, say: dict | None = None) -> Played:
     """Say ``text`` on the server at ``url`` (``ws://host:port/ws``) and play the answer to its end."""
     from websockets.sync.client import connect
 
-    with connect(url, max_size=None, open_timeout=10) as ws:
+    with connect(url, max_size=None, open_timeout=10, origin=origin(url)) as ws:
         result = Played(hello=json.loads(ws.recv(timeout=10)))
         t_say = time.monotonic()
         ws.send(json.dumps({"type": "say", "text": text, **(say or {})}))

@@ -41,19 +41,25 @@ Server -> client, binary (little-endian): 4 bytes of kind, a float64 media time,
 ``FBA1`` + segment start + the segment's fba_object; ``AUD1`` + the chunk's start + signed
 16-bit mono PCM at the segment's ``rate``. Messages come in media-time order.
 
+The handshake must carry ``Origin: http://127.0.0.1:PORT`` (or ``localhost`` / ``[::1]``, the
+server's own port) and a loopback ``Host``; anything else is answered 403 (:mod:`mpeg4fa.guard`).
+A browser sends both by itself; a client outside one sends the origin
+(:func:`mpeg4fa.serve.client.origin`). Messages nested deeper than the JSON reader allows get an
+``error`` like any malformed message.
+
 A client that sends no ``buffer`` report for ``stall_timeout`` seconds while the server has
 something to send is told so (``error``, where ``flow``) and closed with code 1008; one that
 closes mid-utterance ends its synthesis after the sentence under way.
 """
 from __future__ import annotations
 
-import json
 import math
 import struct
 from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
+from mpeg4fa.guard import JsonError, read_json
 from mpeg4fa.speech.markup import MAX_TEXT_CHARS
 
 PROTOCOL = 1
@@ -106,9 +112,9 @@ def parse_client(text: str | None, data: bytes | None = None) -> Say | Buffer | 
         raise ProtocolError(f"binary message of {len(data or b'')} bytes: the client sends JSON text only",
                             "message")
     try:
-        raw = json.loads(text)
-    except ValueError as exc:
-        raise ProtocolError(f"not JSON: {exc}", "message") from None
+        raw = read_json(text, "message")
+    except JsonError as exc:
+        raise ProtocolError(f"not JSON: {exc.message}", "message") from None
     if not isinstance(raw, dict):
         raise ProtocolError(f"a message is a JSON object, not {type(raw).__name__}", "message")
     if "type" not in raw:

@@ -1,7 +1,11 @@
 """The editor's JSON API (FastAPI), over :mod:`.edits`, :mod:`.session` and the face engine.
 
-Every fault answers ``{"error": one line, "where": the field or step}`` with 400 (bad request or
-edit), 404 (no such route) or 413 (upload too large); files are written only as plain names
+Every fault answers ``{"error": one line, "where": the field or step}``: 400 (a body that is not
+JSON or multipart), 422 (a request read but refused: a field out of its range, an edit that cannot
+be made or that the model cannot hold, a file the readers refuse), 403 (not from the editor's own
+page or a loopback address: :mod:`mpeg4fa.guard`), 404 (no such route) or 413 (upload too large, cut
+as it streams). A refused request changes nothing: edits are checked before the session takes them,
+so the session never holds a model it cannot answer with. Files are written only as plain names
 inside ``out_dir``; nothing in a request is executed or opened as a path.
 """
 from __future__ import annotations
@@ -11,15 +15,17 @@ from pathlib import Path
 from typing import Annotated, Literal, Union
 
 import numpy as np
-from fastapi import FastAPI, Form, Request, UploadFile
+from fastapi import FastAPI, Form, HTTPException, Request, UploadFile
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, Response
+from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.errors import MpegFaError
+from mpeg4fa.guard import JsonError, LocalOnly, read_json
 from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
 from mpeg4fa.web import edits, photos
 from mpeg4fa.web.files import FORMATS, output_path, read_model, read_upload, save_model
@@ -27,6 +33,10 @@ from mpeg4fa.web.posing import pose_values, posed_vertices
 from mpeg4fa.web.session import Session
 
 UPLOAD_LIMIT = 64 * 1024 * 1024
+FORM_SLACK = 65536
+"""Bytes a multipart request may carry beyond ``upload_limit`` (its boundaries and part headers)."""
+MAX_INDEX = 2**62
+"""The largest vertex or face index a request may name (any index past the mesh is refused by the edit itself)."""
 STALE = "the mesh changed (an edit, load or upload) after it was calibrated"
 HOST = "127.0.0.1"
 STATIC = Path(__file__).with_name("static")
@@ -37,7 +47,7 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-Index = Annotated[int, Field(ge=0)]
+Index = Annotated[int, Field(ge=0, le=MAX_INDEX)]
 Xyz = Annotated[list[float], Field(min_length=3, max_length=3)]
 
 
@@ -183,12 +193,43 @@ def _error(status: int, error: str, where: str) -> JSONResponse:
     return JSONResponse({"error": error, "where": where}, status_code=status)
 
 
+class _BodyError(HTTPException):
+    """A JSON body the reader refused (FastAPI passes its HTTPException through the body parsing)."""
+
+    def __init__(self, exc: JsonError) -> None:
+        super().__init__(400, f"{exc.message} ({exc.hint})" if exc.hint else exc.message)
+        self.where = exc.where or "body"
+
+
+class _JsonRequest(Request):
+    async def json(self):
+        if not hasattr(self, "_json"):
+            try:
+                self._json = read_json(await self.body(), "body")
+            except JsonError as exc:
+                raise _BodyError(exc) from None
+        return self._json
+
+
+class _Route(APIRoute):
+    """Routes whose JSON bodies are read by :func:`mpeg4fa.guard.read_json` (nesting and size capped)."""
+
+    def get_route_handler(self):
+        handler = super().get_route_handler()
+
+        async def route(request: Request):
+            return await handler(_JsonRequest(request.scope, request.receive))
+        return route
+
+
 def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.PathLike = ".", *,
                head=None, upload_limit: int = UPLOAD_LIMIT) -> FastAPI:
     """The editor's app. ``model_path``: a mesh file to start with (else the head); ``head``: the
     :class:`~mpeg4fa.face.FaceModel` that ``load head`` gives and poses go through (default the generic head)."""
     out = Path(out_dir).resolve()
     app = FastAPI(title="mpeg4fa face model editor", docs_url=None, redoc_url=None, openapi_url=None)
+    app.router.route_class = _Route
+    app.add_middleware(LocalOnly, body_limit=upload_limit + FORM_SLACK)
     session = Session()
     state: dict = {"head": head, "cache": {}}
 
@@ -209,15 +250,17 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
         where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "body"
         if first.get("type") == "json_invalid":
             return _error(400, f"malformed JSON: {first.get('ctx', {}).get('error', first.get('msg'))}", "body")
-        return _error(400, f"{first.get('msg', 'invalid request')}", where)
+        return _error(422, f"{first.get('msg', 'invalid request')}", where)
 
     @app.exception_handler(MpegFaError)
     async def _failed(request: Request, exc: MpegFaError):
         text = f"{exc.message} ({exc.hint})" if exc.hint else exc.message
-        return _error(400, text, exc.where or request.url.path)
+        return _error(422, text, exc.where or request.url.path)
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException):
+        if isinstance(exc, _BodyError):
+            return _error(exc.status_code, str(exc.detail), exc.where)
         return _error(exc.status_code, str(exc.detail).lower(), request.url.path)
 
     @app.get("/", response_class=HTMLResponse)
@@ -394,13 +437,6 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
             save_fdp(fdp, tmps[0])
             tmps[1].write_bytes(png)
         return {"files": [p.name for p in paths], "folder": str(out)}
-
-    @app.middleware("http")
-    async def _limit(request: Request, call_next):
-        length = request.headers.get("content-length")
-        if length is not None and length.isdigit() and int(length) > upload_limit + 65536:
-            return _error(413, f"request larger than {upload_limit} bytes", request.url.path)
-        return await call_next(request)
 
     return app
 

@@ -23,6 +23,9 @@ PART_NAME = re.compile(r"^[a-z][a-z0-9_]{0,39}$")
 UNASSIGNED = "unassigned"
 CLOSED_PARTS = ("eye_l", "eye_r", "tongue")
 """Parts that must be closed surfaces (watertight) on save; the skin and teeth may be open."""
+MAX_COORDINATE = 1e9
+"""The largest absolute vertex coordinate a mesh may have, in any unit (a head is about 0.2 m, 200 mm):
+beyond it areas, FAPU and the 6-decimal JSON of the model (x 1e6) would overflow to infinity."""
 
 
 class EditError(MpegFaError):
@@ -58,8 +61,7 @@ def make_mesh(vertices, triangles, parts=None, points=None, origin=None, source=
     """An :class:`EditMesh` from arrays; ``parts`` per triangle (names), default all ``skin``."""
     v = np.array(vertices, dtype=np.float64).reshape(-1, 3)
     t = np.array(triangles, dtype=np.int64).reshape(-1, 3)
-    if not np.all(np.isfinite(v)):
-        raise EditError("vertex coordinates must be finite")
+    check_vertices(v)
     if len(t) and (t.min() < 0 or t.max() >= len(v)):
         raise EditError(f"triangle indices must lie in 0..{len(v) - 1}")
     names = list(parts) if parts is not None else ["skin"] * len(t)
@@ -86,6 +88,17 @@ def from_head(head) -> EditMesh:
 
 
 # ---- checks ------------------------------------------------------------------------------------
+
+def check_vertices(vertices: np.ndarray) -> None:
+    """Refuse coordinates a mesh cannot hold: not finite, or beyond :data:`MAX_COORDINATE`."""
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(vertices) <= MAX_COORDINATE).all(axis=-1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise EditError(f"vertex {i} would lie at ({', '.join(f'{x:.6g}' for x in vertices[i])}): coordinates must be "
+                        f"finite and within +-{MAX_COORDINATE:g}", where="vertices",
+                        hint="check the values (or the file's unit); nothing was changed")
+
 
 def _indices(mesh: EditMesh, values, n: int, what: str) -> np.ndarray:
     idx = np.unique(np.asarray(list(values), dtype=np.int64))
@@ -216,9 +229,9 @@ def move_vertices(mesh: EditMesh, vertices, positions=None, delta=None) -> EditM
         d = np.asarray(delta, np.float64)
         if d.shape != (3,):
             raise EditError("delta is one [x, y, z]")
-        v[np.unique(idx)] += d
-    if not np.all(np.isfinite(v)):
-        raise EditError("vertex coordinates must be finite")
+        with np.errstate(over="ignore", invalid="ignore"):
+            v[np.unique(idx)] += d
+    check_vertices(v)
     return replace(mesh, vertices=v)
 
 

@@ -15,6 +15,7 @@ import trimesh
 from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.fdp.build import parse_points_json
 from mpeg4fa.fdp.obj import mesh_and_groups_from_obj
+from mpeg4fa.guard import read_json
 from mpeg4fa.web.edits import EditError, EditMesh, make_mesh, validate
 from mpeg4fa.web.vrml import read_vrml
 
@@ -77,10 +78,7 @@ def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[st
 
 def _gltf_external(data: bytes, filename: str) -> list[str]:
     """The URIs of a .gltf's buffers and images that are files (not data: URIs), as written in its JSON."""
-    try:
-        doc = json.loads(data)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise EditError(f"a .gltf file is JSON: {exc}", where=filename) from None
+    doc = read_json(data, filename)
     items = [item for key in ("buffers", "images") for item in (doc.get(key) or [] if isinstance(doc, dict) else [])]
     uris = [item.get("uri") for item in items if isinstance(item, dict)]
     return list(dict.fromkeys(u for u in uris if isinstance(u, str) and not u.startswith("data:")))
@@ -242,12 +240,7 @@ def _with_sidecars(mesh: EditMesh, model: str, sidecars: dict[str, tuple[bytes, 
 
 def _read_parts(data: bytes, where: str, n_triangles: int) -> list[str]:
     """Per-triangle part names from a ``{"parts": {name: [triangle, ...]}}`` file covering every triangle once."""
-    try:
-        doc = json.loads(data.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise EditError(f"cannot read the parts file: {exc}", where=where) from None
-    except json.JSONDecodeError as exc:
-        raise EditError(f"malformed JSON: {exc.msg}", where=f"{where}:{exc.lineno}:{exc.colno}") from None
+    doc = read_json(data, where)
     parts = doc.get("parts") if isinstance(doc, dict) else None
     if not isinstance(parts, dict):
         raise EditError('a parts file is {"parts": {name: [triangle indices]}}', where=where)

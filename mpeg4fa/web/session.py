@@ -1,10 +1,13 @@
-"""One mesh being edited, with undo and redo as stacks of snapshots (edits never change a mesh)."""
+"""One mesh being edited, with undo and redo as stacks of snapshots (edits never change a mesh).
+
+The session takes a mesh only after :func:`~mpeg4fa.web.edits.check_vertices` passed on it, so a refused
+load or edit leaves the model as it was and the model is always one the API can answer with."""
 from __future__ import annotations
 
 import threading
 from typing import Callable
 
-from mpeg4fa.web.edits import EditError, EditMesh
+from mpeg4fa.web.edits import EditError, EditMesh, check_vertices
 
 UNDO_LIMIT = 200
 
@@ -22,12 +25,14 @@ class Session:
         return self.mesh
 
     def load(self, mesh: EditMesh) -> None:
+        check_vertices(mesh.vertices)
         with self.lock:
             self.mesh, self.undo_stack, self.redo_stack = mesh, [], []
 
     def apply(self, op: Callable[[EditMesh], EditMesh]) -> EditMesh:
         with self.lock:
             new = op(self.require())
+            check_vertices(new.vertices)
             self.undo_stack = (self.undo_stack + [self.mesh])[-UNDO_LIMIT:]
             self.redo_stack = []
             self.mesh = new

@@ -99,7 +99,7 @@ def test_sixty_seconds_of_speech_delivered_in_real_time(app, base):
 
 def test_a_client_that_disconnects_mid_speech(app, base):
     before = len(app.state.live.utterances)
-    with connect(ws_url(base)) as ws:
+    with connect(ws_url(base), origin=base) as ws:
         json.loads(ws.recv(timeout=10))
         ws.send(json.dumps({"type": "say", "text": " ".join(SENTENCES)}))
         while True:
@@ -117,7 +117,7 @@ def test_a_client_that_disconnects_mid_speech(app, base):
 def test_a_client_that_stalls_is_closed_after_the_window(app, base):
     before = len(app.state.live.utterances)
     received = 0.0
-    with connect(ws_url(base)) as ws:
+    with connect(ws_url(base), origin=base) as ws:
         hello = json.loads(ws.recv(timeout=10))
         ws.send(json.dumps({"type": "say", "text": " ".join(SENTENCES)}))
         started = time.monotonic()
@@ -167,7 +167,7 @@ BAD = [
 
 
 def test_malformed_messages_get_one_clear_error_and_the_connection_goes_on(base):
-    with connect(ws_url(base)) as ws:
+    with connect(ws_url(base), origin=base) as ws:
         json.loads(ws.recv(timeout=10))
         for raw, where, words in BAD:
             ws.send(raw)

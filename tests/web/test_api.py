@@ -9,6 +9,7 @@ from fastapi.testclient import TestClient
 
 from mpeg4fa.fdp.build import read_points_json
 from mpeg4fa.web.app import create_app
+from web.local import LOCAL
 
 
 def obj_bytes(mesh: trimesh.Trimesh) -> bytes:
@@ -19,7 +20,7 @@ def obj_bytes(mesh: trimesh.Trimesh) -> bytes:
 def client(tmp_path, procedural_face):
     out = tmp_path / "out"
     out.mkdir()
-    with TestClient(create_app(out_dir=out, head=procedural_face, upload_limit=200_000)) as c:
+    with TestClient(create_app(out_dir=out, head=procedural_face, upload_limit=200_000), base_url=LOCAL) as c:
         c.out = out
         yield c
 
@@ -55,7 +56,7 @@ def test_upload_edit_undo_save(client):
 def test_save_refuses_an_unfinished_model(client):
     upload(client, trimesh.creation.icosphere(1))
     r = client.post("/api/save", json={"name": "ball"})
-    assert r.status_code == 400 and "84 feature points not placed" in r.json()["error"]
+    assert r.status_code == 422 and "84 feature points not placed" in r.json()["error"]
     assert os.listdir(client.out) == []
 
 
@@ -63,7 +64,7 @@ def test_save_refuses_an_unfinished_model(client):
 def test_traversal_refused(client, name):
     upload(client, trimesh.creation.icosphere(1))
     r = client.post("/api/save", json={"name": name, "required_points": []})
-    assert r.status_code == 400 and r.json()["where"] == "name", r.text
+    assert r.status_code == 422 and r.json()["where"] == "name", r.text
     assert os.listdir(client.out) == [] and not os.path.exists(client.out.parent / "evil.obj")
 
 
@@ -71,7 +72,7 @@ def test_symlink_out_of_the_folder_refused(client, tmp_path):
     (client.out / "link.obj").symlink_to(tmp_path / "elsewhere.obj")
     upload(client, trimesh.creation.icosphere(1))
     r = client.post("/api/save", json={"name": "link", "required_points": []})
-    assert r.status_code == 400 and "outside" in r.json()["error"]
+    assert r.status_code == 422 and "outside" in r.json()["error"]
     assert not (tmp_path / "elsewhere.obj").exists()
 
 
@@ -90,11 +91,11 @@ def test_bad_requests_say_where(client):
     assert client.get("/api/model").json()["where"] == "session"
     upload(client, trimesh.creation.icosphere(1))
     r = client.post("/api/edit", json={"edit": {"op": "explode"}})
-    assert r.status_code == 400 and r.json()["where"].startswith("edit")
+    assert r.status_code == 422 and r.json()["where"].startswith("edit")
     r = client.post("/api/edit", json={"edit": {"op": "delete_faces", "faces": [10**6]}})
-    assert r.status_code == 400 and "face 1000000 does not exist" in r.json()["error"]
+    assert r.status_code == 422 and "face 1000000 does not exist" in r.json()["error"]
     r = client.post("/api/upload", files={"file": ("head.wrl", b"#VRML V2.0 utf8\n", "text/plain")})
-    assert r.status_code == 400 and "VRML" in r.json()["error"]
+    assert r.status_code == 422 and "VRML" in r.json()["error"]
     assert client.get("/nowhere").status_code == 404
     assert client.get("/nowhere").json()["where"] == "/nowhere"
 
@@ -114,7 +115,7 @@ def test_pose_moves_the_head(client, procedural_face):
     assert len(again) < len(posed) and np.abs(again - np.reshape(
         client.get("/api/model").json()["positions"], (-1, 3))).max() > 0.1
     r = client.post("/api/pose", json={"faps": {"1": 5}})
-    assert r.status_code == 400 and "faps" in r.json()["where"]
+    assert r.status_code == 422 and "faps" in r.json()["where"]
 
 
 def test_index_page_lists_the_api(client):
@@ -133,7 +134,7 @@ def test_glb_with_two_meshes_loads_as_two_parts(client):
 
 @pytest.mark.usefixtures("generic_head_installed")
 def test_the_generic_head_loads_poses_and_saves(tmp_path, generic_face):
-    with TestClient(create_app(out_dir=tmp_path)) as client:
+    with TestClient(create_app(out_dir=tmp_path), base_url=LOCAL) as client:
         model = client.post("/api/load", json={"source": "head"}).json()
         assert model["counts"]["vertices"] == generic_face.mesh.n_vertices
         assert client.get("/api/fapu").json()["fapu"] == pytest.approx(generic_face.fapu.as_dict())

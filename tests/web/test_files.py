@@ -10,6 +10,7 @@ from fastapi.testclient import TestClient
 
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.web.app import create_app
+from web.local import LOCAL
 from mpeg4fa.web.edits import EditError, make_mesh
 from mpeg4fa.web.files import read_mesh, read_model, read_upload, save_model
 
@@ -83,13 +84,13 @@ Transform { translation 0 5 0 children [
 
 
 def test_vrml_upload_through_the_api(tmp_path):
-    with TestClient(create_app(out_dir=tmp_path)) as client:
+    with TestClient(create_app(out_dir=tmp_path), base_url=LOCAL) as client:
         r = client.post("/api/upload", files={"file": ("head.wrl", TWO_SHAPES, "model/vrml")})
         assert r.status_code == 200, r.text
         assert sorted(r.json()["parts"]) == ["skin", "teeth"] and r.json()["counts"]["triangles"] == 3
         bad = TWO_SHAPES.replace(b"1 1 0, 0 1 0", b"1 1 0, 0 x 0")
         r = client.post("/api/upload", files={"file": ("bad.wrl", bad, "model/vrml")})
-        assert r.status_code == 400 and r.json()["where"] == "bad.wrl:6", r.json()
+        assert r.status_code == 422 and r.json()["where"] == "bad.wrl:6", r.json()
 
 
 @pytest.mark.parametrize("text, where, problem", [
@@ -181,7 +182,7 @@ def test_saved_obj_reads_back_with_its_parts_and_points(tmp_path):
     assert np.allclose(back.vertices, mesh.vertices) and np.array_equal(back.triangles, mesh.triangles)
     assert back.parts == mesh.parts and back.points == mesh.points and back.source == "head.obj"
     # and so does `mpeg4fa edit head.obj`
-    with TestClient(create_app(tmp_path / "head.obj", out_dir=tmp_path)) as client:
+    with TestClient(create_app(tmp_path / "head.obj", out_dir=tmp_path), base_url=LOCAL) as client:
         model = client.get("/api/model").json()
         assert sorted(model["parts"]) == ["skin", "teeth_upper"]
         assert client.app.state.session.mesh.points == {"2.1": 5, "9.3": 11}
@@ -240,7 +241,7 @@ def _post(client, files: dict[str, bytes] | list[tuple[str, bytes]]):
 
 @pytest.fixture
 def client(tmp_path):
-    with TestClient(create_app(out_dir=tmp_path / "out", upload_limit=200_000)) as c:
+    with TestClient(create_app(out_dir=tmp_path / "out", upload_limit=200_000), base_url=LOCAL) as c:
         yield c
 
 
@@ -258,7 +259,7 @@ def test_gltf_upload_without_a_buffer_names_it(client):
     files = _gltf_files()
     del files["gltf_buffer_1.bin"], files["gltf_buffer_3.bin"], files["skin.png"]
     r = _post(client, files)
-    assert r.status_code == 400 and r.json()["where"] == "head.gltf", r.json()
+    assert r.status_code == 422 and r.json()["where"] == "head.gltf", r.json()
     error = r.json()["error"]
     assert "names gltf_buffer_1.bin, gltf_buffer_3.bin, skin.png, not among the uploaded files" in error, error
 
@@ -278,7 +279,7 @@ def test_obj_uploaded_with_its_sidecars_is_as_read_by_path(client, tmp_path):
     assert alone["parts"] == ["skin"] and alone["points"] == {}
     # a bad sidecar names itself, the uploaded name
     r = _post(client, {"head.obj": paths[0].read_bytes(), "head.points.json": b'{"2.1": 100000}'})
-    assert r.status_code == 400 and r.json()["where"] == "head.points.json" and "vertex 100000" in r.json()["error"]
+    assert r.status_code == 422 and r.json()["where"] == "head.points.json" and "vertex 100000" in r.json()["error"]
 
 
 def test_obj_upload_takes_its_mtl_and_texture():
@@ -305,12 +306,12 @@ def test_upload_sets_refused_with_one_error(files, where, problem):
 
 def test_upload_refusals_through_the_api(client):
     r = _post(client, [("a.obj", b"v 0 0 0\n"), ("b.obj", b"v 0 0 0\n")])
-    assert r.status_code == 400 and "2 model files" in r.json()["error"], r.json()
+    assert r.status_code == 422 and "2 model files" in r.json()["error"], r.json()
     # the limit is on the whole request: two files each under it, together over it
     big = b"v 0 0 0\n" * 13_000
     r = _post(client, [("head.obj", big), ("head.points.json", big)])
     assert r.status_code == 413 and "all files together" in r.json()["error"], r.json()
-    assert client.get("/api/model").status_code == 400  # nothing was loaded
+    assert client.get("/api/model").status_code == 422  # nothing was loaded
 
 
 def test_traversal_looking_names_are_only_keys_among_the_uploaded_files(client, tmp_path):
@@ -335,4 +336,4 @@ def test_traversal_looking_names_are_only_keys_among_the_uploaded_files(client, 
     doc["buffers"][0]["uri"] = str(on_disk)
     files["head.gltf"] = json.dumps(doc).encode()
     r = _post(client, files)
-    assert r.status_code == 400 and str(on_disk) in r.json()["error"], r.json()
+    assert r.status_code == 422 and str(on_disk) in r.json()["error"], r.json()

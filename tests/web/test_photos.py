@@ -19,6 +19,7 @@ from mpeg4fa.render.renderer import Renderer
 from mpeg4fa.render.texture import uv_rasterise
 from mpeg4fa.web import photos
 from mpeg4fa.web.app import create_app
+from web.local import LOCAL
 
 PHOTO = 320
 SIZE = 512  # the preview's texture size (photos.bake's default)
@@ -70,7 +71,7 @@ class MainThreadClient:
 
     def request(self, method: str, url: str, **kw) -> httpx.Response:
         async def go():
-            async with httpx.AsyncClient(transport=httpx.ASGITransport(app=self.app), base_url="http://editor") as c:
+            async with httpx.AsyncClient(transport=httpx.ASGITransport(app=self.app), base_url=LOCAL) as c:
                 return await c.request(method, url, **kw)
         return asyncio.run(go())
 
@@ -199,37 +200,37 @@ def test_pure_functions_fit_the_box(procedural_face):
 def test_missing_photos(client, route, payload):
     client.post("/api/load", json={"source": "head"})
     r = client.post(route, json=payload)
-    assert r.status_code == 400 and "POST /api/photos first" in r.json()["error"], r.text
+    assert r.status_code == 422 and "POST /api/photos first" in r.json()["error"], r.text
     assert set(r.json()) == {"error", "where"}
 
 
 def test_bad_input(client, synth):
     r = post_photos(client, synth, front=b"not an image")
-    assert r.status_code == 400 and r.json()["where"] == "front", r.text
+    assert r.status_code == 422 and r.json()["where"] == "front", r.text
     r = client.post("/api/photos", files={"front": ("f.png", synth.png["front"], "image/png")})
-    assert r.status_code == 400 and r.json()["where"] == "side"
-    assert client.get("/api/texture-preview").status_code == 400
+    assert r.status_code == 422 and r.json()["where"] == "side"
+    assert client.get("/api/texture-preview").status_code == 422
     assert post_photos(client, synth).status_code == 200
     assert client.get("/api/texture-preview").json()["where"] == "calibrate"
     r = client.post("/api/photos/box", json={"view": "front", "box": [50, 50, 10, 10]})
-    assert r.status_code == 400 and r.json()["where"] == "box"
+    assert r.status_code == 422 and r.json()["where"] == "box"
     r = client.post("/api/photos/box", json={"view": "top", "box": [0, 0, 10, 10]})
-    assert r.status_code == 400 and r.json()["where"] == "view"
+    assert r.status_code == 422 and r.json()["where"] == "view"
     client.post("/api/load", json={"source": "head"})
     r = client.post("/api/calibrate", json={"front": {"9.3": [1, 2]}, "side": {}, "method": "magic"})
-    assert r.status_code == 400 and r.json()["where"] == "method"
+    assert r.status_code == 422 and r.json()["where"] == "method"
     r = client.post("/api/calibrate", json={"front": {"99.9": [1, 2]}, "side": {"9.3": [1, 2]}})
-    assert r.status_code == 400 and "99.9" in r.json()["error"]
+    assert r.status_code == 422 and "99.9" in r.json()["error"]
     r = client.post("/api/calibrate", json={"front": {"9.3": [1, 2]}, "side": {"9.3": [1, 2]}})
-    assert r.status_code == 400 and set(r.json()) == {"error", "where"}  # too few points to match the scales
+    assert r.status_code == 422 and set(r.json()) == {"error", "where"}  # too few points to match the scales
     r = client.post("/api/export", json={"name": "../evil"})
-    assert r.status_code == 400
+    assert r.status_code == 422
     import trimesh
     obj = trimesh.exchange.obj.export_obj(trimesh.creation.icosphere(1), include_normals=False,
                                           include_texture=False).encode()
     client.post("/api/upload", files={"file": ("ball.obj", obj, "text/plain")})
     r = client.post("/api/calibrate", json={"front": {"9.3": [1, 2]}, "side": {"9.3": [1, 2]}})
-    assert r.status_code == 400 and "head only" in r.json()["error"], r.text
+    assert r.status_code == 422 and "head only" in r.json()["error"], r.text
     big = client.post("/api/photos", files={"front": ("f.png", b"\0" * 2_100_000, "image/png"),
                                             "side": ("s.png", synth.png["side"], "image/png")})
     assert big.status_code == 413
@@ -265,7 +266,7 @@ def test_dragged_points_stay_when_the_box_moves(client, synth):
     # only labels the photo shows can be dragged (the side photo shows the face's left half)
     r = client.post("/api/photos/box", json={"view": "side", "box": side["box"]["side"],
                                              "dragged": {"side": {"3.6": [1, 2]}}})
-    assert r.status_code == 400 and r.json()["where"] == "side" and "3.6" in r.json()["error"], r.text
+    assert r.status_code == 422 and r.json()["where"] == "side" and "3.6" in r.json()["error"], r.text
     assert client.get("/api/photos").json()["guess"]["dragged"]["side"] == ["9.3"]  # a refused request changes nothing
 
 
@@ -299,7 +300,7 @@ def test_a_mesh_change_clears_the_calibration(client, synth):
     state = client.get("/api/photos").json()
     assert state["calibrated"] is False and "mesh changed" in state["cleared"]
     for r in (client.get("/api/texture-preview"), client.post("/api/export", json={"name": "stale"})):
-        assert r.status_code == 400 and "calibration was cleared" in r.json()["error"], r.text
+        assert r.status_code == 422 and "calibration was cleared" in r.json()["error"], r.text
     assert list(client.out.iterdir()) == []
     out = calibrate_true(client, synth, guess)  # on the edited mesh: the deleted face has no texture to show
     assert len(out["skin"]["indices"]) == 3 * (n_skin - 1)
@@ -315,7 +316,7 @@ def test_a_mesh_change_clears_the_calibration(client, synth):
                                           include_texture=False).encode()
     assert client.post("/api/upload", files={"file": ("ball.obj", obj, "text/plain")}).status_code == 200
     r = client.post("/api/export", json={"name": "stale"})
-    assert r.status_code == 400 and r.json()["where"] == "calibrate" and "calibrate again" in r.json()["error"]
+    assert r.status_code == 422 and r.json()["where"] == "calibrate" and "calibrate again" in r.json()["error"]
     # new photos start afresh: nothing calibrated, nothing cleared
     post_photos(client, synth)
     assert client.get("/api/photos").json()["cleared"] is None
