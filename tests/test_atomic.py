@@ -108,3 +108,53 @@ def test_several_outputs_are_all_written_or_none(tmp_path):
         pa.write_bytes(b"stream")
         pb.write_bytes(b"wav")
     assert a.read_bytes() == b"stream" and b.read_bytes() == b"wav"
+
+
+# -- signals: SIGTERM/SIGHUP unwind like Ctrl-C; C callbacks hold them ----------------------------------
+
+import signal  # noqa: E402
+
+from mpeg4fa.atomic import Terminated, clean_up_on_signals, failed_output, signals_deferred  # noqa: E402
+
+
+def test_sigterm_raises_terminated_and_removes_the_temporary(tmp_path):
+    target = tmp_path / "talk.fba"
+    target.write_bytes(b"old")
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(Terminated) as info:
+        with clean_up_on_signals(), atomic_output(target) as partial:
+            partial.write_bytes(b"half")
+            signal.raise_signal(signal.SIGTERM)
+    assert isinstance(info.value, KeyboardInterrupt)
+    assert info.value.exit_status == 128 + signal.SIGTERM and info.value.signal_name == "SIGTERM"
+    assert target.read_bytes() == b"old" and leftovers(tmp_path) == []
+    assert signal.getsignal(signal.SIGTERM) is before  # put back after the block
+
+
+def test_an_ignored_signal_is_left_ignored():
+    before = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        with clean_up_on_signals():
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+            signal.raise_signal(signal.SIGHUP)  # ignored: nothing raised
+    finally:
+        signal.signal(signal.SIGHUP, before)
+
+
+def test_signals_in_c_callbacks_are_delivered_after_the_call():
+    with clean_up_on_signals():
+        with pytest.raises(Terminated):
+            with signals_deferred() as stopped:
+                assert not stopped()
+                signal.raise_signal(signal.SIGHUP)  # as if it came while C code ran a callback
+                assert stopped()  # the callback tells the C code to stop; nothing raised yet
+
+
+def test_a_write_error_names_the_output(tmp_path):
+    """write() on a full disk raises OSError without a file name: atomic_output gives it the target's."""
+    target = tmp_path / "out.fba"
+    with pytest.raises(OSError) as info:
+        with atomic_output(target):
+            raise OSError(28, "No space left on device")
+    assert info.value.filename == str(target) and failed_output(info.value) == str(target)
+    assert str(target) in str(info.value)

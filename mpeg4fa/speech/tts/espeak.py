@@ -20,10 +20,11 @@ import html
 import threading
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
+from mpeg4fa.atomic import signals_deferred
 from mpeg4fa.speech.errors import TTSError
 from mpeg4fa.speech.tts.base import Event, Speech
 
@@ -132,6 +133,7 @@ class _Collector:
     chunks: list[np.ndarray] = field(default_factory=list)
     events: list[RawEvent] = field(default_factory=list)
     error: BaseException | None = None
+    stopped: Callable[[], bool] = lambda: False  # a signal came (Ctrl-C, SIGTERM): abort the synthesis
 
 
 _lock = threading.RLock()
@@ -167,7 +169,7 @@ def _on_synth(wav, n: int, events) -> int:
     except BaseException as exc:  # noqa: BLE001 - must not cross into C
         if col.error is None:
             col.error = exc
-    return 0
+    return 1 if col.error is not None or col.stopped() else 0  # 1: espeak stops synthesising
 
 
 def _load() -> ctypes.CDLL:
@@ -438,7 +440,8 @@ class EspeakEngine:
             try:
                 data = source.encode("utf-8") + b"\0"
                 buf = ctypes.create_string_buffer(data, len(data))
-                err = lib.espeak_Synth(buf, len(data), 0, POS_CHARACTER, 0, flags, None, None)
+                with signals_deferred() as col.stopped:  # Ctrl-C/SIGTERM in the callback would be lost
+                    err = lib.espeak_Synth(buf, len(data), 0, POS_CHARACTER, 0, flags, None, None)
                 if err != EE_OK:
                     raise TTSError(f"espeak_Synth failed with status {err}", where=WHERE,
                                    hint="retry; if it persists the text may be too long")
