@@ -1,7 +1,7 @@
-"""The speech layer's exception types."""
+"""The speech layer's exception and warning types."""
 from __future__ import annotations
 
-from mpeg4fa.errors import MpegFaError
+from mpeg4fa.errors import MpegFaError, MpegFaWarning
 
 
 class MarkupError(MpegFaError, ValueError):
@@ -25,3 +25,11 @@ class MarkupError(MpegFaError, ValueError):
 
 class TTSError(MpegFaError, RuntimeError):
     """A speech engine that cannot be loaded or cannot speak the text (``where``: the engine)."""
+
+
+class PhonemeWarning(MpegFaWarning):
+    """Phonemes with symbols no table knows, shown by the nearest viseme by features (said once per encode)."""
+
+
+class MarkupWarning(MpegFaWarning):
+    """Malformed tags spoken as text under ``lenient`` (said once, naming the first and the count)."""

@@ -28,9 +28,14 @@ An empty event is a pause (espeak's ``_``) when the audio is silent there; espea
 a few short sounding phonemes without an IPA name (English ``;`` after ``I2``, the Russian
 epenthetic ``@-`` between p and r): there the previous phoneme continues, as
 ``spec/english_visemes.csv`` has it for ``;``. A parenthesised event (``(en)``) is a language
-switch inside the text: the previous phoneme continues. A segment or mark the tables do not
-know fails loudly, naming it and when it was spoken: a silently dropped phoneme is a mouth
-that stops moving.
+switch inside the text: the previous phoneme continues.
+
+A character the tables do not know never stops the speech (espeak-ng grows; a mouth that stops
+is worse than a near one): :func:`nearest` reads it as the closest thing they do know (its
+compatibility form, ``ᵊ`` -> ``ə``; the base letter its Unicode name gives, ``ʞ`` TURNED K -> ``k``,
+Greek alpha -> ``ɑ``; a combining mark or symbol is dropped; any other letter is a schwa), and every
+such phoneme is counted in one :class:`~mpeg4fa.speech.errors.PhonemeWarning` per encode
+(:func:`phoneme_fallbacks`), naming each with what it was read as, so the table can be completed.
 
 espeak hands a phoneme name over in 8 bytes; a longer IPA string arrives cut, its last
 incomplete character dropped by the engine binding (its marks matter little; a cut base
@@ -39,15 +44,18 @@ letter loses its viseme part).
 from __future__ import annotations
 
 import unicodedata
-from collections.abc import Callable
-from dataclasses import dataclass
+import warnings
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
 
 from mpeg4fa.spec import VISEME_PROFILES
 from mpeg4fa.spec._load import read_table, split_list
-from mpeg4fa.speech.errors import TTSError
+from mpeg4fa.speech.errors import PhonemeWarning, TTSError
 from mpeg4fa.speech.tts.base import Event
 
 PAUSE = "none"
@@ -71,6 +79,10 @@ PLACES = ("bilabial", "labiodental", "dental", "alveolar", "postalveolar", "retr
 MANNERS = ("stop", "nasal", "trill", "tap", "fricative", "approximant", "lateral-approximant",
            "lateral-fricative", "lateral-tap", "implosive", "click")
 _ACTIONS = ("drop", "round")
+ANY_LETTER = "ə"
+"""What a letter nothing else identifies is read as: the most neutral vowel (viseme E)."""
+_LISTED = 6
+"""Phonemes named in the fallback warning; the rest are counted."""
 
 
 @dataclass(frozen=True)
@@ -222,12 +234,47 @@ def viseme_of(segment: Segment) -> str:
     raise ValueError(f"spec/ipa_visemes.csv: no rule matches {segment.symbol!r} ({segment})")
 
 
+def nearest(char: str) -> str:
+    """What a character no table knows is read as: one IPA segment or alias of the tables, or ``""`` (dropped).
+
+    In order: its compatibility form (superscripts, small and full-width forms: ``ᵊ`` -> ``ə``); the
+    base letter its Unicode name gives, without ``WITH ...`` and leading words such as ``TURNED``,
+    ``SMALL CAPITAL`` (``ʞ`` -> ``k``; a Greek or Cyrillic letter whose name is a Latin IPA letter's:
+    alpha -> ``ɑ``); its lower case; then by class: any other letter is :data:`ANY_LETTER`, anything
+    else (a combining mark, a modifier letter, punctuation, a digit, a symbol) is dropped.
+    """
+    known, alias = features(), aliases()
+
+    def usable(c: str) -> bool:
+        return c in known or c in alias
+
+    for c in unicodedata.normalize("NFKD", char):
+        if c != char and usable(c):
+            return c
+    name = unicodedata.name(char, "")
+    if " LETTER " in f" {name} ":
+        words = name.split("LETTER ", 1)[1].split(" WITH ", 1)[0].split()
+        for k in range(len(words)):
+            try:
+                base = unicodedata.lookup("LATIN SMALL LETTER " + " ".join(words[k:]))
+            except KeyError:
+                continue
+            if base != char and usable(base):
+                return base
+    if usable(char.lower()):
+        return char.lower()
+    if unicodedata.category(char) in ("Lu", "Ll", "Lt", "Lo"):
+        return ANY_LETTER
+    return ""
+
+
 def parse(text: str) -> tuple[list[Segment], list[str]]:
     """The segments of one phoneme's IPA, and the characters the tables do not know.
 
     Marks are applied to the segment before them (or taken alone when the phoneme is nothing
     but marks); a precomposed letter the table lacks is tried as its decomposition (``ä`` =
-    ``a`` + diaeresis); ``ç`` and other letters the table lists are never decomposed.
+    ``a`` + diaeresis); ``ç`` and other letters the table lists are never decomposed. A character
+    still unknown is listed and read as :func:`nearest` says, so the segments are never short of it.
     """
     known, mark_table, alias = features(), marks(), aliases()
     out: list[Segment] = []
@@ -256,12 +303,14 @@ def parse(text: str) -> tuple[list[Segment], list[str]]:
                 take(part)
             return
         unknown.append(ch)
+        for part in nearest(ch):
+            take(part)
 
     for ch in text:
         take(ch)
-    if not out and alone and not unknown:
+    if not out and alone:
         first = alone[0]
-        return ([] if first == CONTINUE else [known[first]]), []
+        return ([] if first == CONTINUE else [known[first]]), unknown
     return out, unknown
 
 
@@ -269,7 +318,8 @@ def phoneme_visemes(text: str) -> tuple[list[tuple[str, str]], list[str]]:
     """(segment symbol, viseme) parts of one phoneme event with equal neighbours merged, and unknown characters.
 
     An empty name is a pause (``[("", "none")]``); a language switch ``(xx)`` or a lone ``ʲ`` is
-    ``[("", "=")]``: the previous phoneme continues.
+    ``[("", "=")]``: the previous phoneme continues. Unknown characters are read as :func:`nearest`
+    says, so the parts are always there; the list says which characters were guessed.
     """
     bare = text.strip()
     if not bare:
@@ -277,10 +327,8 @@ def phoneme_visemes(text: str) -> tuple[list[tuple[str, str]], list[str]]:
     if bare.startswith("(") and bare.endswith(")"):
         return [("", CONTINUE)], []
     segments, unknown = parse(bare)
-    if unknown:
-        return [], unknown
     if not segments:
-        return [("", CONTINUE)], []
+        return [("", CONTINUE)], unknown
     segments = [s for k, s in enumerate(segments)
                 if not (k > 0 and s.symbol in RHOTIC and segments[k - 1].kind == "vowel")]
     parts: list[tuple[str, str]] = []
@@ -290,7 +338,7 @@ def phoneme_visemes(text: str) -> tuple[list[tuple[str, str]], list[str]]:
             parts[-1] = (parts[-1][0] + s.symbol, v)
             continue
         parts.append((s.symbol, v))
-    return parts, []
+    return parts, unknown
 
 
 def shares(first: Segment | None, second: Segment | None, n: int) -> list[float]:
@@ -317,43 +365,97 @@ def sounding(samples: np.ndarray, rate: int) -> Callable[[Event], bool]:
     return test
 
 
+@dataclass
+class FallbackLog:
+    """Phonemes shown by a guess (:func:`nearest`) during one encode: phoneme -> [count, characters, read as]."""
+
+    where: str = "espeak"
+    seen: dict[str, list] = field(default_factory=dict)
+
+    def note(self, phoneme: str, unknown: list[str] | str, read_as: str) -> None:
+        """Count one phoneme; ``unknown``: the characters guessed, or a phrase saying what was unknown."""
+        what = unknown if isinstance(unknown, str) else " ".join(f"U+{ord(c):04X}" for c in dict.fromkeys(unknown))
+        entry = self.seen.setdefault(phoneme, [0, what, read_as])
+        entry[0] += 1
+
+    def __len__(self) -> int:
+        return sum(entry[0] for entry in self.seen.values())
+
+    def message(self) -> str:
+        """One line: how many, and the first few phonemes with their unknown characters and what they became."""
+        def one(phoneme: str, count: int, what: str, read_as: str) -> str:
+            return f"{phoneme!r} x{count} ({what}; read as {read_as or 'nothing'})"
+        listed = [one(p, *entry) for p, entry in list(self.seen.items())[:_LISTED]]
+        more = len(self.seen) - _LISTED
+        n = len(self)
+        return (f"{self.where}: {n} phoneme{'s' if n != 1 else ''} with symbols the phoneme tables do not know "
+                f"showed the nearest viseme by features: " + ", ".join(listed)
+                + (f" and {more} more" if more > 0 else ""))
+
+
+_fallbacks: ContextVar[FallbackLog | None] = ContextVar("phoneme_fallbacks", default=None)
+
+
+@contextmanager
+def phoneme_fallbacks(where: str = "espeak") -> Iterator[FallbackLog]:
+    """Collect the phonemes shown by a guess and say them in one :class:`PhonemeWarning` at the end.
+
+    Nested uses share the outermost log, so an encode that wraps all its runs (or sentences) warns
+    once; :func:`ipa_visemes` and :func:`mpeg4fa.speech.visemes.english_visemes` open one themselves,
+    so a caller that wraps nothing gets one warning per call. No warning when the block raises.
+    """
+    outer = _fallbacks.get()
+    if outer is not None:
+        yield outer
+        return
+    log = FallbackLog(where)
+    token = _fallbacks.set(log)
+    try:
+        yield log
+    finally:
+        _fallbacks.reset(token)
+    if log.seen:
+        warnings.warn(PhonemeWarning(log.message()), stacklevel=3)
+
+
+def split_event(event: Event, parts: list[tuple[str, str]]) -> list[tuple[str, str, float, float]]:
+    """(label, viseme, start, end) of one phoneme's parts over its time (:func:`shares`); a one-part phoneme is
+    labelled by its name, the parts of a split one as ``name:segment``."""
+    if len(parts) == 1:
+        return [(event.text, parts[0][1], event.start, event.end)]
+    known = features()
+    heads = [known.get(p[0][:1]) for p in parts]
+    cut = shares(heads[0], heads[1], len(parts))
+    out, t = [], event.start
+    for (symbol, viseme), share in zip(parts, cut):
+        stop = t + share * (event.end - event.start)
+        out.append((f"{event.text}:{symbol}", viseme, t, stop))
+        t = stop
+    return out
+
+
 def ipa_visemes(phonemes: list[Event], where: str = "espeak", is_sound: Callable[[Event], bool] | None = None,
                 ) -> list[tuple[str, str, float, float]]:
     """(label, viseme, start, end) for espeak's IPA phoneme events, diphthongs and affricates split.
 
     A one-part phoneme is labelled by its IPA; the parts of a split one as ``IPA:segment``. An
-    unnamed event is a pause, or with ``is_sound`` saying it is sound, the previous phoneme continued. Raises
-    :class:`TTSError` listing every phoneme with a character the tables lack.
+    unnamed event is a pause, or with ``is_sound`` saying it is sound, the previous phoneme continued.
+    Never fails on a character the tables lack: it shows the nearest viseme (:func:`nearest`) and is
+    counted in the :func:`phoneme_fallbacks` warning.
     """
     out: list[tuple[str, str, float, float]] = []
-    missing: dict[str, tuple[str, float]] = {}
-    known = features()
-    for event in phonemes:
-        if not event.text.strip() and is_sound is not None and is_sound(event):
-            out.append((event.text, out[-1][1] if out else PAUSE, event.start, event.end))
-            continue
-        parts, unknown = phoneme_visemes(event.text)
-        if unknown:
-            missing.setdefault(event.text, ("".join(dict.fromkeys(unknown)), event.start))
-            continue
-        if len(parts) == 1:
-            viseme = parts[0][1]
-            if viseme == CONTINUE:
-                viseme = out[-1][1] if out else PAUSE
-            out.append((event.text, viseme, event.start, event.end))
-            continue
-        heads = [known.get(p[0][:1]) for p in parts]
-        cut = shares(heads[0], heads[1], len(parts))
-        t = event.start
-        for (symbol, viseme), share in zip(parts, cut):
-            stop = t + share * (event.end - event.start)
-            out.append((f"{event.text}:{symbol}", viseme, t, stop))
-            t = stop
-    if missing:
-        listed = ", ".join(f"{p!r} ({', '.join(repr(c) + f' U+{ord(c):04X}' for c in chars)}; first at {t:.3f} s)"
-                           for p, (chars, t) in missing.items())
-        raise TTSError(f"no viseme for the IPA phonemes {listed}", where=f"{where}: spec/ipa_features.csv",
-                       hint="add a row for each segment (spec/ipa_features.csv) or mark (spec/ipa_marks.csv)")
+    with phoneme_fallbacks(where) as log:
+        for event in phonemes:
+            if not event.text.strip() and is_sound is not None and is_sound(event):
+                out.append((event.text, out[-1][1] if out else PAUSE, event.start, event.end))
+                continue
+            parts, unknown = phoneme_visemes(event.text)
+            if unknown:
+                log.note(event.text, unknown, "".join(symbol for symbol, _ in parts))
+            if len(parts) == 1 and parts[0][1] == CONTINUE:
+                out.append((event.text, out[-1][1] if out else PAUSE, event.start, event.end))
+                continue
+            out += split_event(event, parts)
     return out
 
 

@@ -4,8 +4,16 @@ through IPA and articulatory features (:mod:`.ipa`), held to this English table 
 
 The English table is data (``spec/english_visemes.csv``). A pause (a mnemonic starting
 with ``_``) is ``none``; a ``=`` row means "the previous phoneme continues" (espeak's
-``;`` modifier). A phoneme the table does not know fails loudly, naming it and where
-it was spoken: a silently dropped phoneme is a mouth that stops moving.
+``;`` modifier).
+
+Every phoneme gets a mouth: the table is the preferred choice, not the only one. A mnemonic it
+lacks (``l#`` in "Bokhl", ``O``) is read as the IPA espeak-ng itself gives it
+(``spec/english_ipa.csv``, every mnemonic of every English phoneme table, written by
+``tools/english_ipa.py``) and mapped by its features like any other language (:mod:`.ipa`), its
+parts sharing the phoneme's time as a diphthong's do. A mnemonic missing from both tables (a
+voice newer than the table) is read as IPA letters and the nearest viseme
+(:func:`.ipa.nearest`); such guesses are counted in one warning per encode
+(:func:`.ipa.phoneme_fallbacks`), never an error.
 """
 from __future__ import annotations
 
@@ -13,11 +21,10 @@ from functools import lru_cache
 
 from mpeg4fa.spec import VISEME_PROFILES
 from mpeg4fa.spec._load import read_table
-from mpeg4fa.speech.errors import TTSError
+from mpeg4fa.speech.ipa import CONTINUE, PAUSE, phoneme_fallbacks, phoneme_visemes, split_event
 from mpeg4fa.speech.tts.base import Event
 
-CONTINUE = "="
-PAUSE = "none"
+__all__ = ["CONTINUE", "PAUSE", "english_table", "english_ipa", "english_viseme", "english_visemes"]
 
 
 @lru_cache(maxsize=None)
@@ -35,32 +42,64 @@ def english_table() -> dict[str, str]:
     return table
 
 
+@lru_cache(maxsize=None)
+def english_ipa() -> dict[str, str]:
+    """``spec/english_ipa.csv``: espeak-ng mnemonic -> the IPA espeak-ng names it with (checked: once each, not empty)."""
+    table: dict[str, str] = {}
+    for line, row in enumerate(read_table("english_ipa.csv", "phoneme,ipa,table"), start=2):
+        if not row["phoneme"] or not row["ipa"] or row["phoneme"] in table:
+            raise ValueError(f"spec/english_ipa.csv:{line}: {row['phoneme']!r} must have an IPA name and be listed once")
+        table[row["phoneme"]] = row["ipa"]
+    return table
+
+
+def _bare(phoneme: str) -> str:
+    return phoneme.lstrip("',")
+
+
+def _parts(bare: str) -> tuple[list[tuple[str, str]], list[str] | str]:
+    """(segment, viseme) parts of a mnemonic the English table lacks, and what was guessed: the characters
+    of its IPA no table knows, or (a mnemonic in no table) a phrase saying so."""
+    ipa = english_ipa().get(bare)
+    if ipa is None:  # in no table: its letters read as IPA (espeak's ASCII mnemonics are aliases there)
+        return phoneme_visemes(bare)[0], "a mnemonic of no English phoneme table"
+    return phoneme_visemes(ipa)
+
+
 def english_viseme(phoneme: str) -> str:
-    """The viseme of one espeak mnemonic (stress marks ' and , ignored); KeyError if unmapped."""
-    bare = phoneme.lstrip("',")
+    """The viseme of one espeak mnemonic (stress marks ' and , ignored): the table's, else the first part's
+    by IPA features (a diphthong's nucleus); ``=`` when the previous phoneme continues."""
+    bare = _bare(phoneme)
     if bare.startswith("_") or not bare:
         return PAUSE
-    return english_table()[bare]
+    if bare in english_table():
+        return english_table()[bare]
+    return _parts(bare)[0][0][1]
 
 
 def english_visemes(phonemes: list[Event]) -> list[tuple[str, Event]]:
     """(viseme, phoneme event) for each phoneme, ``=`` rows folded into their predecessor's viseme.
 
-    Raises :class:`TTSError` listing every phoneme the table lacks.
+    A mnemonic the table lacks goes by its IPA features (see the module docstring); when it has
+    several parts (``aI@``) each gets an event of its own, ``name:segment``, over its share of the time.
     """
     out: list[tuple[str, Event]] = []
-    missing: dict[str, float] = {}
-    for event in phonemes:
-        try:
-            viseme = english_viseme(event.text)
-        except KeyError:
-            missing.setdefault(event.text, event.start)
-            continue
-        if viseme == CONTINUE:
-            viseme = out[-1][0] if out else PAUSE
-        out.append((viseme, event))
-    if missing:
-        listed = ", ".join(f"{p!r} (first at {t:.3f} s)" for p, t in missing.items())
-        raise TTSError(f"no viseme for the phonemes {listed}", where="spec/english_visemes.csv",
-                       hint="add a row for each (phoneme,viseme,example)")
+    with phoneme_fallbacks("espeak (English)") as log:
+        for event in phonemes:
+            bare = _bare(event.text)
+            if bare.startswith("_") or not bare:
+                out.append((PAUSE, event))
+                continue
+            viseme = english_table().get(bare)
+            if viseme is not None:
+                out.append((out[-1][0] if out else PAUSE, event) if viseme == CONTINUE else (viseme, event))
+                continue
+            parts, unknown = _parts(bare)
+            if unknown:
+                log.note(event.text, unknown, "".join(symbol for symbol, _ in parts))
+            if len(parts) == 1 and parts[0][1] == CONTINUE:
+                out.append((out[-1][0] if out else PAUSE, event))
+                continue
+            for label, v, start, end in split_event(event, parts):
+                out.append((v, event if label == event.text else Event(event.kind, start, end, label, event.position)))
     return out

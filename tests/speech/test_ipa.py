@@ -8,6 +8,7 @@ import pytest
 
 from mpeg4fa.speech import MarkupError, TTSError
 from mpeg4fa.speech import ipa
+from mpeg4fa.speech.errors import PhonemeWarning
 from mpeg4fa.speech.markup import parse_markup
 from mpeg4fa.speech.script import check_speakable, runs
 from mpeg4fa.speech.tts.base import Event
@@ -87,9 +88,30 @@ def test_phonemes_parse_into_segments(text, expected):
     assert visemes(text) == expected
 
 
-def test_unknown_characters_are_reported_not_dropped():
+def test_unknown_characters_are_reported_and_read_as_the_nearest():
     found, unknown = ipa.phoneme_visemes("a\u2603")
-    assert found == [] and unknown == ["\u2603"]
+    assert found == [("a", "AA")] and unknown == ["\u2603"]
+
+
+@pytest.mark.parametrize("char, read_as", [
+    ("\u1d4a", "ə"),   # MODIFIER LETTER SMALL SCHWA: its compatibility form
+    ("\u029e", "k"),   # LATIN SMALL LETTER TURNED K: the base letter of its name
+    ("\u1d00", "a"),   # LATIN LETTER SMALL CAPITAL A
+    ("\u03b1", "ɑ"),   # GREEK SMALL LETTER ALPHA: Latin alpha is an IPA letter
+    ("B", "b"),         # a capital: its lower case
+    ("\u0436", "ə"),   # CYRILLIC SMALL LETTER ZHE: a letter nothing identifies
+    ("\u20d0", ""),    # COMBINING LEFT HARPOON ABOVE: a mark, dropped
+    ("\u2603", ""),    # a symbol, dropped
+    ("§", "")])
+def test_nearest_reads_an_unknown_character_by_its_base_letter_or_class(char, read_as):
+    assert char not in ipa.features() and char not in ipa.aliases() and char not in ipa.marks()
+    assert ipa.nearest(char) == read_as
+
+
+def test_a_phoneme_of_nothing_but_unknown_marks_continues_the_one_before():
+    with pytest.warns(PhonemeWarning):
+        placed = ipa.ipa_visemes(events(("p", 0.0, 0.1), ("\u20d0", 0.1, 0.2)))
+    assert [v for _, v, _, _ in placed] == ["PP", "PP"]
 
 
 def test_shares_split_diphthongs_and_affricates():
@@ -119,12 +141,28 @@ def test_a_sounding_unnamed_phoneme_continues_the_one_before():
     assert [v for _, v, _, _ in placed] == ["PP", "PP", "RR"]
 
 
-def test_unknown_segments_fail_loudly_listing_them():
-    with pytest.raises(TTSError) as info:
-        ipa.ipa_visemes(events(("a", 0, 0.1), ("x\u2603", 0.1, 0.2), ("\u2604", 0.25, 0.3), ("x\u2603", 0.3, 0.4)))
-    message = str(info.value)
-    assert "U+2603" in message and "U+2604" in message and "first at 0.100 s" in message
-    assert "spec/ipa_features.csv" in message and message.count("U+2603") == 1
+def test_unknown_segments_are_counted_in_one_warning_never_an_error():
+    with pytest.warns(PhonemeWarning) as caught:
+        placed = ipa.ipa_visemes(events(("a", 0, 0.1), ("x\u2603", 0.1, 0.2), ("\u2604", 0.25, 0.3),
+                                        ("x\u2603", 0.3, 0.4)))
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    assert "3 phonemes" in message and "'x\u2603' x2 (U+2603; read as x)" in message and "U+2604" in message
+    assert [v for _, v, _, _ in placed] == ["AA", "kk", "kk", "kk"]
+
+
+def test_nested_calls_share_one_warning():
+    with pytest.warns(PhonemeWarning) as caught:
+        with ipa.phoneme_fallbacks("test") as log:
+            ipa.ipa_visemes(events(("\u029e", 0, 0.1)))
+            ipa.ipa_visemes(events(("\u029e", 0, 0.1), ("\u1d00", 0.1, 0.2)))
+    assert len(caught) == 1 and len(log) == 3
+    assert str(caught[0].message).startswith("test: 3 phonemes") and "'\u029e' x2" in str(caught[0].message)
+
+
+def test_no_warning_when_every_character_is_known(recwarn):
+    ipa.ipa_visemes(events(("ˈaɪ", 0, 0.1), ("tʃ", 0.1, 0.2)))
+    assert not [w for w in recwarn if issubclass(w.category, PhonemeWarning)]
 
 
 def test_an_ipa_name_cut_at_8_bytes_loses_only_the_broken_character():
