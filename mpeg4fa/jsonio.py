@@ -35,7 +35,7 @@ from mpeg4fa.errors import MpegFaError
 from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
 
 __all__ = ["JsonError", "MAX_JSON_BYTES", "MAX_DEPTH", "MAX_INT_DIGITS", "loads", "read_json", "decode_utf8",
-           "LineIndex", "line_col", "deepest"]
+           "LineIndex", "line_col", "deepest", "loads_lines"]
 
 MAX_JSON_BYTES = 16 << 20
 """Default ceiling on a JSON document (16 MiB): parsed JSON takes several times its text in memory."""
@@ -84,7 +84,7 @@ def line_col(text: str, offset: int) -> tuple[int, int]:
 def decode_utf8(raw: bytes, path: str, error: ErrorFactory = JsonError, what: str = "JSON") -> str:
     """``raw`` as text: UTF-8, a leading byte-order mark dropped; UTF-16 or an invalid byte is located."""
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        raise error(path, 1, 1, f"the file is UTF-16 text; {what} is read as UTF-8", "save the file as UTF-8")
+        raise error(path, 1, 1, f"the file is UTF-16 text, not UTF-8 ({what} is read as UTF-8)", "save the file as UTF-8")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -168,6 +168,54 @@ def loads(source: str | bytes, path: str = "<json>", *, max_bytes: int = MAX_JSO
 
     ``what`` names the document in messages (``"a points file"``); ``path`` is the place errors name.
     """
+    text = _checked_text(source, path, max_bytes, max_depth, error, what)
+    try:
+        return json.loads(text, parse_constant=_constant, parse_float=_float, parse_int=_int,
+                          object_pairs_hook=object_pairs_hook)
+    except json.JSONDecodeError as exc:
+        raise error(path, exc.lineno, exc.colno, f"invalid JSON: {exc.msg}",
+                    "check the JSON syntax there" if what == "JSON" else f"{what} is JSON") from None
+    except _Refused as exc:
+        line, col = line_col(text, _locate_literal(text, exc.literal))
+        raise error(path, line, col, exc.problem, "give a finite number in ordinary notation") from None
+    except RecursionError:  # a hook nesting deeper than max_depth allowed for (should not happen)
+        raise error(path, None, None, "JSON nested too deeply", f"{what} nests far less") from None
+
+
+def loads_lines(source: str | bytes, path: str = "<json>", *, max_bytes: int = MAX_JSON_BYTES,
+                max_depth: int = MAX_DEPTH, error: ErrorFactory = JsonError, what: str = "JSON lines"
+                ) -> list[tuple[int, Any]]:
+    """``(line number, value)`` of each non-blank line of a JSON Lines document (one value a line).
+
+    The same checks as :func:`loads`; the nesting scan runs once over the whole text (lines are parsed in
+    order and the first bad one stops the read, so every line before it is balanced).
+    """
+    text = _checked_text(source, path, max_bytes, max_depth, error, what)
+    decoder = json.JSONDecoder(parse_constant=_constant, parse_float=_float, parse_int=_int)
+    out = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        body = line.strip()
+        if not body:
+            continue
+        indent = len(line) - len(line.lstrip())
+        try:
+            value, end = decoder.raw_decode(body)
+        except json.JSONDecodeError as exc:
+            raise error(path, number, indent + exc.colno, f"invalid JSON: {exc.msg}",
+                        f"{what}: one JSON value a line") from None
+        except _Refused as exc:
+            raise error(path, number, indent + _locate_literal(body, exc.literal) + 1, exc.problem,
+                        "give a finite number in ordinary notation") from None
+        if body[end:].strip():
+            raise error(path, number, indent + end + 1, "more than one JSON value on the line",
+                        f"{what}: one JSON value a line")
+        out.append((number, value))
+    return out
+
+
+def _checked_text(source: str | bytes, path: str, max_bytes: int, max_depth: int, error: ErrorFactory,
+                  what: str) -> str:
+    """Steps 1-4 of the module docstring: the text, sized, of the right kind, UTF-8 and not too deep."""
     size = len(source.encode("utf-8", "surrogatepass")) if isinstance(source, str) else len(source)
     if size > max_bytes:
         raise error(path, None, None, f"{what} of {size:,} bytes is larger than the {max_bytes:,} bytes read",
@@ -184,17 +232,7 @@ def loads(source: str | bytes, path: str = "<json>", *, max_bytes: int = MAX_JSO
         line, col = line_col(text, deep)
         raise error(path, line, col, f"JSON nested more than {max_depth} levels deep",
                     f"{what} nests far less; is this the right file?")
-    try:
-        return json.loads(text, parse_constant=_constant, parse_float=_float, parse_int=_int,
-                          object_pairs_hook=object_pairs_hook)
-    except json.JSONDecodeError as exc:
-        raise error(path, exc.lineno, exc.colno, f"not valid JSON: {exc.msg}",
-                    "check the JSON syntax there" if what == "JSON" else f"{what} is JSON") from None
-    except _Refused as exc:
-        line, col = line_col(text, _locate_literal(text, exc.literal))
-        raise error(path, line, col, exc.problem, "give a finite number in ordinary notation") from None
-    except RecursionError:  # a hook nesting deeper than max_depth allowed for (should not happen)
-        raise error(path, None, None, "JSON nested too deeply", f"{what} nests far less") from None
+    return text
 
 
 def read_json(path: str | os.PathLike, *, max_bytes: int = MAX_JSON_BYTES, max_depth: int = MAX_DEPTH,

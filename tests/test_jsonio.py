@@ -17,7 +17,7 @@ from mpeg4fa.jsonio import JsonError, LineIndex, line_col, loads, read_json
     (b"[" + b"7" * 5000 + b"]", "5,000 digits", (1, 2)),
     (b'{"a":\n "caf\xe9"}', "not UTF-8: byte 0xe9", (2, 6)),
     (b"\xff\xfe[\x00]\x00", "UTF-16", (1, 1)),
-    (b'{"a": [1, 2}', "not valid JSON", (1, 12)),
+    (b'{"a": [1, 2}', "invalid JSON", (1, 12)),
     (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR", "starts with 0x89504E47 (a PNG image)", (None, None)),
     (b"PK\x03\x04rest", "ZIP archive", (None, None)),
 ])

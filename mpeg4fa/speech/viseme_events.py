@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mpeg4fa import jsonio
 from mpeg4fa.formats.errors import FormatError
 from mpeg4fa.spec.avatars import AZURE_VISEMES, from_azure, from_polly
 from mpeg4fa.spec.errors import SpecError
@@ -45,7 +46,7 @@ from mpeg4fa.speech.utterance import Timing, Utterance
 from mpeg4fa.speech.ipa import FIRST_SHARE
 from mpeg4fa.speech.visemes import PAUSE
 
-__all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "MAX_SECONDS", "TICKS_PER_SECOND", "parse_viseme_events",
+__all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "MAX_SECONDS", "MAX_EVENTS", "MAX_BYTES", "TICKS_PER_SECOND", "parse_viseme_events",
            "read_viseme_events", "events_utterance", "encode_viseme_events"]
 
 FORMATS = ("auto", "azure", "polly")
@@ -55,8 +56,13 @@ LAST_VISEME = 0.15
 """Seconds the last viseme lasts when no event (silence) ends it: about one spoken phoneme."""
 TAIL = 0.2
 """Seconds the stream runs past the end of the last viseme, long enough for the mouth to reach rest."""
-MAX_SECONDS = 6 * 3600.0
-"""Events later than this (6 h) are refused: a time that large is a unit mistake, and the stream would be huge."""
+MAX_SECONDS = 3600.0
+"""Events later than this (1 h) are refused, before anything is allocated: a time that large is a unit
+mistake (a cloud TTS request gives minutes of speech), and the stream would be huge."""
+MAX_EVENTS = 200_000
+"""Most events (or speech marks) a file may hold: an hour of speech has about 50,000 visemes."""
+MAX_BYTES = 32 << 20
+"""Largest viseme event file read (32 MiB): 200,000 events of Polly's verbose marks."""
 _RATE = 1000  # sample rate of the silent audio that only gives the utterance its duration
 _AZURE_KEYS = (("AudioOffset", "VisemeId"), ("audioOffset", "visemeId"), ("audio_offset", "viseme_id"),
                ("privAudioOffset", "privVisemeId"))
@@ -78,59 +84,62 @@ class VisemeEvent:
     """A diphthong's second viseme (Azure 9, 10, 11): the last part of the event's time shows it."""
 
 
-def _records(text: str, name: str) -> list[tuple[dict, int | None]]:
-    """The file's objects and their line (known for JSON lines): a JSON array, an object holding one, or lines."""
-    stripped = text.lstrip()
-    if not stripped:
+def _records(text: str | bytes, name: str) -> list[tuple[dict, int | None]]:
+    """The file's objects and their line: a JSON array, an object holding one, or JSON lines.
+
+    Read by :mod:`mpeg4fa.jsonio` (size, nesting, encoding and numbers checked, every fault located);
+    at most :data:`MAX_EVENTS` records.
+    """
+    if not (text if isinstance(text, str) else text.decode("utf-8", "replace")).strip(" \t\r\n\ufeff"):
         raise FormatError(name, None, None, "the file is empty", hint="give Azure or Polly viseme events as JSON")
     try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        if exc.msg != "Extra data":
-            raise FormatError(name, exc.lineno, exc.colno, f"not JSON: {exc.msg}",
-                              hint="a JSON array of events, or JSON lines as Polly writes them") from None
-        return _json_lines(text, name)
+        data = jsonio.loads(text, name, max_bytes=MAX_BYTES, error=FormatError, what="viseme events")
+    except FormatError as exc:
+        if not exc.problem.startswith("invalid JSON: Extra data"):
+            raise
+        records = [(item, number) for number, item in jsonio.loads_lines(
+            text, name, max_bytes=MAX_BYTES, error=FormatError, what="Polly speech marks (JSON lines)")]
+        return _counted(records, name)
     if isinstance(data, list):
-        return list(zip(data, _item_lines(text)))
+        if len(data) > MAX_EVENTS:
+            _too_many(len(data), name)
+        source = text if isinstance(text, str) else jsonio.decode_utf8(text, name, FormatError)
+        return list(zip(data, _item_lines(source)))
     if isinstance(data, dict):
         for key in ("visemes", "events", "speechMarks", "marks"):
             if isinstance(data.get(key), list):
-                return [(item, None) for item in data[key]]
+                return _counted([(item, None) for item in data[key]], name)
         return [(data, 1)]
     raise FormatError(name, 1, 1, f"JSON {type(data).__name__} where a list of events was expected",
                       hint="a JSON array of events, or JSON lines")
 
 
+def _counted(records: list[tuple[dict, int | None]], name: str) -> list[tuple[dict, int | None]]:
+    if len(records) > MAX_EVENTS:
+        _too_many(len(records), name)
+    return records
+
+
+def _too_many(n: int, name: str) -> None:
+    raise FormatError(name, None, None, f"{n:,} events, more than the {MAX_EVENTS:,} read",
+                      hint=f"a viseme event file covers at most {MAX_SECONDS / 3600:g} h of speech; split it")
+
+
 def _item_lines(text: str) -> list[int]:
-    """The line each item of a top-level JSON array (already parsed, so well formed) starts on."""
+    """The line each item of a top-level JSON array (already parsed, so well formed) starts on.
+
+    Line starts are found once (:class:`~mpeg4fa.jsonio.LineIndex`), so this is linear in the text.
+    """
     decoder = json.JSONDecoder()
+    index = jsonio.LineIndex(text)
     lines, at = [], text.index("[") + 1
     while True:
         while text[at] in " \t\r\n,":
             at += 1
         if text[at] == "]":
             return lines
-        lines.append(text.count("\n", 0, at) + 1)
+        lines.append(index.line(at))
         at = decoder.raw_decode(text, at)[1]
-
-
-def _json_lines(text: str, name: str) -> list[tuple[dict, int | None]]:
-    out = []
-    decoder = json.JSONDecoder()
-    for number, line in enumerate(text.splitlines(), start=1):
-        body = line.strip()
-        if not body:
-            continue
-        try:
-            item, end = decoder.raw_decode(body)
-        except json.JSONDecodeError as exc:
-            raise FormatError(name, number, len(line) - len(line.lstrip()) + exc.colno, f"not JSON: {exc.msg}",
-                              hint="one JSON object a line, as Polly writes speech marks") from None
-        if body[end:].strip():
-            raise FormatError(name, number, len(line) - len(line.lstrip()) + end + 1,
-                              "more than one JSON value on the line", hint="one speech mark a line")
-        out.append((item, number))
-    return out
 
 
 def _guess(records: list[tuple[dict, int | None]], name: str) -> str:
@@ -194,8 +203,13 @@ def _polly_event(item: object, line: int | None, index: int, name: str) -> Visem
     return VisemeEvent(seconds, viseme, str(item.get("value")), line, index)
 
 
-def parse_viseme_events(text: str, name: str = "<events>", format: str = "auto") -> tuple[str, list[VisemeEvent]]:
-    """``(format, events)`` of a viseme event file's text, in time order (see the module docstring)."""
+def parse_viseme_events(text: str | bytes, name: str = "<events>", format: str = "auto"
+                        ) -> tuple[str, list[VisemeEvent]]:
+    """``(format, events)`` of a viseme event file's text (or bytes), in time order (see the module docstring).
+
+    Times past :data:`MAX_SECONDS` and more than :data:`MAX_EVENTS` events are refused here, before the
+    encoder allocates anything for them.
+    """
     if format not in FORMATS:
         raise ValueError(f"format {format!r}: one of {', '.join(FORMATS)}")
     records = _records(text, name)
@@ -214,15 +228,14 @@ def parse_viseme_events(text: str, name: str = "<events>", format: str = "auto")
 
 
 def read_viseme_events(path: str | Path, format: str = "auto") -> tuple[str, list[VisemeEvent]]:
-    """:func:`parse_viseme_events` of a file (UTF-8)."""
+    """:func:`parse_viseme_events` of a file (UTF-8, at most :data:`MAX_BYTES`; a bad byte is located)."""
     name = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_BYTES + 1)
     except OSError as exc:
         raise FormatError.from_os_error(name, exc) from None
-    except UnicodeDecodeError as exc:
-        raise FormatError.no_place(name, f"not UTF-8 text (byte {exc.start})", hint="viseme events are JSON") from None
-    return parse_viseme_events(text, name, format)
+    return parse_viseme_events(data, name, format)
 
 
 def events_utterance(events: list[VisemeEvent], engine: str = "events", name: str = "<events>") -> Utterance:

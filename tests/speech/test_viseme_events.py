@@ -93,8 +93,8 @@ def test_events_encode_with_the_text_encoders_transitions():
 
 @pytest.mark.parametrize("text, where, what", [
     ("", "f.json", "empty"),
-    ('[{"AudioOffset": 0, "VisemeId": 1},\n {"AudioOffset": 5 "VisemeId": 2}]', "f.json:2:20", "not JSON"),
-    ('{"time":0,"type":"viseme","value":"p"}\n{"time":5,"type":"viseme",,}\n', "f.json:2:", "not JSON"),
+    ('[{"AudioOffset": 0, "VisemeId": 1},\n {"AudioOffset": 5 "VisemeId": 2}]', "f.json:2:20", "invalid JSON"),
+    ('{"time":0,"type":"viseme","value":"p"}\n{"time":5,"type":"viseme",,}\n', "f.json:2:", "invalid JSON"),
     ('[{"AudioOffset": 0, "VisemeId": 1},\n {"AudioOffset": 5, "VisemeId": 22}]', "f.json:2: event 1", "0..21"),
     ('[{"AudioOffset": 0, "VisemeId": 1},\n {"AudioOffset": -5, "VisemeId": 2}]', "f.json:2: event 1", "ticks"),
     ('[{"AudioOffset": 0, "VisemeId": 1},\n {"AudioOffset": "5", "VisemeId": 2}]', "f.json:2: event 1", "ticks"),
@@ -103,8 +103,8 @@ def test_events_encode_with_the_text_encoders_transitions():
      "before the previous"),
     ('{"time":0,"type":"viseme","value":"p"}\n{"time":5,"type":"viseme","value":"B"}\n', "f.json:2: event 1",
      "Polly viseme 'B'"),
-    ('{"time":0,"type":"viseme","value":"p"}\n{"time":NaN,"type":"viseme","value":"a"}\n', "f.json:2: event 1",
-     "not a time"),
+    ('{"time":0,"type":"viseme","value":"p"}\n{"time":NaN,"type":"viseme","value":"a"}\n', "f.json:2:9",
+     "NaN is not a number"),
     ('{"time":0,"type":"viseme","value":"p"}\n{"time":1e12,"type":"viseme","value":"a"}\n', "f.json:2: event 1",
      "not a time"),
     ('[{"AudioOffset": 1e300, "VisemeId": 1}]', "f.json:1: event 0", "ticks"),
