@@ -27,7 +27,7 @@ from typing import Callable, Iterator
 
 from mpeg4fa.atomic import atomic_output
 from mpeg4fa.batch.errors import BatchError
-from mpeg4fa.batch.job import completed, job_key, one_line, render_job
+from mpeg4fa.batch.job import completed, job_key, one_line, remove_leftovers, render_job
 from mpeg4fa.batch.manifest import Job, Manifest, load_manifest
 
 SUMMARY_NAME = "batch-summary.json"
@@ -120,11 +120,18 @@ def run_batch(manifest: Manifest | str | os.PathLike, outdir: str | os.PathLike,
     if todo:
         if scheduler is None:
             _generic_head_first(todo)
-        with _client(scheduler, min(workers or default_workers(), len(todo))) as client:
-            for job, result in _submitted(client, todo, out):
-                results[job.index] = result
-                if progress is not None:
-                    progress(len(results), total)
+        try:
+            with _client(scheduler, min(workers or default_workers(), len(todo))) as client:
+                for job, result in _submitted(client, todo, out):
+                    results[job.index] = result
+                    if progress is not None:
+                        progress(len(results), total)
+        except BaseException:  # Ctrl-C, SIGTERM (mpeg4fa.atomic.Terminated), a lost scheduler...
+            if scheduler is None:  # the local cluster is closed: no worker writes any more
+                for job, _, _ in todo:
+                    if job.index not in results:
+                        remove_leftovers(out / job.output)
+            raise
     used = len({r.worker for r in results.values() if r.worker is not None})
     summary = BatchSummary(str(manifest.path), str(out), scheduler, used, time.perf_counter() - started,
                            [results[j.index] for j in manifest.jobs])
