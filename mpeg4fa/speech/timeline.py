@@ -244,39 +244,71 @@ def _checked_spans(spans: Sequence[VisemeSpan]) -> list[tuple[float, float, tupl
     return [(start, end, (span.set, span.viseme), profile) for start, end, _, span, profile in checked]
 
 
-def _phases(spans: Sequence[VisemeSpan]) -> list[tuple[float, float, tuple[str, str], np.ndarray]]:
-    """The spans with the silences around and between them: (start, end, key, profile) in time order."""
-    checked = _checked_spans(spans)
-    if not checked:
-        return []
-    rest_pose = np.zeros(N_FAPS)
-    phases = [(-math.inf, checked[0][0], _REST, rest_pose)]
-    for previous, span in zip([None] + checked[:-1], checked):
-        if previous is not None and span[0] > previous[1]:
-            phases.append((previous[1], span[0], _REST, rest_pose))
-        phases.append(span)
-    phases.append((checked[-1][1], math.inf, _REST, rest_pose))
-    return phases
+class _Moves:
+    """The moves of the mouth (:func:`_viseme_segments`), made one span at a time, earliest first.
 
+    Why incremental: long text is timed sentence by sentence, so the spans of the whole text are
+    never held at once. A move needs only the phases on both sides of its boundary, so each span
+    adds the moves up to its own onset; :meth:`finish` adds the close into the final silence.
+    The moves are the same, bit for bit, as from all the spans at once."""
 
-def _viseme_segments(spans: Sequence[VisemeSpan], rest: float, hold: float = CLOSURE_HOLD) -> list[_Segment]:
-    """One move per boundary between phases (see the module docstring), earliest first."""
-    phases = _phases(spans)
-    segments: list[_Segment] = []
-    floor = -math.inf  # the previous move's end, or the end of a closure's hold
-    for before, after in zip(phases, phases[1:]):
+    def __init__(self, rest: float, hold: float = CLOSURE_HOLD) -> None:
+        self.rest, self.hold = rest, hold
+        self.last: tuple | None = None  # the last span phase added
+        self.floor = -math.inf  # the previous move's end, or the end of a closure's hold
+        self._rest_pose = np.zeros(N_FAPS)
+
+    def _move(self, before: tuple, after: tuple) -> _Segment:
         at = after[0]
         lead = min(LEAD, LEAD_SHARE * (before[1] - before[0]))
         closure = after[2] in CLOSURES
         lag = 0.0 if closure else min(LAG, LAG_SHARE * (after[1] - after[0]))
+        rest = self.rest
         if after[2] == _REST and lead + lag > rest:  # closing into silence: at most rest_time long
             lead, lag = (lead * rest / (lead + lag), lag * rest / (lead + lag)) if rest > 0 else (0.0, 0.0)
         start, end = at - lead, at + lag
+        floor = self.floor
         if start < floor:  # a closure's hold, or a move it delayed, is still on
             start, end = floor, max(end, floor + min(MIN_MOVE, lead + lag))
-        segments.append(_Segment(start, end, before[2], after[2], before[3], after[3]))
-        floor = max(end, at + hold) if closure else end
-    return segments
+        self.floor = max(end, at + self.hold) if closure else end
+        return _Segment(start, end, before[2], after[2], before[3], after[3])
+
+    def add(self, phase: tuple) -> list[_Segment]:
+        """The moves up to span ``phase`` (start, end, key, profile), which must not start before the last ends."""
+        rest_pose = self._rest_pose
+        if self.last is None:
+            moves = [self._move((-math.inf, phase[0], _REST, rest_pose), phase)]
+        elif phase[0] < self.last[1]:
+            raise ValueError(f"a span starts at {phase[0]}, before the span before it ends at {self.last[1]}: "
+                             "spans overlap")
+        elif phase[0] > self.last[1]:
+            gap = (self.last[1], phase[0], _REST, rest_pose)
+            moves = [self._move(self.last, gap), self._move(gap, phase)]
+        else:
+            moves = [self._move(self.last, phase)]
+        self.last = phase
+        return moves
+
+    def finish(self) -> list[_Segment]:
+        """The close into the silence after the last span (none if no span came)."""
+        if self.last is None:
+            return []
+        last, self.last = self.last, None
+        return [self._move(last, (last[1], math.inf, _REST, self._rest_pose))]
+
+    @property
+    def horizon(self) -> float:
+        """Every move still to come starts at or after this time (the next move crosses the last span's end)."""
+        return -math.inf if self.last is None else self.last[1] - LEAD
+
+
+def _viseme_segments(spans: Sequence[VisemeSpan], rest: float, hold: float = CLOSURE_HOLD) -> list[_Segment]:
+    """One move per boundary between phases (see the module docstring), earliest first."""
+    moves = _Moves(rest, hold)
+    segments: list[_Segment] = []
+    for span in _checked_spans(spans):
+        segments += moves.add(span)
+    return segments + moves.finish()
 
 
 def _locate(segments: list[_Segment], t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -317,6 +349,12 @@ def viseme_track(spans: Sequence[VisemeSpan], times: npt.ArrayLike, tangent: flo
         raise ValueError(f"tangent {tangent!r} must be in [0, 3]: outside it the mouth overshoots")
     segments = _viseme_segments(spans, _non_negative(rest_time, "rest_time"),
                                 _non_negative(closure_hold, "closure_hold"))
+    return _viseme_rows(segments, t, k_tan)
+
+
+def _viseme_rows(segments: Sequence[_Segment], t: np.ndarray, k_tan: float = 0.0) -> np.ndarray:
+    """:func:`viseme_track` at ``t`` from its moves: all of them, or (streaming) those from the last one
+    started at ``t[0]`` on, which give the same rows."""
     out = np.zeros((len(t), N_FAPS))
     if not segments:
         return out
@@ -348,6 +386,11 @@ def viseme_fields(spans: Sequence[VisemeSpan], times: npt.ArrayLike, rest_time: 
     t = _times(times)
     segments = _viseme_segments(spans, _non_negative(rest_time, "rest_time"),
                                 _non_negative(closure_hold, "closure_hold"))
+    return _viseme_field_rows(segments, t)
+
+
+def _viseme_field_rows(segments: Sequence[_Segment], t: np.ndarray) -> VisemeFields:
+    """:func:`viseme_fields` at ``t`` from its moves (all, or those from the last one started at ``t[0]``)."""
     if not segments:
         return VisemeFields([_REST] * len(t), [_REST] * len(t), np.zeros(len(t), np.int64))
     idx, live, u = _locate(segments, t)
@@ -393,6 +436,57 @@ def _state(seg: tuple[float, float, float, float, float], at: float) -> tuple[fl
     return value, float(hermite_slope(u, a_s, a_e, g)) / seconds
 
 
+class _ExpressionTracks:
+    """Each expression's transitions (start, seconds, a_s, a_e, g), added cue by cue in time order.
+
+    Why a class: a long text's cues come sentence by sentence; a new transition starts from where
+    its track is (value and slope, :func:`_state`), which needs only each track's last transition.
+    :meth:`levels` reads the tracks at times not before those read last; :meth:`forget` drops the
+    transitions no later time can reach, so memory stays flat."""
+
+    def __init__(self) -> None:
+        self.tracks: list[list[tuple[float, float, float, float, float]]] = [[] for _ in _EXPRESSION_NAMES]
+        self.latest = -math.inf
+
+    def add(self, checked: Sequence[tuple[float, float, str, int]]) -> None:
+        """Cues as :func:`_checked_cues` gives them, none before a cue added earlier."""
+        for start, seconds, name, level in checked:
+            if start < self.latest:
+                raise ValueError(f"a cue at {start} s comes after one at {self.latest} s: cues go in time order")
+            self.latest = start
+            for e, track in enumerate(self.tracks):
+                target = float(level) if _EXPRESSION_NAMES[e] == name else 0.0
+                value, slope = _state(track[-1], start) if track else (0.0, 0.0)
+                if not track and target == 0.0:
+                    continue  # never shown and not asked for: stays at 0
+                track.append((start, seconds, value, target, slope * seconds))
+
+    def levels(self, t: np.ndarray) -> np.ndarray:
+        """(n, k) intensities at ``t``."""
+        out = np.zeros((len(t), len(_EXPRESSION_NAMES)))
+        for e, track in enumerate(self.tracks):
+            if not track:
+                continue
+            starts, seconds, a_s, a_e, g = (np.array(col) for col in zip(*track))
+            idx = np.searchsorted(starts, t, side="right") - 1
+            live = idx >= 0
+            i, tt = idx[live], t[live]
+            moving = (seconds[i] > 0) & (tt < starts[i] + seconds[i])
+            u = np.where(moving, (tt - starts[i]) / np.where(seconds[i] > 0, seconds[i], 1.0), 1.0)
+            curve = _hermite_rows(np.clip(u, 0.0, 1.0), a_s[i], a_e[i], g[i])
+            out[live, e] = np.clip(curve, 0.0, FULL_INTENSITY)
+        return out
+
+    def forget(self, before: float) -> None:
+        """Drop transitions that times from ``before`` on cannot read (each track keeps the one in force)."""
+        for e, track in enumerate(self.tracks):
+            k = 0
+            while k + 1 < len(track) and track[k + 1][0] <= before:
+                k += 1
+            if k:
+                del track[:k]
+
+
 def expression_intensities(cues: Sequence[ExpressionCue],
                            times: npt.ArrayLike) -> tuple[tuple[str, ...], np.ndarray]:
     """Each expression's intensity (n, k float, 0..63) at ``times``, with the k names (no ``neutral``).
@@ -401,32 +495,19 @@ def expression_intensities(cues: Sequence[ExpressionCue],
     module docstring for the fade rule and how a moving transition continues.
     """
     t = _times(times)
-    tracks: list[list[tuple[float, float, float, float, float]]] = [[] for _ in _EXPRESSION_NAMES]
-    for start, seconds, name, level in _checked_cues(cues):
-        for e, track in enumerate(tracks):
-            target = float(level) if _EXPRESSION_NAMES[e] == name else 0.0
-            value, slope = _state(track[-1], start) if track else (0.0, 0.0)
-            if not track and target == 0.0:
-                continue  # never shown and not asked for: stays at 0
-            track.append((start, seconds, value, target, slope * seconds))
-    out = np.zeros((len(t), len(_EXPRESSION_NAMES)))
-    for e, track in enumerate(tracks):
-        if not track:
-            continue
-        starts, seconds, a_s, a_e, g = (np.array(col) for col in zip(*track))
-        idx = np.searchsorted(starts, t, side="right") - 1
-        live = idx >= 0
-        i, tt = idx[live], t[live]
-        moving = (seconds[i] > 0) & (tt < starts[i] + seconds[i])
-        u = np.where(moving, (tt - starts[i]) / np.where(seconds[i] > 0, seconds[i], 1.0), 1.0)
-        curve = _hermite_rows(np.clip(u, 0.0, 1.0), a_s[i], a_e[i], g[i])
-        out[live, e] = np.clip(curve, 0.0, FULL_INTENSITY)
-    return _EXPRESSION_NAMES, out
+    tracks = _ExpressionTracks()
+    tracks.add(_checked_cues(cues))
+    return _EXPRESSION_NAMES, tracks.levels(t)
 
 
 def expression_track(cues: Sequence[ExpressionCue], times: npt.ArrayLike) -> np.ndarray:
     """Low-level FAPs (n, 68) of the expressions: ``sum(profile * intensity / 63)``."""
     _, levels = expression_intensities(cues, times)
+    return _expression_rows(levels)
+
+
+def _expression_rows(levels: np.ndarray) -> np.ndarray:
+    """(n, 68) FAPs of (n, k) intensities: ``sum(profile * intensity / 63)``, row by row alike."""
     return levels @ _EXPRESSION_STACK / FULL_INTENSITY
 
 
@@ -437,6 +518,12 @@ def expression_fields(cues: Sequence[ExpressionCue], times: npt.ArrayLike) -> Ex
     choice is stable from frame to frame; a rounded intensity of 0 reads ``neutral``.
     """
     names, levels = expression_intensities(cues, times)
+    return _expression_field_rows(levels)
+
+
+def _expression_field_rows(levels: np.ndarray) -> ExpressionFields:
+    """:func:`expression_fields` from the (n, k) intensities."""
+    names = _EXPRESSION_NAMES
     padded = np.concatenate([levels, np.zeros((len(levels), 2))], axis=1)  # always a first and second
     label = np.array(names + (NEUTRAL, NEUTRAL))
     order = np.argsort(-padded, axis=1, kind="stable")[:, :2]
@@ -467,15 +554,72 @@ def _smoothstep(x: np.ndarray) -> np.ndarray:
     return hermite(np.clip(x, 0.0, 1.0), 0.0, 1.0)
 
 
-def _blink_onsets(rng: np.random.Generator, until: float, lo: float, hi: float) -> np.ndarray:
-    """Blink start times in (0, until]; drawn in fixed blocks, so a longer ``until`` only adds blinks."""
-    onsets: list[np.ndarray] = []
-    last = 0.0
-    while last <= until:
-        block = last + np.cumsum(rng.uniform(lo, hi, size=64))
-        onsets.append(block)
-        last = float(block[-1])
-    return np.concatenate(onsets) if onsets else np.zeros(0)
+def _blink_block(rng: np.random.Generator, last: float, lo: float, hi: float) -> np.ndarray:
+    """The next 64 blink onsets after ``last``: blinks are drawn in fixed blocks, so a longer time
+    only adds blinks, and a stream made piece by piece blinks as one made at once."""
+    return last + np.cumsum(rng.uniform(lo, hi, size=64))
+
+
+class IdleMotion:
+    """Idle blinks and head motion as a function of time: :func:`idle_track` for times read piece by
+    piece (non-decreasing), drawing blinks only as far as asked and forgetting those passed."""
+
+    def __init__(self, seed: int, blinks: bool = True, head: bool = True, *,
+                 blink_every: tuple[float, float] = (2.0, 6.0), blink_seconds: float = 0.15,
+                 blink_amplitude: float = _LID_SHUT, head_degrees: tuple[float, float, float] = (1.5, 2.5, 1.0),
+                 fade_in: float = 1.0) -> None:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+            raise ValueError(f"seed {seed!r} must be an integer")
+        lo, hi = (_finite(x, "blink_every") for x in blink_every)
+        length = _finite(blink_seconds, "blink_seconds")
+        if not 0 < length < lo <= hi:
+            raise ValueError(f"need 0 < blink_seconds < blink_every[0] <= blink_every[1], "
+                             f"got {blink_seconds} and {blink_every}")
+        self.blinks, self.head = blinks, head
+        self.lo, self.hi, self.length, self.amplitude = lo, hi, length, float(blink_amplitude)
+        self._rng, head_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(2))
+        self._onsets = np.zeros(0)
+        self._last = 0.0
+        self.fade = _finite(fade_in, "fade_in") if head else 0.0
+        self._sway = []
+        if head:
+            for col, degrees in zip(_HEAD_COLUMNS, head_degrees):
+                freq = head_rng.uniform(0.05, 0.3, size=3)
+                phase = head_rng.uniform(0.0, 2 * math.pi, size=3)
+                weight = head_rng.uniform(0.5, 1.0, size=3)
+                weight /= weight.sum()
+                self._sway.append((col, freq, phase, weight, _finite(degrees, "head_degrees")))
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        """(n, 68) idle FAPs at ``t`` (seconds from 0)."""
+        out = np.zeros((len(t), N_FAPS))
+        if self.blinks and len(t):
+            until = float(t.max())
+            blocks = [self._onsets]
+            while self._last <= until:
+                block = _blink_block(self._rng, self._last, self.lo, self.hi)
+                blocks.append(block)
+                self._last = float(block[-1])
+            onsets = self._onsets = np.concatenate(blocks) if len(blocks) > 1 else self._onsets
+            idx = np.searchsorted(onsets, t, side="right") - 1
+            u = np.where(idx >= 0, (t - onsets[np.maximum(idx, 0)]) / self.length, np.inf)
+            shut = np.where(u < 0.5, _smoothstep(3 * u), _smoothstep(3 * (1 - u)))
+            shut = np.where((u >= 0) & (u < 1), shut, 0.0)
+            for col in _BLINK_COLUMNS:
+                out[:, col] = self.amplitude * shut
+        if self.head:
+            fade = self.fade
+            envelope = _smoothstep(t / fade) if fade > 0 else (t >= 0).astype(np.float64)
+            for col, freq, phase, weight, degrees in self._sway:
+                sway = np.sin(2 * math.pi * freq * t[:, None] + phase) @ weight
+                out[:, col] = degrees * _AU_PER_DEGREE * envelope * sway
+        return out
+
+    def forget(self, before: float) -> None:
+        """Drop blink onsets that times from ``before`` on cannot read."""
+        k = int(np.searchsorted(self._onsets, before, side="right")) - 1
+        if k > 0:
+            self._onsets = self._onsets[k:]
 
 
 def idle_track(times: npt.ArrayLike, seed: int, blinks: bool = True, head: bool = True, *,
@@ -494,34 +638,8 @@ def idle_track(times: npt.ArrayLike, seed: int, blinks: bool = True, head: bool 
     head use independent random streams: turning one off leaves the other as is.
     """
     t = _times(times)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ValueError(f"seed {seed!r} must be an integer")
-    lo, hi = (_finite(x, "blink_every") for x in blink_every)
-    length = _finite(blink_seconds, "blink_seconds")
-    if not 0 < length < lo <= hi:
-        raise ValueError(f"need 0 < blink_seconds < blink_every[0] <= blink_every[1], "
-                         f"got {blink_seconds} and {blink_every}")
-    blink_rng, head_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(2))
-    out = np.zeros((len(t), N_FAPS))
-    if blinks and len(t):
-        onsets = _blink_onsets(blink_rng, float(t.max()), lo, hi)
-        idx = np.searchsorted(onsets, t, side="right") - 1
-        u = np.where(idx >= 0, (t - onsets[np.maximum(idx, 0)]) / length, np.inf)
-        shut = np.where(u < 0.5, _smoothstep(3 * u), _smoothstep(3 * (1 - u)))
-        shut = np.where((u >= 0) & (u < 1), shut, 0.0)
-        for col in _BLINK_COLUMNS:
-            out[:, col] = float(blink_amplitude) * shut
-    if head:
-        fade = _finite(fade_in, "fade_in")
-        envelope = _smoothstep(t / fade) if fade > 0 else (t >= 0).astype(np.float64)
-        for col, degrees in zip(_HEAD_COLUMNS, head_degrees):
-            freq = head_rng.uniform(0.05, 0.3, size=3)
-            phase = head_rng.uniform(0.0, 2 * math.pi, size=3)
-            weight = head_rng.uniform(0.5, 1.0, size=3)
-            weight /= weight.sum()
-            sway = np.sin(2 * math.pi * freq * t[:, None] + phase) @ weight
-            out[:, col] = _finite(degrees, "head_degrees") * _AU_PER_DEGREE * envelope * sway
-    return out
+    return IdleMotion(seed, blinks, head, blink_every=blink_every, blink_seconds=blink_seconds,
+                      blink_amplitude=blink_amplitude, head_degrees=head_degrees, fade_in=fade_in)(t)
 
 
 # ---- frames ----------------------------------------------------------------------------------------
