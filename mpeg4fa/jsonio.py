@@ -35,7 +35,7 @@ from mpeg4fa.errors import MpegFaError
 from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
 
 __all__ = ["JsonError", "MAX_JSON_BYTES", "MAX_DEPTH", "MAX_INT_DIGITS", "loads", "read_json", "decode_utf8",
-           "LineIndex", "line_col", "deepest", "loads_lines"]
+           "LineIndex", "line_col", "deepest", "loads_lines", "json_text"]
 
 MAX_JSON_BYTES = 16 << 20
 """Default ceiling on a JSON document (16 MiB): parsed JSON takes several times its text in memory."""
@@ -96,6 +96,16 @@ def decode_utf8(raw: bytes, path: str, error: ErrorFactory = JsonError, what: st
     return text[1:] if text.startswith("\ufeff") else text
 
 
+def json_text(source: str | bytes, path: str, error: ErrorFactory = JsonError, what: str = "JSON") -> str:
+    """Bytes as JSON text: a foreign file (PNG, ZIP...) named by its signature, then :func:`decode_utf8`."""
+    if isinstance(source, str):
+        return source[1:] if source.startswith("\ufeff") else source
+    raw = bytes(source)
+    refuse_foreign(raw[:HEAD_BYTES], what, lambda problem, hint: error(path, None, None, problem, hint),
+                   allowed=("UTF-16 text",))
+    return decode_utf8(raw, path, error, what)
+
+
 _STRING = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"', re.S)
 _BRACKETS = {ord("["): 1, ord("{"): 1, ord("]"): -1, ord("}"): -1}
 
@@ -145,7 +155,7 @@ def _constant(name: str) -> float:
 def _float(literal: str) -> float:
     value = float(literal)
     if not math.isfinite(value):
-        raise _Refused(literal, f"number {literal[:40]} is beyond what a double holds")
+        raise _Refused(literal, f"number {literal[:40]} is not finite: beyond what a double holds")
     return value
 
 
@@ -220,13 +230,7 @@ def _checked_text(source: str | bytes, path: str, max_bytes: int, max_depth: int
     if size > max_bytes:
         raise error(path, None, None, f"{what} of {size:,} bytes is larger than the {max_bytes:,} bytes read",
                     f"is this {what}?")
-    if isinstance(source, (bytes, bytearray, memoryview)):
-        raw = bytes(source)
-        refuse_foreign(raw[:HEAD_BYTES], what, lambda problem, hint: error(path, None, None, problem, hint),
-                       allowed=("UTF-16 text",))
-        text = decode_utf8(raw, path, error, what)
-    else:
-        text = source[1:] if source.startswith("\ufeff") else source
+    text = json_text(source, path, error, what)
     deep = deepest(text, max_depth)
     if deep is not None:
         line, col = line_col(text, deep)

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_outputs
+from ..jsonio import read_json
 from ..render import RenderError
 from . import options
 from .errors import UsageError
@@ -44,7 +45,7 @@ def register(commands: Commands) -> None:
 
 def _points(path: Path) -> dict[str, tuple[float, float]]:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = read_json(path, what="a points file")  # size, nesting, encoding checked; faults at line:column
     except FileNotFoundError:
         raise RenderError("no such points file", where=str(path)) from None
     except json.JSONDecodeError as exc:

@@ -36,6 +36,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from mpeg4fa import jsonio
 from mpeg4fa.fdp.errors import FdpError
 from mpeg4fa.fdp.model import (FAPU_KEYS, INT32_MAX, INT32_MIN, UINT32_MAX, FaceDefMesh, FaceDefTable,
                                FaceDefTransform, Fdp, FdpMesh, FdpValueError, TextureImage, Where)
@@ -45,6 +46,8 @@ FORMAT = "mpeg4fa-fdp"
 VERSION = 1
 MAX_JSON_CHARS = 32 << 20
 """Longest JSON document read (32 Mi characters): a textured face with a 100,000-vertex mesh takes ~20 MB."""
+MAX_DEPTH = 16
+"""Deepest nesting read: the schema's deepest value (a displacement in a face definition table) is 8 levels in."""
 
 _TOP_KEYS = ("format", "version", "name", "feature_points", "texture_coords", "fapu", "textures", "mesh",
              "face_def_tables")
@@ -323,52 +326,15 @@ def fdp_from_json(text: str | bytes, path: str = "<string>") -> Fdp:
 
 
 def _decode(text: str | bytes, path: str) -> str:
-    if isinstance(text, (bytes, bytearray, memoryview)):
-        raw = bytes(text)
-        if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-            raise FdpError(path, 1, 1, "the file is UTF-16 text; FDP JSON is UTF-8", "save the file as UTF-8")
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            line = raw.count(b"\n", 0, exc.start) + 1
-            start = raw.rfind(b"\n", 0, exc.start) + 1
-            col = len(raw[start:exc.start].decode("utf-8", "replace")) + 1
-            raise FdpError(path, line, col, f"not UTF-8: byte 0x{raw[exc.start]:02x} cannot start or continue "
-                           "a character", "save the file as UTF-8") from None
-    return text[1:] if text.startswith("\ufeff") else text
+    """The document as text: UTF-8 checked and located by the package's JSON reader (:mod:`mpeg4fa.jsonio`)."""
+    return jsonio.json_text(text, path, FdpError, "FDP JSON")
 
 
 def _parse(text: str, path: str) -> Any:
-    try:
-        return json.loads(text, object_pairs_hook=_pairs)
-    except json.JSONDecodeError as exc:
-        raise FdpError(path, exc.lineno, exc.colno, f"invalid JSON: {exc.msg}") from None
-    except RecursionError:
-        line, col = _line_col(text, _too_deep(text))
-        raise FdpError(path, line, col, "JSON nested too deeply", "an FDP document nests at most 6 levels") from None
-    except ValueError as exc:  # an integer literal too long for int() (sys.get_int_max_str_digits)
-        long_run = re.search(r"[0-9]{1000,}", text)
-        line, col = _line_col(text, long_run.start() if long_run else 0)
-        raise FdpError(path, line, col, f"number too long to read ({exc})") from None
-
-
-def _too_deep(text: str, limit: int = 100) -> int:
-    """Offset of the first bracket nested deeper than ``limit`` (outside strings)."""
-    depth, in_string, escaped = 0, False, False
-    for i, ch in enumerate(text):
-        if in_string:
-            escaped = not escaped and ch == "\\"
-            if ch == '"' and not escaped:
-                in_string = False
-        elif ch == '"':
-            in_string = True
-        elif ch in "[{":
-            depth += 1
-            if depth > limit:
-                return i
-        elif ch in "]}":
-            depth -= 1
-    return 0
+    """The parsed document: nesting (at most :data:`MAX_DEPTH`), numbers and syntax checked by
+    :func:`mpeg4fa.jsonio.loads`, duplicate keys remembered for the schema's checks."""
+    return jsonio.loads(text, path, max_bytes=4 * MAX_JSON_CHARS, max_depth=MAX_DEPTH, error=FdpError,
+                        what="an FDP document", object_pairs_hook=_pairs)
 
 
 def _texture_coords(doc: _Doc, top: dict, labels: tuple[str, ...]) -> np.ndarray | None:
