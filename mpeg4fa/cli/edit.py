@@ -25,9 +25,8 @@ def register(commands: Commands) -> None:
 
 
 def run_edit(args: argparse.Namespace) -> int:
-    import uvicorn
-
     from ..web.app import HOST, create_app
+    from .local_server import run_until_stopped
 
     app = create_app(args.model, args.out)
     if app.state.session.mesh is None:
@@ -38,5 +37,5 @@ def run_edit(args: argparse.Namespace) -> int:
     print(f"mpeg4fa edit: serving {url} (Ctrl-C stops); saving into {args.out.resolve()}")
     if not args.no_browser:
         threading.Timer(1.0, webbrowser.open, (url,)).start()
-    uvicorn.run(app, host=HOST, port=args.port, log_level="warning")
+    run_until_stopped(app, host=HOST, port=args.port, log_level="warning")
     return 0

@@ -38,9 +38,8 @@ def register(commands: Commands) -> None:
 
 
 def run_serve(args: argparse.Namespace) -> int:
-    import uvicorn
-
     from ..serve.app import HOST, create_app
+    from .local_server import run_until_stopped
     from .model import face_from_args
 
     with socket.socket() as probe:  # a port in use is one line now, not a log from uvicorn after the set-up
@@ -56,5 +55,5 @@ def run_serve(args: argparse.Namespace) -> int:
           + (f"{len(units.names)} ARKit units" if units is not None else "this head has no ARKit units: no weights"))
     if not args.no_browser:
         threading.Timer(1.0, webbrowser.open, (url,)).start()
-    uvicorn.run(app, host=HOST, port=args.port, log_level="warning", ws_max_size=1 << 20)
+    run_until_stopped(app, host=HOST, port=args.port, log_level="warning", ws_max_size=1 << 20)
     return 0

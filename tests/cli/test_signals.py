@@ -120,3 +120,29 @@ def test_a_signal_the_process_ignores_stays_ignored(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert out.stat().st_size > 0 and _partials(tmp_path) == []
+
+
+@pytest.mark.parametrize("signum", SIGNALS, ids=lambda s: signal.Signals(s).name)
+def test_the_editor_server_stops_cleanly(tmp_path, signum):
+    """uvicorn handles SIGTERM itself (and swallowed the exit status); SIGHUP used to cut its loop mid-step."""
+    import socket
+
+    import trimesh
+
+    trimesh.creation.icosphere(1).export(tmp_path / "ball.obj")
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    proc = _start(tmp_path, "edit", "ball.obj", "--port", str(port), "--no-browser", "--out", str(tmp_path))
+
+    def listening() -> bool:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
+            return True
+        except OSError:
+            return False
+    _wait_for(proc, listening, "server listening")
+    err = _stop(proc, signum)
+    assert proc.returncode == 128 + signum, err
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == \
+        f"mpeg4fa edit: terminated ({signal.Signals(signum).name})", err

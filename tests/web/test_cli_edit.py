@@ -1,12 +1,13 @@
-"""``mpeg4fa edit`` starts the app on 127.0.0.1 only (uvicorn.run replaced: no socket in the tests)."""
+"""``mpeg4fa edit`` starts the app on 127.0.0.1 only (the server run replaced: no socket in the tests)."""
 import pytest
 import trimesh
-import uvicorn
+
+from mpeg4fa.cli import local_server
 
 
 def test_edit_serves_on_localhost_only(cli, tmp_path, monkeypatch):
     seen = {}
-    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: seen.update(kw, app=app))
+    monkeypatch.setattr(local_server, "run_until_stopped", lambda app, **kw: seen.update(kw, app=app))
     ball = tmp_path / "ball.obj"
     trimesh.creation.icosphere(1).export(ball)
     code, out, err = cli("edit", ball, "--port", "8999", "--out", tmp_path, "--no-browser")
