@@ -16,6 +16,7 @@ stream carries them at the chosen level:
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 
@@ -25,12 +26,12 @@ from mpeg4fa.decoded import ClampWarning, resolve
 from mpeg4fa.fba import EncodeOptions
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
-from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, FULL_INTENSITY, VISEMES
+from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, FULL_INTENSITY, N_FAPS, VISEMES
 from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.compact import compact_expressions, compact_visemes, plan_expression_mask
 from mpeg4fa.speech.markup import parse_markup
-from mpeg4fa.speech.timeline import (CLOSURE_HOLD, expression_fields, expression_track, frame_times, idle_track,
-                                     merge_tracks, viseme_fields, viseme_track)
+from mpeg4fa.speech.frames import FrameBlock, FrameMaker
+from mpeg4fa.speech.timeline import CLOSURE_HOLD, ExpressionFields, VisemeFields
 from mpeg4fa.speech.tts.base import Engine
 from mpeg4fa.speech.utterance import Utterance, speak
 
@@ -67,13 +68,6 @@ class Encoded:
     @property
     def speech(self):
         return self.utterance.speech
-
-
-def _moving(values: np.ndarray) -> np.ndarray:
-    """Columns of the low-level FAPs (3-68) that move anywhere in ``values``."""
-    used = np.abs(values).max(axis=0) > 0
-    used[:2] = False
-    return np.flatnonzero(used)
 
 
 ENGINES = ("espeak", "pyttsx3", "estimate")
@@ -136,32 +130,37 @@ def encode_utterance(utterance: Utterance, *, fps: float = 25.0, level: str = "h
                      seed: int = 0, fold: bool = True, compact: bool = True) -> Encoded:
     """The timeline and stream of a timed :class:`Utterance` (spoken by an engine or aligned to a recording):
     stops start at their closure's silence, then viseme, expression (and idle) tracks at ``fps``, coded
-    at ``level`` (see :func:`encode_text` for ``fold`` and ``compact``)."""
+    at ``level`` (see :func:`encode_text` for ``fold`` and ``compact``).
+
+    The same passes as long text (:mod:`.pipeline`): phones (:func:`phones`) -> frames
+    (:class:`~.frames.FrameMaker`) -> stream (:class:`StreamBuilder`), here on one utterance, in memory."""
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
-    utterance = replace(utterance, timings=stop_closures(utterance.timings, utterance.speech))
-    times = frame_times(utterance.speech.duration, fps)
-    spans, cues = utterance.spans(), list(utterance.cues)
-    hold = closure_hold(fps)
-    visemes, expressions = viseme_track(spans, times, closure_hold=hold), expression_track(cues, times)
-    tracks = [visemes, expressions] + ([idle_track(times, seed)] if idle else [])
-    values = np.rint(merge_tracks(*tracks))
+    utterance = phones(utterance)
+    maker = FrameMaker(fps, idle=idle, seed=seed, closure_hold=closure_hold(fps), fields=level != "low")
+    duration = utterance.speech.duration
+    blocks = [maker.add(utterance.spans(), utterance.cues, duration), maker.finish(duration)]
+    block = join_blocks([b for b in blocks if b is not None])
+    stream = StreamBuilder(level, fps, fold=fold, compact=compact).build(block)
+    return Encoded(stream, utterance, block.values, level)
 
-    n = len(times)
-    stream = FapStream.empty(n)
-    stream.source_fps = fps
-    stream.timestamps[:] = times
-    if level in ("low", "both"):
-        used = _moving(values)
-        stream.fap_mask[:, used] = True
-        stream.fap_values[:, used] = values[:, used]
-    if level in ("high", "both"):
-        _high_level(stream, utterance, times, values, level, hold, compact)
-    if fold:
-        fold_symmetric(stream)
-    if compact and level in ("high", "both"):  # last: the choice is made on the stream as it will be coded
-        stream = plan_expression_mask(stream, stream.expression.copy(), EncodeOptions(**TEXT_CODING))
-    return Encoded(stream, utterance, values, level)
+
+def phones(utterance: Utterance) -> Utterance:
+    """The phones pass: stops start at their closure's silence (:func:`~.closures.stop_closures`)."""
+    return replace(utterance, timings=stop_closures(utterance.timings, utterance.speech))
+
+
+def join_blocks(blocks: Sequence[FrameBlock]) -> FrameBlock:
+    """Consecutive frame blocks as one (what a stream of several chunks is built from)."""
+    if len(blocks) == 1:
+        return blocks[0]
+    fields = blocks[0].visemes is not None
+    vis = VisemeFields(sum((b.visemes.select1 for b in blocks), []), sum((b.visemes.select2 for b in blocks), []),
+                       np.concatenate([b.visemes.blend for b in blocks])) if fields else None
+    exp = ExpressionFields(*(np.concatenate([getattr(b.expressions, f) for b in blocks])
+                             for f in ("select1", "intensity1", "select2", "intensity2"))) if fields else None
+    return FrameBlock(blocks[0].first, np.concatenate([b.times for b in blocks]),
+                      np.concatenate([b.values for b in blocks]), vis, exp)
 
 
 def closure_hold(fps: float) -> float:
@@ -170,38 +169,94 @@ def closure_hold(fps: float) -> float:
     return max(CLOSURE_HOLD, 1.0 / fps)
 
 
-def _high_level(stream: FapStream, utterance: Utterance, times: np.ndarray, values: np.ndarray, level: str,
-                hold: float, compact: bool = True) -> None:
-    """FAP 1 and 2 fields; frames whose visemes or expressions they cannot name get low-level FAPs.
+class StreamBuilder:
+    """The stream pass: frames -> the FapStream that carries them at ``level`` (see the module docstring).
 
-    FAP 1 comes from the same moves as the low-level track (same spans, same closure hold).
-    With ``compact`` the fields are rewritten to the cheapest equivalent ones (:mod:`.compact`)."""
-    same = lambda rows: rows  # noqa: E731
-    quant = TEXT_CODING["fap_quant"]
-    visemes, expressions = ((partial(compact_visemes, fap_quant=quant), partial(compact_expressions, fap_quant=quant))
-                            if compact else (same, same))
-    vis = viseme_fields(utterance.spans(), times, closure_hold=hold)
-    exp = expression_fields(list(utterance.cues), times)
-    n = len(times)
-    standard_vis = np.array([a[0] == "mpeg4" and b[0] == "mpeg4" for a, b in zip(vis.select1, vis.select2)])
-    select1 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select1, standard_vis)])
-    select2 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select2, standard_vis)])
-    names = {s[1] for s, ok in zip(vis.select1 + vis.select2, np.r_[standard_vis, standard_vis]) if ok}
-    if names - {"none"}:  # all-Chinese speech leaves FAP 1 nothing to name
-        stream.fap_mask[:, 0] = True
-        stream.viseme[:] = visemes(
-            np.c_[select1, select2, np.where(standard_vis, vis.blend, FULL_INTENSITY), np.zeros(n)])
-    known = np.array([[s in _EXPRESSION_CODE for s in col] for col in (exp.select1, exp.select2)]).all(axis=0)
-    stream.fap_mask[:, 1] = True  # in every frame until encode_text plans where FAP 2 must go
-    stream.expression[:] = expressions(np.c_[
-        [_EXPRESSION_CODE.get(s, 0) for s in exp.select1], np.where(known, exp.intensity1, 0),
-        [_EXPRESSION_CODE.get(s, 0) for s in exp.select2], np.where(known, exp.intensity2, 0), np.zeros((n, 2))])
-    if level == "high":
-        low = ~standard_vis | ~known
-        if low.any():  # what those frames need, sent in every frame: a change of FAP mask costs an intra frame
-            used = _moving(values[low])
+    A long text's frames come in blocks, each coded as a stream of its own that starts with an intra
+    frame (:mod:`.bits` joins their bits). What a decoder holds across a block boundary is kept
+    here, so the blocks decode as one stream would: a low-level FAP sent once is sent in every later
+    block (a FAP left out holds its last value), FAP 1 likewise, and FAP 2 goes out in a block's
+    first frame whenever the decoder holds other fields than the neutral zeros the planner assumes.
+    One block (a short text) is coded exactly as before the streaming.
+    """
+
+    def __init__(self, level: str, fps: float, *, fold: bool = True, compact: bool = True) -> None:
+        if level not in LEVELS:
+            raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
+        self.level, self.fps, self.fold, self.compact = level, fps, fold, compact
+        self.low = np.zeros(N_FAPS, dtype=bool)        # low-level FAPs sent so far (level low, both)
+        self.low_for_high = np.zeros(N_FAPS, dtype=bool)  # low-level FAPs a high-level stream had to send
+        self.fap1 = False
+        self.held_expression = np.zeros(6, dtype=np.int64)  # FAP 2 fields the decoder holds
+
+    def build(self, block: FrameBlock) -> FapStream:
+        times, values, level = block.times, block.values, self.level
+        n = len(times)
+        stream = FapStream.empty(n)
+        stream.source_fps = self.fps
+        stream.timestamps[:] = times
+        if level in ("low", "both"):
+            self.low |= _moving_mask(values)
+            used = np.flatnonzero(self.low)
             stream.fap_mask[:, used] = True
             stream.fap_values[:, used] = values[:, used]
+        if level in ("high", "both"):
+            self._high_level(stream, block, values)
+        if self.fold:
+            fold_symmetric(stream)
+        if self.compact and level in ("high", "both"):  # last: the choice is made on the stream as it will be coded
+            expression = stream.expression.copy()
+            stream = plan_expression_mask(stream, expression, EncodeOptions(**TEXT_CODING))
+            if self.held_expression.any() and not stream.fap_mask[0, 1]:  # the planner assumed zeros held
+                stream.fap_mask[0, 1] = True
+                stream.expression[0] = expression[0]
+        if level in ("high", "both"):
+            sent = np.flatnonzero(stream.fap_mask[:, 1])
+            if len(sent):
+                self.held_expression = stream.expression[sent[-1]].astype(np.int64)
+        return stream
+
+    def _high_level(self, stream: FapStream, block: FrameBlock, values: np.ndarray) -> None:
+        """FAP 1 and 2 fields; frames whose visemes or expressions they cannot name get low-level FAPs.
+
+        FAP 1 comes from the same moves as the low-level track (same spans, same closure hold).
+        With ``compact`` the fields are rewritten to the cheapest equivalent ones (:mod:`.compact`)."""
+        same = lambda rows: rows  # noqa: E731
+        quant = TEXT_CODING["fap_quant"]
+        visemes, expressions = ((partial(compact_visemes, fap_quant=quant),
+                                 partial(compact_expressions, fap_quant=quant)) if self.compact else (same, same))
+        vis, exp = block.visemes, block.expressions
+        n = len(block)
+        standard_vis = np.array([a[0] == "mpeg4" and b[0] == "mpeg4" for a, b in zip(vis.select1, vis.select2)],
+                                dtype=bool)
+        select1 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select1, standard_vis)])
+        select2 = np.array([_VISEME_CODE[s[1]] if ok else 0 for s, ok in zip(vis.select2, standard_vis)])
+        names = {s[1] for s, ok in zip(vis.select1 + vis.select2, np.r_[standard_vis, standard_vis]) if ok}
+        if names - {"none"} or self.fap1:  # all-Chinese speech leaves FAP 1 nothing to name
+            self.fap1 = True
+            stream.fap_mask[:, 0] = True
+            stream.viseme[:] = visemes(
+                np.c_[select1, select2, np.where(standard_vis, vis.blend, FULL_INTENSITY), np.zeros(n)])
+        known = np.array([[s in _EXPRESSION_CODE for s in col] for col in (exp.select1, exp.select2)]).all(axis=0)
+        stream.fap_mask[:, 1] = True  # in every frame until the plan says where FAP 2 must go
+        stream.expression[:] = expressions(np.c_[
+            [_EXPRESSION_CODE.get(s, 0) for s in exp.select1], np.where(known, exp.intensity1, 0),
+            [_EXPRESSION_CODE.get(s, 0) for s in exp.select2], np.where(known, exp.intensity2, 0), np.zeros((n, 2))])
+        if self.level == "high":
+            low = ~standard_vis | ~known
+            if low.any():  # what those frames need, sent in every frame: a change of FAP mask costs an intra frame
+                self.low_for_high |= _moving_mask(values[low])
+            used = np.flatnonzero(self.low_for_high)
+            if len(used):
+                stream.fap_mask[:, used] = True
+                stream.fap_values[:, used] = values[:, used]
+
+
+def _moving_mask(values: np.ndarray) -> np.ndarray:
+    """Which low-level FAPs (3-68) move anywhere in ``values`` (68 booleans)."""
+    used = np.abs(values).max(axis=0) > 0 if len(values) else np.zeros(N_FAPS, dtype=bool)
+    used[:2] = False
+    return used
 
 
 def fold_symmetric(stream: FapStream) -> set[int]:
