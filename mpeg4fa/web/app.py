@@ -47,8 +47,14 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+MAX_PIXEL = 1e6
+"""The largest absolute pixel coordinate a photo point or box may have (a photo is some thousands wide)."""
+
 Index = Annotated[int, Field(ge=0, le=MAX_INDEX)]
-Xyz = Annotated[list[float], Field(min_length=3, max_length=3)]
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+Coordinate = Annotated[float, Field(ge=-edits.MAX_COORDINATE, le=edits.MAX_COORDINATE, allow_inf_nan=False)]
+PixelCoordinate = Annotated[float, Field(ge=-MAX_PIXEL, le=MAX_PIXEL, allow_inf_nan=False)]
+Xyz = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
 
 
 class DeleteFaces(_Strict):
@@ -150,18 +156,18 @@ class ValidateRequest(_Strict):
 
 
 class PoseRequest(_Strict):
-    faps: dict[Annotated[int, Field(ge=3, le=N_FAPS)], float] = {}
+    faps: dict[Annotated[int, Field(ge=3, le=N_FAPS)], Finite] = {}
     viseme: str | None = None
     expression: str | None = None
     intensity: Annotated[int, Field(ge=0, le=FULL_INTENSITY)] = FULL_INTENSITY
 
 
-Pixel = Annotated[list[float], Field(min_length=2, max_length=2)]
+Pixel = Annotated[list[PixelCoordinate], Field(min_length=2, max_length=2)]
 
 
 class BoxRequest(_Strict):
     view: Literal["front", "side"]
-    box: Annotated[list[float], Field(min_length=4, max_length=4)]
+    box: Annotated[list[PixelCoordinate], Field(min_length=4, max_length=4)]
     dragged: dict[Literal["front", "side"], dict[str, Pixel]] = {}  # per view, the points put by hand (they stay put)
 
 

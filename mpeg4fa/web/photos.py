@@ -23,15 +23,21 @@ from mpeg4fa.web.edits import EditError
 
 BOX_HEIGHT = 0.8
 """The default box's height as a share of the photo's height (centred)."""
+MAX_PHOTO_PIXELS = 50_000_000
+"""The most pixels a photo may have (a 50 MP photo is 150 MB decoded; a face needs far fewer)."""
 _HIDDEN_SIDE = {"left": "right", "right": "left"}  # a side photo does not show the face's other half
 
 
 def decode_photo(data: bytes, where: str) -> np.ndarray:
-    """Image bytes (anything Pillow reads) as an (H, W, 3) uint8 RGB array; EditError otherwise."""
+    """Image bytes (anything Pillow reads) as an (H, W, 3) uint8 RGB array; EditError otherwise. The size in its
+    header is checked before any pixel is decoded: at most :data:`MAX_PHOTO_PIXELS`."""
     from PIL import Image, UnidentifiedImageError
 
     try:
         with Image.open(io.BytesIO(data)) as img:
+            if img.width * img.height > MAX_PHOTO_PIXELS:
+                raise EditError(f"the {where} photo is {img.width}x{img.height} pixels, more than "
+                                f"{MAX_PHOTO_PIXELS // 1_000_000} million", where=where, hint="scale it down")
             rgb = np.asarray(img.convert("RGB"))
     except (OSError, UnidentifiedImageError, ValueError, Image.DecompressionBombError) as exc:
         raise EditError(f"cannot read the {where} photo ({exc})", where=where,
