@@ -53,10 +53,11 @@ def write_timings(encoded: "Encoded", path: str | os.PathLike) -> None:
 def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str = "auto", voice: str | None = None,
         rate: int | None = None, fps: float = 25.0, level: str = "low", idle: bool = False, width: int = 512,
         height: int = 512, samples: int = 4, keep: bool = False, face: "FaceModel | None" = None,
-        name: str = "<text>", progress: Callable[[int, int], None] | None = None) -> Said:
+        name: str = "<text>", progress: Callable[[int, int], None] | None = None, lenient: bool = False) -> Said:
     """Speak tagged ``text`` and render ``face`` (the generic head by default) saying it to ``out``.
 
     ``out``: .mp4/.mov/.m4v, else a folder of PNG frames (see :func:`mpeg4fa.render.play`).
+    ``lenient`` speaks malformed tags as text, with one warning (:func:`mpeg4fa.speech.markup.parse_markup`).
     ``keep`` also writes :func:`kept_paths` (the stream, the speech as WAV, the timings), after
     the render succeeded. Every file appears whole or not at all (:mod:`mpeg4fa.atomic`).
     Errors are the layers' own (:class:`~mpeg4fa.speech.MarkupError`, ``TTSError``, ``RenderError``...).
@@ -64,7 +65,7 @@ def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str 
     from mpeg4fa.speech.encoder import encode_text
 
     encoded = encode_text(text, engine=engine, lang=lang, voice=voice, rate=rate, fps=fps, level=level, idle=idle,
-                          name=name)
+                          name=name, lenient=lenient)
     return say_encoded(encoded, out, width=width, height=height, samples=samples, keep=keep, face=face,
                        progress=progress)
 

@@ -248,6 +248,9 @@ def speech_options(g) -> list[argparse.Action]:
         g.add_argument("--rate", type=options.speech_rate, help="speech rate in words per minute, 80 to 450 "
                                                                 "(default 175)"),
         g.add_argument("--idle", action="store_true", help="add blinks and small head motion"),
+        g.add_argument("--lenient", action="store_true",
+                       help="speak a malformed tag, like (joy 40 0.5), as text with one warning, instead of "
+                            "stopping at it with its line and column"),
     ]
 
 
@@ -285,7 +288,7 @@ def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -
     text, name = text_input.read_text(source)
     fps = args.fps if args.fps is not None else 25.0
     encoded = encode_text(text, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate,
-                          fps=fps, level=args.level, idle=args.idle, name=name)
+                          fps=fps, level=args.level, idle=args.idle, name=name, lenient=args.lenient)
     return _write_encoded(args, encoded, name, fps, fdp)
 
 
@@ -388,7 +391,7 @@ def run_say(args: argparse.Namespace) -> int:
     with rendering("say", args.output) as progress:
         said = say(text, args.output, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate,
                    fps=args.fps, level=args.level, idle=args.idle, width=width, height=height, samples=args.aa,
-                   keep=args.keep, name=name, progress=progress)
+                   keep=args.keep, name=name, progress=progress, lenient=args.lenient)
     result = said.result
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s), "
           f"{len(said.data) * 8 / max(len(said.stream), 1):.0f} bits/frame of FAPs ({args.level}-level); "

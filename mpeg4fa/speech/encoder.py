@@ -29,6 +29,7 @@ from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
 from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, FULL_INTENSITY, N_FAPS, VISEMES
 from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.compact import compact_expressions, compact_visemes, plan_expression_mask
+from mpeg4fa.speech.ipa import phoneme_fallbacks
 from mpeg4fa.speech.markup import parse_markup
 from mpeg4fa.speech.frames import FrameBlock, FrameMaker
 from mpeg4fa.speech.timeline import CLOSURE_HOLD, ExpressionFields, VisemeFields
@@ -90,8 +91,13 @@ def make_engine(name: str) -> Engine:
 
 def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto", voice: str | None = None,
                 rate: int | None = None, fps: float = 25.0, level: str = "high", idle: bool = False,
-                seed: int = 0, name: str = "<text>", fold: bool = True, compact: bool = True) -> Encoded:
+                seed: int = 0, name: str = "<text>", fold: bool = True, compact: bool = True,
+                lenient: bool = False) -> Encoded:
     """Speak tagged text and turn it into a FapStream at ``fps`` (see the module docstring for levels).
+
+    ``lenient`` speaks a malformed tag as text instead of raising :class:`~mpeg4fa.speech.MarkupError`, with
+    one warning (:func:`~mpeg4fa.speech.markup.parse_markup`). Phonemes shown by a guess are said in one
+    :class:`~mpeg4fa.speech.errors.PhonemeWarning` at the end (:func:`~mpeg4fa.speech.ipa.phoneme_fallbacks`).
 
     ``fold`` leaves out the FAPs the decoder copies from their counterparts (:func:`fold_symmetric`);
     the stream's :attr:`~mpeg4fa.fba.stream.FapStream.mask_types` say so to any encoding of it.
@@ -100,9 +106,10 @@ def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto
     """
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
-    markup = parse_markup(text, name=name)
-    utterance = speak(markup, make_engine(engine) if isinstance(engine, str) else engine, lang=lang, voice=voice,
-                      rate=rate)
+    markup = parse_markup(text, name=name, lenient=lenient)
+    with phoneme_fallbacks(name):  # one warning for the whole text, however many runs it is spoken in
+        utterance = speak(markup, make_engine(engine) if isinstance(engine, str) else engine, lang=lang,
+                          voice=voice, rate=rate)
     return encode_utterance(utterance, fps=fps, level=level, idle=idle, seed=seed, fold=fold, compact=compact)
 
 

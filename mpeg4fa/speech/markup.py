@@ -15,13 +15,27 @@ Grammar (``WS`` is any run of characters for which ``str.isspace()`` is true)::
     seconds    := ["+" | "-"] ( [0-9]+ ["." [0-9]*] | "." [0-9]+ )   -- must be >= 0
     word       := a letter or "_", then letters, digits or "_" (Unicode, as in regex \w)
 
-Which parentheses are tags: an unescaped ``(`` followed (after optional
-whitespace) by a word and a comma starts a tag, and a ``(`` with nothing but
-whitespace before its ``)`` is an empty tag (an error). Every other parenthesis
-is ordinary text, so ``(see below)``, ``(3, 4)`` and a stray ``)`` are spoken
-as written. A tag ends at the first ``)``; reaching a ``(`` or the end of the
+Which parentheses are tags: an unescaped ``(`` starts a tag (and must then be one,
+or it is an error, with its line and column) when what follows it, after optional
+whitespace, is
+
+1. a known expression name as a whole word, not followed (after whitespace) by a
+   letter: ``(joy, 40, 0.5)``, but also ``(joy 40 0.5)`` (missing commas), ``(Joy)``,
+   ``(anger, 99, 1)``; while ``(joy is contagious)`` is prose; or
+2. the shape of a tag: a word, a comma and a number: ``(jyo, 40, 0.5)`` (an unknown
+   expression), ``(smile, 20)``; or
+3. nothing but whitespace before its ``)``: an empty tag.
+
+Every other parenthesis is ordinary text, so ``(see below)``, ``(Paris, France)``,
+``(however, we think)``, ``(3, 4)`` and a stray ``)`` are spoken as written; so is a
+prose parenthesis that happens to look like a tag (``(Smith, 2020)``) if its ``(``
+is written ``\(``. A tag ends at the first ``)``; reaching a ``(`` or the end of the
 text first means it is unclosed. A tag may span lines. A backslash before any
 other character is an ordinary backslash.
+
+``lenient=True`` speaks a malformed tag as the text it is (from its ``(``), and says
+so once: one :class:`~mpeg4fa.speech.errors.MarkupWarning` naming the first one's
+place and what was wrong, and how many there were (:attr:`Markup.malformed` lists them).
 
 Whitespace rule (offsets refer to the text after it is applied):
 
@@ -44,13 +58,14 @@ from __future__ import annotations
 import difflib
 import math
 import re
+import warnings
 from bisect import bisect_right
 from collections.abc import Iterable
 from dataclasses import dataclass
 
 from mpeg4fa.spec import HIGH_LEVEL_FIELDS
 from mpeg4fa.spec.profiles import EXPRESSION_PROFILES
-from mpeg4fa.speech.errors import MarkupError
+from mpeg4fa.speech.errors import MarkupError, MarkupWarning
 
 __all__ = ["Tag", "Markup", "parse_markup", "INTENSITY_MIN", "INTENSITY_MAX"]
 
@@ -64,8 +79,10 @@ MAX_TEXT_CHARS = 200_000
 """Longest text read (about 3 h of speech at 175 words a minute): the speech, its audio (silence too,
 for the estimate engine) and the frames grow with it, so a longer text is refused, not half-spoken."""
 
-_HEAD = re.compile(r"\(\s*([^\W\d]\w*)\s*,")
-"""What makes a ``(`` a tag: a word, then a comma."""
+_WORD = re.compile(r"[^\W\d]\w*")
+_SHAPE = re.compile(r"\(\s*[^\W\d]\w*\s*,\s*[+-]?\.?[0-9]")
+"""A ``(`` that starts a tag by its shape: a word, a comma, a number."""
+_NOT_A_LETTER_NEXT = r"\b(?!\s*[^\W\d_])"
 _EMPTY = re.compile(r"\(\s*\)")
 _PAREN = re.compile(r"[()]")
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
@@ -110,6 +127,8 @@ class Markup:
     """Where the text came from (a file name), as used in error messages."""
     places: tuple[tuple[int, int], ...] = ()
     """(line, column) in the source of each character of :attr:`text` (1-based), for errors about it."""
+    malformed: tuple[MarkupError, ...] = ()
+    """Under ``lenient``: the malformed tags spoken as text, each as the error it would have been."""
 
     def place(self, index: int) -> tuple[int, int]:
         """Source (line, column) of ``text[index]``; counted in ``text`` itself for a Markup made by hand."""
@@ -137,8 +156,11 @@ class _Parser:
     next to tags is held back until it is known whether text follows.
     """
 
-    def __init__(self, source: str, known: tuple[str, ...], name: str) -> None:
-        self.source, self.known, self.name = source, known, name
+    def __init__(self, source: str, known: tuple[str, ...], name: str, lenient: bool = False) -> None:
+        self.source, self.known, self.name, self.lenient = source, known, name, lenient
+        self.malformed: list[MarkupError] = []
+        names = "|".join(re.escape(n) for n in sorted(known, key=len, reverse=True))
+        self.known_head = re.compile(rf"\(\s*(?:{names}){_NOT_A_LETTER_NEXT}", re.IGNORECASE) if known else None
         self.where = _Positions(source)
         self.out: list[str] = []
         self.places: list[tuple[int, int]] = []  # source (line, column) of each character of out
@@ -191,9 +213,13 @@ class _Parser:
         while self.out and self.out[-1].isspace():
             self.pop_space()
         self.flush(separate=False)
-        return Markup("".join(self.out), tuple(self.tags), self.name, tuple(self.places))
+        return Markup("".join(self.out), tuple(self.tags), self.name, tuple(self.places), tuple(self.malformed))
 
     # -- reading the source -----------------------------------------------------------------------
+
+    def is_tag(self, i: int) -> bool:
+        """Whether the ``(`` at ``i`` starts a tag (see the module docstring: a known name, or the shape)."""
+        return bool(_SHAPE.match(self.source, i) or (self.known_head and self.known_head.match(self.source, i)))
 
     def run(self) -> Markup:
         source, i, n = self.source, 0, len(self.source)
@@ -202,41 +228,67 @@ class _Parser:
             if char == "\\" and i + 1 < n and source[i + 1] in _ESCAPABLE:
                 self.emit(source[i + 1], i, literal=True)
                 i += 2
-            elif char == "(" and _EMPTY.match(source, i):
-                raise self.error(i, "empty tag", f"write a tag as {_EXAMPLE}, or {_LITERAL_HINT}")
-            elif char == "(" and (head := _HEAD.match(source, i)):
-                i = self.tag(i, head)
+            elif char == "(" and (_EMPTY.match(source, i) or self.is_tag(i)):
+                try:
+                    if _EMPTY.match(source, i):
+                        raise self.error(i, "empty tag", f"write a tag as {_EXAMPLE}, or {_LITERAL_HINT}")
+                    i = self.tag(i)
+                except MarkupError as exc:
+                    if not self.lenient:
+                        raise
+                    self.malformed.append(exc)  # spoken as written, from its "("
+                    self.emit(char, i)
+                    i += 1
             else:
                 self.emit(char, i)
                 i += 1
         return self.finish()
 
-    def tag(self, start: int, head: re.Match[str]) -> int:
+    def tag(self, start: int) -> int:
         """Reads the tag whose ``(`` is at ``start``; returns the index after its ``)``."""
-        close = _PAREN.search(self.source, head.end())
+        close = _PAREN.search(self.source, start + 1)
         if close is None or close.group() == "(":
             before = "the end of the text" if close is None else "the next '('"
             raise self.error(start, f"tag is not closed before {before}",
                              f"end the tag with ')', as in {_EXAMPLE}, or {_LITERAL_HINT}")
         end = close.start()
-        # Commas that split the parts (the first one is the head's); the word is part 0.
-        commas = [head.end() - 1]
+        commas = [start]  # the "(" stands before part 0 as each comma before the part after it
         while (comma := self.source.find(",", commas[-1] + 1, end)) != -1:
             commas.append(comma)
         delimiters = [*commas[1:], end]
-        parts = [(head.start(1), head.end(1))]
-        parts += [self.strip(comma + 1, stop) for comma, stop in zip(commas, delimiters)]
+        parts = [self.strip(comma + 1, stop) for comma, stop in zip(commas, delimiters)]
         expression = self.expression(*parts[0])
-        intensity = self.intensity(*parts[1], delimiter=delimiters[0])
+        if len(parts) < 2:
+            raise self.error(end, "tag has 1 part, needs 3: missing intensity",
+                             f"write (expression, intensity, seconds), as in {_EXAMPLE}")
+        intensity = self.intensity(*parts[1], delimiter=delimiters[1])
         if len(parts) < 3:
             raise self.error(end, f"tag has {len(parts)} parts, needs 3: missing T (seconds)",
                              f"add the time to reach the intensity, as in {_EXAMPLE}")
-        seconds = self.seconds(*parts[2], delimiter=delimiters[1])
+        seconds = self.seconds(*parts[2], delimiter=delimiters[2])
         if len(parts) > 3:
-            raise self.error(commas[2], f"tag has {len(parts)} parts, needs 3",
+            raise self.error(commas[3], f"tag has {len(parts)} parts, needs 3",
                              f"write (expression, intensity, seconds), as in {_EXAMPLE}")
         self.add_tag(expression, intensity, seconds, start)
         return end + 1
+
+    def one_token(self, start: int, stop: int, token_end: int) -> None:
+        """A part holds one thing: anything after it (past ``token_end``) is a missing comma."""
+        rest = self.source[token_end:stop]
+        if not rest:
+            return
+        gap = len(rest) - len(rest.lstrip())
+        if gap:
+            raise self.error(token_end + gap, f"missing ',' after {_quote(self.source[start:token_end])}",
+                             f"separate the parts with commas, as in {_EXAMPLE}")
+        raise self.error(token_end, f"unexpected {_quote(rest)} after {_quote(self.source[start:token_end])}",
+                         f"write (expression, intensity, seconds), as in {_EXAMPLE}")
+
+    def token_end(self, start: int, stop: int) -> int:
+        """Where the part's first whitespace-separated token ends."""
+        text = self.source[start:stop]
+        cut = next((k for k, c in enumerate(text) if c.isspace()), len(text))
+        return start + cut
 
     def strip(self, start: int, stop: int) -> tuple[int, int]:
         """Source bounds of a part without the whitespace around it."""
@@ -245,9 +297,12 @@ class _Parser:
         return start + lead, start + len(text.rstrip())
 
     def expression(self, start: int, stop: int) -> str:
-        word = self.source[start:stop]
-        name = word.lower()
+        word_match = _WORD.match(self.source, start, stop)
+        if word_match is None:  # cannot happen for a "(" that is_tag() took; kept for a clear message
+            raise self.error(start, "a tag starts with an expression name", f"write {_EXAMPLE}, or {_LITERAL_HINT}")
+        word, name = word_match.group(), word_match.group().lower()
         if name in self.known:
+            self.one_token(start, stop, word_match.end())
             return name
         close = difflib.get_close_matches(name, self.known, n=1)
         guess = f"did you mean {close[0]!r}? " if close else ""
@@ -256,6 +311,11 @@ class _Parser:
                          f"{guess}known expressions: {known}; or {_LITERAL_HINT}")
 
     def intensity(self, start: int, stop: int, delimiter: int) -> int:
+        value = self.integer(start, self.token_end(start, stop), delimiter)
+        self.one_token(start, stop, self.token_end(start, stop))
+        return value
+
+    def integer(self, start: int, stop: int, delimiter: int) -> int:
         text = self.source[start:stop]
         hint = f"write a whole number from {INTENSITY_MIN} (neutral) to {INTENSITY_MAX} (full), " \
                f"as in {_EXAMPLE}"
@@ -275,6 +335,11 @@ class _Parser:
         return value
 
     def seconds(self, start: int, stop: int, delimiter: int) -> float:
+        value = self.decimal(start, self.token_end(start, stop), delimiter)
+        self.one_token(start, stop, self.token_end(start, stop))
+        return value
+
+    def decimal(self, start: int, stop: int, delimiter: int) -> float:
         text = self.source[start:stop]
         hint = f"write the time to reach the intensity in seconds, e.g. 0.5, 1 or .25, as in {_EXAMPLE}"
         if not text:
@@ -290,14 +355,17 @@ class _Parser:
         return value + 0.0
 
 
-def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name: str = "<text>") -> Markup:
+def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name: str = "<text>",
+                 lenient: bool = False) -> Markup:
     """Split tagged text into the plain text to speak and its tags (see the module docstring).
 
     ``expressions`` are the names a tag may use, matched case-insensitively;
     by default those of :data:`~mpeg4fa.spec.profiles.EXPRESSION_PROFILES`, so
     an expression added to ``expression_faps.csv`` can be tagged at once.
     ``name`` labels error messages. Raises :class:`MarkupError` (with line,
-    column and a hint) for a malformed tag, and nothing else for any text.
+    column and a hint) for a malformed tag, and nothing else for any text;
+    with ``lenient``, malformed tags are spoken as text and said in one
+    :class:`MarkupWarning` (the text's length bound still raises).
     """
     if len(source) > MAX_TEXT_CHARS:
         line, column = _Positions(source)(MAX_TEXT_CHARS)
@@ -305,4 +373,10 @@ def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name:
                           "read at once", line, column, "split it and encode the parts one after another", name)
     names = EXPRESSION_PROFILES if expressions is None else expressions
     known = tuple(dict.fromkeys(str(n).lower() for n in names))
-    return _Parser(source, known, name).run()
+    markup = _Parser(source, known, name, lenient).run()
+    if markup.malformed:
+        first, n = markup.malformed[0], len(markup.malformed)
+        warnings.warn(MarkupWarning(
+            f"{first.where}: {n} malformed tag{'s' if n != 1 else ''} spoken as text (lenient); the first: "
+            f"{first.message}"), stacklevel=2)
+    return markup

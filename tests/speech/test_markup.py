@@ -132,8 +132,9 @@ def test_unicode_offsets_are_characters() -> None:
 
 
 @pytest.mark.parametrize("source", [
-    "(see below)", "f(x) = (3, 4)", "a stray ) here", ")(", "(joy)", "(joy 40, 1)", "((", "(e.g., this)",
+    "(see below)", "f(x) = (3, 4)", "a stray ) here", ")(", "((", "(e.g., this)",
     "(1, 2, 3)", "(, joy, 1, 1)", "smile :) and :(", "(-joy, 1, 1)", "(4joy, 1, 1)",
+    "(however, we think) so", "(Paris, France)", "(joy is contagious)", "(joyful day)", "(Joy\nto the world)",
 ])
 def test_ordinary_parentheses_stay_text(source: str) -> None:
     m = parse_markup(source)
@@ -201,10 +202,16 @@ def test_default_set_rejects_names_not_in_profiles() -> None:
 
 @pytest.mark.parametrize("source, line, column, words", [
     ("Hi (joyy, 40, 0.5)", 1, 5, "unknown expression"),
-    ("(however, we think) so", 1, 2, "unknown expression"),
+    ("(Smith, 2020) wrote", 1, 2, "unknown expression"),       # the shape of a tag: write \( for prose
     ("(joy, 4.5, 1)", 1, 7, "not an integer"),
     ("(joy, forty, 1)", 1, 7, "not an integer"),
-    ("(joy, 40 0.5)", 1, 7, "not an integer"),
+    ("(joy, 40 0.5)", 1, 10, "missing ',' after '40'"),
+    ("(joy 40 0.5) Hello there", 1, 6, "missing ',' after 'joy'"),
+    ("(joy, 40, 0.5 1)", 1, 15, "missing ',' after '0.5'"),
+    ("(joy\n40, 1)", 2, 1, "missing ','"),
+    ("(joy)", 1, 5, "missing intensity"),
+    ("(Joy!) hi", 1, 5, "unexpected '!'"),
+    ("(joy; 40; 0.5)", 1, 5, "unexpected"),
     ("(joy, ４０, 1)", 1, 7, "not an integer"),          # full-width digits are not accepted
     ("(joy, 64, 1)", 1, 7, "out of range"),
     ("(joy,  -1, 1)", 1, 8, "out of range"),
