@@ -46,6 +46,7 @@ def test_a_bad_tag_anywhere_is_refused_with_its_place():
     ('{"type": "buffer", "received": "x", "buffered": 0}', "received"),
     ('{"type": "buffer", "received": 1e999, "buffered": 0}', "received"),
     ('{"type": "say", "text": "hi", "rate": 1000}', "rate"), ('{"type": "stop", "now": true}', "now"),
+    ("[" * 100_000, "message"), ('{"type": ' + "[" * 100_000, "message"),  # deep: an error, not a RecursionError
 ])
 def test_client_messages_are_refused_with_the_field(raw, where):
     with pytest.raises(ProtocolError) as err:
