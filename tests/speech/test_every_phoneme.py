@@ -118,3 +118,17 @@ def test_cli_encode_hello_bokhl_exits_0(tmp_path, capsys):
     assert main(["encode", "Hello Bokhl", "-o", str(tmp_path / "w.fba")]) == 0
     err = capsys.readouterr().err
     assert "error" not in err and (tmp_path / "w.fba").stat().st_size > 0
+
+
+def test_a_phoneme_no_table_knows_is_one_warning_line_at_the_end(tmp_path, capsys, monkeypatch):
+    """Were l# in neither English table, Bokhl would still encode: l# read as IPA letters (l), one warning line
+    for the whole text, though its two English runs (around the Chinese one) are mapped apart."""
+    from mpeg4fa.cli import main
+    from mpeg4fa.speech import visemes
+
+    lacking = {k: v for k, v in visemes.english_ipa().items() if k != "l#"}
+    monkeypatch.setattr(visemes, "english_ipa", lambda: lacking)
+    assert main(["encode", "Hello Bokhl, 你好, Bokhl!", "-o", str(tmp_path / "w.fba")]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(warned) == 1 and warned[0].startswith("mpeg4fa encode: warning: <text>: 2 phonemes")
+    assert "'l#' x2 (a mnemonic of no English phoneme table; read as l)" in warned[0]
