@@ -30,11 +30,10 @@ from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS,
 from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.compact import compact_expressions, compact_visemes, plan_expression_mask
 from mpeg4fa.speech.ipa import phoneme_fallbacks
-from mpeg4fa.speech.markup import parse_markup
 from mpeg4fa.speech.frames import FrameBlock, FrameMaker
 from mpeg4fa.speech.timeline import CLOSURE_HOLD, ExpressionFields, VisemeFields
 from mpeg4fa.speech.tts.base import Engine
-from mpeg4fa.speech.utterance import Utterance, speak
+from mpeg4fa.speech.utterance import Utterance
 
 LEVELS = ("high", "low", "both")
 TEXT_CODING = {"optimize": True, "fap_quant": 3}
@@ -92,25 +91,26 @@ def make_engine(name: str) -> Engine:
 def encode_text(text: str, *, engine: Engine | str = "espeak", lang: str = "auto", voice: str | None = None,
                 rate: int | None = None, fps: float = 25.0, level: str = "high", idle: bool = False,
                 seed: int = 0, name: str = "<text>", fold: bool = True, compact: bool = True,
-                lenient: bool = False) -> Encoded:
+                max_seconds: float | None = None, progress=None, **markup_options) -> Encoded:
     """Speak tagged text and turn it into a FapStream at ``fps`` (see the module docstring for levels).
-
-    ``lenient`` speaks a malformed tag as text instead of raising :class:`~mpeg4fa.speech.MarkupError`, with
-    one warning (:func:`~mpeg4fa.speech.markup.parse_markup`). Phonemes shown by a guess are said in one
-    :class:`~mpeg4fa.speech.errors.PhonemeWarning` at the end (:func:`~mpeg4fa.speech.ipa.phoneme_fallbacks`).
 
     ``fold`` leaves out the FAPs the decoder copies from their counterparts (:func:`fold_symmetric`);
     the stream's :attr:`~mpeg4fa.fba.stream.FapStream.mask_types` say so to any encoding of it.
     ``compact`` writes FAP 1 and FAP 2 in the fields cheapest to code and sends FAP 2 only where
     that makes the stream smaller (:mod:`.compact`); the decoded face is the same either way.
+
+    The text goes through the passes of :mod:`.pipeline` in chunks of sentences and is kept in
+    memory (use :func:`~.pipeline.encode_text_to` for long text): ``max_seconds`` refuses speech
+    longer than that where it runs over; ``progress(done, total)`` counts characters;
+    ``markup_options`` go to :func:`~.markup.parse_markup`.
     """
+    from mpeg4fa.speech.pipeline import encoded_text
+
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
-    markup = parse_markup(text, name=name, lenient=lenient)
-    with phoneme_fallbacks(name):  # one warning for the whole text, however many runs it is spoken in
-        utterance = speak(markup, make_engine(engine) if isinstance(engine, str) else engine, lang=lang,
-                          voice=voice, rate=rate)
-    return encode_utterance(utterance, fps=fps, level=level, idle=idle, seed=seed, fold=fold, compact=compact)
+    return encoded_text(text, make_engine(engine) if isinstance(engine, str) else engine, fps=fps, level=level,
+                        idle=idle, seed=seed, name=name, fold=fold, compact=compact, lang=lang, voice=voice,
+                        rate=rate, max_seconds=max_seconds, progress=progress, **markup_options)
 
 
 def encode_recording(recording, transcript: str, *, lang: str = "auto", voice: str | None = None,
