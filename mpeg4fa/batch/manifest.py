@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Any, Callable
 
+from mpeg4fa import jsonio
 from mpeg4fa.batch.errors import BatchError
 from mpeg4fa.cli import options as rules
 from mpeg4fa.face import calibrate, deformers
@@ -39,6 +40,8 @@ from mpeg4fa.render.video import VIDEO_SUFFIXES
 
 MAX_MANIFEST_BYTES = 64 << 20
 """A manifest larger than this is refused (a list of a million jobs is not a manifest)."""
+MAX_DEPTH = 8
+"""Deepest nesting of a JSON manifest read (it needs 3: the document, its jobs, a job)."""
 INPUT_KEYS = ("stream", "audio", "fdp")
 PATH_OPTIONS = ("texture", "face_mesh", "face_points")
 SKULLS = ("triangles", "nurbs")
@@ -179,17 +182,24 @@ def load_manifest(path: str | os.PathLike) -> Manifest:
 
 
 def _read_text(path: Path) -> str:
+    """The manifest's text: at most :data:`MAX_MANIFEST_BYTES`, UTF-8 (a bad byte at its line:column)."""
     try:
         if not path.is_file():
             raise BatchError("no such manifest" if not path.exists() else "the manifest is not a file",
                              where=str(path), hint="give a .json or .csv manifest")
-        if path.stat().st_size > MAX_MANIFEST_BYTES:
-            raise BatchError(f"the manifest is over {MAX_MANIFEST_BYTES >> 20} MiB", where=str(path))
-        return path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise BatchError(f"the manifest is not UTF-8 text (byte {exc.start})", where=str(path)) from None
+        with open(path, "rb") as fh:
+            raw = fh.read(MAX_MANIFEST_BYTES + 1)
     except OSError as exc:
         raise BatchError(f"cannot read the manifest ({exc.strerror or exc})", where=str(path)) from None
+    if len(raw) > MAX_MANIFEST_BYTES:
+        raise BatchError(f"the manifest is over {MAX_MANIFEST_BYTES >> 20} MiB", where=str(path))
+    return jsonio.json_text(raw, str(path), _located, "a manifest")
+
+
+def _located(path: str, line: int | None, column: int | None, problem: str, hint: str) -> BatchError:
+    """A :class:`BatchError` at ``path:line:column``: the error type :mod:`mpeg4fa.jsonio` reports through."""
+    where = path if line is None else f"{path}:{line}" if column is None else f"{path}:{line}:{column}"
+    return BatchError(problem, where=where, hint=hint)
 
 
 # -- the two forms -----------------------------------------------------------------------------
@@ -205,11 +215,8 @@ def _skip(text: str, pos: int) -> int:
 
 def _json_entries(text: str, path: Path) -> tuple[dict, list[tuple[int, Any]]]:
     """``(defaults, [(line, job entry)])``: the document is parsed whole first, then walked for the lines."""
-    try:
-        document = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise BatchError(f"not valid JSON: {exc.msg}", where=f"{path}:{exc.lineno}:{exc.colno}",
-                         hint="a list of jobs, or {\"defaults\": {...}, \"jobs\": [...]}") from None
+    document = jsonio.loads(text, str(path), max_bytes=4 * MAX_MANIFEST_BYTES, max_depth=MAX_DEPTH, error=_located,
+                            what='a manifest (a list of jobs, or {"defaults": {...}, "jobs": [...]})')
     decoder = json.JSONDecoder()
     start = _skip(text, 0)
     if isinstance(document, dict):
@@ -245,10 +252,10 @@ def _member_start(text: str, pos: int, name: str, decoder: json.JSONDecoder) -> 
 
 
 def _element_lines(text: str, pos: int, decoder: json.JSONDecoder) -> list[int]:
-    """The line on which each element of the array at ``pos`` begins."""
-    lines, pos = [], _skip(text, pos + 1)
+    """The line on which each element of the array at ``pos`` begins (the document is well formed)."""
+    lines, pos, index = [], _skip(text, pos + 1), jsonio.LineIndex(text)
     while text[pos] != "]":
-        lines.append(text.count("\n", 0, pos) + 1)
+        lines.append(index.line(pos))  # line starts found once: linear, not a recount per job
         _, pos = decoder.raw_decode(text, pos)
         pos = _skip(text, pos)
         if text[pos] == ",":

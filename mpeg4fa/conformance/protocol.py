@@ -33,6 +33,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from mpeg4fa import jsonio
 from mpeg4fa.conformance.errors import ConformanceError
 from mpeg4fa.spec import N_FAPS
 
@@ -148,16 +149,36 @@ def read_output(out: Path) -> DecoderOutput | None:
     csv_path = out.with_suffix(".csv")
     try:
         if out.is_file():
-            try:
-                doc = json.loads(out.read_text(encoding="utf-8"))
-            except ValueError as exc:
-                raise ConformanceError(f"not JSON: {exc}", where=str(out)) from None
+            doc = jsonio.loads(_read_capped(out), str(out), max_bytes=MAX_OUTPUT_BYTES, max_depth=MAX_DEPTH,
+                               error=_located, what="a decoder's output (the protocol's JSON)")
             return output_from_json(doc, str(out))
         if csv_path.is_file():
-            return output_from_csv(csv_path.read_text(encoding="utf-8"), str(csv_path))
-    except (OSError, UnicodeDecodeError) as exc:
+            text = jsonio.decode_utf8(_read_capped(csv_path), str(csv_path), _located, "a decoder's CSV output")
+            return output_from_csv(text, str(csv_path))
+    except OSError as exc:
         raise ConformanceError(f"cannot read the decoder's output: {exc}", where=str(out)) from None
     return None
+
+
+MAX_OUTPUT_BYTES = 256 << 20
+"""Largest decoder output read (256 MiB): 68 values and 84 points a frame for far longer than any vector."""
+MAX_DEPTH = 8
+"""Deepest nesting of the output JSON read (it needs 5: feature point positions)."""
+
+
+def _read_capped(path: Path) -> bytes:
+    """The file's bytes, refused past :data:`MAX_OUTPUT_BYTES` before more is read."""
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_OUTPUT_BYTES + 1)
+    if len(data) > MAX_OUTPUT_BYTES:
+        raise ConformanceError(f"the decoder's output is over {MAX_OUTPUT_BYTES >> 20} MiB", where=str(path))
+    return data
+
+
+def _located(path: str, line: int | None, column: int | None, problem: str, hint: str) -> ConformanceError:
+    """A :class:`ConformanceError` at ``path:line:column`` (how :mod:`mpeg4fa.jsonio` reports)."""
+    where = path if line is None else f"{path}:{line}" if column is None else f"{path}:{line}:{column}"
+    return ConformanceError(problem, where=where, hint=hint)
 
 
 def write_output(output: DecoderOutput, out: Path) -> None:

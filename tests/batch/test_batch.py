@@ -161,7 +161,7 @@ def test_manifest_faults_are_all_located_at_once(inputs):
     assert caught.value.where == str(path)
 
     path.write_text('[{"stream": "s1.fba"},\n {"stream": "s2.fba",}]')
-    with pytest.raises(BatchError, match="not valid JSON") as caught:
+    with pytest.raises(BatchError, match="invalid JSON") as caught:
         load_manifest(path)
     assert caught.value.where == f"{path}:2:22"
 
