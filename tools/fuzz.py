@@ -6,52 +6,61 @@ located error of the layer's type, with what was decoded before the fault kept,
 in bounded time and memory. Hand-written bad-input tests cover the faults we
 thought of; this covers the ones we did not.
 
-How to run (on demand, one process, bounded in time and in count)::
+How to run (on demand, bounded in time and in count; ``--jobs N`` runs chunks of cases in N worker
+processes, :mod:`fuzz_parallel`)::
 
     .venv/bin/python tools/fuzz.py --cases 100000 --seconds 1800 --seed 0 \\
-        [--target fba,fap,fdp-binary,fdp-json,fdp-xface,markup] [--json out/fuzz/fuzz.json]
-    .venv/bin/python tools/fuzz.py --replay out/fuzz/crashes/fap-1.bin --target fap
+        [--target fba,fap,...|new] [--per-target N] [--jobs N] [--json out/fuzz/fuzz.json]
+    .venv/bin/python tools/fuzz.py --case text:1234 --seed 0          # one case again, from (target, seed, index)
+    .venv/bin/python tools/fuzz.py --replay out/fuzz/crashes/fap-17.bin --target fap --index 17
 
-Seeds and mutations live in ``tools/fuzz_inputs.py``: the real files in
-``../shared/vectors`` (``fba/``, ``fap/``, any FDP file there) when present
-(``--no-vectors`` leaves them out), plus seeds made with the library (streams
-encoded with several coding options, ``write_fap``, ``save_fdp`` in both forms,
-an Xface XML written there, markup strings). Each case applies 1-4 mutations
-(bit flips, byte sets, inserts, deletes, truncation, chunk duplication, splices
-of two seeds, extreme 32-bit integers, FBA start codes; for text formats
-number-token replacement, line duplication and deletion, encoding damage; XML
-damage (encoding declarations, entity bombs, external entities, deep nesting);
-JSON damage (deep nesting, huge arrays, NaN, long numbers, valid JSON with wrong
-content); for the binary FDP, payload damage with the chunk CRC fixed so the
-reader looks inside) and calls the library in-process: ``decode`` /
-``iter_decode`` / ``read_stream``, ``read_fap`` / ``iter_fap``, ``load_fdp``,
-``read_xface_fdp`` + ``to_fdp``, ``parse_markup``. What parses goes on to the
-next layers: ``resolve`` and ``encode`` -> ``decode`` for streams (also for the
-frames an ``FbaError`` kept in ``.partial``; decoded FBA must come back with the
-same values), a binary and a JSON save -> load for FDPs, and for markup of up to
+Targets. The codec and FDP readers (``markup``, ``fdp-json``, ``fdp-xface``, ``fdp-binary``, ``fap``,
+``fba``) are seeded from ``tools/fuzz_inputs.py``: the real files in ``../shared/vectors`` (``fba/``,
+``fap/``, any FDP file there) when present (``--no-vectors`` leaves them out), plus seeds made with the
+library (streams encoded with several coding options, ``write_fap``, ``save_fdp`` in both forms, an Xface
+XML written there, markup strings). Each case applies 1-4 mutations (bit flips, byte sets, inserts,
+deletes, truncation, chunk duplication, splices of two seeds, extreme 32-bit integers, FBA start codes;
+for text formats number-token replacement, line duplication and deletion, encoding damage; XML damage
+(encoding declarations, entity bombs, external entities, deep nesting); JSON damage (deep nesting, huge
+arrays, NaN, long numbers, valid JSON with wrong content); for the binary FDP, payload damage with the
+chunk CRC fixed so the reader looks inside) and calls the library in-process: ``decode`` /
+``iter_decode`` / ``read_stream``, ``read_fap`` / ``iter_fap``, ``load_fdp``, ``read_xface_fdp`` +
+``to_fdp``, ``parse_markup``. What parses goes on to the next layers: ``resolve`` and ``encode`` ->
+``decode`` for streams (also for the frames an ``FbaError`` kept in ``.partial``; decoded FBA must come
+back with the same values), a binary and a JSON save -> load for FDPs, and for markup of up to
 ``SPEECH_CHARS`` characters ``encode_text`` with the silent estimate engine.
 
-Each case is *ok* (parsed), *rejected* (an ``MpegFaError`` or the layer's own
-error type), *crash* (anything else; deduplicated by target, stage, exception
-type and the traceback's last frame; the input saved as
-``OUT/crashes/TARGET-N.bin`` with a ``.txt`` beside it saying how to replay it),
-*hang* (a stage ran past ``--case-seconds``, scaled up for large inputs),
-*memory* (``MemoryError`` anywhere in the exception chain, under an
-address-space cap ``--memory-gib`` above the start), *peak* (RSS grew more than
-``--peak-mib`` during the case) or *mismatch* (a round trip changed the values).
-Also counted: rejections whose error names no place, and warnings that are not
-an ``MpegFaWarning``. A watchdog thread ends the run (keeping the input) if a
-case is stuck where the timer signal cannot reach. Case ``i`` of a target is
-drawn from its own generator seeded by ``--seed``, the target and ``i``, so a
-run is reproducible. The targets run one after the other, each with an equal
-share of what is left of ``--cases`` and ``--seconds``. Exit status 1 when
-anything but ok/rejected was seen.
+The readers of issue 26 item 4 and the text path (``new``: ``text``, ``stdin``, ``visemes``, ``points``,
+``manifest``, ``conform``, ``bap``, ``wav``, ``image``, ``obj``, ``gltf``; :mod:`fuzz_readers` says what
+each runs) take only seeds made here (:mod:`fuzz_seeds`; never files from ``../shared``) with their own
+mutations (WAV headers, PNG chunks with fixed CRCs and decompression bombs, JPEG frames, glTF accessors
+and node cycles, GLB chunk lengths, OBJ indices and statements, viseme events at 6 h and by the ten
+thousand, manifest paths and cells); ``text`` and ``stdin`` draw generated texts (:mod:`fuzz_text`: every
+script, control characters, 1 MB lines, nested and broken tags, RTL marks, emoji; for ``stdin`` in many
+encodings) through ``parse_markup`` and ``encode_text`` (estimate engine; a share through espeak-ng).
+
+Each case is *ok* (parsed), *rejected* (an ``MpegFaError`` or the layer's own error type), *crash*
+(anything else; deduplicated by target, stage, exception type and the traceback's last frame; the input
+saved as ``OUT/crashes/TARGET-INDEX.bin`` with a ``.txt`` beside it giving the traceback and the replay
+commands), *hang* (the case ran past ``--case-seconds``, 10 s by default as issue 26 sets, plus 40 us a
+byte for the codec targets; the stages of a case share the time), *memory* (``MemoryError`` anywhere in
+the exception chain, under an address-space cap ``--memory-gib`` above the start), *peak* (RSS grew more
+than ``--peak-mib`` during the case) or *mismatch* (a round trip changed the values, or a layer refused
+what the layer before it made). Also counted: rejections whose error names no place, and warnings that
+are not an ``MpegFaWarning``. A watchdog thread ends the process with exit status 3 (keeping the input
+and printing its replay command) if a case is stuck where the timer signal cannot reach. Case ``i`` of
+a target is drawn from its own generator seeded by ``--seed``, the target and ``i``, so a run is
+reproducible. In one process the targets run one after the other, each with ``--per-target`` cases or
+an equal share of what is left of ``--cases`` and ``--seconds``. The summary (JSON, and printed) has a
+table: per target the cases, each outcome, the largest memory growth of a case and resident memory of
+the process (MiB), cases per second of one process. Exit status 1 when anything but ok/rejected was seen.
 """
 from __future__ import annotations
 
 import argparse
 import io
 import json
+import logging
 import os
 import random
 import re
@@ -71,21 +80,18 @@ from typing import Callable, Iterable
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fuzz_inputs import MAX_INPUT, ROOT, TARGETS, Seed, collect_seeds, draw  # noqa: E402
+from fuzz_inputs import MAX_INPUT, ORIGINAL_TARGETS, READER_TARGETS, ROOT, TARGETS, Seed, collect_seeds, draw  # noqa: E402,I001
+import fuzz_parallel  # noqa: E402
+from fuzz_readers import RUNNERS as READER_RUNNERS, SPEECH_CHARS, Mismatch, stream_layers  # noqa: E402
 
 from mpeg4fa.errors import MpegFaError, MpegFaWarning  # noqa: E402
-from mpeg4fa.fba import FapStream, FbaError, decode, encode, iter_decode  # noqa: E402
+from mpeg4fa.fba import FbaError, decode, encode, iter_decode  # noqa: E402
 from mpeg4fa.fdp import (Fdp, FdpError, fdp_from_bytes, fdp_from_json, fdp_to_bytes, fdp_to_json,  # noqa: E402
                          load_fdp, read_xface_fdp, xface_from_xml)
 from mpeg4fa.formats import FormatError, iter_fap, read_fap, read_stream  # noqa: E402
 from mpeg4fa.speech.encoder import encode_text  # noqa: E402
 from mpeg4fa.speech.errors import MarkupError  # noqa: E402
 from mpeg4fa.speech.markup import parse_markup  # noqa: E402
-
-try:  # the one home of decoder output is moving to mpeg4fa.decoded (issue 12 item 1)
-    from mpeg4fa.decoded import resolve  # type: ignore[import-not-found]
-except ImportError:
-    from mpeg4fa.face.frames import resolve
 
 LAYER_ERRORS: dict[str, tuple[type[BaseException], ...]] = {
     "fba": (MpegFaError, FbaError),
@@ -94,13 +100,14 @@ LAYER_ERRORS: dict[str, tuple[type[BaseException], ...]] = {
     "fdp-json": (MpegFaError, FdpError),
     "fdp-xface": (MpegFaError, FdpError),
     "markup": (MpegFaError, MarkupError),
+    **{target: (MpegFaError,) for target in READER_TARGETS},
 }
 """What a target may raise on bad input: the base, plus the layer's type until it derives from the base."""
+SCALED = frozenset(ORIGINAL_TARGETS) | {"bap"}
+"""Targets whose time limit grows with the input (a 64 KB stream decodes, re-encodes and decodes in ~2.5 s);
+the others have the issue's flat limit per case."""
 VECTORS = ROOT.parent / "shared" / "vectors"
 _DIGITS = re.compile(r"[0-9]+")
-SPEECH_CHARS = 4000
-"""Longest markup also spoken (by the silent estimate engine) in a case."""
-VALUE_FIELDS = ("fap_mask", "fap_values", "viseme", "expression", "bap_mask", "bap_values")
 
 
 # ---- the guards: time and memory -----------------------------------------------------------------------------
@@ -110,8 +117,8 @@ class _Hang(BaseException):
     """Raised by the timer inside a stage that ran too long (a BaseException: no `except Exception` eats it)."""
 
 
-class _Mismatch(Exception):
-    """A round trip gave different values: a finding, counted with the crashes."""
+_Mismatch = Mismatch
+"""A round trip gave different values: a finding, counted with the crashes (:class:`fuzz_readers.Mismatch`)."""
 
 
 def _on_alarm(signum, frame):
@@ -119,7 +126,8 @@ def _on_alarm(signum, frame):
 
 
 class Guard:
-    """Per-stage time limit (a SIGALRM timer) and per-case peak memory (VmHWM, reset before each case)."""
+    """Per-case time limit (a SIGALRM timer; the stages of a case share it) and per-case peak memory
+    (VmHWM, reset before each case)."""
 
     def __init__(self, case_seconds: float) -> None:
         self.case_seconds = case_seconds
@@ -132,12 +140,13 @@ class Guard:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, self._previous)
 
-    def limit_for(self, size: int) -> float:
-        return self.case_seconds + size * 40e-6  # a 64 KB stream decodes, re-encodes and decodes in ~2.5 s
+    def limit_for(self, size: int, target: str = "fba") -> float:
+        """A case's time limit: ``case_seconds``, plus 40 us a byte for the codec targets (:data:`SCALED`)."""
+        return self.case_seconds + (size * 40e-6 if target in SCALED else 0.0)
 
     def run(self, stage: str, limit: float, call: Callable[[], object]) -> object:
         self.stage = stage
-        signal.setitimer(signal.ITIMER_REAL, limit)
+        signal.setitimer(signal.ITIMER_REAL, max(limit, 1e-3))
         try:
             return call()
         finally:
@@ -196,6 +205,10 @@ class Case:
     limit: float
     notes: list[str] = field(default_factory=list)
     fault: tuple[str, BaseException] | None = None
+    deadline: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.deadline = time.monotonic() + self.limit
 
     def file(self, suffix: str) -> Path:
         path = self.tmp / f"case{suffix}"
@@ -203,46 +216,15 @@ class Case:
         return path
 
     def stage(self, name: str, call: Callable[[], object]) -> object:
+        """Run one stage within what is left of the case's time."""
         try:
-            return self.guard.run(name, self.limit, call)
+            return self.guard.run(name, self.deadline - time.monotonic(), call)
         except BaseException as exc:
             self.fault = (name, exc)  # the stage an exception came from, even if later stages ran
             raise
 
     def stage_of(self, exc: BaseException | None) -> str:
         return self.fault[0] if self.fault is not None and self.fault[1] is exc else self.guard.stage
-
-
-def _same_values(a: FapStream, b: FapStream) -> None:
-    """``b`` (decoded from ``encode(a)``) shows the same frames as ``a`` on the frame grid."""
-    ga, gb = _on_grid(a), _on_grid(b)
-    for name in VALUE_FIELDS:
-        if ga[name].shape != gb[name].shape or not np.array_equal(ga[name], gb[name]):
-            raise _Mismatch(f"encode -> decode changed {name} (frames {len(a)} -> {len(b)})")
-
-
-def _on_grid(s: FapStream) -> dict[str, np.ndarray]:
-    idx = np.repeat(np.arange(len(s)), np.asarray(s.skip, dtype=np.int64) + 1)
-    return {name: getattr(s, name)[idx] for name in VALUE_FIELDS}
-
-
-def _stream_layers(case: Case, stream: FapStream, errors: tuple[type[BaseException], ...], exact: bool,
-                   label: str = "") -> None:
-    """resolve, then encode -> decode; ``exact``: the re-decoded values must equal (a decoded FBA stream)."""
-    case.stage(label + "resolve", lambda: resolve(stream))
-    if not len(stream):
-        return
-    try:
-        data = case.stage(label + "encode", lambda: encode(stream))
-    except errors as exc:
-        case.notes.append(f"encode refused: {exc}")
-        return
-    try:
-        again = case.stage(label + "redecode", lambda: decode(data))
-    except FbaError as exc:
-        raise _Mismatch(f"decode refuses what encode wrote: {exc}") from exc
-    if exact:
-        _same_values(stream, again)
 
 
 def run_fba(case: Case) -> None:
@@ -263,9 +245,9 @@ def run_fba(case: Case) -> None:
         if partial is None:
             raise _Mismatch("an FbaError from decode() without .partial (the frames before the fault)") from exc
         if len(partial):  # what was decoded before the fault goes on through the next layers
-            _stream_layers(case, partial, errors, exact=True, label="partial ")
+            stream_layers(case, partial, errors, exact=True, label="partial ")
         raise
-    _stream_layers(case, stream, errors, exact=True)
+    stream_layers(case, stream, errors, exact=True)
 
 
 def run_fap(case: Case) -> None:
@@ -283,7 +265,7 @@ def run_fap(case: Case) -> None:
     else:
         path = case.file(".fap")
         stream = case.stage("read_fap", lambda: read_fap(path))
-    _stream_layers(case, stream, LAYER_ERRORS["fap"], exact=False)
+    stream_layers(case, stream, LAYER_ERRORS["fap"], exact=False)
 
 
 def _fdp_round_trip(case: Case, fdp: Fdp) -> None:
@@ -353,7 +335,7 @@ def run_markup(case: Case) -> None:
 
 RUNNERS: dict[str, Callable[[Case], None]] = {
     "fba": run_fba, "fap": run_fap, "fdp-binary": run_fdp_file, "fdp-json": run_fdp_json,
-    "fdp-xface": run_fdp_xface, "markup": run_markup,
+    "fdp-xface": run_fdp_xface, "markup": run_markup, **READER_RUNNERS,
 }
 
 
@@ -380,6 +362,19 @@ def _last_frame(exc: BaseException) -> str:
     return f"{where}:{last.lineno} in {last.name}"
 
 
+def _project_frame(exc: BaseException) -> str:
+    """The innermost frame in the package (``mpeg4fa/...``): where the fault is routed when the last frame is
+    in the standard library or a dependency."""
+    for frame in reversed(traceback.extract_tb(exc.__traceback__)):
+        try:
+            where = Path(frame.filename).resolve().relative_to(ROOT).as_posix()
+        except ValueError:
+            continue
+        if where.startswith("mpeg4fa/"):
+            return f"{where}:{frame.lineno} in {frame.name}"
+    return ""
+
+
 def _located(exc: BaseException) -> bool:
     """Does the error say where (bit offset, line, byte, a place in ``where``)?"""
     for name in ("bit_offset", "line", "offset", "where"):
@@ -400,6 +395,9 @@ class Finding:
     count: int = 1
     first_case: int = 0
     reproducer: str = ""
+    replay: str = ""
+    project_frame: str = ""
+    """The innermost frame in ``mpeg4fa/`` (where to route it when ``frame`` is in a library)."""
 
 
 @dataclass
@@ -417,19 +415,23 @@ class Tally:
     slowest: float = 0.0
     slowest_case: str = ""
     peak_mib: float = 0.0
+    """Largest growth of resident memory during one case (MiB)."""
+    rss_mib: float = 0.0
+    """Largest resident memory of the process during a case (MiB): the fuzzer's own imports included."""
 
 
 class Campaign:
     """Runs cases, classifies them, keeps the tallies and the distinct findings, saves reproducers."""
 
-    def __init__(self, seed: int, out: Path, guard: Guard, peak_limit: int, tmp: Path) -> None:
+    def __init__(self, seed: int, out: Path, guard: Guard, peak_limit: int, tmp: Path, replay_flags: str = "") -> None:
         self.seed, self.out, self.guard, self.peak_limit, self.tmp = seed, out, guard, peak_limit, tmp
+        self.replay_flags = replay_flags  # what a replay needs to draw the same seeds (--no-vectors, --vectors)
         self.tallies: dict[str, Tally] = {}
         self.findings: dict[str, Finding] = {}
         self.unlocated: dict[str, str] = {}
         self.warnings: dict[str, str] = {}
         self.reasons: dict[str, int] = {}
-        self.current: tuple[str, int, bytes] | None = None
+        self.current: tuple[str, int, bytes, float] | None = None
         self.case_started = 0.0
 
     def case_rng(self, target: str, index: int) -> random.Random:
@@ -442,8 +444,9 @@ class Campaign:
 
     def run_input(self, target: str, index: int, data: bytes, rng: random.Random, origin: str) -> str:
         tally = self.tallies.setdefault(target, Tally())
-        case = Case(data, rng, self.guard, self.tmp, self.guard.limit_for(len(data)))
-        self.current, self.case_started = (target, index, data), time.monotonic()
+        limit = self.guard.limit_for(len(data), target)
+        case = Case(data, rng, self.guard, self.tmp, limit)
+        self.current, self.case_started = (target, index, data, limit), time.monotonic()
         if self.guard.peak_ok:
             _reset_peak()  # VmHWM := VmRSS now, so the growth below is this case's own
         before = _status_bytes("VmRSS")
@@ -475,8 +478,17 @@ class Campaign:
             if not issubclass(w.category, MpegFaWarning):
                 key = f"{w.category.__name__} {Path(str(w.filename)).name}:{w.lineno}"
                 self.warnings.setdefault(key, f"{target}: {str(w.message)[:200]}")
-        peak = _peak_bytes() - before if self.guard.peak_ok else 0
+        high = _peak_bytes()
+        peak = high - before if self.guard.peak_ok else 0
         tally.peak_mib = max(tally.peak_mib, peak / 2**20)
+        tally.rss_mib = max(tally.rss_mib, high / 2**20)
+        if outcome in ("ok", "rejected") and elapsed > limit + 1.0:
+            # the timer could not interrupt it (C code, or a callback that swallowed the exception)
+            tally.hangs += 1
+            self._record("hang", target, index, data, None, origin, elapsed, stage,
+                         f"the case ran {elapsed:.1f} s, past its {limit:.1f} s (it ended {outcome}; the timer "
+                         "could not interrupt it)")
+            return "hang"
         if outcome == "rejected":
             tally.rejected += 1
             text = _DIGITS.sub("N", getattr(exc, "message", None) or str(exc))[:90]
@@ -496,11 +508,15 @@ class Campaign:
             self._record("peak", target, index, data, None, origin, elapsed, stage, f"peak {peak / 2**20:.0f} MiB")
         return outcome
 
+    def replay_command(self, target: str, index: int) -> str:
+        """The command that runs case ``index`` of ``target`` again, drawn afresh from (target, seed, index)."""
+        return f".venv/bin/python tools/fuzz.py --case {target}:{index} --seed {self.seed}{self.replay_flags}"
+
     def _record(self, kind: str, target: str, index: int, data: bytes, exc: BaseException | None, origin: str,
                 elapsed: float, stage: str, message: str = "") -> None:
         if exc is not None and kind == "hang":
-            limit = self.guard.limit_for(len(data))
-            frame, etype, message = _last_frame(exc), "hang", f"stage {stage} ran past {limit:.1f} s"
+            limit = self.guard.limit_for(len(data), target)
+            frame, etype, message = _last_frame(exc), "hang", f"the case ran past {limit:.1f} s (in stage {stage})"
         elif exc is not None:
             frame, etype, message = _last_frame(exc), type(exc).__name__, str(exc)[:300]
         else:
@@ -510,63 +526,49 @@ class Campaign:
         if found is not None:
             found.count += 1
             return
-        number = sum(1 for f in self.findings.values() if f.target == target) + 1
-        path = self.out / "crashes" / f"{target}-{number}.bin"
+        path = self.out / "crashes" / f"{target}-{index}.bin"  # (target, seed, index) names a case
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
         tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
+        replay = self.replay_command(target, index)
         path.with_suffix(".txt").write_text(
             f"kind: {kind}\ntarget: {target}\nstage: {stage}\ncase: {index} (--seed {self.seed})\n"
-            f"origin: {origin}\nseconds: {elapsed:.3f}\nreplay: .venv/bin/python tools/fuzz.py --replay {path} "
-            f"--target {target}\n\n{message}\n\n{tb}", encoding="utf-8")
+            f"origin: {origin}\nseconds: {elapsed:.3f}\nreplay: {replay}\n"
+            f"replay the saved input: .venv/bin/python tools/fuzz.py --replay {path} --target {target} "
+            f"--index {index} --seed {self.seed}{self.replay_flags}\n\n{message}\n\n{tb}", encoding="utf-8")
         self.findings[key] = Finding(kind, key, target, stage, etype, message, frame, 1, index,
-                                     path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else str(path))
+                                     path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else str(path),
+                                     replay, _project_frame(exc) if exc is not None else "")
 
 
-def _watchdog(campaign: Campaign, hard_limit: float, report: Callable[[str], None]) -> None:
-    """End the run when a case is stuck where SIGALRM cannot reach (C code): keep the reproducer and the tallies."""
+def _watchdog(campaign: Campaign, report: Callable[[str], None]) -> None:
+    """End the run when a case is stuck where SIGALRM cannot reach (C code): keep the reproducer. The limit is
+    three times the case's own (at least 30 s); exit status 3 tells a coordinator (``--jobs``) what happened."""
     while True:
         time.sleep(0.5)
         current = campaign.current
-        if current is not None and time.monotonic() - campaign.case_started > hard_limit:
-            target, index, data = current
+        if current is None:
+            continue
+        target, index, data, limit = current
+        stuck = time.monotonic() - campaign.case_started
+        if stuck > max(30.0, 3 * limit):
             path = campaign.out / "crashes" / f"{target}-stuck-{index}.bin"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_bytes(data)
-            report(f"case {index} of {target} stuck in stage {campaign.guard.stage} for {hard_limit:.0f} s "
-                   f"(not interruptible); input saved to {path}")
+            report(f"STUCK: case {index} of {target} stuck in stage {campaign.guard.stage} for {stuck:.0f} s "
+                   f"(not interruptible); input saved to {path}; replay: "
+                   f"{campaign.replay_command(target, index)}")
             os._exit(3)
 
 
 # ---- the command ---------------------------------------------------------------------------------------------
 
 
-def _table(campaign: Campaign, elapsed: float) -> str:
-    head = ("target", "cases", "ok", "rejected", "crashes", "hangs", "memory", "peak>lim", "mismatch",
-            "unlocated", "cases/s", "slowest s")
-    rows = []
-    total = Tally()
-    for target in TARGETS:
-        t = campaign.tallies.get(target)
-        if t is None:
-            continue
-        rows.append((target, t.cases, t.ok, t.rejected, t.crashes, t.hangs, t.memory, t.peak, t.mismatches,
-                     t.unlocated, f"{t.cases / max(t.seconds, 1e-9):.0f}", f"{t.slowest:.2f}"))
-        for name in ("cases", "ok", "rejected", "crashes", "hangs", "memory", "peak", "mismatches", "unlocated"):
-            setattr(total, name, getattr(total, name) + getattr(t, name))
-    rows.append(("total", total.cases, total.ok, total.rejected, total.crashes, total.hangs, total.memory, total.peak,
-                 total.mismatches, total.unlocated, f"{total.cases / max(elapsed, 1e-9):.0f}", ""))
-    widths = [max(len(str(r[k])) for r in rows + [head]) for k in range(len(head))]
-    lines = ["  ".join(str(c).rjust(w) if k else str(c).ljust(w) for k, (c, w) in enumerate(zip(r, widths)))
-             for r in [head] + rows]
-    return "\n".join(lines)
-
-
 def _summary(campaign: Campaign, args: argparse.Namespace, elapsed: float, seeds: dict[str, list[Seed]],
              memory_cap: int | None) -> dict:
-    return {
+    summary = {
         "seed": args.seed, "seconds": round(elapsed, 1), "case_seconds": args.case_seconds,
-        "memory_cap_bytes": memory_cap, "peak_limit_mib": args.peak_mib,
+        "memory_cap_bytes": memory_cap, "peak_limit_mib": args.peak_mib, "jobs": 1, "first": args.first,
         "vectors": str(args.vectors) if args.vectors and args.vectors.is_dir() else None,
         "seeds": {t: [s.name for s in seeds[t]] for t in campaign.tallies},
         "targets": {t: vars(campaign.tallies[t]) for t in TARGETS if t in campaign.tallies},
@@ -576,40 +578,87 @@ def _summary(campaign: Campaign, args: argparse.Namespace, elapsed: float, seeds
         "top_rejections": dict(sorted(campaign.reasons.items(), key=lambda kv: -kv[1])[:40]),
         "python": sys.version.split()[0],
     }
+    summary["table"] = fuzz_parallel.table_rows(summary)
+    return summary
 
 
-def _replay(args: argparse.Namespace, guard: Guard, tmp: Path) -> int:
-    target = args.target[0]
-    data = Path(args.replay).read_bytes()
-    campaign = Campaign(args.seed, tmp / "replay", guard, args.peak_mib << 20, tmp)
-    outcome = campaign.run_input(target, 0, data, random.Random(0), str(args.replay))
+def _replay_flags(args: argparse.Namespace) -> str:
+    if args.vectors is None:
+        return " --no-vectors"
+    return "" if args.vectors == VECTORS else f" --vectors {args.vectors}"
+
+
+def _show(campaign: Campaign, outcome: str, target: str) -> None:
     print(f"{target}: {outcome}")
     for finding in campaign.findings.values():
         print(f"  {finding.type} at {finding.frame} (stage {finding.stage}): {finding.message}")
-        print((campaign.out / "crashes" / f"{target}-1.txt").read_text(encoding="utf-8").split("\n\n", 2)[-1])
+        text = (ROOT / finding.reproducer if not Path(finding.reproducer).is_absolute() else Path(finding.reproducer))
+        print(text.with_suffix(".txt").read_text(encoding="utf-8").split("\n\n", 2)[-1])
+
+
+def _replay(args: argparse.Namespace, guard: Guard, tmp: Path) -> int:
+    """``--replay FILE``: the saved bytes through ``--target``; with ``--index`` the case's own random choices."""
+    target = args.target[0]
+    data = Path(args.replay).read_bytes()
+    campaign = Campaign(args.seed, tmp / "replay", guard, args.peak_mib << 20, tmp, _replay_flags(args))
+    if args.index is not None:
+        rng = campaign.case_rng(target, args.index)
+        draw(rng, target, collect_seeds(args.vectors)[target])  # the draw's random calls, then the case's own
+    else:
+        rng = random.Random(0)
+    outcome = campaign.run_input(target, args.index or 0, data, rng, str(args.replay))
+    _show(campaign, outcome, target)
     return 0 if outcome in ("ok", "rejected") else 1
+
+
+def _one_case(args: argparse.Namespace, guard: Guard, tmp: Path) -> int:
+    """``--case TARGET:INDEX``: that case drawn again from (target, seed, index) and run, findings shown."""
+    target, index = args.case
+    campaign = Campaign(args.seed, tmp / "replay", guard, args.peak_mib << 20, tmp, _replay_flags(args))
+    outcome = campaign.run_case(target, index, collect_seeds(args.vectors)[target])
+    _show(campaign, outcome, target)
+    return 0 if outcome in ("ok", "rejected") else 1
+
+
+def _case_arg(text: str) -> tuple[str, int]:
+    target, _, index = text.rpartition(":")
+    if target not in TARGETS or not index.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: TARGET:INDEX with TARGET one of {', '.join(TARGETS)}")
+    return target, int(index)
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--cases", type=int, default=100_000, help="total cases over all targets (default 100000)")
+    p.add_argument("--per-target", type=int, default=None, help="cases per target (instead of a share of --cases)")
     p.add_argument("--seconds", type=float, default=1800.0, help="total time budget (default 1800)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--target", default=",".join(TARGETS), help="comma-separated: " + ",".join(TARGETS))
+    p.add_argument("--first", type=int, default=0, help="index of the first case of each target (default 0)")
+    p.add_argument("--target", default=",".join(TARGETS), help="comma-separated: " + ",".join(TARGETS)
+                   + "; 'new' for the readers of issue 26 (" + ",".join(READER_TARGETS) + ")")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes running chunks of cases in parallel")
+    p.add_argument("--chunk", type=int, default=5000, help="with --jobs: cases of one target per worker run")
     p.add_argument("--json", type=Path, default=None, help="write the summary here (default out/fuzz/fuzz.json)")
     p.add_argument("--out", type=Path, default=ROOT / "out" / "fuzz", help="reproducers go to OUT/crashes")
     p.add_argument("--vectors", type=Path, default=VECTORS, help="real files to seed from (default ../shared/vectors)")
     p.add_argument("--no-vectors", action="store_true", help="only the seeds made here")
-    p.add_argument("--case-seconds", type=float, default=2.0, help="per-stage time limit (scaled up for big inputs)")
+    p.add_argument("--case-seconds", type=float, default=10.0,
+                   help="time limit of a case (default 10, the issue's; plus 40 us a byte for the codec targets)")
     p.add_argument("--memory-gib", type=float, default=2.0, help="address space allowed above the start")
     p.add_argument("--peak-mib", type=int, default=256, help="a case whose peak RSS grows more than this is reported")
     p.add_argument("--replay", type=Path, default=None, help="run one input file through --target and show the outcome")
+    p.add_argument("--index", type=int, default=None, help="with --replay: the case's index (its random choices)")
+    p.add_argument("--case", type=_case_arg, default=None, metavar="TARGET:INDEX",
+                   help="draw case INDEX of TARGET again (with --seed) and run it")
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
-    args.target = [t.strip() for t in args.target.split(",") if t.strip()]
+    names = [t.strip() for t in args.target.split(",") if t.strip()]
+    args.target = [t for name in names for t in (READER_TARGETS if name == "new" else (name,))]
     unknown = [t for t in args.target if t not in TARGETS]
     if unknown:
         p.error(f"unknown target {unknown[0]!r}; known: {', '.join(TARGETS)}")
+    if args.jobs < 1 or args.chunk < 1:
+        p.error("--jobs and --chunk are at least 1")
     if args.no_vectors:
         args.vectors = None
     return args
@@ -618,28 +667,32 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     say = (lambda *_: None) if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))
+    if args.jobs > 1 and args.replay is None and args.case is None:
+        return fuzz_parallel.run(args, Path(__file__).resolve(), say)
+    logging.getLogger("trimesh").setLevel(logging.CRITICAL)  # a damaged mesh is our finding, not a log line
     tmp = Path(tempfile.mkdtemp(prefix="mpeg4fa-fuzz-", dir="/dev/shm" if os.path.isdir("/dev/shm") else None))
     guard = Guard(args.case_seconds)
     try:
         if args.replay is not None:
             return _replay(args, guard, tmp)
+        if args.case is not None:
+            return _one_case(args, guard, tmp)
         seeds = collect_seeds(args.vectors)
         memory_cap = limit_memory(args.memory_gib)
-        campaign = Campaign(args.seed, args.out, guard, args.peak_mib << 20, tmp)
-        hard = max(30.0, 10 * guard.limit_for(MAX_INPUT))
-        threading.Thread(target=_watchdog, args=(campaign, hard, say), daemon=True).start()
+        campaign = Campaign(args.seed, args.out, guard, args.peak_mib << 20, tmp, _replay_flags(args))
+        threading.Thread(target=_watchdog, args=(campaign, say), daemon=True).start()
         targets = [t for t in TARGETS if t in args.target]
         start, interrupted = time.monotonic(), False
         try:
             for k, target in enumerate(targets):
                 left = len(targets) - k
                 done = sum(t.cases for t in campaign.tallies.values())
-                cases = (args.cases - done) // left
+                cases = args.per_target if args.per_target is not None else (args.cases - done) // left
                 until = time.monotonic() + (args.seconds - (time.monotonic() - start)) / left
-                say(f"{target}: up to {cases} cases, {max(until - time.monotonic(), 0):.0f} s, "
+                say(f"{target}: up to {cases} cases from {args.first}, {max(until - time.monotonic(), 0):.0f} s, "
                     f"{len(seeds[target])} seeds")
-                index = 0
-                while index < cases and time.monotonic() < until:
+                index = args.first
+                while index < args.first + cases and time.monotonic() < until:
                     campaign.run_case(target, index, seeds[target])
                     index += 1
         except KeyboardInterrupt:  # Ctrl-C: keep what was found so far
@@ -652,15 +705,7 @@ def main(argv: list[str] | None = None) -> int:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
         if not args.quiet:
-            print(_table(campaign, elapsed))
-            for f in campaign.findings.values():
-                print(f"{f.kind}: {f.target} {f.stage}: {f.type} x{f.count} at {f.frame}: {f.message[:160]} "
-                      f"-> {f.reproducer}")
-            for key, message in campaign.unlocated.items():
-                print(f"unlocated: {key}: {message[:160]}")
-            for key, message in campaign.warnings.items():
-                print(f"stray warning: {key}: {message[:160]}")
-            print(f"summary: {path}")
+            print(fuzz_parallel.report(summary, path))
         bad = sum(t.crashes + t.hangs + t.memory + t.peak + t.mismatches for t in campaign.tallies.values())
         return 1 if bad else 0
     finally:

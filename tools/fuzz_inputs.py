@@ -6,6 +6,7 @@ deterministic for a given ``random.Random`` state, so a case can be replayed.
 """
 from __future__ import annotations
 
+import functools
 import io
 import json
 import math
@@ -30,8 +31,16 @@ from mpeg4fa.fdp import (FaceDefMesh, FaceDefTable, FaceDefTransform, Fdp, FdpMe
 from mpeg4fa.fdp.model import LABELS  # noqa: E402
 from mpeg4fa.formats import write_fap  # noqa: E402
 
-TARGETS = ("markup", "fdp-json", "fdp-xface", "fdp-binary", "fap", "fba")
-"""Run order: the fast targets first, so the slow ones inherit the time the fast ones leave."""
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import fuzz_seeds  # noqa: E402
+from fuzz_text import draw_text, text_bytes  # noqa: E402
+
+ORIGINAL_TARGETS = ("markup", "fdp-json", "fdp-xface", "fdp-binary", "fap", "fba")
+READER_TARGETS = ("text", "stdin", "visemes", "points", "manifest", "conform", "bap", "wav", "image", "obj", "gltf")
+"""Issue 26 item 9: every reader of item 4 and the text path (seeds: :mod:`fuzz_seeds`, texts: :mod:`fuzz_text`)."""
+TARGETS = ORIGINAL_TARGETS + READER_TARGETS
+"""Run order: the fast targets first, so the slow ones inherit the time the fast ones leave. A target's place
+here seeds its cases (:meth:`Campaign.case_rng`), so new targets go at the end."""
 MAX_INPUT = 2 << 20
 """Mutated inputs are cut to 2 MiB: big enough for a huge JSON array, small enough for 2 cores."""
 
@@ -155,6 +164,10 @@ def collect_seeds(vectors: Path | None) -> dict[str, list[Seed]]:
         seeds["fdp-json"].append(Seed(name + ".json", fdp_to_json(fdp).encode("utf-8")))
     seeds["fdp-xface"].append(Seed("own/xface.fdp", _own_xface()))
     seeds["markup"] += [Seed(f"own/markup-{k}", s.encode("utf-8")) for k, s in enumerate(MARKUP_SEEDS)]
+    for target, made in fuzz_seeds.all_seeds().items():  # the new readers: seeds made here only
+        seeds[target] += [Seed(name, data) for name, data in made]
+    seeds["text"] = [Seed("generated (tools/fuzz_text.py)", b"")]
+    seeds["stdin"] = [Seed("generated (tools/fuzz_text.py) in some encoding", b"")]
     return seeds
 
 
@@ -481,6 +494,358 @@ def m_fdp_chunk(rng, data, seeds):
     return data[:start] + rebuilt + data[start + 12 + length:]
 
 
+# ---- mutations for the readers of issue 26 item 4 -------------------------------------------------------------
+
+_U32 = (0, 1, 2, 3, 7, 8, 12, 255, 256, 0xFFFF, 0x10000, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF)
+
+
+def _riff_chunks(data: bytes) -> list[tuple[int, bytes, int]]:
+    """``(offset, tag, size)`` of each chunk of a RIFF file, as far as its sizes lead."""
+    chunks, pos = [], 12
+    while pos + 8 <= len(data):
+        size = int.from_bytes(data[pos + 4:pos + 8], "little")
+        chunks.append((pos, data[pos:pos + 4], size))
+        pos += 8 + size + (size & 1)
+    return chunks
+
+
+def m_wav(rng, data, seeds):
+    """WAV header damage: fmt fields (format tag, channels, rate, bits, block align), chunk and RIFF sizes,
+    chunk order, the magic words, an unknown chunk claiming gigabytes, the extensible sub-format."""
+    chunks = _riff_chunks(data)
+    op = rng.randrange(8)
+    fmt = next((c for c in chunks if c[1] == b"fmt "), None)
+    if op == 0 and fmt is not None and fmt[2] >= 16:
+        field, width = rng.choice(((0, 2), (2, 2), (4, 4), (8, 4), (12, 2), (14, 2)))
+        choices = {0: (0, 1, 2, 3, 6, 7, 0x11, 0x55, 0xFFFE, 0xFFFF), 2: (0, 1, 2, 3, 8, 255, 0xFFFF),
+                   4: (0, 1, 8000, 44100, 0x7FFFFFFF, 0xFFFFFFFF), 8: (0, 1, 0xFFFFFFFF),
+                   12: (0, 1, 3, 0xFFFF), 14: (0, 1, 4, 7, 8, 12, 16, 20, 24, 32, 48, 64, 0xFFFF)}[field]
+        at = fmt[0] + 8 + field
+        return data[:at] + rng.choice(choices).to_bytes(width, "little") + data[at + width:]
+    if op == 1 and chunks:
+        at = rng.choice(chunks)[0] + 4
+        value = rng.choice(_U32 + (len(data), len(data) + 1))
+        return data[:at] + value.to_bytes(4, "little") + data[at + 4:]
+    if op == 2 and len(data) >= 8:
+        return data[:4] + rng.choice(_U32 + (len(data) - 8, len(data))).to_bytes(4, "little") + data[8:]
+    if op == 3 and len(chunks) >= 2:  # swap, drop or duplicate whole chunks
+        parts = [data[o:o + 8 + n + (n & 1)] for o, _, n in chunks]
+        kind = rng.randrange(3)
+        if kind == 0:
+            parts.reverse()
+        elif kind == 1:
+            del parts[rng.randrange(len(parts))]
+        else:
+            parts.insert(0, rng.choice(parts))
+        return data[:12] + b"".join(parts)
+    if op == 4:
+        tag = rng.choice((b"junk", b"LIST", b"fact", b"cue ", b"data", b"fmt ", b"\x00\x00\x00\x00"))
+        size = rng.choice((0, 3, 0x7FFFFFF0, 0xFFFFFFFF))
+        return data[:12] + tag + size.to_bytes(4, "little") + b"x" * rng.choice((0, 3, 16)) + data[12:]
+    if op == 5:
+        return data[:rng.choice((0, 4, 11, 12, 20, 36, 43, 44, 46))]
+    if op == 6:
+        magic = rng.choice(((0, b"RIFX"), (0, b"RF64"), (0, b"riff"), (8, b"AVI "), (8, b"WAVf"), (0, b"\x00" * 4)))
+        return data[:magic[0]] + magic[1] + data[magic[0] + 4:]
+    if fmt is not None and fmt[2] >= 18:  # the extension: cbSize, valid bits, channel mask, sub-format GUID
+        at = fmt[0] + 8 + rng.choice((16, 18, 20, 24))
+        return data[:at] + rng.choice((b"\xff\xff", b"\x00\x00", b"\x03\x00", b"\x55\x00")) + data[at + 2:]
+    return m_int32(rng, data, seeds)
+
+
+_PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_chunks(data: bytes) -> list[tuple[int, bytes, int]]:
+    chunks, pos = [], 8
+    while pos + 12 <= len(data):
+        size = int.from_bytes(data[pos:pos + 4], "big")
+        chunks.append((pos, data[pos + 4:pos + 8], size))
+        if size > len(data):
+            break
+        pos += 12 + size
+    return chunks
+
+
+def _png_chunk(tag: bytes, payload: bytes) -> bytes:
+    return len(payload).to_bytes(4, "big") + tag + payload + zlib.crc32(tag + payload).to_bytes(4, "big")
+
+
+@functools.lru_cache(maxsize=None)
+def _zeros_deflated(n: int) -> bytes:
+    return zlib.compress(b"\x00" * n, 9)
+
+
+def m_image(rng, data, seeds):
+    """Image damage that gets past the checksums: PNG chunks rebuilt with their CRC (IHDR sizes up to a
+    decompression bomb, bit depths, colour types, a zlib bomb in IDAT, zTXt, iCCP), JPEG frame sizes and
+    segment lengths; other formats get byte damage."""
+    if data.startswith(_PNG_MAGIC):
+        chunks = _png_chunks(data)
+        op = rng.randrange(6)
+        ihdr = next((c for c in chunks if c[1] == b"IHDR" and c[2] == 13), None)
+        if op <= 1 and ihdr is not None:
+            payload = bytearray(data[ihdr[0] + 8:ihdr[0] + 21])
+            if op == 0:
+                w, h = rng.choice(((0, 12), (16, 0), (65535, 65535), (30000, 30000), (10000, 9000), (1, 2**31 - 1),
+                                   (2**31 - 1, 2**31 - 1), (100000, 1), (16, 13), (17, 12)))
+                payload[0:8] = w.to_bytes(4, "big") + h.to_bytes(4, "big")
+            else:
+                at = rng.choice((8, 9, 10, 11, 12))
+                payload[at] = rng.choice((0, 1, 2, 3, 4, 5, 6, 7, 8, 16, 33, 255))
+            return data[:ihdr[0]] + _png_chunk(b"IHDR", bytes(payload)) + data[ihdr[0] + 25:]
+        if op == 2:  # an IDAT (or a text chunk) that inflates to far more than the image holds
+            bomb = _zeros_deflated(rng.choice((1 << 20, 64 << 20)))
+            tag = rng.choice((b"IDAT", b"zTXt", b"iCCP", b"iTXt"))
+            payload = (b"k\x00\x00" + bomb) if tag != b"IDAT" else bomb
+            at = next((c[0] for c in chunks if c[1] == b"IDAT"), 33)
+            return data[:at] + _png_chunk(tag, payload) + data[at:]
+        if op == 3 and chunks:  # damage a payload, fix the CRC
+            pos, tag, size = rng.choice(chunks)
+            payload = data[pos + 8:pos + 8 + size]
+            payload = rng.choice((m_bitflip, m_byteset, m_truncate, m_insert))(rng, payload, seeds)
+            return data[:pos] + _png_chunk(tag, payload) + data[pos + 12 + size:]
+        if op == 4 and chunks:  # drop or repeat a chunk
+            pos, tag, size = rng.choice(chunks)
+            one = data[pos:pos + 12 + size]
+            return data[:pos] + (one * rng.choice((0, 2, 500))) + data[pos + 12 + size:]
+        return data[:8] + _png_chunk(rng.choice((b"acTL", b"fcTL", b"PLTE", b"tRNS", b"sBIT", b"eXIf")),
+                                     bytes(rng.randrange(256) for _ in range(rng.choice((0, 1, 8, 26))))) + data[8:]
+    if data.startswith(b"\xff\xd8"):
+        sof = [m.start() for m in re.finditer(rb"\xff[\xc0-\xc3\xc5-\xc7\xc9-\xcb\xcd-\xcf]", data)]
+        op = rng.randrange(4)
+        if op == 0 and sof:
+            at = rng.choice(sof) + 5
+            size = rng.choice((0, 1, 65535, 65500, 12, 16))
+            return data[:at] + size.to_bytes(2, "big") + data[at + 2:]
+        if op == 1 and sof:  # component count, precision
+            at = rng.choice(sof) + rng.choice((4, 9))
+            return data[:at] + bytes([rng.choice((0, 1, 2, 3, 4, 5, 12, 16, 255))]) + data[at + 1:]
+        if op == 2:  # a segment length
+            marks = [m.start() for m in re.finditer(rb"\xff[\xc0-\xfe]", data[:4096])]
+            if marks:
+                at = rng.choice(marks) + 2
+                return data[:at] + rng.choice((0, 1, 2, 0xFFFF)).to_bytes(2, "big") + data[at + 2:]
+        exif = b"Exif\x00\x00MM\x00*\x00\x00\x00\x08\x00\x01\x01\x12\x00\x03\x00\x00\x00\x01" + \
+            bytes([0, rng.choice((0, 1, 6, 8, 9, 255)), 0, 0])
+        return data[:2] + b"\xff\xe1" + (len(exif) + 2).to_bytes(2, "big") + exif + data[2:]
+    return rng.choice(BINARY)(rng, data, seeds)
+
+
+_GLTF_VALUES = (0, 1, -1, 3, 5120, 5121, 5123, 5125, 5126, 9999, 2**31, 2**32 + 3, 10**12, 1e308, "VEC3", "MAT4",
+                "SCALAR", "", None, [], {}, [0], [0, 0], "data:,", "data:application/octet-stream;base64,!!!",
+                "data:application/octet-stream;base64,AAAA", "../../../../etc/passwd", "buf.bin", "http://x/y.bin")
+_GLTF_PLACES = (("accessors", "count"), ("accessors", "byteOffset"), ("accessors", "componentType"),
+                ("accessors", "type"), ("accessors", "bufferView"), ("bufferViews", "byteOffset"),
+                ("bufferViews", "byteLength"), ("bufferViews", "byteStride"), ("bufferViews", "buffer"),
+                ("buffers", "byteLength"), ("buffers", "uri"), ("nodes", "mesh"), ("nodes", "children"),
+                ("nodes", "matrix"), ("nodes", "scale"), ("meshes", "primitives"), ("scenes", "nodes"))
+
+
+def m_gltf(rng, data, seeds):
+    """glTF content damage on the parsed document: accessor counts and offsets, component types, buffer sizes
+    and URIs, node cycles (a node its own child), transforms of 1e308, required extensions."""
+    try:
+        doc = json.loads(data)
+    except (ValueError, RecursionError):
+        return data
+    if not isinstance(doc, dict):
+        return data
+    op = rng.randrange(4)
+    if op == 0:
+        key, field = rng.choice(_GLTF_PLACES)
+        items = doc.get(key)
+        if isinstance(items, list) and items and isinstance(items[0], dict):
+            rng.choice(items)[field] = rng.choice(_GLTF_VALUES)
+    elif op == 1 and isinstance(doc.get("nodes"), list) and doc["nodes"]:  # cycles and deep chains
+        nodes = doc["nodes"]
+        depth = rng.choice((1, 2, 1000))
+        for k in range(len(nodes)):
+            if isinstance(nodes[k], dict):
+                nodes[k]["children"] = [rng.randrange(len(nodes) + depth)]
+        nodes += [{"children": [len(nodes) + k + 1]} for k in range(depth)]
+    elif op == 2:
+        doc["extensionsRequired"] = [rng.choice(("KHR_draco_mesh_compression", "EXT_meshopt_compression", "X"))]
+        doc["extensionsUsed"] = doc["extensionsRequired"]
+    else:
+        prims = [p for m in doc.get("meshes", []) if isinstance(m, dict) for p in m.get("primitives", [])
+                 if isinstance(p, dict)]
+        if prims:
+            prim = rng.choice(prims)
+            prim[rng.choice(("mode", "indices", "attributes", "targets"))] = rng.choice(
+                (0, 1, 3, 6, 7, -1, 99, None, {"POSITION": 5}, [{"POSITION": 0}], {}))
+    try:
+        return json.dumps(doc).encode("utf-8")
+    except (ValueError, OverflowError, RecursionError):
+        return data
+
+
+def m_glb(rng, data, seeds):
+    """GLB container damage: header and chunk lengths, chunk types, version, and the JSON chunk rewritten by
+    the glTF mutators with the lengths fixed (so the reader gets to the content)."""
+    if len(data) < 20 or not data.startswith(b"glTF"):
+        return m_int32(rng, data, seeds)
+    json_len = int.from_bytes(data[12:16], "little")
+    op = rng.randrange(5)
+    if op == 0:
+        at = rng.choice((4, 8, 12, 20 + json_len))
+        return data[:at] + rng.choice(_U32 + (len(data), json_len + 1)).to_bytes(4, "little") + data[at + 4:]
+    if op == 1:
+        at = rng.choice((16, 24 + json_len))
+        return data[:at] + rng.choice((b"BIN\x00", b"JSON", b"\x00\x00\x00\x00", b"XXXX")) + data[at + 4:]
+    text, rest = data[20:20 + json_len], data[20 + json_len:]
+    text = rng.choice((m_gltf, m_gltf, m_json, m_json_tree))(rng, text, seeds)
+    text += b" " * (-len(text) % 4)
+    body = len(text).to_bytes(4, "little") + b"JSON" + text + rest
+    return b"glTF" + data[4:8] + (12 + len(body)).to_bytes(4, "little") + body
+
+
+_OBJ_TOKENS = ("0", "-1", "-99999", "99999", "2147483648", "-2147483649", "1" + "0" * 30, "1/2/3/4", "//", "/",
+               "1//", "a", "nan", "inf", "-inf", "1e308", "-1e308", "1e400", "", "1.5", "0x10", "#", "\\")
+_OBJ_LINES = ("f 1 2", "f 1 1 1", "f", "v", "v 1", "v 1 2 3 4 5 6 7", "vt 1", "vn", "l 1 2 3", "p 1",
+              "s off", "g", "o", "g " + "x" * 5000, "usemtl", "mtllib ../../../../etc/passwd", "mtllib /dev/zero",
+              "curv 0 1 1 2", "vp 0.5", "cstype bspline", "f " + " ".join(str(k) for k in range(1, 2000)),
+              "v nan nan nan", "v 1e308 1e308 1e308", "v -1e308 0 1e308", "f -1 -2 -3", "f 1/1/1 2/2 3//3",
+              "\\", "f 1 2 \\\n 3", "v 0 0 0 \\")
+
+
+def m_obj(rng, data, seeds):
+    """OBJ damage: a face or vertex token replaced (0, out of range, huge, nan, malformed), odd statements
+    added (polygons of 2000 corners, mtllib naming system files, lines, points, curves, line continuations)."""
+    lines = _lines(data)
+    if rng.random() < 0.5:
+        picks = [k for k, line in enumerate(lines[:20000]) if line[:2] in (b"f ", b"v ", b"vt", b"vn")]
+        if picks:
+            k = rng.choice(picks)
+            words = lines[k].rstrip(b"\r\n").split(b" ")
+            if len(words) > 1:
+                words[rng.randrange(1, len(words))] = rng.choice(_OBJ_TOKENS).encode()
+                lines[k] = b" ".join(words) + b"\n"
+            return b"".join(lines)
+    extra = rng.choice(_OBJ_LINES).encode() + b"\n"
+    lines.insert(rng.randint(0, len(lines)), extra * rng.choice((1, 1, 2, 1000)))
+    return b"".join(lines)
+
+
+_EVENT_TIMES = (0, -1, 1, 21_600_000, 21_600_001, 216_000_000_000, 216_000_000_001, 10**15, 2**63, 10**30, 1.5,
+                1e308, -1e308, "5", None, True, [], 3_600_000, 36_000_000_000)
+_EVENT_VISEMES = (-1, 0, 9, 10, 11, 21, 22, 100, 2**40, 1.5, "p", "sil", "", "21", None, True, [], "\u0000", "x" * 100)
+
+
+def m_events(rng, data, seeds):
+    """Viseme-event damage: a time far away (6 h and over, in ticks or ms), negative, a string; a viseme ID
+    out of range or of the wrong type; events out of order; tens of thousands of events."""
+    try:
+        doc = json.loads(data)
+        lines = None
+    except (ValueError, RecursionError):
+        try:
+            lines, doc = data.decode("utf-8").splitlines(), None
+            doc = [json.loads(line) for line in lines if line.strip()]
+        except (ValueError, RecursionError, UnicodeDecodeError):
+            return data
+    events = doc if isinstance(doc, list) else next((v for v in doc.values() if isinstance(v, list)), None) \
+        if isinstance(doc, dict) else None
+    if not events or not all(isinstance(e, dict) for e in events):
+        return data
+    op = rng.randrange(4)
+    event = rng.choice(events)
+    time_keys = [k for k in event if "ffset" in k or k == "time"]
+    id_keys = [k for k in event if "iseme" in k or k == "value"]
+    if op == 0 and time_keys:
+        event[rng.choice(time_keys)] = rng.choice(_EVENT_TIMES)
+    elif op == 1 and id_keys:
+        event[rng.choice(id_keys)] = rng.choice(_EVENT_VISEMES)
+    elif op == 2:
+        rng.shuffle(events)
+    else:
+        n = rng.choice((1000, 20000, 40000))
+        events.extend(dict(events[k % len(events)]) for k in range(n))
+        for k, e in enumerate(events):
+            for key in time_keys:
+                if key in e:
+                    e[key] = k * (10_000 if "ffset" in key else 1)
+    try:
+        if lines is not None:
+            return "\n".join(json.dumps(e) for e in doc).encode("utf-8")
+        return json.dumps(doc).encode("utf-8")
+    except (ValueError, OverflowError, RecursionError):
+        return data
+
+
+_CSV_CELLS = ("", '"', '""', '"a,b"', '"x\ny"', "a.fba", "../a.fba", "/dev/zero", "/dev/null", ".", "/", "~",
+              "a.fba\x00", "nonexistent.fba", "x" * 5000, "320x240", "0x0", "100000x100000", "-2x2", "3", "17",
+              "1e308", "nan", "front", "sideways", "true", "maybe", "one.mp4", "../escape.mp4", "/tmp/abs.mp4",
+              "one.mp4", "ONE.MP4", "out.avi")
+
+
+def m_csv(rng, data, seeds):
+    """Manifest cell damage: a cell replaced by a quote, a path (system files, folders, ``..``), a size or
+    option value out of range, a duplicated output name; a column added or dropped."""
+    lines = _lines(data)
+    k = rng.randrange(len(lines))
+    cells = lines[k].rstrip(b"\r\n").split(b",")
+    op = rng.randrange(3)
+    if op == 0:
+        cells[rng.randrange(len(cells))] = rng.choice(_CSV_CELLS).encode()
+    elif op == 1:
+        cells.insert(rng.randint(0, len(cells)), rng.choice(_CSV_CELLS).encode())
+    elif len(cells) > 1:
+        del cells[rng.randrange(len(cells))]
+    lines[k] = b",".join(cells) + b"\n"
+    return b"".join(lines)
+
+
+_MANIFEST_VALUES = ("/dev/zero", "/dev/null", ".", "/", "../a.fba", "a.fba", "s.wav", "m.obj", "nonexistent.fba",
+                    "one.mp4", "../x.mp4", "x" * 5000, [320, 240], [0, 0], [10**9, 10**9], [1.5, 2], 3, 17, -1,
+                    1e308, "nan", True, None, {}, [])
+_MANIFEST_KEYS = ("stream", "audio", "fdp", "output", "size", "aa", "view", "fps", "fit", "crf", "deformer", "blocks",
+                  "method", "skull", "texture", "fdp_texture", "face_mesh", "face_points", "options", "x")
+
+
+def m_manifest(rng, data, seeds):
+    """A job's key set to a value of the manifest's vocabulary: paths (system files, folders), sizes, odd types."""
+    try:
+        doc = json.loads(data)
+    except (ValueError, RecursionError):
+        return data
+    jobs = doc.get("jobs") if isinstance(doc, dict) else doc
+    if not isinstance(jobs, list) or not jobs or not isinstance(jobs[0], dict):
+        return data
+    job = rng.choice([j for j in jobs if isinstance(j, dict)] or [{}])
+    job[rng.choice(_MANIFEST_KEYS)] = rng.choice(_MANIFEST_VALUES)
+    if rng.random() < 0.1:
+        jobs.extend(dict(jobs[0]) for _ in range(rng.choice((100, 5000))))
+    try:
+        return json.dumps(doc).encode("utf-8")
+    except (ValueError, OverflowError, RecursionError):
+        return data
+
+
+_CODECS = ("utf-8", "utf-8", "utf-8-sig", "utf-16", "utf-16-le", "utf-16-be", "utf-32", "latin-1", "cp1252",
+           "cp1251", "koi8-r", "shift_jis", "euc-jp", "gb18030", "big5", "euc-kr", "iso-8859-7", "cp437", "mac-roman")
+
+
+def stdin_bytes(rng: random.Random) -> tuple[bytes, str]:
+    """Bytes as a pipe brings them: a generated text in one of many encodings (some not UTF-8), pieces in
+    several, raw random bytes, or UTF-8 with encoding damage."""
+    text, recipe = draw_text(rng)
+    op = rng.random()
+    if op < 0.45:
+        codec = rng.choice(_CODECS)
+        return text.encode(codec, rng.choice(("replace", "ignore", "surrogatepass" if "utf" in codec else "replace"))
+                           ), f"{recipe} in {codec}"
+    if op < 0.6:
+        pieces = [draw_text(rng)[0][:2000].encode(rng.choice(_CODECS), "replace") for _ in range(rng.choice((2, 3)))]
+        return b"".join(pieces), f"{recipe}: pieces in several encodings"
+    if op < 0.7:
+        return bytes(rng.randrange(256) for _ in range(rng.choice((1, 16, 300, 4000)))), "random bytes"
+    data = text_bytes(text)
+    for _ in range(rng.choice((1, 2, 3))):
+        data = rng.choice((m_encoding, m_encoding, m_bitflip, m_truncate, m_insert))(rng, data, [])
+    return data[:MAX_INPUT], f"{recipe} in UTF-8 + encoding damage"
+
+
 BINARY = (m_bitflip, m_byteset, m_insert, m_delete, m_truncate, m_duplicate, m_splice, m_int32)
 TEXT = (m_number, m_number, m_number, m_lines, m_lines, m_encoding, m_bitflip, m_byteset, m_insert, m_delete,
         m_truncate, m_duplicate, m_splice)
@@ -491,7 +856,22 @@ MUTATORS: dict[str, tuple[Mutator, ...]] = {
     "fdp-json": TEXT + (m_json,) * 6 + (m_json_tree,) * 8,
     "fdp-xface": TEXT + (m_xml,) * 6,
     "markup": TEXT + (m_encoding,),
+    "visemes": TEXT + (m_json,) * 4 + (m_json_tree,) * 6 + (m_events,) * 8,
+    "points": TEXT + (m_json,) * 6 + (m_json_tree,) * 8,
+    "manifest": TEXT + (m_json,) * 4 + (m_json_tree,) * 6 + (m_manifest,) * 6 + (m_csv,) * 4,
+    "conform": TEXT + (m_json,) * 6 + (m_json_tree,) * 8,
+    "bap": TEXT,
+    "wav": BINARY + (m_wav,) * 10,
+    "image": BINARY + (m_image,) * 10,
+    "obj": TEXT + (m_obj,) * 8 + (m_json, m_json_tree),
+    "gltf": TEXT + (m_json,) * 3 + (m_json_tree,) * 4 + (m_gltf,) * 6 + (m_glb,) * 6,
 }
+GENERATED: dict[str, Callable[[random.Random], tuple[bytes, str]]] = {
+    "text": lambda rng: (lambda text, recipe: (text_bytes(text if len(text) * 4 <= MAX_INPUT or len(text_bytes(text))
+                                                      <= MAX_INPUT else text[:MAX_INPUT // 4]), recipe))(*draw_text(rng)),
+    "stdin": stdin_bytes,
+}
+"""Targets whose cases are drawn, not mutated from seeds: what a user types or pipes is not damaged files."""
 
 
 def mutate(rng: random.Random, target: str, seed: bytes, pool: list[bytes]) -> tuple[bytes, list[str]]:
@@ -515,6 +895,8 @@ def _pick_seed(rng: random.Random, seeds: list[Seed]) -> Seed:
 
 def draw(rng: random.Random, target: str, seeds: list[Seed]) -> tuple[bytes, str]:
     """One case's input and where it came from (the seed and the mutations, for the reproducer's notes)."""
+    if target in GENERATED:
+        return GENERATED[target](rng)
     seed = _pick_seed(rng, seeds)
     base = seed.data
     if len(base) > 16384 and rng.random() < 0.7:  # most cases of a long stream look at its start
