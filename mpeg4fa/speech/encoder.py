@@ -29,7 +29,6 @@ from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
 from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, FULL_INTENSITY, N_FAPS, VISEMES
 from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.compact import compact_expressions, compact_visemes, plan_expression_mask
-from mpeg4fa.speech.ipa import phoneme_fallbacks
 from mpeg4fa.speech.frames import FrameBlock, FrameMaker
 from mpeg4fa.speech.timeline import CLOSURE_HOLD, ExpressionFields, VisemeFields
 from mpeg4fa.speech.tts.base import Engine

@@ -30,6 +30,7 @@ import numpy as np
 from mpeg4fa.speech.chunks import CHUNK_CHARS, parse_pieces, sentence_chunks
 from mpeg4fa.speech.errors import MarkupError, TTSError
 from mpeg4fa.speech.frames import FrameBlock, FrameMaker
+from mpeg4fa.speech.ipa import phoneme_fallbacks
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.timeline import ExpressionCue
 from mpeg4fa.speech.tts.base import Engine, Event, Speech
@@ -201,16 +202,17 @@ def stream_text(text: str, out, *, audio=None, timings=None, engine: Engine | st
     wav = None
     listed = TimingsWriter(timings) if timings is not None else None
     engine_name = speaker.name
-    for chunk in passes:
-        speech = chunk.utterance.speech
-        if audio is not None:
-            if wav is None:
-                wav = PcmWriter(audio, speech.rate, name=getattr(audio, "name", "<wav>"))
-            wav.write(speech.samples)
-        if listed is not None:
-            listed.add(chunk.utterance.timings)
-        bits.add(chunk.frames)
-        engine_name = speech.engine
+    with phoneme_fallbacks(name):  # phonemes shown by a guess: one warning for the whole text
+        for chunk in passes:
+            speech = chunk.utterance.speech
+            if audio is not None:
+                if wav is None:
+                    wav = PcmWriter(audio, speech.rate, name=getattr(audio, "name", "<wav>"))
+                wav.write(speech.samples)
+            if listed is not None:
+                listed.add(chunk.utterance.timings)
+            bits.add(chunk.frames)
+            engine_name = speech.engine
     bits.add(passes.finish())
     bits.finish()
     if wav is not None:
@@ -261,7 +263,8 @@ def encoded_text(text: str, engine: Engine, *, fps: float = 25.0, level: str = "
     passes = Passes(text, engine, lang=lang, voice=voice, rate=rate, fps=fps, idle=idle, seed=seed,
                     fields=level != "low", name=name, chunk_chars=chunk_chars, progress=progress,
                     max_seconds=max_seconds, **markup_options)
-    chunks = list(passes)
+    with phoneme_fallbacks(name):  # phonemes shown by a guess: one warning for the whole text
+        chunks = list(passes)
     blocks = [c.frames for c in chunks if c.frames is not None] + [passes.finish()]
     block = join_blocks(blocks)
     stream = StreamBuilder(level, fps, fold=fold, compact=compact).build(block)
