@@ -265,8 +265,6 @@ def reject_text_options(args: argparse.Namespace) -> None:
 
 def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -> int:
     """``mpeg4fa encode TEXT``: speech -> FAP stream (+ WAV, timings, FDP), all written or none."""
-    from ..speech.encoder import encode_text
-
     if args.visemes is not None:
         return _encode_visemes(args)
     if args.events_format != "auto":
@@ -287,9 +285,48 @@ def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -
     fdp = _speaker_fdp(args) if args.fdp_out is not None else None
     text, name = text_input.read_text(source)
     fps = args.fps if args.fps is not None else 25.0
-    encoded = encode_text(text, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate,
-                          fps=fps, level=args.level, idle=args.idle, name=name, lenient=args.lenient)
-    return _write_encoded(args, encoded, name, fps, fdp)
+    return _stream_encoded(args, text, name, fps, fdp)
+
+
+def _stream_encoded(args: argparse.Namespace, text: str, name: str, fps: float, fdp) -> int:
+    """Speak the text chunk by chunk, writing the stream, the WAV and the timings as they come
+    (:func:`mpeg4fa.speech.pipeline.stream_text`: memory of a chunk, whatever the text's length), with a
+    progress bar; all files appear once it is done, or none."""
+    from ..fba import EncodeOptions
+    from ..speech.encoder import TEXT_CODING
+    from ..speech.pipeline import stream_text
+    from .progress import ProgressBar
+
+    options = coding_options(args, EncodeOptions(**TEXT_CODING))
+    bar = ProgressBar("speaking", unit="characters")
+    try:
+        with atomic_outputs(args.output, args.audio, args.timings, args.fdp_out) as (out, audio, timings, fdp_out):
+            with contextlib.ExitStack() as files:
+                spoken = stream_text(
+                    text, files.enter_context(open(out, "wb")),
+                    audio=files.enter_context(open(audio, "wb")) if audio is not None else None,
+                    timings=files.enter_context(open(timings, "w", encoding="utf-8")) if timings is not None else None,
+                    engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate, fps=fps, level=args.level,
+                    idle=args.idle, name=name, options=options, progress=bar, lenient=args.lenient)
+            if fdp is not None:
+                from ..fdp import save_fdp
+                save_fdp(fdp, fdp_out)
+    finally:
+        bar.close()
+    written = [f"{args.output} ({spoken.bytes} bytes)"]
+    if args.audio is not None:
+        written.append(f"{args.audio} ({spoken.seconds:.2f} s)")
+    if args.timings is not None:
+        written.append(str(args.timings))
+    if fdp is not None:
+        written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points)")
+    frames = spoken.frames
+    print(f"{name}: {spoken.engine} speech {spoken.seconds:.2f} s, {frames} frames, "
+          f"{spoken.bytes * 8 / max(frames, 1):.1f} bits/frame "
+          f"({spoken.bytes * 8 / max(frames / fps, 1e-9) / 1000:.2f} kbit/s, {args.level}-level), "
+          f"{spoken.speed:.0f} x real time", file=sys.stderr)
+    print("wrote " + ", ".join(written), file=sys.stderr)
+    return 0
 
 
 def _encode_recording(args: argparse.Namespace) -> int:

@@ -31,6 +31,7 @@ from mpeg4fa.speech.chunks import CHUNK_CHARS, parse_pieces, sentence_chunks
 from mpeg4fa.speech.errors import MarkupError, TTSError
 from mpeg4fa.speech.frames import FrameBlock, FrameMaker
 from mpeg4fa.speech.ipa import phoneme_fallbacks
+from mpeg4fa.speech.ipa import phoneme_fallbacks
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.timeline import ExpressionCue
 from mpeg4fa.speech.tts.base import Engine, Event, Speech
@@ -91,11 +92,18 @@ class Passes:
         self.place = (name, 1, 1)
 
     def __iter__(self) -> Iterator[Chunk]:
-        from mpeg4fa.speech.encoder import phones
-
-        total, done = max(len(self.text), 1), 0
+        total = max(len(self.text), 1)
         if self.progress is not None:
             self.progress(0, total)
+        with phoneme_fallbacks(self.name):  # one warning for the whole text, however many chunks it is spoken in
+            yield from self._chunks(total)
+        if not self.chunks:
+            raise MarkupError("there is nothing to say", 1, 1, hint="give some text", source=self.name)
+
+    def _chunks(self, total: int) -> Iterator[Chunk]:
+        from mpeg4fa.speech.encoder import phones
+
+        done = 0
         for piece in parse_pieces(self.text, name=self.name, **self.markup_options):
             for markup in sentence_chunks(piece, self.chunk_chars):
                 if not markup.text.strip():
@@ -122,8 +130,6 @@ class Passes:
                 done = min(done + len(markup.text), total - 1)
                 if self.progress is not None:
                     self.progress(done, total)
-        if not self.chunks:
-            raise MarkupError("there is nothing to say", 1, 1, hint="give some text", source=self.name)
 
     @property
     def duration(self) -> float:
