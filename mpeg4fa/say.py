@@ -43,11 +43,20 @@ def kept_paths(out: str | os.PathLike) -> dict[str, Path]:
     return {what: base.with_name(base.name + suffix) for what, suffix in KEPT.items()}
 
 
+MAX_SAY_SECONDS = 20 * 60
+"""Most speech :func:`say` renders: 20 minutes. It holds the speech, the frames and the render's
+audio in memory, and a render runs near real time, so longer text is refused where it runs over
+(before any rendering), with the way out: ``mpeg4fa encode`` streams text of any length."""
+
+
 def write_timings(encoded: "Encoded", path: str | os.PathLike) -> None:
     """The timed visemes as JSON: ``[{"phoneme", "viseme", "start", "end"}, ...]``, seconds in the audio."""
-    timings = [t.as_dict() for t in encoded.utterance.timings]
-    with atomic_output(path) as partial:
-        Path(partial).write_text(json.dumps(timings, ensure_ascii=False, indent=1) + "\n", encoding="utf-8")
+    from mpeg4fa.speech.pipeline import TimingsWriter
+
+    with atomic_output(path) as partial, open(partial, "w", encoding="utf-8") as handle:
+        listed = TimingsWriter(handle)
+        listed.add(encoded.utterance.timings)
+        listed.close()
 
 
 def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str = "auto", voice: str | None = None,
@@ -58,6 +67,8 @@ def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str 
 
     ``out``: .mp4/.mov/.m4v, else a folder of PNG frames (see :func:`mpeg4fa.render.play`).
     ``lenient`` speaks malformed tags as text, with one warning (:func:`mpeg4fa.speech.markup.parse_markup`).
+    Speech longer than :data:`MAX_SAY_SECONDS` is refused (a :class:`~mpeg4fa.speech.MarkupError` at the
+    place it runs over) before anything is rendered.
     ``keep`` also writes :func:`kept_paths` (the stream, the speech as WAV, the timings), after
     the render succeeded. Every file appears whole or not at all (:mod:`mpeg4fa.atomic`).
     Errors are the layers' own (:class:`~mpeg4fa.speech.MarkupError`, ``TTSError``, ``RenderError``...).
@@ -65,7 +76,7 @@ def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str 
     from mpeg4fa.speech.encoder import encode_text
 
     encoded = encode_text(text, engine=engine, lang=lang, voice=voice, rate=rate, fps=fps, level=level, idle=idle,
-                          name=name, lenient=lenient)
+                          name=name, lenient=lenient, max_seconds=MAX_SAY_SECONDS)
     return say_encoded(encoded, out, width=width, height=height, samples=samples, keep=keep, face=face,
                        progress=progress)
 
