@@ -41,7 +41,8 @@ SIGNATURES: tuple[tuple[int, bytes, str], ...] = (
     (0, b"\x00\x00\x01\xba", "an FBA stream"),
     (0, b"\x00\x00\x01\x01", "an FBA stream"),
 )
-"""(offset, bytes, what it is). RIFF files are told apart by their form type (:func:`foreign_kind`)."""
+"""(offset, bytes, what it is). RIFF files are told apart by their form type, and MPEG audio without an
+ID3 tag by its frame sync (:func:`foreign_kind`)."""
 
 _RIFF_FORMS = {b"WAVE": "a WAV audio file", b"AVI ": "an AVI video", b"WEBP": "a WebP image"}
 
@@ -54,6 +55,10 @@ def foreign_kind(head: bytes) -> str | None:
     for offset, magic, kind in SIGNATURES:
         if head[offset:offset + len(magic)] == magic:
             return kind
+    if len(head) >= 2 and head[0] == 0xFF and head[1] & 0xF6 == 0xF0:  # MPEG audio frame sync, layer bits 00
+        return "an AAC (ADTS) audio file"
+    if len(head) >= 2 and head[0] == 0xFF and head[1] & 0xE0 == 0xE0 and head[1] & 0x06:
+        return "an MP3 audio file"
     return None
 
 

@@ -1,20 +1,22 @@
 """A recording to align: any PCM WAV (8/16/24/32-bit integer or 32/64-bit float, any rate and channel
 count) read into mono int16 at its own rate, plus the resampling and speech-energy checks the aligners need.
 
-The stdlib :mod:`wave` reads integer PCM; a WAV it refuses (IEEE float, WAVE_FORMAT_EXTENSIBLE) is
-decoded with PyAV (a dependency already). Channels are averaged. Resampling is
+WAV is read by the package's one WAV reader (:mod:`mpeg4fa.wavread`: damage located at its byte, at
+most 30 minutes, refused from the header); MP3, AAC, FLAC, Ogg and MP4 audio are decoded with PyAV (a
+dependency already) within the same ceiling. Channels are averaged. Resampling is
 :func:`scipy.signal.resample_poly` (polyphase, anti-aliased).
 """
 from __future__ import annotations
 
 import os
-import wave
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from mpeg4fa.filetype import HEAD_BYTES, foreign_kind
 from mpeg4fa.speech.align.errors import AlignError
+from mpeg4fa.wavread import MAX_SECONDS, WavError, read_wav
 
 HOP = 0.01
 """Analysis frame step (s): pocketsphinx's, and the DTW's."""
@@ -40,68 +42,71 @@ def _to_int16(x: np.ndarray) -> np.ndarray:
     return np.clip(np.rint(x * 32768.0), -32768, 32767).astype(np.int16)
 
 
-def _read_wave(path: Path) -> tuple[np.ndarray, int]:
-    with open(path, "rb") as handle, wave.open(handle, "rb") as w:
-        channels, width, rate, n = w.getnchannels(), w.getsampwidth(), w.getframerate(), w.getnframes()
-        raw = w.readframes(n)
-    if width == 1:
-        x = (np.frombuffer(raw, np.uint8).astype(np.float64) - 128.0) / 128.0
-    elif width == 2:
-        x = np.frombuffer(raw, "<i2").astype(np.float64) / 32768.0
-    elif width == 3:
-        b = np.frombuffer(raw, np.uint8).reshape(-1, 3).astype(np.int32)
-        v = b[:, 0] | (b[:, 1] << 8) | (b[:, 2] << 16)
-        x = np.where(v >= 1 << 23, v - (1 << 24), v).astype(np.float64) / float(1 << 23)
-    elif width == 4:
-        x = np.frombuffer(raw, "<i4").astype(np.float64) / float(1 << 31)
-    else:
-        raise AlignError(f"{8 * width}-bit samples are not supported", where=str(path),
-                         hint="give 8, 16, 24 or 32-bit PCM")
-    usable = len(x) // channels * channels
-    return x[:usable].reshape(-1, channels).mean(axis=1), rate
+_OTHER_AUDIO = ("an MP3 audio file", "an AAC (ADTS) audio file", "a FLAC audio file", "an Ogg audio file",
+                "an MP4/QuickTime file")
+"""Kinds of file read through PyAV when they are not WAV (:mod:`mpeg4fa.filetype` names them)."""
 
 
-def _read_av(path: Path) -> tuple[np.ndarray, int]:
+def _read_av(path: Path, max_seconds: float) -> tuple[np.ndarray, int]:
+    """Compressed audio decoded with PyAV, refused past ``max_seconds`` (from the container when it says,
+    else as soon as the decoded samples pass it)."""
     import av
 
-    chunks, rate = [], 0
+    chunks, rate, total = [], 0, 0
     with av.open(str(path)) as container:
         if not container.streams.audio:
             raise AlignError("the file has no audio stream", where=str(path), hint="give a WAV recording")
+        if container.duration is not None and container.duration / 1e6 > max_seconds:
+            raise _too_long(container.duration / 1e6, max_seconds, str(path))
         stream = container.streams.audio[0]
         rate = int(stream.codec_context.sample_rate or stream.rate)
-        resampler = av.AudioResampler(format="flt", layout="mono", rate=rate)
+        resampler = av.AudioResampler(format="s16", layout="mono", rate=rate)
         for frame in container.decode(stream):
-            chunks += [f.to_ndarray().reshape(-1) for f in resampler.resample(frame)]
-        chunks += [f.to_ndarray().reshape(-1) for f in resampler.resample(None)]
-    return (np.concatenate(chunks).astype(np.float64) if chunks else np.zeros(0)), rate
+            for f in resampler.resample(frame):
+                chunks.append(f.to_ndarray().reshape(-1).astype(np.int16))
+                total += len(chunks[-1])
+            if total > max_seconds * rate:
+                raise _too_long(total / rate, max_seconds, str(path))
+        chunks += [f.to_ndarray().reshape(-1).astype(np.int16) for f in resampler.resample(None)]
+    return (np.concatenate(chunks) if chunks else np.zeros(0, np.int16)), rate
 
 
-def read_recording(path: str | os.PathLike) -> Recording:
-    """Read a WAV file as mono int16 at its own rate; :class:`AlignError` naming the file if it cannot."""
+def _too_long(seconds: float, max_seconds: float, where: str) -> AlignError:
+    return AlignError(f"the recording lasts {seconds / 60:,.1f} min or more, more than the {max_seconds / 60:g} min "
+                      "read", where=where, hint="cut the recording into parts and align each with its transcript")
+
+
+def read_recording(path: str | os.PathLike, max_seconds: float = MAX_SECONDS) -> Recording:
+    """Read a WAV file (or MP3, AAC, FLAC, Ogg, MP4 audio through PyAV) as mono int16 at its own rate.
+
+    WAV goes through :func:`mpeg4fa.wavread.read_wav` (every fault at its byte, the length checked from the
+    header, memory 2 bytes a sample); anything else is an :class:`AlignError` naming the file.
+    """
     path = Path(path)
     if not path.exists():
         raise AlignError("no such recording", where=str(path), hint="give the WAV file of the speech with --speech")
     if not path.is_file():
         raise AlignError("not a file", where=str(path), hint="give the WAV file of the speech with --speech")
     try:
-        x, rate = _read_wave(path)
-    except AlignError:
-        raise
-    except (wave.Error, EOFError, ValueError) as exc:
+        samples, rate = read_wav(path, max_seconds=max_seconds)
+    except WavError as exc:
         try:
-            x, rate = _read_av(path)
+            with open(path, "rb") as fh:
+                kind = foreign_kind(fh.read(HEAD_BYTES))
+        except OSError:
+            kind = None
+        if kind not in _OTHER_AUDIO:
+            raise AlignError(f"cannot read the recording: {exc.message}", where=exc.where, hint=exc.hint) from None
+        try:
+            samples, rate = _read_av(path, max_seconds)
         except AlignError:
             raise
-        except Exception:  # noqa: BLE001 - any decoder failure is "cannot read"
-            raise AlignError(f"cannot read the recording ({exc})", where=str(path),
+        except Exception as av_exc:  # noqa: BLE001 - any decoder failure is "cannot read"
+            raise AlignError(f"cannot read the recording as {kind} ({av_exc})", where=str(path),
                              hint="give a PCM WAV file (8-32 bit integer or float samples)") from None
-    except OSError as exc:
-        raise AlignError(f"cannot read the recording ({exc.strerror or exc})", where=str(path),
-                         hint="check the file can be read") from None
-    if rate <= 0 or len(x) == 0:
+    if rate <= 0 or len(samples) == 0:
         raise AlignError("the recording holds no samples", where=str(path), hint="give a WAV file with the speech")
-    return Recording(_to_int16(np.clip(x, -1.0, 1.0)), int(rate), str(path))
+    return Recording(samples, int(rate), str(path))
 
 
 def resample(x: np.ndarray, rate: int, target: int) -> np.ndarray:
