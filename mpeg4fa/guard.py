@@ -21,10 +21,9 @@ A refusal is ``403 {"error": one line, "where": "Host" | "Origin" | "Sec-Fetch-S
 WebSocket: the handshake's HTTP answer) and nothing of the app runs. A body larger than
 ``body_limit`` is refused with 413 at once when ``Content-Length`` says so, and otherwise (chunked
 transfer) as soon as the bytes read pass the limit: reading stops there, so at most the limit (plus
-one chunk) was ever spooled.
-
-:func:`read_json` is the one JSON reading of what these servers receive (uploaded JSON files,
-WebSocket messages).
+what the server had read at once) was ever spooled. JSON the servers receive (bodies, uploaded
+files, WebSocket messages) is read by the package's one reader, :mod:`mpeg4fa.jsonio` (nesting,
+size and numbers capped).
 """
 from __future__ import annotations
 
@@ -32,8 +31,6 @@ import json
 import re
 from collections.abc import Awaitable, Callable, MutableMapping
 from typing import Any
-
-from mpeg4fa.errors import MpegFaError
 
 LOOPBACK = ("localhost", "127.0.0.1", "[::1]")
 """The host names a local server answers to (with its own port)."""
@@ -44,26 +41,6 @@ Scope = MutableMapping[str, Any]
 Message = MutableMapping[str, Any]
 Receive = Callable[[], Awaitable[Message]]
 Send = Callable[[Message], Awaitable[None]]
-
-
-class JsonError(MpegFaError):
-    """JSON that a server will not take (malformed, or nested deeper than a reader allows)."""
-
-
-def read_json(data: bytes | str, where: str) -> Any:
-    """``data`` parsed as JSON, or :class:`JsonError` naming ``where`` (and line:column when malformed).
-
-    TEMPORARY (issue 26): this is ``json.loads`` with its RecursionError caught, until the package's
-    JSON reader with depth and size caps lands; then this function calls that reader and nothing else
-    changes (every server-side JSON read goes through here)."""
-    try:
-        return json.loads(data)  # issue 26: replace by the package's capped JSON reader
-    except RecursionError:
-        raise JsonError("JSON nested too deeply", where=where) from None
-    except json.JSONDecodeError as exc:
-        raise JsonError(f"malformed JSON: {exc.msg}", where=f"{where}:{exc.lineno}:{exc.colno}") from None
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise JsonError(f"not JSON text: {exc}", where=where) from None
 
 
 def _port_of(scope: Scope) -> int | None:

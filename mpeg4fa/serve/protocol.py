@@ -44,8 +44,9 @@ Server -> client, binary (little-endian): 4 bytes of kind, a float64 media time,
 The handshake must carry ``Origin: http://127.0.0.1:PORT`` (or ``localhost`` / ``[::1]``, the
 server's own port) and a loopback ``Host``; anything else is answered 403 (:mod:`mpeg4fa.guard`).
 A browser sends both by itself; a client outside one sends the origin
-(:func:`mpeg4fa.serve.client.origin`). Messages nested deeper than the JSON reader allows get an
-``error`` like any malformed message.
+(:func:`mpeg4fa.serve.client.origin`). A message is read by :func:`mpeg4fa.jsonio.loads`: nested
+deeper than 64 levels, or holding NaN or a number beyond a double, it gets an ``error`` like any
+malformed message.
 
 A client that sends no ``buffer`` report for ``stall_timeout`` seconds while the server has
 something to send is told so (``error``, where ``flow``) and closed with code 1008; one that
@@ -59,7 +60,7 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
-from mpeg4fa.guard import JsonError, read_json
+from mpeg4fa.jsonio import JsonError, loads
 from mpeg4fa.speech.markup import MAX_TEXT_CHARS
 
 PROTOCOL = 1
@@ -112,9 +113,12 @@ def parse_client(text: str | None, data: bytes | None = None) -> Say | Buffer | 
         raise ProtocolError(f"binary message of {len(data or b'')} bytes: the client sends JSON text only",
                             "message")
     try:
-        raw = read_json(text, "message")
+        raw = loads(text, "message", what="a message")
     except JsonError as exc:
-        raise ProtocolError(f"not JSON: {exc.message}", "message") from None
+        problem = f"not JSON: {exc.problem[len('invalid JSON: '):]}" if exc.problem.startswith("invalid JSON") \
+            else exc.problem
+        raise ProtocolError(problem + (f" (line {exc.line}, column {exc.column})" if exc.line else ""),
+                            "message") from None
     if not isinstance(raw, dict):
         raise ProtocolError(f"a message is a JSON object, not {type(raw).__name__}", "message")
     if "type" not in raw:

@@ -25,7 +25,8 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.errors import MpegFaError
-from mpeg4fa.guard import JsonError, LocalOnly, read_json
+from mpeg4fa.guard import LocalOnly
+from mpeg4fa.jsonio import JsonError, loads
 from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
 from mpeg4fa.web import edits, photos
 from mpeg4fa.web.files import FORMATS, output_path, read_model, read_upload, save_model
@@ -33,6 +34,8 @@ from mpeg4fa.web.posing import pose_values, posed_vertices
 from mpeg4fa.web.session import Session
 
 UPLOAD_LIMIT = 64 * 1024 * 1024
+MAX_BODY_JSON = 16 << 20
+"""The largest JSON request body (an edit naming every vertex of a large mesh is some MB)."""
 FORM_SLACK = 65536
 """Bytes a multipart request may carry beyond ``upload_limit`` (its boundaries and part headers)."""
 MAX_INDEX = 2**62
@@ -211,14 +214,14 @@ class _JsonRequest(Request):
     async def json(self):
         if not hasattr(self, "_json"):
             try:
-                self._json = read_json(await self.body(), "body")
+                self._json = loads(await self.body(), "body", max_bytes=MAX_BODY_JSON, what="a request")
             except JsonError as exc:
                 raise _BodyError(exc) from None
         return self._json
 
 
 class _Route(APIRoute):
-    """Routes whose JSON bodies are read by :func:`mpeg4fa.guard.read_json` (nesting and size capped)."""
+    """Routes whose JSON bodies are read by :func:`mpeg4fa.jsonio.loads` (nesting, size and numbers capped)."""
 
     def get_route_handler(self):
         handler = super().get_route_handler()

@@ -15,7 +15,7 @@ import trimesh
 from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.fdp.build import parse_points_json
 from mpeg4fa.fdp.obj import mesh_and_groups_from_obj
-from mpeg4fa.guard import read_json
+from mpeg4fa.jsonio import loads
 from mpeg4fa.web.edits import EditError, EditMesh, make_mesh, validate
 from mpeg4fa.web.vrml import read_vrml
 
@@ -23,6 +23,8 @@ FORMATS = ("obj", "wrl", "vrml", "glb", "gltf", "off", "ply", "stl")
 """What the editor reads: OBJ with the FDP reader (trimesh, the file's own vertex indices), VRML 97 with VTK
 (:mod:`mpeg4fa.web.vrml`), the rest with trimesh."""
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
+GLTF_JSON_BYTES = 64 << 20
+"""The largest .gltf read (its buffers may be embedded as data: URIs; the editor's upload limit is the same)."""
 SIDECARS = (".points.json", ".parts.json")
 """What :func:`save_model` writes beside ``NAME.obj`` and :func:`read_model` reads back."""
 
@@ -54,8 +56,10 @@ def read_mesh(data: bytes, filename: str, resolver=None) -> EditMesh:
 def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """``[(node name, world vertices, triangles)]`` of every scene node with triangles, as trimesh reads them
     (glTF node names are the objects' names in the modelling tool; the mesh names are often ``Cube.001``)."""
-    if ext == "gltf" and resolver is None:
-        _refuse_external(data, filename)
+    if ext == "gltf":  # read by the package's JSON reader first (nesting, size), then by trimesh
+        external = _gltf_external(data, filename)
+        if resolver is None and external:
+            _refuse_external(external, filename)
     try:
         scene = trimesh.load(io.BytesIO(data), file_type=ext, force="scene", process=False, maintain_order=True,
                              resolver=resolver)
@@ -78,15 +82,14 @@ def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[st
 
 def _gltf_external(data: bytes, filename: str) -> list[str]:
     """The URIs of a .gltf's buffers and images that are files (not data: URIs), as written in its JSON."""
-    doc = read_json(data, filename)
+    doc = loads(data, filename, max_bytes=GLTF_JSON_BYTES, what="a .gltf file")
     items = [item for key in ("buffers", "images") for item in (doc.get(key) or [] if isinstance(doc, dict) else [])]
     uris = [item.get("uri") for item in items if isinstance(item, dict)]
     return list(dict.fromkeys(u for u in uris if isinstance(u, str) and not u.startswith("data:")))
 
 
-def _refuse_external(data: bytes, filename: str) -> None:
-    """A .gltf read from bytes alone: refuse one whose buffers or images are other files."""
-    external = _gltf_external(data, filename)
+def _refuse_external(external: list[str], filename: str) -> None:
+    """A .gltf read from bytes alone: refuse one whose buffers or images (``external``) are other files."""
     if external:
         raise EditError(f"the .gltf needs {', '.join(external[:3])}, which were not given with it",
                         where=filename, hint="upload it together with the files it names (several files at once), "
@@ -240,7 +243,7 @@ def _with_sidecars(mesh: EditMesh, model: str, sidecars: dict[str, tuple[bytes, 
 
 def _read_parts(data: bytes, where: str, n_triangles: int) -> list[str]:
     """Per-triangle part names from a ``{"parts": {name: [triangle, ...]}}`` file covering every triangle once."""
-    doc = read_json(data, where)
+    doc = loads(data, where, what="a parts file")
     parts = doc.get("parts") if isinstance(doc, dict) else None
     if not isinstance(parts, dict):
         raise EditError('a parts file is {"parts": {name: [triangle indices]}}', where=where)

@@ -163,7 +163,7 @@ BAD = [
     ('{"type": "buffer", "received": 1}', "buffered", "Field required"),
     ('{"type": "say", "text": "Hello (joy, 99, 1) there"}', "text:1:13", "intensity"),
     ('{"type": "say", "text": "(joy, 20, 1)"}', "text", "nothing to speak"),
-    ("[" * 100_000, "message", "nested too deeply"),  # issue 26: this closed the socket (1006)
+    ("[" * 100_000, "message", "nested more than 64 levels"),  # issue 26: this closed the socket (1006)
 ]
 
 

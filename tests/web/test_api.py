@@ -84,7 +84,7 @@ def test_oversized_upload_refused(client):
 def test_malformed_json_is_one_error(client):
     r = client.post("/api/edit", content=b'{"edit": ', headers={"content-type": "application/json"})
     assert r.status_code == 400
-    assert set(r.json()) == {"error", "where"} and r.json()["error"].startswith("malformed JSON")
+    assert set(r.json()) == {"error", "where"} and r.json()["error"].startswith("invalid JSON")
 
 
 def test_bad_requests_say_where(client):

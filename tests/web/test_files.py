@@ -197,7 +197,7 @@ def test_saved_obj_reads_back_with_its_parts_and_points(tmp_path):
     ({"parts": {"skin": [0, 1]}}, None, "head.parts.json", "is in no part"),
     ({"parts": {"skin": list(range(80)), "teeth": [0]}}, None, "head.parts.json: parts/teeth", "repeats a triangle"),
     ({"parts": {"skin": [10**6]}}, None, "head.parts.json: parts/skin", "outside 0..79"),
-    ("[1, 2", None, "head.parts.json:1:6", "malformed JSON"),
+    ("[1, 2", None, "head.parts.json:1:6", "invalid JSON"),
     (None, {"2.1": 10**6}, "head.points.json", "vertex 1000000"),
     (None, {"2.1": [0.1, 0.2, 0.3]}, "head.points.json", "a position, not a vertex index"),
 ])
