@@ -44,11 +44,11 @@ def english_table() -> dict[str, str]:
 
 @lru_cache(maxsize=None)
 def english_ipa() -> dict[str, str]:
-    """``spec/english_ipa.csv``: espeak-ng mnemonic -> the IPA espeak-ng names it with (checked: once each, not empty)."""
+    """``spec/english_ipa.csv``: espeak-ng mnemonic -> the IPA espeak-ng names it with (checked: once each)."""
     table: dict[str, str] = {}
     for line, row in enumerate(read_table("english_ipa.csv", "phoneme,ipa,table"), start=2):
         if not row["phoneme"] or not row["ipa"] or row["phoneme"] in table:
-            raise ValueError(f"spec/english_ipa.csv:{line}: {row['phoneme']!r} must have an IPA name and be listed once")
+            raise ValueError(f"spec/english_ipa.csv:{line}: {row['phoneme']!r} must have an IPA name, listed once")
         table[row["phoneme"]] = row["ipa"]
     return table
 
