@@ -16,7 +16,10 @@ def register(commands: Commands) -> None:
                                         "MODEL: a mesh file (OBJ, VRML 97, GLB, glTF, OFF, PLY, STL); "
                                         "default the generic head. "
                                         "An OBJ saved by the editor gets its parts and feature points back "
-                                        "from NAME.parts.json and NAME.points.json beside it.")
+                                        "from NAME.parts.json and NAME.points.json beside it. "
+                                        "Only the editor's own page and clients on this machine get in: a request "
+                                        "with another site's Origin or a Host other than localhost, 127.0.0.1 or "
+                                        "[::1] with the port is refused (403).")
     p.add_argument("model", nargs="?", type=Path, metavar="MODEL", help="mesh to edit (default: the generic head)")
     p.add_argument("--port", type=options.integer(1, 65535), default=8765, help="port (default 8765)")
     p.add_argument("--out", type=Path, default=Path("."), help="folder saved models are written into (default .)")

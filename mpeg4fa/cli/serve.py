@@ -24,7 +24,10 @@ def register(commands: Commands) -> None:
                     "each sentence's FBA stream, its frames with their times and ARKit weights, and the audio, "
                     "never more than --window seconds ahead of what the client reports it has played. The "
                     "page (http://127.0.0.1:PORT/) plays them on the head as GLB with three.js and WebAudio. "
-                    "The protocol is documented in mpeg4fa/serve/protocol.py.")
+                    "The protocol is documented in mpeg4fa/serve/protocol.py. Only the server's own page and "
+                    "clients on this machine get in: a WebSocket client outside a browser sends 'Origin: "
+                    "http://127.0.0.1:PORT' (browsers send their page's); another site's Origin, or a Host other "
+                    "than localhost, 127.0.0.1 or [::1] with the port, is refused (403).")
     p.add_argument("--port", type=options.integer(1, 65535), default=DEFAULT_PORT,
                    help=f"port (default {DEFAULT_PORT})")
     p.add_argument("--engine", choices=ENGINES, default="espeak", help="speech engine (default espeak)")
