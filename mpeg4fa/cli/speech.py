@@ -225,11 +225,13 @@ def _aligned(args: argparse.Namespace, inputs: dict, outputs: dict):
     """The transcript read (text, file, - or @FILE) and aligned to the recording: (Alignment, transcript name).
     No output may overwrite ``inputs``, the recording or the transcript file."""
     from ..speech.align import align_recording
+    from ..speech.markup import parse_markup
 
     source = text_input.classify(args.transcript, as_text=args.as_text)
     refuse_overlaps({**inputs, "--speech": args.speech, "--transcript": source.path}, outputs)
     text, name = text_input.read_text(source)
-    return align_recording(args.speech, text, lang=args.lang, voice=args.voice, rate=args.rate,
+    transcript = parse_markup(text, name=name, lenient=args.lenient) if args.lenient else text
+    return align_recording(args.speech, transcript, lang=args.lang, voice=args.voice, rate=args.rate,
                            method=args.aligner, name=name, fit_check=args.fit_check), name
 
 

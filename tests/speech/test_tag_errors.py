@@ -115,3 +115,18 @@ def test_encode_text_lenient_keyword():
     with pytest.warns(MarkupWarning):
         encoded = encode_text("(joy 40 0.5) Hi", engine="estimate", lenient=True)
     assert encoded.utterance.markup.text == "(joy 40 0.5) Hi" and encoded.utterance.cues == ()
+
+
+def test_lenient_reaches_a_recordings_transcript(tmp_path, capsys):
+    from mpeg4fa.speech.tts.espeak import EspeakEngine
+
+    recording = tmp_path / "rec.wav"
+    EspeakEngine().synthesize("joy 40 0.5. Hello there", voice="en-gb").write_wav(recording)
+    args = ["encode", "--speech", str(recording), "--transcript", "(joy 40 0.5) Hello there", "-o",
+            str(tmp_path / "out.fba")]
+    assert main(args) == 1
+    assert capsys.readouterr().err.startswith("mpeg4fa encode: error: <text>:1:6: missing ','")
+    assert main(args + ["--lenient"]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert warned == ["mpeg4fa encode: warning: <text>:1:6: 1 malformed tag spoken as text (lenient); the first: "
+                      "missing ',' after 'joy'"]
