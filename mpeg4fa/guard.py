@@ -17,8 +17,9 @@ an attacker's DNS points at 127.0.0.1 (DNS rebinding) reads the answers. So ever
 - A WebSocket handshake must carry a loopback ``Origin`` (browsers always send one; the Python
   client :mod:`mpeg4fa.serve.client` sends its server's own), so no page elsewhere can open one.
 
-A refusal is ``403 {"error": one line, "where": "Host" | "Origin" | "Sec-Fetch-Site"}`` (on a
-WebSocket: the handshake's HTTP answer) and nothing of the app runs. A body larger than
+A refusal is ``403 {"error": one line, "where": "Host" | "Origin" | "Sec-Fetch-Site"}`` and nothing
+of the app runs; a refused WebSocket handshake is closed before it is accepted, which the server
+answers with a bare 403 (uvicorn logs an error for a handshake denied with a body of its own). A body larger than
 ``body_limit`` is refused with 413 at once when ``Content-Length`` says so, and otherwise (chunked
 transfer) as soon as the bytes read pass the limit: reading stops there, so at most the limit (plus
 what the server had read at once) was ever spooled. JSON the servers receive (bodies, uploaded
@@ -120,8 +121,5 @@ async def _refuse(scope: Scope, send: Send, status: int, error: str, where: str)
     if scope["type"] == "http":
         await send({"type": "http.response.start", "status": status, "headers": head})
         await send({"type": "http.response.body", "body": body})
-    elif "websocket.http.response" in scope.get("extensions", {}):
-        await send({"type": "websocket.http.response.start", "status": status, "headers": head})
-        await send({"type": "websocket.http.response.body", "body": body})
-    else:  # a server without the extension answers a close before the accept with 403
+    else:  # a close before the accept: the server answers the handshake with 403
         await send({"type": "websocket.close", "code": 1008, "reason": error[:120]})

@@ -67,12 +67,11 @@ def test_every_route_refuses_a_foreign_origin_or_host(server):
                 headers = {k: v.format(port=port) for k, v in foreign.items()}
                 r = handshake(http, path, headers) if kind == "WS" else http.request(kind, path, headers=headers)
                 assert r.status_code == 403, (kind, path, headers, r.status_code)
-                assert set(r.json()) == {"error", "where"}, r.text
+                assert kind == "WS" or set(r.json()) == {"error", "where"}, r.text
         assert http.get("/api/info").status_code == 200  # curl, scripts: no Origin, a loopback Host
         assert http.get("/api/info", headers={"origin": base}).status_code == 200
         assert http.get("/", headers={"host": f"localhost:{port}"}).status_code == 200
-        r = handshake(http, "/ws", {})
-        assert r.status_code == 403 and r.json()["where"] == "Origin" and "without an Origin" in r.json()["error"]
+        assert handshake(http, "/ws", {}).status_code == 403
     assert app.state.live.connections == 0 and not app.state.live.utterances
 
 
