@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mpeg4fa.fba.stream import FrameRate
 from mpeg4fa.speech.timeline import (CLOSURE_HOLD, ExpressionCue, ExpressionFields, IdleMotion, VisemeFields,
                                      VisemeSpan, _checked_cues, _checked_spans, _expression_field_rows,
                                      _expression_rows, _ExpressionTracks, _finite, _Moves, _viseme_field_rows,
@@ -57,6 +58,7 @@ class FrameMaker:
         rate = _finite(fps, "fps")
         if rate <= 0:
             raise ValueError(f"need fps > 0, got {fps}")
+        FrameRate.from_fps(rate)  # FbaError for a rate no stream carries (1e308 frames would never end)
         self.fps = rate
         self.fields = fields
         self.moves = _Moves(REST_TIME, closure_hold)
