@@ -22,14 +22,16 @@ whitespace, is
 1. a known expression name as a whole word, not followed (after whitespace) by a
    letter: ``(joy, 40, 0.5)``, but also ``(joy 40 0.5)`` (missing commas), ``(Joy)``,
    ``(anger, 99, 1)``; while ``(joy is contagious)`` is prose; or
-2. the shape of a tag: a word, a comma and a number: ``(jyo, 40, 0.5)`` (an unknown
-   expression), ``(smile, 20)``; or
+2. the whole shape of a tag: a word, a number and a number, comma-separated:
+   ``(jyo, 40, 0.5)`` (an unknown expression), ``(smile, 20, 1)``; or a word that is
+   nearly an expression's name (difflib ratio >= 0.7), a comma and a number:
+   ``(joyy, 40)``, ``(suprise, 30)``; or
 3. nothing but whitespace before its ``)``: an empty tag.
 
 Every other parenthesis is ordinary text, so ``(see below)``, ``(Paris, France)``,
-``(however, we think)``, ``(3, 4)`` and a stray ``)`` are spoken as written; so is a
-prose parenthesis that happens to look like a tag (``(Smith, 2020)``) if its ``(``
-is written ``\(``. A tag ends at the first ``)``; reaching a ``(`` or the end of the
+``(however, we think)``, ``(Smith, 2020)``, ``(3, 4)`` and a stray ``)`` are spoken as
+written; so is a prose parenthesis that has the whole shape of a tag
+(``(Smith, 2020, 12)``) if its ``(`` is written ``\(``. A tag ends at the first ``)``; reaching a ``(`` or the end of the
 text first means it is unclosed. A tag may span lines. A backslash before any
 other character is an ordinary backslash.
 
@@ -80,8 +82,12 @@ MAX_TEXT_CHARS = 200_000
 for the estimate engine) and the frames grow with it, so a longer text is refused, not half-spoken."""
 
 _WORD = re.compile(r"[^\W\d]\w*")
-_SHAPE = re.compile(r"\(\s*[^\W\d]\w*\s*,\s*[+-]?\.?[0-9]")
-"""A ``(`` that starts a tag by its shape: a word, a comma, a number."""
+_SHAPE = re.compile(r"\(\s*[^\W\d]\w*\s*,\s*[+-]?\.?[0-9][^,()]*,\s*[+-]?\.?[0-9]")
+"""A ``(`` that starts a tag by its whole shape: a word, a comma, a number, a comma, a number."""
+_NEAR_SHAPE = re.compile(r"\(\s*([^\W\d]\w*)\s*,\s*[+-]?\.?[0-9]")
+"""A ``(`` with a word, a comma and a number: a tag when the word is nearly an expression's name."""
+_NEAR = 0.7
+"""How alike (difflib's ratio) a word must be to an expression's name for ``(word, number`` to be a tag."""
 _NOT_A_LETTER_NEXT = r"\b(?!\s*[^\W\d_])"
 _EMPTY = re.compile(r"\(\s*\)")
 _PAREN = re.compile(r"[()]")
@@ -219,7 +225,10 @@ class _Parser:
 
     def is_tag(self, i: int) -> bool:
         """Whether the ``(`` at ``i`` starts a tag (see the module docstring: a known name, or the shape)."""
-        return bool(_SHAPE.match(self.source, i) or (self.known_head and self.known_head.match(self.source, i)))
+        if _SHAPE.match(self.source, i) or (self.known_head and self.known_head.match(self.source, i)):
+            return True
+        near = _NEAR_SHAPE.match(self.source, i)
+        return bool(near and difflib.get_close_matches(near.group(1).lower(), self.known, n=1, cutoff=_NEAR))
 
     def run(self) -> Markup:
         source, i, n = self.source, 0, len(self.source)

@@ -202,7 +202,8 @@ def test_default_set_rejects_names_not_in_profiles() -> None:
 
 @pytest.mark.parametrize("source, line, column, words", [
     ("Hi (joyy, 40, 0.5)", 1, 5, "unknown expression"),
-    ("(Smith, 2020) wrote", 1, 2, "unknown expression"),       # the shape of a tag: write \( for prose
+    ("(Smith, 2020, 12) wrote", 1, 2, "unknown expression"),   # the whole shape of a tag: write \( for prose
+    ("(joyy, 40) hi", 1, 2, "unknown expression"),              # nearly "joy", a comma and a number
     ("(joy, 4.5, 1)", 1, 7, "not an integer"),
     ("(joy, forty, 1)", 1, 7, "not an integer"),
     ("(joy, 40 0.5)", 1, 10, "missing ',' after '40'"),

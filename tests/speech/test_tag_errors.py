@@ -31,7 +31,7 @@ MALFORMED = [  # (text, column, words of the message)
     ("() Hello", 1, "empty tag"),
 ]
 PROSE = ["(see below) Hello", "Hello (Paris, France) there", "(however, we think) so", "(joy is contagious)",
-         "f(x) = (3, 4)"]
+         "f(x) = (3, 4)", "(Smith, 2020) wrote", "(smile, 20) please", "(page, 12) and (jyo, 4)"]
 
 
 @pytest.mark.parametrize("text, column, words", MALFORMED)
