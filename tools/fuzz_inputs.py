@@ -727,6 +727,22 @@ def m_obj(rng, data, seeds):
     return b"".join(lines)
 
 
+def m_frame_values(rng, data, seeds):
+    """A .fap/.bap value on a frame line (not a mask entry, not the header) set to an extreme or plausible number:
+    mask lines hold most of the numbers, so number damage alone seldom reaches the values."""
+    lines = _lines(data)
+    heads = [k for k, line in enumerate(lines) if line.strip() and not line.lstrip().startswith(b"#")]
+    frames = [k for k in heads[1:] if len(lines[k].split()) > 1 and not set(lines[k].split()) <= {b"0", b"1"}]
+    if not frames:
+        return data
+    k = rng.choice(frames)
+    words = lines[k].split()
+    at = rng.randrange(len(words))
+    words[at] = (rng.choice(NUMBER_TOKENS) if rng.random() < 0.4 else str(rng.randint(-40000, 40000))).encode()
+    lines[k] = b" ".join(words) + b"\n"
+    return b"".join(lines)
+
+
 _EVENT_TIMES = (0, -1, 1, 21_600_000, 21_600_001, 216_000_000_000, 216_000_000_001, 10**15, 2**63, 10**30, 1.5,
                 1e308, -1e308, "5", None, True, [], 3_600_000, 36_000_000_000)
 _EVENT_VISEMES = (-1, 0, 9, 10, 11, 21, 22, 100, 2**40, 1.5, "p", "sil", "", "21", None, True, [], "\u0000", "x" * 100)
@@ -860,7 +876,7 @@ MUTATORS: dict[str, tuple[Mutator, ...]] = {
     "points": TEXT + (m_json,) * 6 + (m_json_tree,) * 8,
     "manifest": TEXT + (m_json,) * 4 + (m_json_tree,) * 6 + (m_manifest,) * 6 + (m_csv,) * 4,
     "conform": TEXT + (m_json,) * 6 + (m_json_tree,) * 8,
-    "bap": TEXT,
+    "bap": TEXT + (m_frame_values,) * 8,
     "wav": BINARY + (m_wav,) * 10,
     "image": BINARY + (m_image,) * 10,
     "obj": TEXT + (m_obj,) * 8 + (m_json, m_json_tree),
