@@ -636,7 +636,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--first", type=int, default=0, help="index of the first case of each target (default 0)")
     p.add_argument("--target", default=",".join(TARGETS), help="comma-separated: " + ",".join(TARGETS)
                    + "; 'new' for the readers of issue 26 (" + ",".join(READER_TARGETS) + ")")
-    p.add_argument("--jobs", type=int, default=1, help="worker processes running chunks of cases in parallel")
+    p.add_argument("--target-seconds", type=float, default=None, help="at most this long on one target")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="worker processes running chunks of cases in parallel (1: one at a time, still in workers, "
+                   "so a case stuck in C code ends only its chunk); default: all in this process")
     p.add_argument("--chunk", type=int, default=5000, help="with --jobs: cases of one target per worker run")
     p.add_argument("--json", type=Path, default=None, help="write the summary here (default out/fuzz/fuzz.json)")
     p.add_argument("--out", type=Path, default=ROOT / "out" / "fuzz", help="reproducers go to OUT/crashes")
@@ -657,7 +660,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     unknown = [t for t in args.target if t not in TARGETS]
     if unknown:
         p.error(f"unknown target {unknown[0]!r}; known: {', '.join(TARGETS)}")
-    if args.jobs < 1 or args.chunk < 1:
+    if args.jobs is not None and args.jobs < 1 or args.chunk < 1:
         p.error("--jobs and --chunk are at least 1")
     if args.no_vectors:
         args.vectors = None
@@ -667,7 +670,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     say = (lambda *_: None) if args.quiet else (lambda text: print(text, file=sys.stderr, flush=True))
-    if args.jobs > 1 and args.replay is None and args.case is None:
+    if args.jobs is not None and args.replay is None and args.case is None:
         return fuzz_parallel.run(args, Path(__file__).resolve(), say)
     logging.getLogger("trimesh").setLevel(logging.CRITICAL)  # a damaged mesh is our finding, not a log line
     tmp = Path(tempfile.mkdtemp(prefix="mpeg4fa-fuzz-", dir="/dev/shm" if os.path.isdir("/dev/shm") else None))
@@ -688,7 +691,8 @@ def main(argv: list[str] | None = None) -> int:
                 left = len(targets) - k
                 done = sum(t.cases for t in campaign.tallies.values())
                 cases = args.per_target if args.per_target is not None else (args.cases - done) // left
-                until = time.monotonic() + (args.seconds - (time.monotonic() - start)) / left
+                until = time.monotonic() + min((args.seconds - (time.monotonic() - start)) / left,
+                                               args.target_seconds or float("inf"))
                 say(f"{target}: up to {cases} cases from {args.first}, {max(until - time.monotonic(), 0):.0f} s, "
                     f"{len(seeds[target])} seeds")
                 index = args.first

@@ -147,7 +147,11 @@ def run(args: argparse.Namespace, tool: Path, say: Callable[[str], None]) -> int
                 target, first, count = tasks.pop(0)
                 part, log = work / f"{target}-{first}.json", work / f"{target}-{first}.log"
                 part.unlink(missing_ok=True)
-                argv = _worker_argv(args, tool, target, first, count, deadline - time.monotonic(), part)
+                seconds = deadline - time.monotonic()
+                if args.target_seconds:  # a chunk's share of its target's time
+                    per = args.per_target or max(args.cases // len(targets), 1)
+                    seconds = min(seconds, args.target_seconds * count / per)
+                argv = _worker_argv(args, tool, target, first, count, seconds, part)
                 with open(log, "w", encoding="utf-8") as handle:
                     proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=handle, stderr=subprocess.STDOUT)
                 running[proc] = (target, first, count, part, log)
