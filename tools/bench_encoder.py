@@ -29,6 +29,14 @@ A script run on demand, not a test::
    the share of phone onsets within 30 ms of the recording's own (tools/bench_align.py has the full
    accuracy table). ``--align-only`` runs just this section; ``--sentences-only`` just section 1.
 
+6. long text (issue 26 item 2, ``--long-only``): 10 kB, 200 kB and 1 MB of ordinary English (``ENGLISH``
+   without its tags, shuffled into paragraphs by a fixed seed; ``--long-tags`` keeps the tags),
+   each encoded in a child process by :func:`mpeg4fa.speech.pipeline.encode_text_to` (the streaming
+   path of ``mpeg4fa encode TEXT``) with the WAV and the timings: seconds of speech, wall time, x real
+   time and the child's peak RSS (its ``ru_maxrss``, as ``/usr/bin/time -v`` reports). Targets: peak
+   RSS < 500 MB for 1 MB of text, >= 20 x real time (``LONG_SIZES``, ``TARGET_LONG_RSS_MB``,
+   ``TARGET_LONG_SPEED``).
+
 Targets: English high level <= 17 bits/frame on average over the sentences (issue 14; issue 5's
 target was <= 30 on the long speech); low-level lip, jaw and brow FAPs <= 60 bits/frame
 (< 1.5 kbit/s). It prints tables, marks targets PASS/FAIL and writes JSON (``bench_encoder.json``
@@ -443,6 +451,85 @@ def _alignment_table(rows: list[dict]) -> None:
               f"{r['x_realtime']:.0f} | {share} |")
 
 
+def os_cpus() -> int:
+    import os
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+LONG_SIZES = {"10 kB": 10_000, "200 kB": 200_000, "1 MB": 1_000_000}
+TARGET_LONG_RSS_MB = 500.0
+TARGET_LONG_SPEED = 20.0
+
+def long_english(size: int, tags: bool = False, seed: int = 26) -> str:
+    """About ``size`` characters of English prose from ``ENGLISH`` (tags removed unless ``tags``), sentences
+    drawn by a fixed seed into paragraphs of five: ordinary text, not random letters."""
+    import random
+    import re
+
+    rng = random.Random(seed)
+    pattern = re.compile(r"\(\s*\w+\s*,[^)]*\)\s*")
+    sentences = ENGLISH if tags else [pattern.sub("", s) for s in ENGLISH]
+    paragraphs, length = [], 0
+    while length < size:
+        paragraph = " ".join(rng.choice(sentences) for _ in range(5))
+        paragraphs.append(paragraph)
+        length += len(paragraph) + 2
+    return "\n\n".join(paragraphs)[:size].rstrip()
+
+
+def _long_child(size: int, tags: bool, folder: Path, engine: str) -> None:
+    """Run in a child process: encode the text to files and print what was spoken as JSON."""
+    from mpeg4fa.speech.pipeline import encode_text_to
+
+    text = long_english(size, tags)
+    spoken = encode_text_to(text, folder / "long.fba", audio=folder / "long.wav" if engine != "estimate" else None,
+                            timings=folder / "long.json", engine=engine)
+    print(json.dumps({"chars": len(text), "seconds": spoken.seconds, "frames": spoken.frames, "bytes": spoken.bytes,
+                      "chunks": spoken.chunks, "encode_wall_s": spoken.wall}))
+
+
+def bench_long(engine: str, tags: bool, sizes: dict[str, int] = LONG_SIZES) -> list[dict]:
+    """Section 6: each size in a child process; wall time and peak RSS of the whole child."""
+    import os
+    import subprocess
+    import tempfile
+
+    rows = []
+    for label, size in sizes.items():
+        with tempfile.TemporaryDirectory() as folder:
+            started = time.perf_counter()
+            child = subprocess.Popen([sys.executable, __file__, "--long-child", str(size), "--long-folder", folder,
+                                      "--engine", engine] + (["--long-tags"] if tags else []),
+                                     stdout=subprocess.PIPE, text=True)
+            out = child.stdout.read()
+            _, status, usage = os.wait4(child.pid, 0)
+            wall = time.perf_counter() - started
+            child.returncode = os.waitstatus_to_exitcode(status)
+            if child.returncode:
+                raise SystemExit(f"{label}: the child failed with status {child.returncode}")
+            row = {"size": label, **json.loads(out.strip().splitlines()[-1]), "wall_s": wall,
+                   "peak_rss_mb": usage.ru_maxrss / 1024, "tags": tags, "engine": engine}
+            row["x_realtime"] = row["seconds"] / wall
+            rows.append(row)
+            print(f"  {label}: {row['seconds']:.0f} s of speech in {wall:.1f} s, {row['peak_rss_mb']:.0f} MB",
+                  file=sys.stderr)
+    return rows
+
+
+def _long_table(rows: list[dict]) -> bool:
+    print("\n| text | characters | chunks | speech s | speech h | wall s | x real time | peak RSS MB | target |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    ok = True
+    for r in rows:
+        passed = r["x_realtime"] >= TARGET_LONG_SPEED and (r["size"] != "1 MB" or r["peak_rss_mb"] < TARGET_LONG_RSS_MB)
+        ok &= passed
+        print(f"| {r['size']}{' (tagged)' if r['tags'] else ''} | {r['chars']:,} | {r['chunks']} | {r['seconds']:.0f} | "
+              f"{r['seconds'] / 3600:.2f} | {r['wall_s']:.1f} | {r['x_realtime']:.0f} | {r['peak_rss_mb']:.0f} | "
+              f"{'PASS' if passed else 'FAIL'} |")
+    print(f"\ntargets: >= {TARGET_LONG_SPEED:g} x real time; peak RSS < {TARGET_LONG_RSS_MB:g} MB for 1 MB of text")
+    return ok
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=60.0, help="speech length per language (default 60)")
@@ -452,7 +539,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--align-only", action="store_true", help="only section 5, the alignment cost")
     ap.add_argument("--sentences-only", action="store_true",
                     help="only section 1, bits per frame of each sentence (issue 14's target; about 10 s)")
+    ap.add_argument("--long-only", action="store_true",
+                    help="only section 6: 10 kB, 200 kB and 1 MB of text through the streaming encoder (minutes)")
+    ap.add_argument("--long-tags", action="store_true", help="section 6 with the sentences' expression tags kept")
+    ap.add_argument("--long-sizes", help="section 6's sizes, comma-separated labels of " + ", ".join(LONG_SIZES))
+    ap.add_argument("--long-child", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--long-folder", type=Path, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.long_child is not None:
+        _long_child(args.long_child, args.long_tags, args.long_folder, args.engine)
+        return 0
+    if args.long_only:
+        sizes = {k: LONG_SIZES[k.strip()] for k in args.long_sizes.split(",")} if args.long_sizes else LONG_SIZES
+        rows = bench_long(args.engine, args.long_tags, sizes)
+        print(f"mpeg4fa {MPEG4FA_VERSION}, {platform.python_implementation()} {platform.python_version()}, "
+              f"{platform.machine()}, {os_cpus()} CPUs, engine {args.engine}, {FPS:g} fps, high level")
+        ok = _long_table(rows)
+        args.json.write_text(json.dumps({"version": MPEG4FA_VERSION, "engine": args.engine, "long_text": rows,
+                                         "targets_met": ok}, indent=1))
+        print(f"\nwrote {args.json}")
+        return 0
     if args.align_only:
         alignment = bench_alignment()
         _alignment_table(alignment)
