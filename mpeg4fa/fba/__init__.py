@@ -7,7 +7,7 @@ data model; ``stacking`` builds one in bounded memory); ``limits`` says what a s
 may ask for (frame rates an intra header carries, at most 24 h of frames).
 ``spec/SYNTAX.md`` describes the bitstream as implemented.
 """
-from .decoder import decode, iter_decode
+from .decoding import decode, iter_decode
 from .encoder import EncodeOptions, encode, plan, write
 from .errors import FbaError, UnsupportedFeature
 from .samples import demo_stream

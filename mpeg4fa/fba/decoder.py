@@ -1,4 +1,9 @@
-"""fba_object() decoding: start codes, planes, and the face and body data of each plane."""
+"""fba_object() decoding: start codes, planes, and the face and body data of each plane (the reference path).
+
+:class:`_Decoder` yields frames; :mod:`.fastpath` builds on it (P planes compiled), and :mod:`.decoding`
+chooses between the two and offers :func:`~mpeg4fa.fba.decode` / :func:`~mpeg4fa.fba.iter_decode`.
+Imports go one way: decoder <- fastpath <- decoding.
+"""
 from __future__ import annotations
 
 import os
@@ -14,7 +19,7 @@ from .bits import BitReader
 from ..filetype import foreign_kind
 from .errors import FbaError
 from .params import BODY, FACE, FieldCoder, ValueCoder
-from .stacking import ZERO_BAP_MASK, ZERO_BAP_VALUES, StreamBuilder
+from .stacking import ZERO_BAP_MASK, ZERO_BAP_VALUES
 from .stream import (BODY as BODY_BIT, DEFAULT_FPS, END_CODE, FACE as FACE_BIT, N_BAPS, N_FAPS,
                      OBJECT_START_CODE, OBJECT_START_CODE_OLD, PLANE_START_CODE, PLANE_START_CODE_OLD,
                      CodingParams, FapStream, Frame, PartParams)
@@ -192,30 +197,6 @@ class _Decoder:
         frame.bap_mask[:] = self.body.mask
 
 
-def _decoder(reader: BitReader, backend: str) -> _Decoder:
-    from .compiled import use_compiled
-
-    if use_compiled(backend):
-        from .fastpath import FastDecoder
-
-        return FastDecoder(reader)
-    return _Decoder(reader)
-
-
-def iter_decode(source: Source, *, backend: str = "auto") -> Iterator[Frame]:
-    """Decode frame by frame without holding the whole stream; raises :class:`FbaError` at a fault.
-
-    ``backend``: ``"auto"`` (compiled when numba is there, see :mod:`mpeg4fa.fba.compiled`),
-    ``"compiled"`` or ``"python"`` (the reference); both give the same frames and the same errors.
-    """
-    with _opened(source) as src:
-        for item in _guarded(_decoder(BitReader(src), backend)):
-            if isinstance(item, Frame):
-                yield item
-            else:
-                yield from item.frames()
-
-
 def _guarded(decoder: _Decoder) -> Iterator:
     """The decoder's items, with any stray low-level exception turned into an FbaError."""
     try:
@@ -224,28 +205,3 @@ def _guarded(decoder: _Decoder) -> Iterator:
         raise
     except (IndexError, ValueError, OverflowError, MemoryError) as exc:  # a guard, not an expected path
         raise FbaError(f"malformed stream ({type(exc).__name__}: {exc})", decoder.bits.pos) from exc
-
-
-def decode(source: Source, *, backend: str = "auto") -> FapStream:
-    """Decode a whole FBA stream (bytes, a path or a binary file) into a :class:`FapStream`.
-
-    On a fault the :class:`FbaError` carries the frames decoded before it in ``.partial``.
-    Memory is that of the stream's arrays (:mod:`mpeg4fa.fba.stacking`): about 400 bytes a
-    frame for a face stream; a stream without body data shares one read-only zero row for its
-    ``bap_mask``/``bap_values``. ``backend`` as for :func:`iter_decode`.
-    """
-    with _opened(source) as src:
-        decoder = _decoder(BitReader(src), backend)
-        builder = StreamBuilder()
-        try:
-            for item in _guarded(decoder):
-                if isinstance(item, Frame):
-                    builder.append(item)
-                else:
-                    builder.extend(item.arrays, item.bap_mask, item.bap_values)
-        except FbaError as exc:
-            builder.object_start_code = decoder.object_start_code
-            exc.partial = builder.build()
-            raise
-    builder.object_start_code = decoder.object_start_code
-    return builder.build()

@@ -7,7 +7,8 @@ minutes of work). These bounds turn such requests into one clear error:
 * frame rate: an intra header sends 8 bits of whole frames and 4 bits of sixteenths
   (plus a 1000/1001 flag), so ``1/16 <= fps <= 255 15/16`` (:meth:`FrameRate.from_fps`);
 * span: a stream covers at most :data:`MAX_SPAN_SECONDS` (24 h) of frames at its rate,
-  counting skipped frames (:func:`frame_limit`, :func:`check_span`).
+  counting skipped frames (:func:`frame_limit`, :func:`check_span`);
+* frames held: :func:`~mpeg4fa.fba.decode` holds at most :data:`MAX_DECODE_FRAMES` (2**21) frames.
 """
 from __future__ import annotations
 
@@ -20,6 +21,10 @@ from .stream import FapStream, FrameRate
 
 MAX_SPAN_SECONDS = 24 * 3600
 """Longest stretch of time a stream may cover, skipped frames included: 24 hours."""
+MAX_DECODE_FRAMES = 1 << 21
+"""Most frames :func:`~mpeg4fa.fba.decode` holds in memory: 2,097,152 (23.3 h at 25 fps, about 850 MB at
+~400 bytes a frame); a 6-bit frame makes this a 1.5 MB stream. :func:`~mpeg4fa.fba.iter_decode` has no
+such ceiling (constant memory)."""
 
 
 def fps_problem(fps: object) -> str | None:

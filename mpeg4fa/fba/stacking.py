@@ -3,7 +3,7 @@
 :func:`~mpeg4fa.fba.decode` used to keep every decoded :class:`Frame` (a dozen small
 numpy arrays each, 296-wide body rows included) and stack them at the end: about
 4.7 KB a frame. :class:`StreamBuilder` copies each frame's rows into blocks of
-:data:`BLOCK` frames instead, and joins the blocks field by field, freeing each
+:data:`STORE_BLOCK` frames instead, and joins the blocks field by field, freeing each
 field's blocks as soon as it is joined, so a face stream costs its ~400 bytes a
 frame (peak under 700 bytes while joining).
 
@@ -15,6 +15,7 @@ arrays to a stream to add BAPs to it).
 """
 from __future__ import annotations
 
+import mmap
 from typing import Iterable
 
 import numpy as np
@@ -22,7 +23,10 @@ import numpy as np
 from .stream import FACE, N_BAPS, N_FAPS, OBJECT_START_CODE, CodingParams, FapStream, Frame
 
 BLOCK = 1024
-"""Frames per block: small enough that a half-filled block is cheap, large enough that joining is quick."""
+"""Frames per block of rows handed over at once (the compiled decoder's unit)."""
+STORE_BLOCK = 16384
+"""Frames per storage block of a :class:`StreamBuilder`: few mappings even for millions of frames, and
+pages are committed only as rows are written, so a short stream pays for what it fills."""
 
 _ROWS = {  # field -> (row shape, dtype): the FapStream layout of every per-frame array but the body's
     "fap_mask": ((N_FAPS,), bool), "fap_values": ((N_FAPS,), np.int32), "viseme": ((4,), np.int32),
@@ -37,6 +41,15 @@ ZERO_BAP_MASK.flags.writeable = False
 ZERO_BAP_VALUES.flags.writeable = False
 
 
+def _fresh(shape: tuple[int, ...], dtype) -> np.ndarray:
+    """Zeroed rows in an anonymous mapping of their own: given back to the system the moment the block is
+    dropped (heap blocks of this size stay with the process), so joining blocks into the stream's arrays
+    costs the arrays plus one block, not twice the stream."""
+    count = int(np.prod(shape))
+    buffer = mmap.mmap(-1, max(1, count * np.dtype(dtype).itemsize))
+    return np.frombuffer(buffer, dtype=dtype, count=count).reshape(shape)
+
+
 def no_body(n: int) -> tuple[np.ndarray, np.ndarray]:
     """``bap_mask`` and ``bap_values`` of ``n`` frames without body data: read-only views of one zero row."""
     return (np.broadcast_to(ZERO_BAP_MASK, (n, N_BAPS)), np.broadcast_to(ZERO_BAP_VALUES, (n, N_BAPS)))
@@ -49,7 +62,7 @@ class StreamBuilder:
         self.object_start_code = object_start_code
         self.intra: dict[int, CodingParams] = {}
         self._blocks: list[dict[str, np.ndarray | None]] = []
-        self._fill = BLOCK  # rows used in the last block (full: the next frame opens a block)
+        self._fill = STORE_BLOCK  # rows used in the last block (full: the next frame opens a block)
         self.n = 0
 
     def __len__(self) -> int:
@@ -57,13 +70,13 @@ class StreamBuilder:
 
     def _open_block(self) -> None:
         block: dict[str, np.ndarray | None] = {
-            name: np.zeros((BLOCK, *shape), dtype=dtype) for name, (shape, dtype) in _ROWS.items()}
+            name: _fresh((STORE_BLOCK, *shape), dtype) for name, (shape, dtype) in _ROWS.items()}
         block.update(dict.fromkeys(_BODY))
         self._blocks.append(block)
         self._fill = 0
 
     def _row(self) -> tuple[dict[str, np.ndarray | None], int]:
-        if self._fill == BLOCK:
+        if self._fill == STORE_BLOCK:
             self._open_block()
         row = self._fill
         self._fill += 1
@@ -88,7 +101,7 @@ class StreamBuilder:
         if has_body:
             for name, value in (("bap_mask", bap_mask), ("bap_values", bap_values)):
                 if block[name] is None:
-                    block[name] = np.zeros((BLOCK, N_BAPS), dtype=_BODY[name])
+                    block[name] = _fresh((STORE_BLOCK, N_BAPS), _BODY[name])
                 if value is not None:
                     block[name][k] = value  # type: ignore[index]
         if params is not None:
@@ -104,16 +117,16 @@ class StreamBuilder:
             body = bap_mask.any(axis=1) | bap_values.any(axis=1)
         done = 0
         while done < n:
-            if self._fill == BLOCK:
+            if self._fill == STORE_BLOCK:
                 self._open_block()
             block, start = self._blocks[-1], self._fill
-            take = min(BLOCK - start, n - done)
+            take = min(STORE_BLOCK - start, n - done)
             for name in _ROWS:
                 block[name][start:start + take] = rows[name][done:done + take]  # type: ignore[index]
             if body is not None and body[done:done + take].any():
                 for name, value in (("bap_mask", bap_mask), ("bap_values", bap_values)):
                     if block[name] is None:
-                        block[name] = np.zeros((BLOCK, N_BAPS), dtype=_BODY[name])
+                        block[name] = _fresh((STORE_BLOCK, N_BAPS), _BODY[name])
                     block[name][start:start + take] = value[done:done + take]  # type: ignore[index]
             self._fill += take
             self.n += take
@@ -129,7 +142,7 @@ class StreamBuilder:
     def build(self) -> FapStream:
         """The stream of every frame added so far. The builder is emptied: its blocks are freed as they are joined."""
         n, blocks = self.n, self._blocks
-        sizes = [BLOCK] * (len(blocks) - 1) + ([self._fill] if blocks else [])
+        sizes = [STORE_BLOCK] * (len(blocks) - 1) + ([self._fill] if blocks else [])
         arrays: dict[str, np.ndarray] = {}
         for name, (shape, dtype) in _ROWS.items():
             arrays[name] = self._join(name, (n, *shape), dtype, sizes)
@@ -162,4 +175,4 @@ def stack_frames(frames: Iterable[Frame], object_start_code: int = OBJECT_START_
     return builder.build()
 
 
-__all__ = ["BLOCK", "StreamBuilder", "stack_frames", "no_body", "ZERO_BAP_MASK", "ZERO_BAP_VALUES"]
+__all__ = ["BLOCK", "STORE_BLOCK", "StreamBuilder", "stack_frames", "no_body", "ZERO_BAP_MASK", "ZERO_BAP_VALUES"]

@@ -224,7 +224,7 @@ def test_only_the_head_turns_the_skull(built):
 def test_stream_plays_like_the_triangle_head(built):
     """A real stream: the moving region poses as on the triangle head (the rig is rebuilt on the new
     mesh; its Sibson cage sees a slightly different skull, hence the small tolerance)."""
-    from mpeg4fa.fba.decoder import decode
+    from mpeg4fa.fba import decode
 
     path = VECTORS / "angry_0.fba"
     if not path.is_file():
