@@ -288,3 +288,16 @@ def test_a_chunked_upload_is_cut_at_the_limit_as_it_streams(tmp_path, procedural
     assert sent < 20_000_000  # the client was stopped, not drained
     assert app.state.session.mesh is None
     assert open_temp_files() <= files_before  # no spooled part left open (they are unlinked: gone with the fd)
+
+
+@pytest.mark.parametrize("files, where", [
+    ([("deep.gltf", b"[" * 100_000)], "deep.gltf:1:65"),
+    ([("m.obj", obj_bytes(trimesh.creation.box())), ("m.parts.json", b'{"parts": ' + b"[" * 100_000)],
+     "m.parts.json:1:74"),
+])
+def test_deep_json_in_an_upload_is_one_json_error(client, files, where):
+    """The issue's reproducer: a 100,000-deep .gltf or NAME.parts.json gave a plain-text 500."""
+    mesh = client.app.state.session.mesh
+    r = client.post("/api/upload", files=[("file", (name, data, "text/plain")) for name, data in files])
+    assert r.status_code == 422 and r.json()["where"] == where and "nested more than 64" in r.json()["error"], r.text
+    assert client.app.state.session.mesh is mesh
