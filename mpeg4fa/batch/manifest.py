@@ -11,7 +11,8 @@ Two forms, told apart by the file's suffix:
 Keys: ``stream`` (required: a .fba or .fap file), ``audio`` (speech to mux; none unless given),
 ``fdp`` (the sender's FDP), ``output`` (a name under the output folder ending in .mp4/.mov/.m4v;
 default: the stream's name with .mp4) and the options of ``mpeg4fa play``, which mean the same
-and are checked by the same rules (:mod:`mpeg4fa.cli.options`): ``size`` (``W``, ``WxH`` or
+and are checked by the same rules (:mod:`mpeg4fa.limits`, the frame rate by
+:meth:`~mpeg4fa.fba.stream.FrameRate.from_fps`): ``size`` (``W``, ``WxH`` or
 ``[W, H]``, even), ``aa``, ``view``, ``fps``, ``fit``, ``crf``, ``deformer``, ``blocks``,
 ``method``, ``skull``, ``texture``, ``fdp_texture`` (true/false), ``face_mesh`` + ``face_points``.
 Relative paths are taken from the manifest's folder. Every fault is collected with its place
@@ -20,7 +21,6 @@ in one edit, not one run per missing file.
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import difflib
 import io
@@ -32,7 +32,9 @@ from typing import Any, Callable
 
 from mpeg4fa import jsonio
 from mpeg4fa.batch.errors import BatchError
-from mpeg4fa.cli import options as rules
+from mpeg4fa import limits
+from mpeg4fa.errors import MpegFaError
+from mpeg4fa.fba.stream import FrameRate
 from mpeg4fa.face import calibrate, deformers
 from mpeg4fa.render.camera import VIEWS
 from mpeg4fa.render.player import FITS
@@ -60,13 +62,20 @@ def _text(value: Any) -> str:
 
 
 def _ruled(rule: Callable[[str], Any]) -> Callable[[Any], Any]:
-    """An argparse ``type=`` rule of the CLI, used on a manifest value."""
+    """A rule on text (:mod:`mpeg4fa.limits`: what the CLI's options take too), used on a manifest value."""
     def parse(value: Any) -> Any:
         try:
             return rule(_text(value))
-        except argparse.ArgumentTypeError as exc:
+        except (ValueError, MpegFaError) as exc:
             raise _Bad(str(exc)) from None
     return parse
+
+
+def _fps(text: str) -> float:
+    """A frame rate a stream carries (the codec's rule, as ``play --fps``)."""
+    value = float(limits.Limit("frame rate").parse(text))
+    FrameRate.from_fps(value)
+    return value
 
 
 def _choice(choices: tuple[str, ...]) -> Callable[[Any], str]:
@@ -83,7 +92,7 @@ def _size(value: Any) -> tuple[int, int]:
         if len(value) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
             raise _Bad(f"{value!r}: expected [W, H], two whole numbers")
         value = f"{value[0]}x{value[1]}"
-    width, height = _ruled(rules.size)(value)
+    width, height = _ruled(limits.parse_size)(value)
     if width % 2 or height % 2:
         raise _Bad(f"{width}x{height} is odd; an MP4 (H.264) needs even sizes, "
                    f"e.g. {width + width % 2}x{height + height % 2}")
@@ -114,11 +123,11 @@ def _names(value: Any) -> tuple[str, ...]:
 
 OPTIONS: dict[str, tuple[Callable[[Any], Any], Any]] = {
     "size": (_size, (512, 512)),
-    "aa": (_ruled(rules.samples), 0),
+    "aa": (_ruled(limits.SAMPLES.parse), 0),
     "view": (_choice(tuple(VIEWS)), "front"),
-    "fps": (_ruled(rules.fps), None),
+    "fps": (_ruled(_fps), None),
     "fit": (_choice(FITS), "pad"),
-    "crf": (_ruled(rules.crf), 18),
+    "crf": (_ruled(limits.CRF.parse), 18),
     "deformer": (_choice(tuple(deformers.names())), deformers.names()[0]),
     "blocks": (_names, None),
     "method": (_choice(tuple(calibrate.METHODS)), "dffd"),

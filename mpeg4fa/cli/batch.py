@@ -35,7 +35,7 @@ def register(commands: Commands) -> None:
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR",
                    help="folder for the MP4s (made if missing)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=options.integer(1, 1024), metavar="N",
+    where.add_argument("--workers", type=options.workers, metavar="N",
                        help="worker processes of the local cluster (default: one a core, at most one a job)")
     where.add_argument("--scheduler", metavar="ADDRESS",
                        help="a running dask.distributed scheduler, e.g. tcp://head-node:8786, instead of a local "

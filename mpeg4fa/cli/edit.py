@@ -21,7 +21,7 @@ def register(commands: Commands) -> None:
                                         "with another site's Origin or a Host other than localhost, 127.0.0.1 or "
                                         "[::1] with the port is refused (403).")
     p.add_argument("model", nargs="?", type=Path, metavar="MODEL", help="mesh to edit (default: the generic head)")
-    p.add_argument("--port", type=options.integer(1, 65535), default=8765, help="port (default 8765)")
+    p.add_argument("--port", type=options.port, default=8765, help="port (default 8765)")
     p.add_argument("--out", type=Path, default=Path("."), help="folder saved models are written into (default .)")
     p.add_argument("--no-browser", action="store_true", help="do not open the page")
     p.set_defaults(run=run_edit)

@@ -55,14 +55,16 @@ def one_line(message: object) -> str:
 
 
 def save_image(image, path: Path) -> None:
-    """Save a PIL image whole or not at all (format from the name); RenderError naming the file otherwise."""
+    """Save a PIL image whole or not at all (format from the name); RenderError for a name PIL has no format for
+    (an OS error names the file itself: :func:`mpeg4fa.atomic.atomic_output`)."""
     from ..atomic import atomic_output
 
     try:
         with atomic_output(path) as partial:
             image.save(partial)
-    except (OSError, ValueError) as exc:
-        raise RenderError(f"cannot write the image ({exc})", where=str(path)) from None
+    except ValueError as exc:
+        raise RenderError(f"cannot write the image ({exc})", where=str(path),
+                          hint="name it .png, .jpg, .bmp or .tif") from None
 
 
 AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")

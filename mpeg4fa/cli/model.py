@@ -96,7 +96,7 @@ def _fap_value(text: str) -> tuple[int, float]:
 def _expression(text: str) -> tuple[str, int]:
     """NAME[=I]: the intensity a whole number 0..FULL_INTENSITY, full when left out."""
     name, equals, intensity = text.partition("=")
-    return name, options.integer(0, FULL_INTENSITY)(intensity) if equals else FULL_INTENSITY
+    return name, options.integer(0, FULL_INTENSITY, what="intensity")(intensity) if equals else FULL_INTENSITY
 
 
 def face_from_args(args: argparse.Namespace) -> FaceModel:

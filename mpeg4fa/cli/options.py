@@ -2,13 +2,18 @@
 
 Why one set: ``--fps`` means the same in ``encode``, ``say`` and ``play``, so it is read and
 checked in one place. A value that is not a number, not finite or out of range is an argparse
-error (one line, exit status 2) before any work starts.
+error (one line, exit status 2) naming the allowed values, before any work starts. The ranges
+are :mod:`mpeg4fa.limits` (shared with the batch manifest and the library), the frame rate is
+the codec's own rule (:meth:`mpeg4fa.fba.stream.FrameRate.from_fps`).
 """
 from __future__ import annotations
 
 import argparse
-import math
 from typing import Any, Callable, Protocol
+
+from .. import limits
+from ..fba.limits import MAX_SPAN_SECONDS
+from ..limits import Limit, LimitError
 
 
 class Commands(Protocol):
@@ -17,53 +22,25 @@ class Commands(Protocol):
     def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser: ...
 
 
-def _whole(text: str) -> int:
-    try:
-        return int(text.strip())
-    except ValueError:  # also the digit limit of a 5000-digit number
-        raise argparse.ArgumentTypeError(f"{_short(text)!r} is not a whole number") from None
+def of(limit: Limit) -> Callable[[str], Any]:
+    """The argparse type of a :class:`~mpeg4fa.limits.Limit`: its value, or an ArgumentTypeError saying the range."""
+    def parse(text: str):
+        try:
+            return limit.parse(text)
+        except LimitError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    parse.__name__ = "integer" if limit.whole or limit.choices else "number"
+    return parse
 
 
-def _real(text: str) -> float:
-    try:
-        value = float(text.strip())
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{_short(text)!r} is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{_short(text)!r} is not a finite number")
-    return value
-
-
-def _short(text: str) -> str:
-    return text if len(text) <= 24 else text[:24] + "..."
-
-
-def _check_range(value: float, shown: str, low: float | None, high: float | None) -> None:
-    """ArgumentTypeError unless ``low <= value <= high`` (either bound may be open-ended)."""
-    if (low is not None and value < low) or (high is not None and value > high):
-        span = f"{low:g}..{high:g}" if low is not None and high is not None else (
-            f">= {low:g}" if low is not None else f"<= {high:g}")
-        raise argparse.ArgumentTypeError(f"{shown} is out of range: give {span}")
-
-
-def integer(low: int | None = None, high: int | None = None) -> Callable[[str], int]:
+def integer(low: int | None = None, high: int | None = None, what: str = "value") -> Callable[[str], int]:
     """A whole number in ``low..high`` (either bound may be open-ended)."""
-    def parse(text: str) -> int:
-        value = _whole(text)
-        _check_range(value, str(value), low, high)
-        return value
-    parse.__name__ = "integer"
-    return parse
+    return of(Limit(what, low, high, whole=True))
 
 
-def real(low: float | None = None, high: float | None = None) -> Callable[[str], float]:
+def real(low: float | None = None, high: float | None = None, what: str = "value") -> Callable[[str], float]:
     """A finite number in ``low..high`` (bounds included; either may be open-ended)."""
-    def parse(text: str) -> float:
-        value = _real(text)
-        _check_range(value, text.strip(), low, high)
-        return value
-    parse.__name__ = "number"
-    return parse
+    return of(Limit(what, low, high))
 
 
 def fps(text: str) -> float:
@@ -71,33 +48,27 @@ def fps(text: str) -> float:
     from ..errors import MpegFaError
     from ..fba.stream import FrameRate
 
-    value = _real(text)
+    value = of(Limit("frame rate"))(text)
     try:
         FrameRate.from_fps(value)
     except (ValueError, MpegFaError) as exc:
-        raise argparse.ArgumentTypeError(getattr(exc, "message", None) or str(exc)) from None
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return value
 
 
 def size(text: str) -> tuple[int, int]:
     """An image size ``W`` or ``WxH``, each side 16..8192 pixels."""
     try:
-        parts = [int(v) for v in text.lower().split("x")]
-    except ValueError:
-        parts = []
-    if len(parts) == 1:
-        parts *= 2
-    if len(parts) != 2 or min(parts) < SIDE[0] or max(parts) > SIDE[1]:
-        raise argparse.ArgumentTypeError(f"{_short(text)!r}: expected W or WxH, {SIDE[0]} to {SIDE[1]}, "
-                                         "e.g. 512 or 640x480")
-    return parts[0], parts[1]
+        return limits.parse_size(text)
+    except LimitError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def speech_rate(text: str) -> int:
     """Words per minute within what espeak-ng accepts (every engine is held to it: a rate of 1 makes hours)."""
     from ..speech.tts.espeak import RATE_RANGE
 
-    return integer(*RATE_RANGE)(text)
+    return integer(*RATE_RANGE, what="speech rate")(text)
 
 
 def mask_types(text: str) -> list[int]:
@@ -113,21 +84,27 @@ def mask_types(text: str) -> list[int]:
     return types
 
 
-SIDE = (16, 8192)
+SIDE = (limits.SIDE.low, limits.SIDE.high)
 """Smallest and largest image side the commands render or bake."""
-quant = integer(0, 31)
+MOST_FRAMES = MAX_SPAN_SECONDS * 256
+"""No stream spans more frames: 24 hours (the codec's bound) at the fastest rate a header carries."""
+quant = of(limits.QUANT)
 """fap_quant / bap_quant: the 5-bit quantiser field."""
-period = integer(0)
+period = integer(0, MOST_FRAMES, what="intra period")
 """A count of frames such as --intra-period (0 = only the first)."""
-side = integer(*SIDE)
+side = of(limits.SIDE)
 """A square image's side in pixels."""
-samples = integer(0, 16)
-"""Anti-aliasing (MSAA) samples; the GL context may allow fewer, and says so."""
-crf = integer(0, 51)
+samples = of(limits.SAMPLES)
+"""Anti-aliasing (MSAA) samples: 0 or a power of two to 16; the GL context may allow fewer, and says so."""
+crf = of(limits.CRF)
 """H.264 constant rate factor."""
-frame = integer()
+port = of(limits.PORT)
+"""A TCP port for the local servers."""
+workers = of(limits.WORKERS)
+"""Worker processes of a local batch cluster."""
+frame = integer(-MOST_FRAMES, MOST_FRAMES, what="frame")
 """A frame index (negative counts from the end)."""
-seconds = real(0.0)
-"""A time in seconds from the start."""
+seconds = real(0.0, float(MAX_SPAN_SECONDS), what="time")
+"""A time in seconds from the start (a stream spans at most 24 h)."""
 finite = real()
 """Any finite number."""

@@ -28,7 +28,7 @@ def register(commands: Commands) -> None:
                     "clients on this machine get in: a WebSocket client outside a browser sends 'Origin: "
                     "http://127.0.0.1:PORT' (browsers send their page's); another site's Origin, or a Host other "
                     "than localhost, 127.0.0.1 or [::1] with the port, is refused (403).")
-    p.add_argument("--port", type=options.integer(1, 65535), default=DEFAULT_PORT,
+    p.add_argument("--port", type=options.port, default=DEFAULT_PORT,
                    help=f"port (default {DEFAULT_PORT})")
     p.add_argument("--engine", choices=ENGINES, default="espeak", help="speech engine (default espeak)")
     p.add_argument("--window", type=options.real(0.2, 60.0), default=WINDOW,

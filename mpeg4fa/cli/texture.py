@@ -83,9 +83,9 @@ def run_texture(args: argparse.Namespace) -> int:
             Image.fromarray(baked.image).save(out)
             if check is not None:
                 Image.fromarray(preview).save(check)
-    except (OSError, ValueError) as exc:
-        where = exc.filename if isinstance(exc, OSError) and exc.filename else args.output
-        raise RenderError(f"cannot write the image ({exc})", where=str(where)) from None
+    except ValueError as exc:  # no image format for the name (an OS error names its file itself)
+        raise RenderError(f"cannot write the image ({exc})", where=str(args.output),
+                          hint="name it .png, .jpg, .bmp or .tif") from None
     for view, align in baked.alignments.items():
         print(f"{view} photo: {len(align.labels)} points, alignment residual {align.residual:.1f} px",
               file=sys.stderr)

@@ -164,14 +164,14 @@ def frame_at(stream: FapStream, *, frame: int | None = None, seconds: float | No
     if seconds is not None:
         times = schedule(stream).times
         if not 0 <= seconds <= times[-1] + 1.0 / stream.fps:
-            raise RenderError(f"{seconds} s is outside the stream (0 to {times[-1]:.3f} s)", where="snapshot")
+            raise RenderError(f"time {seconds} s is outside the stream", hint=f"0 to {times[-1]:.3f} s")
         return int(np.searchsorted(times, seconds + 1e-9, side="right") - 1)
     k = 0 if frame is None else int(frame)
     if k < 0:
         k += n
     if not 0 <= k < n:
-        raise RenderError(f"frame {frame} is outside the stream", where="snapshot",
-                          hint=f"the stream has {n} frames: 0 to {n - 1} (negative counts from the end)")
+        raise RenderError(f"frame {frame} is outside the stream",
+                          hint=f"the stream has {n} frames: 0 to {n - 1}, negative counts from the end")
     return k
 
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.model import FaceModel
+from mpeg4fa.limits import SAMPLES, LimitError
 from mpeg4fa.render.camera import Camera, frame_points
 from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
@@ -60,9 +61,14 @@ class Renderer:
     def _setup_gl(self, samples: int) -> None:
         ctx = self.ctx
         max_samples = ctx.max_samples
-        if samples < 0 or samples > max_samples:
-            raise RenderError(f"{samples} samples for anti-aliasing is not supported here", where="renderer",
-                              hint=f"0 (off) to {max_samples}")
+        try:
+            samples = SAMPLES.check(samples)
+        except LimitError as exc:
+            raise RenderError(exc.message, where="renderer", hint=exc.hint) from None
+        if samples > max_samples:
+            here = ", ".join(str(n) for n in SAMPLES.choices if n <= max_samples)
+            raise RenderError(f"{samples} samples for anti-aliasing is more than this GL context allows",
+                              where="renderer", hint=f"one of {here}")
         self.samples = int(samples)
         self.program = program("face")  # shared: uniforms are set again before every draw
         size = (self.width, self.height)
