@@ -301,3 +301,30 @@ def test_deep_json_in_an_upload_is_one_json_error(client, files, where):
     r = client.post("/api/upload", files=[("file", (name, data, "text/plain")) for name, data in files])
     assert r.status_code == 422 and r.json()["where"] == where and "nested more than 64" in r.json()["error"], r.text
     assert client.app.state.session.mesh is mesh
+
+
+@pytest.mark.parametrize("kind, headers, refused", [
+    ("http", {"host": "127.0.0.1:8765"}, None),
+    ("http", {"host": "LOCALHOST:8765", "origin": "http://Localhost:8765"}, None),
+    ("http", {"host": "[::1]:8765", "origin": "http://[::1]:8765"}, None),
+    ("http", {"host": "127.0.0.1:8765", "sec-fetch-site": "same-origin", "sec-fetch-mode": "cors"}, None),
+    ("http", {"host": "127.0.0.1:8765", "sec-fetch-site": "cross-site", "sec-fetch-mode": "navigate"}, None),
+    ("websocket", {"host": "127.0.0.1:8765", "origin": "http://localhost:8765"}, None),
+    ("http", {"host": "127.0.0.1"}, "Host"),  # port 80, not the server's
+    ("http", {"host": "127.0.0.1.evil.example:8765"}, "Host"),
+    ("http", {"host": "localhost.:8765"}, "Host"),
+    ("http", {"host": "127.0.0.2:8765"}, "Host"),
+    ("http", {}, "Host"),
+    ("http", {"host": "127.0.0.1:8765", "origin": "http://127.0.0.1:8765/"}, "Origin"),
+    ("http", {"host": "127.0.0.1:8765", "origin": "http://127.0.0.1:8765.evil.example"}, "Origin"),
+    ("http", {"host": "127.0.0.1:8765", "origin": "http://127.0.0.1:87650"}, "Origin"),
+    ("http", {"host": "127.0.0.1:8765", "sec-fetch-site": "same-site", "sec-fetch-mode": "no-cors"}, "Sec-Fetch-Site"),
+    ("websocket", {"host": "127.0.0.1:8765"}, "Origin"),
+])
+def test_the_rules(kind, headers, refused):
+    from mpeg4fa.guard import refusal
+
+    scope = {"type": kind, "server": ("127.0.0.1", 8765),
+             "headers": [(k.encode(), v.encode()) for k, v in headers.items()]}
+    why = refusal(scope)
+    assert (why and why[1]) == refused, why
