@@ -1,20 +1,83 @@
-"""Reading an image file (a texture, a photo) for the renderer: one RGB array or one located error."""
+"""Reading an image file (a texture, a photo) for the renderer: one RGB array or one located error.
+
+Bounded before decoding: the header's size is checked against :data:`MAX_PIXELS` (64 Mpx, e.g.
+8192 x 8192) before any pixel is decoded, so a decompression bomb (a small file that says
+50,000 x 50,000) is refused at once; a truncated or damaged image, a file of another kind (a PDF, text,
+a WAV: named by :mod:`mpeg4fa.filetype`) and every decoder fault of Pillow are one :class:`RenderError`
+naming the file and what it was for.
+"""
 from __future__ import annotations
 
+import io
 import os
+import struct
+import warnings
 
 import numpy as np
 
+from mpeg4fa.filetype import HEAD_BYTES, foreign_kind, head_hex
 from mpeg4fa.render.errors import RenderError
 
+MAX_PIXELS = 1 << 26
+"""Largest image read (67,108,864 pixels: 8192 x 8192); decoding it takes up to ~450 MB."""
 
-def read_image(path: str | os.PathLike, what: str) -> np.ndarray:
-    """An image file as (H, W, 3) uint8 RGB; RenderError naming the file (and ``what`` it was for) otherwise."""
+_IMAGE_KINDS = ("a JPEG image", "a PNG image", "a GIF image", "a TIFF image", "a WebP image")
+
+
+def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = None) -> np.ndarray:
+    """An image file (or its bytes, e.g. an FDP's texture) as (H, W, 3) uint8 RGB; RenderError naming the
+    file, or ``where``, and ``what`` it was for otherwise."""
     from PIL import Image, UnidentifiedImageError
+
+    if isinstance(path, (bytes, bytearray, memoryview)):
+        source: str | os.PathLike | io.BytesIO = io.BytesIO(bytes(path))
+        where = where or "<image bytes>"
+    else:
+        source, where = path, where or os.fsdecode(path)
     try:
-        with Image.open(path) as img:
-            return np.asarray(img.convert("RGB"))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(source) as img:
+                width, height = img.size
+                if width * height > MAX_PIXELS:
+                    raise RenderError(f"the {what} is {width:,} x {height:,} pixels, more than the "
+                                      f"{MAX_PIXELS:,} pixels read", where=where, hint="scale the image down to 8192 x 8192 or less")
+                if width == 0 or height == 0:
+                    raise RenderError(f"the {what} has no pixels ({width} x {height})", where=where)
+                return np.asarray(img.convert("RGB"))
     except FileNotFoundError:
-        raise RenderError(f"no such {what}", where=str(path)) from None
-    except (OSError, UnidentifiedImageError, ValueError) as exc:
-        raise RenderError(f"cannot read the {what} ({exc})", where=str(path)) from None
+        raise RenderError(f"no such {what}", where=where) from None
+    except IsADirectoryError:
+        raise RenderError(f"the {what} is a directory, not a file", where=where, hint="name an image file") from None
+    except UnidentifiedImageError:
+        raise RenderError(f"cannot read the {what}: {_not_an_image(source)}", where=where,
+                          hint="give a PNG or JPEG image") from None
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
+        raise RenderError(f"the {what} has more than the {MAX_PIXELS:,} pixels read ({exc})", where=where,
+                          hint="scale the image down to 8192 x 8192 or less") from None
+    except (OSError, ValueError, SyntaxError, EOFError, struct.error, IndexError, TypeError, ZeroDivisionError,
+            MemoryError) as exc:  # Pillow's decoders fail in all of these ways on damaged files
+        raise RenderError(f"cannot read the {what}: damaged or truncated image ({exc})", where=where,
+                          hint="open it in an image viewer, or save it again as PNG") from None
+
+
+def _not_an_image(source: str | os.PathLike | io.BytesIO) -> str:
+    """What the file is instead, from its first bytes."""
+    try:
+        if isinstance(source, io.BytesIO):
+            head = source.getvalue()[:HEAD_BYTES]
+        else:
+            with open(source, "rb") as fh:
+                head = fh.read(HEAD_BYTES)
+    except OSError:
+        return "not an image file"
+    if not head:
+        return "the file is empty"
+    kind = foreign_kind(head)
+    if kind in _IMAGE_KINDS:
+        return f"a damaged file: it starts as {kind}"
+    if kind is not None:
+        return f"not an image: it starts with {head_hex(head)} ({kind})"
+    if all(b in b"\t\n\r" or 32 <= b < 127 for b in head):
+        return "not an image: it is text"
+    return f"not an image format Pillow knows (it starts with {head_hex(head)})"
