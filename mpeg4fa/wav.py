@@ -56,3 +56,8 @@ class PcmWriter:
     def close(self) -> None:
         """Write the header's final sizes (the file itself stays open: its owner closes it)."""
         self._out.close()
+
+    def abandon(self) -> None:
+        """Give up the file (an error stopped the writing): nothing more is written to it, not even by the
+        ``wave`` writer's own clean-up once the file is closed."""
+        self._out._file = None

@@ -127,7 +127,7 @@ class FbaBlocks:
         block = self._take(n)
         if self.frames + n > self.limit:
             source, line, column = self.place()
-            raise MarkupError(f"the speech runs past {self.limit:,} frames ({self.limit / self.fps / 3600:.0f} h at "
+            raise MarkupError(f"the speech runs past {self.limit:,} frames ({self.limit / self.fps / 3600:.3g} h at "
                               f"{self.fps:g} fps) here, more than one stream may span", line, column,
                               span_hint(self.fps), source)
         stream = self.build(block)

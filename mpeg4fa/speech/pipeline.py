@@ -208,7 +208,7 @@ def stream_text(text: str, out, *, audio=None, timings=None, engine: Engine | st
     wav = None
     listed = TimingsWriter(timings) if timings is not None else None
     engine_name = speaker.name
-    with phoneme_fallbacks(name):  # phonemes shown by a guess: one warning for the whole text
+    try:  # the passes warn once for phonemes shown by a guess, over the whole text (Passes.__iter__)
         for chunk in passes:
             speech = chunk.utterance.speech
             if audio is not None:
@@ -219,8 +219,12 @@ def stream_text(text: str, out, *, audio=None, timings=None, engine: Engine | st
                 listed.add(chunk.utterance.timings)
             bits.add(chunk.frames)
             engine_name = speech.engine
-    bits.add(passes.finish())
-    bits.finish()
+        bits.add(passes.finish())
+        bits.finish()
+    except BaseException:
+        if wav is not None:
+            wav.abandon()
+        raise
     if wav is not None:
         wav.close()
     if listed is not None:
@@ -269,8 +273,7 @@ def encoded_text(text: str, engine: Engine, *, fps: float = 25.0, level: str = "
     passes = Passes(text, engine, lang=lang, voice=voice, rate=rate, fps=fps, idle=idle, seed=seed,
                     fields=level != "low", name=name, chunk_chars=chunk_chars, progress=progress,
                     max_seconds=max_seconds, **markup_options)
-    with phoneme_fallbacks(name):  # phonemes shown by a guess: one warning for the whole text
-        chunks = list(passes)
+    chunks = list(passes)  # the passes warn once for phonemes shown by a guess (Passes.__iter__)
     blocks = [c.frames for c in chunks if c.frames is not None] + [passes.finish()]
     block = join_blocks(blocks)
     stream = StreamBuilder(level, fps, fold=fold, compact=compact).build(block)

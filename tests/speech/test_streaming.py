@@ -177,12 +177,17 @@ def test_a_combining_mark_stays_with_its_letter():
     assert all(not p.text[0] == "\u0301" for p in sentence_chunks(parse_markup(text), 7))
 
 
-def test_speech_longer_than_a_stream_spans_is_refused_where_it_runs_over(monkeypatch):
+def test_speech_longer_than_a_stream_spans_is_refused_where_it_runs_over(monkeypatch, tmp_path, capfd):
+    """Located, and nothing left behind: no partial stream, WAV or timings, no noise from the WAV writer."""
     monkeypatch.setattr(bits_module, "frame_limit", lambda fps: 300)
     with pytest.raises(MarkupError) as info:
-        stream_text(TEXT, io.BytesIO(), engine="estimate", level="low", chunk_chars=150, name="long.txt")
+        encode_text_to(TEXT, tmp_path / "long.fba", audio=tmp_path / "long.wav", timings=tmp_path / "long.json",
+                       engine=_SameSpeech(make_engine("espeak")), level="low", chunk_chars=150, name="long.txt")
     assert "more than one stream may span" in str(info.value)
     assert info.value.line == 1 and info.value.column > 1 and str(info.value).startswith("long.txt:1:")
+    import gc
+    gc.collect()
+    assert not list(tmp_path.iterdir()) and "Exception ignored" not in capfd.readouterr().err
 
 
 def test_say_refuses_speech_longer_than_it_renders_before_rendering(monkeypatch, tmp_path):
