@@ -2,14 +2,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from ..atomic import atomic_outputs
-from ..jsonio import read_json
+from ..fdp.build import read_points_json
 from ..render import RenderError
 from . import options
 from .errors import UsageError
@@ -44,16 +43,12 @@ def register(commands: Commands) -> None:
 
 
 def _points(path: Path) -> dict[str, tuple[float, float]]:
-    try:
-        data = read_json(path, what="a points file")  # size, nesting, encoding checked; faults at line:column
-    except FileNotFoundError:
-        raise RenderError("no such points file", where=str(path)) from None
-    except json.JSONDecodeError as exc:
-        raise RenderError(exc.msg, where=f"{path}:{exc.lineno}:{exc.colno}",
-                          hint='a JSON object like {"3.5": [246, 102], ...}') from None
-    if not isinstance(data, dict):
-        raise RenderError("expected a JSON object of label -> [x, y]", where=str(path))
-    return data
+    points = read_points_json(path)  # the one points reader: labels, numbers, nesting, bytes checked and located
+    for label, value in points.items():
+        if not (isinstance(value, tuple) and len(value) == 2):
+            raise RenderError(f"point {label} is not photo pixels [x, y]", where=str(path),
+                              hint='a JSON object like {"3.5": [246, 102], ...}')
+    return points  # type: ignore[return-value]
 
 
 def run_texture(args: argparse.Namespace) -> int:
