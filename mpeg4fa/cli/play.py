@@ -70,7 +70,8 @@ def _render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--size", type=options.size, default=(512, 512), metavar="W[xH]",
                    help="image size, 16 to 8192 (default 512; even for MP4)")
     p.add_argument("--aa", type=options.samples, default=0, metavar="N",
-                   help="anti-aliasing samples, 0 to 16 (4 or 8 for final output; default 0 = off, fastest)")
+                   help="anti-aliasing samples: 0 (off; default, fastest), 1, 2, 4, 8 or 16 (4 or 8 for final output; "
+                        "the GL context may allow fewer: Mesa's CPU renderer 4)")
     p.add_argument("--view", default="front", choices=tuple(VIEWS), help="camera position (default front)")
     p.add_argument("--texture", type=Path, help="a UV texture image for the skin (e.g. from photos); wins over the "
                                                 "FDP's own texture")

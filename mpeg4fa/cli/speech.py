@@ -49,7 +49,7 @@ def register(commands: Commands) -> None:
     p.add_argument("--size", type=options.size, default=(512, 512), metavar="W[xH]",
                    help="image size, 16 to 8192 (default 512; even for MP4)")
     p.add_argument("--aa", type=options.samples, default=4, metavar="N",
-                   help="anti-aliasing samples, 0 (off) to 16 (default 4)")
+                   help="anti-aliasing samples: 0 (off), 1, 2, 4 (default), 8 or 16")
     p.add_argument("--keep", action="store_true",
                    help="also write OUT.fba, OUT.wav and OUT.timings.json beside it")
     p.set_defaults(run=run_say)

@@ -76,29 +76,37 @@ def _readable(path: Path, hint: str) -> Path:
 
 def read_text(source: TextArgument) -> tuple[str, str]:
     """The text and its name for messages (``<text>``, ``<stdin>`` or the file), at most TEXT_MAX characters."""
-    from ..speech.errors import MarkupError
-
     if source.stdin:
-        text = sys.stdin.read(TEXT_MAX + 1)
         name = "<stdin>"
+        binary = getattr(sys.stdin, "buffer", None)
+        if binary is None:  # a text stream put in place of stdin (an embedding program): already decoded
+            text = sys.stdin.read(TEXT_MAX + 1)
+        else:  # bytes, whatever the locale says: decoded (or refused) by one rule, as a file's
+            text = _decoded(binary.read(4 * TEXT_MAX + 1), name)
     elif source.path is not None:
         name = str(source.path)
         with open(source.path, "rb") as handle:
-            data = handle.read(4 * TEXT_MAX + 1)  # UTF-8 takes at most 4 bytes a character
-        if len(data) > 4 * TEXT_MAX:
-            raise InputError(f"the text is longer than {TEXT_MAX} characters", where=name,
-                             hint="split it and encode the parts one after another")
-        try:
-            text = data.decode("utf-8-sig")
-        except UnicodeDecodeError as exc:
-            before = data[:exc.start].decode("utf-8-sig", errors="replace")
-            line = before.count("\n") + 1
-            column = len(before) - (before.rfind("\n") + 1) + 1
-            raise MarkupError(f"the text file is not UTF-8 ({exc.reason} at byte {exc.start})", line, column,
-                              hint="save it as UTF-8", source=name) from None
+            text = _decoded(handle.read(4 * TEXT_MAX + 1), name)
     else:
         return source.argument, "<text>"
     if len(text) > TEXT_MAX:
         raise InputError(f"the text is longer than {TEXT_MAX} characters", where=name,
                          hint="split it and encode the parts one after another")
     return text, name
+
+
+def _decoded(data: bytes, name: str) -> str:
+    """UTF-8 text (a byte-order mark dropped); a MarkupError at line:column and byte offset where it is not.
+
+    Standard input is read as bytes, not through the locale's codec: under a strict UTF-8 locale
+    a stray byte ended in a UnicodeDecodeError, under the C locale it became a lone surrogate.
+    The rule is the package's one (:func:`mpeg4fa.jsonio.decode_utf8`).
+    """
+    from ..jsonio import decode_utf8
+    from ..speech.errors import MarkupError
+
+    if len(data) > 4 * TEXT_MAX:  # UTF-8 takes at most 4 bytes a character
+        raise InputError(f"the text is longer than {TEXT_MAX} characters", where=name,
+                         hint="split it and encode the parts one after another")
+    return decode_utf8(data, name, lambda path, line, column, problem, hint: MarkupError(
+        problem, line or 1, column or 1, hint=hint, source=path), what="text")
