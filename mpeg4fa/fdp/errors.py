@@ -50,21 +50,23 @@ MAX_FILE_BYTES = 256 << 20
 ~60 MB), low enough that a wrong path (a disk image, a device) fails at once instead of filling memory."""
 
 
-def read_bytes(path: "str | os.PathLike[str]") -> bytes:
-    """The file's bytes; a missing, unreadable, oversized or non-file path becomes an :class:`FdpError` naming it."""
+def read_bytes(path: "str | os.PathLike[str]", limit: int | None = None, what: str = "an FDP file") -> bytes:
+    """The file's bytes (at most ``limit``, default :data:`MAX_FILE_BYTES`); a missing, unreadable, oversized
+    or non-file path becomes an :class:`FdpError` naming it."""
     name = str(path)
+    limit = MAX_FILE_BYTES if limit is None else limit
     try:
         with open(path, "rb") as handle:
             info = os.fstat(handle.fileno())
             if not (stat.S_ISREG(info.st_mode) or stat.S_ISFIFO(info.st_mode)):
-                raise FdpError.no_place(name, "is not a regular file (a device or socket?)", "name an FDP file")
-            if info.st_size > MAX_FILE_BYTES:
-                raise FdpError.no_place(name, f"is {info.st_size:,} bytes, more than an FDP file may be "
-                                        f"({MAX_FILE_BYTES:,})", "is this an FDP file?")
-            data = handle.read(MAX_FILE_BYTES + 1)
+                raise FdpError.no_place(name, "is not a regular file (a device or socket?)", f"name {what}")
+            if info.st_size > limit:
+                raise FdpError.no_place(name, f"is {info.st_size:,} bytes, more than {what} may be "
+                                        f"({limit:,})", f"is this {what}?")
+            data = handle.read(limit + 1)
     except OSError as exc:
         raise FdpError.from_os_error(name, exc) from None
-    if len(data) > MAX_FILE_BYTES:
-        raise FdpError.no_place(name, f"holds more than {MAX_FILE_BYTES:,} bytes, more than an FDP file may be",
-                                "is this an FDP file?")
+    if len(data) > limit:
+        raise FdpError.no_place(name, f"holds more than {limit:,} bytes, more than {what} may be",
+                                f"is this {what}?")
     return data

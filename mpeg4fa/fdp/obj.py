@@ -38,6 +38,7 @@ import numpy as np
 import trimesh
 
 from mpeg4fa.fdp.errors import FdpError, read_bytes
+from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
 from mpeg4fa.fdp.model import FdpMesh
 
 _INDEX_HINT = "OBJ indices count from 1; negative ones count back from the last one defined above the face"
@@ -60,10 +61,15 @@ _GROUP, _OBJECT = re.compile(r"(?m)^g "), re.compile(r"(?m)^o ")
 _NAME = re.compile(rf"(?m)^{_WS}*o{_WS}+([^\n]*\S)")
 
 
+MAX_OBJ_BYTES = 32 << 20
+"""Largest OBJ read (32 MiB, about 600,000 vertices with their faces): parsing takes ~17 bytes of memory
+and ~0.7 s per byte-MB of text (4.5 MB: 3 s, +80 MB), so this bounds a mesh at ~25 s and ~0.6 GB."""
+
+
 def read_obj(path: str | os.PathLike[str]) -> FdpMesh:
-    """Read the OBJ file at ``path`` as an :class:`FdpMesh`."""
+    """Read the OBJ file at ``path`` as an :class:`FdpMesh` (at most :data:`MAX_OBJ_BYTES`)."""
     name = str(path)
-    data = read_bytes(path)
+    data = read_bytes(path, MAX_OBJ_BYTES, "an OBJ mesh")
     return mesh_from_obj(data, name)
 
 
@@ -80,7 +86,11 @@ def mesh_and_groups_from_obj(text: str | bytes, path: str = "<string>") -> tuple
 
 
 def _read(text: str | bytes, path: str, groups: bool) -> tuple[FdpMesh, list[str] | None]:
+    if len(text) > MAX_OBJ_BYTES:
+        raise FdpError.no_place(path, f"the OBJ text is {len(text):,} bytes, more than the {MAX_OBJ_BYTES:,} read",
+                                "decimate the mesh; a face needs far fewer than 600,000 vertices")
     if isinstance(text, (bytes, bytearray, memoryview)):
+        refuse_foreign(bytes(text[:HEAD_BYTES]), "an OBJ mesh", lambda problem, hint: FdpError.no_place(path, problem, hint))
         text = bytes(text).decode("utf-8", errors="replace")  # only ASCII numbers matter; names may be anything
     plain = re.sub(r"#[^\n]*", "", text)  # same lines and columns as the file, for locating faults
     _check_statements(plain, path)
