@@ -8,6 +8,7 @@ from typing import Mapping
 from numpy.typing import ArrayLike
 
 from mpeg4fa.fdp.binary import MAGIC, fdp_from_bytes, fdp_to_bytes
+from mpeg4fa.filetype import HEAD_BYTES, head_hex, refuse_foreign
 from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.json_form import fdp_from_json, fdp_to_json
 from mpeg4fa.fdp.model import Fdp
@@ -62,8 +63,9 @@ def load_fdp(path: str | os.PathLike[str], meshes: Mapping[str, ArrayLike] | Non
         return xface.to_fdp(meshes)
     if not data:
         raise FdpError.no_place(name, "the file is empty")
-    raise FdpError.at_byte(name, 0, "not an FDP file (neither the binary magic, JSON nor XML)",
-                           "FDP files are binary (.fdp from save_fdp), JSON or Xface XML")
+    refuse_foreign(data[:HEAD_BYTES], "an FDP file", lambda problem, hint: FdpError.at_byte(name, 0, problem, hint))
+    raise FdpError.at_byte(name, 0, f"not an FDP file: starts with {head_hex(data)}, neither the binary magic, "
+                           "JSON nor XML", "FDP files are binary (.fdp from save_fdp), JSON or Xface XML")
 
 
 def save_fdp(fdp: Fdp, path: str | os.PathLike[str], *, float32: bool = False) -> None:

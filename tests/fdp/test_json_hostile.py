@@ -31,3 +31,16 @@ def test_deep_fdp_json_is_refused_before_parsing(tmp_path):
     path.write_text(text)
     with pytest.raises(FdpError, match="nested"):
         load_fdp(path)
+
+
+@pytest.mark.parametrize("data, words", [
+    (b"\xff\xd8\xff\xe0" + bytes(40), "starts with 0xFFD8FFE0 (a JPEG image)"),
+    (b"\x00\x00\x01\xba" + bytes(40), "(an FBA stream)"),
+    (b"RIFF\x00\x00\x00\x00WAVEfmt ", "(a WAV audio file)"),
+])
+def test_a_foreign_file_given_as_fdp_is_named(tmp_path, data, words):
+    path = tmp_path / "face.fdp"
+    path.write_bytes(data)
+    with pytest.raises(FdpError, match="not an FDP file") as info:
+        load_fdp(path)
+    assert words in str(info.value) and str(info.value).startswith(f"{path}: byte 0")
