@@ -62,7 +62,8 @@ BAD_VALUES = [  # (command line, option, what the line must say)
 ]
 
 
-@pytest.mark.parametrize("argv, option, said", BAD_VALUES, ids=lambda v: " ".join(v)[:60] if isinstance(v, list) else None)
+@pytest.mark.parametrize("argv, option, said", BAD_VALUES,
+                         ids=lambda v: " ".join(v)[:60] if isinstance(v, list) else None)
 def test_a_bad_option_value_is_one_line_without_the_usage(capsys, demo, argv, option, said):
     argv = [str(demo) if a == "D" else a for a in argv]
     err = _argparse_error(capsys, *argv)
