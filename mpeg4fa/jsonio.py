@@ -106,7 +106,9 @@ def json_text(source: str | bytes, path: str, error: ErrorFactory = JsonError, w
     return decode_utf8(raw, path, error, what)
 
 
-_STRING = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"', re.S)
+_STRING = re.compile(r'"[^"\\]*+(?:\\(?:.|\Z)[^"\\]*+)*+(?:"|\Z)', re.S)
+"""A string, or an unterminated one up to the end: it always matches from a quote, possessively, so a scan
+never starts over inside a string (``"\\"\\"...`` unterminated was quadratic)."""
 _BRACKETS = {ord("["): 1, ord("{"): 1, ord("]"): -1, ord("}"): -1}
 
 
