@@ -67,8 +67,14 @@ def main(argv: list[str] | None = None) -> int:
             args = build_parser().parse_args(argv)
         except KeyboardInterrupt as exc:  # before any work: nothing to clean up
             return _stopped("mpeg4fa", exc)
-        warnings.showwarning = _one_line_warnings(f"mpeg4fa {args.command}")
+        warnings.showwarning = _one_line_warnings(_command(args))
         return _run(args)
+
+
+def _command(args: argparse.Namespace) -> str:
+    """``mpeg4fa CMD`` as its messages begin (with the subcommand: ``mpeg4fa model pose``), as argparse's do."""
+    sub = getattr(args, "model_command", None)
+    return f"mpeg4fa {args.command} {sub}" if sub else f"mpeg4fa {args.command}"
 
 
 def _one_line_warnings(prefix: str):
@@ -78,7 +84,7 @@ def _one_line_warnings(prefix: str):
 
 
 def _run(args: argparse.Namespace) -> int:
-    command = f"mpeg4fa {args.command}"
+    command = _command(args)
     try:
         return int(args.run(args) or 0)
     except UsageError as exc:

@@ -218,6 +218,8 @@ def run_validate(args: argparse.Namespace) -> int:
     try:
         stream = decode(args.stream)
     except FbaError as exc:
+        if not os.path.isfile(args.stream):  # no stream to judge: an error line, not "invalid" (and the name twice)
+            raise
         result = {"valid": False, "error": exc.message, "bit_offset": exc.bit_offset, "frame": exc.frame,
                   "frames_decoded": len(exc.partial) if exc.partial is not None else 0}
         print(json.dumps(result) if args.json else f"{args.stream}: invalid: {exc}")
@@ -234,6 +236,8 @@ def _run_validate_semantic(args: argparse.Namespace) -> int:
     try:
         stream, kind = read_stream(args.stream)
     except FbaError as exc:
+        if not os.path.isfile(args.stream):
+            raise
         result = {"valid": False, "error": exc.message, "bit_offset": exc.bit_offset, "frame": exc.frame,
                   "frames_decoded": len(exc.partial) if exc.partial is not None else 0}
         print(json.dumps(result) if args.json else f"{args.stream}: invalid: {exc}")

@@ -212,3 +212,15 @@ def test_utf8_on_stdin_is_read_whatever_the_locale(tmp_path):
                            "--engine", "estimate"], input="Grüße, café".encode(), capture_output=True,
                           cwd=ROOT, env={**base, "LC_ALL": "C"})
     assert done.returncode == 0, done.stderr.decode()
+
+
+def test_a_subcommand_says_its_full_name(cli):
+    code, _, err = cli("model", "pose", "--viseme", "XX")
+    assert code == 1 and err.startswith("mpeg4fa model pose: error: unknown viseme 'XX'"), err
+
+
+def test_validate_of_a_missing_file_is_an_error_naming_it_once(cli, tmp_path):
+    missing = tmp_path / "nothere.fba"
+    for semantic in ((), ("--semantic",)):
+        code, out, err = cli("validate", missing, *semantic)
+        assert code == 1 and out == "" and err.count(str(missing)) == 1 and err.startswith("mpeg4fa validate: error:")
