@@ -1,5 +1,6 @@
 """The CLI's own errors: options that do not go together (exit status 2, like argparse's), and command-line
-input that names no usable file (exit status 1, like every other bad input)."""
+input that names no usable file (exit status 1, like every other bad input); and how an operating-system
+error becomes one line naming its file and what to do (:func:`os_error_line`)."""
 from __future__ import annotations
 
 import errno
