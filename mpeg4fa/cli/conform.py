@@ -9,7 +9,7 @@ from pathlib import Path
 from .options import Commands, real
 from .progress import ProgressBar
 
-timeout = real(0.1, 3600.0)
+timeout = real(0.1, 3600.0, what="timeout")
 """Seconds a decoder may take on one vector."""
 
 

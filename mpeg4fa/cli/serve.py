@@ -31,9 +31,9 @@ def register(commands: Commands) -> None:
     p.add_argument("--port", type=options.port, default=DEFAULT_PORT,
                    help=f"port (default {DEFAULT_PORT})")
     p.add_argument("--engine", choices=ENGINES, default="espeak", help="speech engine (default espeak)")
-    p.add_argument("--window", type=options.real(0.2, 60.0), default=WINDOW,
+    p.add_argument("--window", type=options.real(0.2, 60.0, what="window"), default=WINDOW,
                    help=f"seconds of media sent ahead of the client's playhead (default {WINDOW:g})")
-    p.add_argument("--stall-timeout", type=options.real(1.0, 3600.0), default=STALL_TIMEOUT,
+    p.add_argument("--stall-timeout", type=options.real(1.0, 3600.0, what="stall timeout"), default=STALL_TIMEOUT,
                    help=f"close a client silent this many seconds with the window full (default {STALL_TIMEOUT:g})")
     face_options(p)
     p.add_argument("--no-browser", action="store_true", help="do not open the page")
