@@ -35,8 +35,7 @@ def test_manifest_jobs_keep_their_lines(tmp_path):
     (tmp_path / "s.fba").write_bytes(b"")
     path = tmp_path / "jobs.json"
     path.write_text("[\n" + ",\n\n".join('{"stream": "s.fba", "output": "o%d.mp4"}' % k for k in range(300)) + "\n]")
-    manifest = load_manifest(path)
-    jobs = manifest.jobs if hasattr(manifest, "jobs") else manifest
+    jobs = load_manifest(path).jobs
     assert [job.where for job in jobs][:2] == ["job 0 at line 2", "job 1 at line 4"]
     assert jobs[-1].where == f"job 299 at line {2 + 2 * 299}"
 
@@ -53,3 +52,17 @@ def test_a_deep_decoder_answer_is_an_error_not_a_crash_of_the_run(tmp_path):
     """))
     result = CommandDecoder(f"{sys.executable} {script}")(tmp_path / "any.fba", None, 30)
     assert result.status == CRASH and "nested more than 8 levels" in result.message
+
+
+def test_decoder_answers_that_broke_the_protocol_reader(tmp_path):
+    from mpeg4fa.conformance.protocol import bit_from_text
+
+    assert bit_from_text("error at bit " + "9" * 5000) is None and bit_from_text("at bit 1234 (byte 154)") == 1234
+    out = tmp_path / "out.json"
+    out.write_text('{"timestamps": [0], "shown": [[' + ", ".join(["1" + "0" * 40] * 68) + "]]}")
+    with pytest.raises(ConformanceError, match="not an array of numbers"):
+        read_output(out)
+    out.unlink()
+    out.with_suffix(".csv").write_text("t," + "x" * 200_000 + "\n")
+    with pytest.raises(ConformanceError, match="not valid CSV"):
+        read_output(out)

@@ -40,7 +40,7 @@ from mpeg4fa.spec import N_FAPS
 DECODED, REJECTED, CRASH, TIMEOUT = "decoded", "rejected", "crash", "timeout"
 DEFAULT_TIMEOUT = 20.0
 """Seconds a decoder may take on one vector (the suite's vectors are a few seconds of frames)."""
-_BIT = re.compile(r"\bbit\s+(\d+)", re.IGNORECASE)
+_BIT = re.compile(r"\bbit\s+(\d{1,18})\b", re.IGNORECASE)
 
 
 @dataclass
@@ -92,7 +92,7 @@ class DecoderResult:
 def _array(value: Any, shape_tail: tuple[int, ...], what: str, where: str, dtype=np.float64) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=dtype)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ConformanceError(f"{what} is not an array of numbers", where=where) from None
     if array.size == 0:
         array = array.reshape((0, *shape_tail))
@@ -133,7 +133,10 @@ def output_from_json(doc: Any, where: str = "decoder output") -> DecoderOutput:
 
 def output_from_csv(text: str, where: str = "decoder output") -> DecoderOutput:
     """A :class:`DecoderOutput` from the CSV form (``t,FAP1..FAP68`` per frame: shown values only)."""
-    rows = [row for row in csv.reader(text.splitlines()) if row and any(cell.strip() for cell in row)]
+    try:
+        rows = [row for row in csv.reader(text.splitlines()) if row and any(cell.strip() for cell in row)]
+    except csv.Error as exc:  # a field over csv's limit (128 KiB), a NUL...
+        raise ConformanceError(f"not valid CSV: {exc}", where=where) from None
     if not rows:
         raise ConformanceError("empty CSV", where=where)
     header = [cell.strip().lower() for cell in rows[0]]
