@@ -59,7 +59,10 @@ def test_decoder_answers_that_broke_the_protocol_reader(tmp_path):
 
     assert bit_from_text("error at bit " + "9" * 5000) is None and bit_from_text("at bit 1234 (byte 154)") == 1234
     out = tmp_path / "out.json"
-    out.write_text('{"timestamps": [0], "shown": [[' + ", ".join(["1" + "0" * 40] * 68) + "]]}")
+    row = "[" + ", ".join(["0"] * 68) + "]"
+    big = "[" + ", ".join(["1" + "0" * 40] * 68) + "]"
+    out.write_text('{"timestamps": [0], "shown": [' + row + '], "sent": {"mask": [' + row + '], "values": ['
+                   + big + '], "viseme": [[0, 0, 0, 0]], "expression": [[0, 0, 0, 0, 0, 0]]}}')
     with pytest.raises(ConformanceError, match="not an array of numbers"):
         read_output(out)
     out.unlink()
