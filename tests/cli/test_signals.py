@@ -146,3 +146,17 @@ def test_the_editor_server_stops_cleanly(tmp_path, signum):
     assert proc.returncode == 128 + signum, err
     assert "Traceback" not in err and err.strip().splitlines()[-1] == \
         f"mpeg4fa edit: terminated ({signal.Signals(signum).name})", err
+
+
+@pytest.mark.usefixtures("generic_head_installed")
+def test_batch_removes_what_its_workers_left(tmp_path):
+    """The local cluster's workers die with the batch (or with the process group, as `timeout` kills it) and
+    cannot clean up: the batch removes their temporaries once the cluster is closed."""
+    (tmp_path / "long.fba").write_bytes(encode(demo_stream(seconds=1200.0)))
+    (tmp_path / "jobs.json").write_text('{"defaults": {"size": "32x32"}, "jobs": [{"stream": "long.fba"}]}')
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "long.mp4").write_bytes(EARLIER)
+    proc = _start(tmp_path, "batch", "jobs.json", "-o", "out", "--workers", "1", "--force")
+    _wait_for(proc, lambda: _partials(out), "partial MP4")
+    _check_stopped(proc, _stop(proc, signal.SIGTERM), "batch", signal.SIGTERM, out, out / "long.mp4")
