@@ -322,10 +322,22 @@ def texture_from_file(path: str | os.PathLike[str]) -> TextureImage:
     return TextureImage(Path(path).name, media_type, data)
 
 
+def _one_ihdr(data: bytes) -> bool:
+    """Whether the PNG's chunks before its image data hold one IHDR (decoders take the last of several)."""
+    pos, seen = 8, 0
+    while pos + 8 <= len(data):
+        length, kind = struct.unpack(">I", data[pos:pos + 4])[0], data[pos + 4:pos + 8]
+        if kind in (b"IDAT", b"IEND"):
+            break
+        seen += kind == b"IHDR"
+        pos += 12 + length
+    return seen == 1
+
+
 def image_size(data: bytes) -> tuple[int, int] | None:
     """(width, height) from a PNG or JPEG header, or None when ``data`` is neither or is cut short."""
     if data.startswith(_PNG) and data[12:16] == b"IHDR" and len(data) >= 24:
-        return struct.unpack(">II", data[16:24])
+        return struct.unpack(">II", data[16:24]) if _one_ihdr(data) else None
     if not data.startswith(_JPEG):
         return None
     pos = 2
