@@ -69,3 +69,10 @@ def test_decoder_answers_that_broke_the_protocol_reader(tmp_path):
     out.with_suffix(".csv").write_text("t," + "x" * 200_000 + "\n")
     with pytest.raises(ConformanceError, match="not valid CSV"):
         read_output(out)
+
+
+def test_a_manifest_path_the_system_refuses_is_a_problem_not_a_crash(tmp_path):
+    path = tmp_path / "jobs.json"
+    path.write_text('[{"stream": "' + "x" * 5000 + '.fba"}]')
+    with pytest.raises(BatchError, match="File name too long"):
+        load_manifest(path)

@@ -382,9 +382,13 @@ def _input_path(value: Any, key: str, where: str, base: Path, problems: list[str
         problems.append(f"{where}: {key}: expected a file path")
         return None
     path = base / Path(value.strip()).expanduser()
-    if not path.is_file():
-        problems.append(f"{where}: no such {key} file {value.strip()}" if not path.exists()
-                        else f"{where}: {key} {value.strip()} is not a file")
+    try:
+        if not path.is_file():
+            problems.append(f"{where}: no such {key} file {value.strip()}" if not path.exists()
+                            else f"{where}: {key} {value.strip()} is not a file")
+            return None
+    except OSError as exc:  # a name too long, a path through a file...: said, with the others
+        problems.append(f"{where}: {key} {value.strip()[:80]!r}: {exc.strerror or exc}")
         return None
     return Path(os.path.abspath(path))
 
