@@ -2,7 +2,7 @@
 
 Why blocks: the planner and the writer (:mod:`mpeg4fa.fba.encoder`) take a whole
 :class:`~mpeg4fa.fba.stream.FapStream`, and a long text's frames must not be held at once. So
-frames are coded in blocks of about :data:`BLOCK_SECONDS`, each planned and written as a stream of
+frames are coded in blocks of about :data:`BLOCK_SECONDS` (at most :data:`BLOCK_FRAMES`), each planned and written as a stream of
 its own, starting with an intra frame behind a plane start code, and the blocks' bits are joined
 into one stream: the first block keeps its object start code, every block drops its end code
 and the stuffing before its plane start code (the block before ends with the same stuffing),
@@ -30,15 +30,19 @@ from mpeg4fa.fba.limits import frame_limit, span_hint
 from mpeg4fa.fba.params import FACE, dequantise, quantise
 from mpeg4fa.fba.stream import END_CODE, PLANE_START_CODE, FapStream
 from mpeg4fa.speech.errors import MarkupError
-from mpeg4fa.speech.frames import FrameBlock
+from mpeg4fa.speech.frames import FrameBlock, join_blocks
 
 BLOCK_SECONDS = 60.0
 """Seconds of frames coded as one block: each starts with an intra frame (some hundred bits)."""
+BLOCK_FRAMES = 1500
+"""Most frames in a block (60 s at 25 fps): the planner's search over a block (FAP 1/2 fields,
+:mod:`mpeg4fa.speech.compact`) keeps some state per frame, so at high frame rates blocks are shorter."""
 
 
 def block_frames(fps: float, intra_period: int | None = None) -> int:
-    """Frames per block at ``fps``: :data:`BLOCK_SECONDS` of them, a whole number of intra periods."""
-    n = max(1, int(round(BLOCK_SECONDS * fps)))
+    """Frames per block at ``fps``: :data:`BLOCK_SECONDS` of them, at most :data:`BLOCK_FRAMES`, a whole
+    number of intra periods."""
+    n = max(1, min(int(round(BLOCK_SECONDS * fps)), BLOCK_FRAMES))
     if intra_period:
         n = -(-n // intra_period) * intra_period
     return n
@@ -115,8 +119,6 @@ class FbaBlocks:
         self._put(struct.pack(">I", END_CODE))
 
     def _take(self, n: int) -> FrameBlock:
-        from mpeg4fa.speech.encoder import join_blocks
-
         whole = join_blocks(self.pending)
         head, rest = _split(whole, n)
         self.pending = [rest] if len(rest) else []

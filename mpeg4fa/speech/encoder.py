@@ -29,7 +29,7 @@ from mpeg4fa.fba.syntax import MASK_ALL, MASK_HOLD, MASK_INTERPOLATE, MASK_NONE
 from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS, FULL_INTENSITY, N_FAPS, VISEMES
 from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.compact import compact_expressions, compact_visemes, plan_expression_mask
-from mpeg4fa.speech.frames import FrameBlock, FrameMaker
+from mpeg4fa.speech.frames import FrameBlock, FrameMaker, join_blocks
 from mpeg4fa.speech.timeline import CLOSURE_HOLD, ExpressionFields, VisemeFields
 from mpeg4fa.speech.tts.base import Engine
 from mpeg4fa.speech.utterance import Utterance
@@ -154,19 +154,6 @@ def encode_utterance(utterance: Utterance, *, fps: float = 25.0, level: str = "h
 def phones(utterance: Utterance) -> Utterance:
     """The phones pass: stops start at their closure's silence (:func:`~.closures.stop_closures`)."""
     return replace(utterance, timings=stop_closures(utterance.timings, utterance.speech))
-
-
-def join_blocks(blocks: Sequence[FrameBlock]) -> FrameBlock:
-    """Consecutive frame blocks as one (what a stream of several chunks is built from)."""
-    if len(blocks) == 1:
-        return blocks[0]
-    fields = blocks[0].visemes is not None
-    vis = VisemeFields(sum((b.visemes.select1 for b in blocks), []), sum((b.visemes.select2 for b in blocks), []),
-                       np.concatenate([b.visemes.blend for b in blocks])) if fields else None
-    exp = ExpressionFields(*(np.concatenate([getattr(b.expressions, f) for b in blocks])
-                             for f in ("select1", "intensity1", "select2", "intensity2"))) if fields else None
-    return FrameBlock(blocks[0].first, np.concatenate([b.times for b in blocks]),
-                      np.concatenate([b.values for b in blocks]), vis, exp)
 
 
 def closure_hold(fps: float) -> float:

@@ -21,6 +21,8 @@ from mpeg4fa.speech.timeline import (CLOSURE_HOLD, ExpressionCue, ExpressionFiel
                                      _expression_rows, _ExpressionTracks, _finite, _Moves, _viseme_field_rows,
                                      _viseme_rows, merge_tracks)
 
+WINDOW = 4096
+"""Frames computed at once (the tracks take some kB a frame while they are merged)."""
 REST_TIME = 0.15
 """The longest move into silence (s), as :func:`~.timeline.viseme_track` defaults it."""
 
@@ -106,6 +108,14 @@ class FrameMaker:
         return self._frames(max(stop, self.next))
 
     def _frames(self, stop: int) -> FrameBlock:
+        """Frames ``next .. stop - 1``, computed :data:`WINDOW` at a time (the tracks of a long chunk at
+        a high frame rate are not all held at once)."""
+        parts = []
+        while self.next < stop or not parts:
+            parts.append(self._window(min(stop, self.next + WINDOW)))
+        return join_blocks(parts)
+
+    def _window(self, stop: int) -> FrameBlock:
         first = self.next
         t = np.arange(first, stop, dtype=np.float64) / self.fps
         segments = self.segments
@@ -127,3 +137,16 @@ class FrameMaker:
                 self.idle.forget(last)
         self.next = stop
         return FrameBlock(first, t, values, visemes, expressions)
+
+
+def join_blocks(blocks: Sequence[FrameBlock]) -> FrameBlock:
+    """Consecutive frame blocks as one (what a stream of several chunks is built from)."""
+    if len(blocks) == 1:
+        return blocks[0]
+    fields = blocks[0].visemes is not None
+    vis = VisemeFields([s for b in blocks for s in b.visemes.select1], [s for b in blocks for s in b.visemes.select2],
+                       np.concatenate([b.visemes.blend for b in blocks])) if fields else None
+    exp = ExpressionFields(*(np.concatenate([getattr(b.expressions, f) for b in blocks])
+                             for f in ("select1", "intensity1", "select2", "intensity2"))) if fields else None
+    return FrameBlock(blocks[0].first, np.concatenate([b.times for b in blocks]),
+                      np.concatenate([b.values for b in blocks]), vis, exp)

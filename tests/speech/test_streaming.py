@@ -81,10 +81,13 @@ def test_short_texts_keep_their_frames_and_bytes():
         assert hashlib.sha256(data).hexdigest() == golden["meta"][key]["sha256"], key
 
 
-@pytest.mark.parametrize("idle", [False, True])
-def test_chunked_frames_equal_the_whole_text_timeline(idle):
-    """Chunk by chunk, the frames (values and FAP 1/2 fields) are those of the timeline run over all the
-    text's timings at once: tags, moves and idle motion carry across the chunk boundaries."""
+@pytest.mark.parametrize("idle, window", [(False, 4096), (True, 4096), (True, 7)])
+def test_chunked_frames_equal_the_whole_text_timeline(idle, window, monkeypatch):
+    """Chunk by chunk (and window by window), the frames (values and FAP 1/2 fields) are those of the
+    timeline run over all the text's timings at once: tags, moves and idle motion carry across."""
+    from mpeg4fa.speech import frames as frames_module
+
+    monkeypatch.setattr(frames_module, "WINDOW", window)
     fps = 25.0
     passes = Passes(TEXT, make_engine("estimate"), fps=fps, idle=idle, seed=3, chunk_chars=150)
     chunks = list(passes)
