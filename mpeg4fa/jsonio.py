@@ -191,7 +191,7 @@ def loads(source: str | bytes, path: str = "<json>", *, max_bytes: int = MAX_JSO
         line, col = line_col(text, _locate_literal(text, exc.literal))
         raise error(path, line, col, exc.problem, "give a finite number in ordinary notation") from None
     except RecursionError:  # a hook nesting deeper than max_depth allowed for (should not happen)
-        raise error(path, None, None, "JSON nested too deeply", f"{what} nests far less") from None
+        raise error(path, None, None, "JSON nested too deeply", f"nothing in {what} nests this deep") from None
 
 
 def loads_lines(source: str | bytes, path: str = "<json>", *, max_bytes: int = MAX_JSON_BYTES,
@@ -237,7 +237,7 @@ def _checked_text(source: str | bytes, path: str, max_bytes: int, max_depth: int
     if deep is not None:
         line, col = line_col(text, deep)
         raise error(path, line, col, f"JSON nested more than {max_depth} levels deep",
-                    f"{what} nests far less; is this the right file?")
+                    f"nothing in {what} nests this deep; is this the right file?")
     return text
 
 

@@ -225,7 +225,7 @@ def _skip(text: str, pos: int) -> int:
 def _json_entries(text: str, path: Path) -> tuple[dict, list[tuple[int, Any]]]:
     """``(defaults, [(line, job entry)])``: the document is parsed whole first, then walked for the lines."""
     document = jsonio.loads(text, str(path), max_bytes=4 * MAX_MANIFEST_BYTES, max_depth=MAX_DEPTH, error=_located,
-                            what='a manifest (a list of jobs, or {"defaults": {...}, "jobs": [...]})')
+                            what="a batch manifest")
     decoder = json.JSONDecoder()
     start = _skip(text, 0)
     if isinstance(document, dict):

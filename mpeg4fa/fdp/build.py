@@ -116,7 +116,7 @@ def parse_points_json(data: bytes, name: str) -> dict[str, int | tuple[float, ..
     """:func:`read_points_json` on bytes already in memory (an upload); ``name`` locates the faults."""
     text = _decode(data, name)
     doc = _Doc(text, name)
-    points = doc.obj(_parse(text, name), (), "a feature points file", ())
+    points = doc.obj(_parse(text, name, "a feature points file"), (), "a feature points file", ())
     out: dict[str, int | tuple[float, ...]] = {}
     first_photo: bool | None = None
     for label, value in points.items():

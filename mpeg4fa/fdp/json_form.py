@@ -330,11 +330,11 @@ def _decode(text: str | bytes, path: str) -> str:
     return jsonio.json_text(text, path, FdpError, "FDP JSON")
 
 
-def _parse(text: str, path: str) -> Any:
+def _parse(text: str, path: str, what: str = "an FDP document") -> Any:
     """The parsed document: nesting (at most :data:`MAX_DEPTH`), numbers and syntax checked by
     :func:`mpeg4fa.jsonio.loads`, duplicate keys remembered for the schema's checks."""
     return jsonio.loads(text, path, max_bytes=4 * MAX_JSON_CHARS, max_depth=MAX_DEPTH, error=FdpError,
-                        what="an FDP document", object_pairs_hook=_pairs)
+                        what=what, object_pairs_hook=_pairs)
 
 
 def _texture_coords(doc: _Doc, top: dict, labels: tuple[str, ...]) -> np.ndarray | None:
