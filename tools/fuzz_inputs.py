@@ -289,8 +289,8 @@ def m_lines(rng, data, seeds):
         del lines[i]
     elif op == 2:
         lines[i], lines[j] = lines[j], lines[i]
-    else:
-        lines[i:i + 1] = [lines[i]] * rng.choice((2, 10, 1000))
+    else:  # repeated, up to what a case may hold
+        lines[i:i + 1] = [lines[i]] * min(rng.choice((2, 10, 1000)), MAX_INPUT // max(len(lines[i]), 1) + 1)
     return b"".join(lines)
 
 
@@ -898,7 +898,7 @@ def mutate(rng: random.Random, target: str, seed: bytes, pool: list[bytes]) -> t
         try:
             data = mutator(rng, data, pool)[:MAX_INPUT]
             names.append(mutator.__name__[2:])
-        except (ArithmeticError, ValueError, RecursionError):  # cannot apply to this input: leave it as it is
+        except (ArithmeticError, ValueError, RecursionError, MemoryError):  # cannot apply here: leave it as it is
             names.append(mutator.__name__[2:] + " (not applicable)")
     return data, names
 
