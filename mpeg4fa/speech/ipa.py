@@ -415,7 +415,7 @@ def phoneme_fallbacks(where: str = "espeak") -> Iterator[FallbackLog]:
     finally:
         _fallbacks.reset(token)
     if log.seen:
-        warnings.warn(PhonemeWarning(log.message()), stacklevel=3)
+        warnings.warn(log.message(), PhonemeWarning, stacklevel=3)
 
 
 def split_event(event: Event, parts: list[tuple[str, str]]) -> list[tuple[str, str, float, float]]:

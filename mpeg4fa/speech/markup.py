@@ -385,7 +385,6 @@ def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name:
     markup = _Parser(source, known, name, lenient).run()
     if markup.malformed:
         first, n = markup.malformed[0], len(markup.malformed)
-        warnings.warn(MarkupWarning(
-            f"{first.where}: {n} malformed tag{'s' if n != 1 else ''} spoken as text (lenient); the first: "
-            f"{first.message}"), stacklevel=2)
+        warnings.warn(f"{first.where}: {n} malformed tag{'s' if n != 1 else ''} spoken as text (lenient); "
+                      f"the first: {first.message}", MarkupWarning, stacklevel=2)
     return markup
