@@ -32,8 +32,19 @@ class Audio:
         return self.samples.mean(axis=1)
 
 
-def read_audio(path: str | os.PathLike) -> Audio:
-    """Decode an audio file (WAV or anything FFmpeg reads) into float32 samples."""
+MAX_AUDIO_SECONDS = 3600.0
+"""Longest audio read for playback (1 h: 1.4 GB of float32 at 48 kHz stereo); refused from the header when it
+says so, else when decoding passes it, so a small file cannot ask for unbounded memory."""
+
+
+def _too_long(path: Path, seconds: float, limit: float) -> RenderError:
+    return RenderError(f"the audio lasts more than {limit:,.0f} s ({seconds:,.0f} s read or announced)",
+                       where=str(path), hint="cut it to the stream's length first (audio beyond a stream is not "
+                                             "played)")
+
+
+def read_audio(path: str | os.PathLike, *, max_seconds: float = MAX_AUDIO_SECONDS) -> Audio:
+    """Decode an audio file (WAV or anything FFmpeg reads) into float32 samples, at most ``max_seconds``."""
     import av
 
     path = Path(path)
@@ -47,11 +58,20 @@ def read_audio(path: str | os.PathLike) -> Audio:
                 raise RenderError("the file has no audio stream", where=str(path))
             stream = container.streams.audio[0]
             rate = int(stream.codec_context.sample_rate or stream.rate)
+            if rate <= 0:
+                raise RenderError("the audio stream has no sample rate", where=str(path), hint="the file is damaged")
+            announced = container.duration / av.time_base if container.duration else 0.0
+            if announced > max_seconds:
+                raise _too_long(path, announced, max_seconds)
+            limit, total = int(max_seconds * rate), 0
             resampler = av.AudioResampler(format="flt", layout=stream.layout.name if stream.layout else None,
                                           rate=rate)
             for frame in container.decode(stream):
                 for out in resampler.resample(frame):
                     chunks.append(out.to_ndarray().reshape(-1, len(out.layout.channels)))
+                    total += len(chunks[-1])
+                if total > limit:
+                    raise _too_long(path, total / rate, max_seconds)
             for out in resampler.resample(None):
                 chunks.append(out.to_ndarray().reshape(-1, len(out.layout.channels)))
     except RenderError:

@@ -251,3 +251,16 @@ def test_probe_media_missing_file(tmp_path):
     with pytest.raises(RenderError):
         probe_media(tmp_path / "none.mp4")
     assert MediaInfo("x", 2, 2, 0, 25.0, 0.0, 0.0, "h264", audio_start=0.5).av_offset == 0.5
+
+
+def test_audio_longer_than_the_ceiling_is_refused_naming_the_file(tmp_path):
+    """Issue 26: a small file must not ask for unbounded memory; the header's duration is checked first, and a
+    file whose header says nothing is stopped while decoding."""
+    from mpeg4fa.wav import write_pcm16
+
+    path = tmp_path / "long.wav"
+    write_pcm16(path, np.zeros(8000 * 3, np.int16), 8000)
+    assert read_audio(path, max_seconds=5).duration == pytest.approx(3.0)
+    with pytest.raises(RenderError, match="more than 2 s") as info:
+        read_audio(path, max_seconds=2)
+    assert info.value.where == str(path)
