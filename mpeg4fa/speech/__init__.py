@@ -4,7 +4,8 @@
 Modules: ``markup`` (expression tags), ``script`` (which text a voice can speak), ``tts/``
 (speech engines with timed events), ``visemes`` (English phonemes and Mandarin pinyin to
 visemes), ``utterance`` (timed visemes and tags), ``timeline`` (Hermite transitions,
-expressions, merging, frames), ``encoder`` (the FapStream).
+expressions, merging, frames), ``encoder`` (the FapStream); long text goes through ``pipeline``,
+a line of passes run chunk by chunk (``chunks`` -> speak -> phones -> ``frames`` -> ``bits``).
 
 The names below are imported on first use, so that ``import mpeg4fa.speech.markup`` does
 not load the engines, and ``say`` (which renders, :mod:`mpeg4fa.say`) does not pull the
@@ -17,6 +18,8 @@ from typing import Any
 
 _EXPORTS = {
     "encode_text": "mpeg4fa.speech.encoder",
+    "encode_text_to": "mpeg4fa.speech.pipeline",
+    "stream_text": "mpeg4fa.speech.pipeline",
     "Encoded": "mpeg4fa.speech.encoder",
     "make_engine": "mpeg4fa.speech.encoder",
     "ENGINES": "mpeg4fa.speech.encoder",
