@@ -7,7 +7,6 @@ face plays what a receiver would decode, not the encoder's own values.
 """
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path

@@ -16,7 +16,6 @@ stream carries them at the chosen level:
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 
@@ -30,7 +29,7 @@ from mpeg4fa.spec import EXPRESSIONS, FAP_GROUP, FAP_GROUP_SLICES, FAP_PARTNERS,
 from mpeg4fa.speech.closures import stop_closures
 from mpeg4fa.speech.compact import compact_expressions, compact_visemes, plan_expression_mask
 from mpeg4fa.speech.frames import FrameBlock, FrameMaker, join_blocks
-from mpeg4fa.speech.timeline import CLOSURE_HOLD, ExpressionFields, VisemeFields
+from mpeg4fa.speech.timeline import CLOSURE_HOLD
 from mpeg4fa.speech.tts.base import Engine
 from mpeg4fa.speech.utterance import Utterance
 
