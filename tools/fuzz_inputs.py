@@ -655,8 +655,9 @@ def m_gltf(rng, data, seeds):
     if op == 0:
         key, field = rng.choice(_GLTF_PLACES)
         items = doc.get(key)
-        if isinstance(items, list) and items and isinstance(items[0], dict):
-            rng.choice(items)[field] = rng.choice(_GLTF_VALUES)
+        entries = [item for item in items if isinstance(item, dict)] if isinstance(items, list) else []
+        if entries:
+            rng.choice(entries)[field] = rng.choice(_GLTF_VALUES)
     elif op == 1 and isinstance(doc.get("nodes"), list) and doc["nodes"]:  # cycles and deep chains
         nodes = doc["nodes"]
         depth = rng.choice((1, 2, 1000))
@@ -668,8 +669,9 @@ def m_gltf(rng, data, seeds):
         doc["extensionsRequired"] = [rng.choice(("KHR_draco_mesh_compression", "EXT_meshopt_compression", "X"))]
         doc["extensionsUsed"] = doc["extensionsRequired"]
     else:
-        prims = [p for m in doc.get("meshes", []) if isinstance(m, dict) for p in m.get("primitives", [])
-                 if isinstance(p, dict)]
+        meshes = doc.get("meshes") if isinstance(doc.get("meshes"), list) else []
+        prims = [p for m in meshes if isinstance(m, dict) and isinstance(m.get("primitives"), list)
+                 for p in m["primitives"] if isinstance(p, dict)]
         if prims:
             prim = rng.choice(prims)
             prim[rng.choice(("mode", "indices", "attributes", "targets"))] = rng.choice(
@@ -898,7 +900,8 @@ def mutate(rng: random.Random, target: str, seed: bytes, pool: list[bytes]) -> t
         try:
             data = mutator(rng, data, pool)[:MAX_INPUT]
             names.append(mutator.__name__[2:])
-        except (ArithmeticError, ValueError, RecursionError, MemoryError):  # cannot apply here: leave it as it is
+        except (ArithmeticError, ValueError, RecursionError, MemoryError, LookupError, TypeError):
+            # cannot apply to this input (a document of another shape than the mutator knows): leave it as it is
             names.append(mutator.__name__[2:] + " (not applicable)")
     return data, names
 
