@@ -238,3 +238,11 @@ def test_encode_cli_streams_text_with_audio_and_timings(tmp_path, capsys):
     assert decode(out.read_bytes()).n_frames > 0
     with wave.open(str(wav), "rb") as w:
         assert w.getnframes() > 0
+
+
+def test_blocks_stay_short_at_any_frame_rate():
+    """--fps 255 is bounded: a block holds at most BLOCK_FRAMES frames, a whole number of intra periods."""
+    assert bits_module.block_frames(25.0) == bits_module.BLOCK_FRAMES
+    assert bits_module.block_frames(255.0) == bits_module.BLOCK_FRAMES
+    assert bits_module.block_frames(1.0) == 60
+    assert bits_module.block_frames(25.0, intra_period=7) % 7 == 0
