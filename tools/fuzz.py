@@ -80,7 +80,7 @@ from typing import Callable, Iterable
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fuzz_inputs import MAX_INPUT, ORIGINAL_TARGETS, READER_TARGETS, ROOT, TARGETS, Seed, collect_seeds, draw  # noqa: E402,I001
+from fuzz_inputs import ORIGINAL_TARGETS, READER_TARGETS, ROOT, TARGETS, Seed, collect_seeds, draw  # noqa: E402
 import fuzz_parallel  # noqa: E402
 from fuzz_readers import RUNNERS as READER_RUNNERS, SPEECH_CHARS, Mismatch, stream_layers  # noqa: E402
 

@@ -884,9 +884,14 @@ MUTATORS: dict[str, tuple[Mutator, ...]] = {
     "obj": TEXT + (m_obj,) * 8 + (m_json, m_json_tree),
     "gltf": TEXT + (m_json,) * 3 + (m_json_tree,) * 4 + (m_gltf,) * 6 + (m_glb,) * 6,
 }
+def _text_case(text: str, recipe: str) -> tuple[bytes, str]:
+    """A generated text as a case's bytes, cut (at a character) to what a case may hold."""
+    data = text_bytes(text)
+    return (data if len(data) <= MAX_INPUT else text_bytes(text[:MAX_INPUT // 4])), recipe
+
+
 GENERATED: dict[str, Callable[[random.Random], tuple[bytes, str]]] = {
-    "text": lambda rng: (lambda text, recipe: (text_bytes(text if len(text) * 4 <= MAX_INPUT or len(text_bytes(text))
-                                                      <= MAX_INPUT else text[:MAX_INPUT // 4]), recipe))(*draw_text(rng)),
+    "text": lambda rng: _text_case(*draw_text(rng)),
     "stdin": stdin_bytes,
 }
 """Targets whose cases are drawn, not mutated from seeds: what a user types or pipes is not damaged files."""

@@ -56,12 +56,14 @@ def report(summary: dict, path: Path) -> str:
     """What the command prints: the table, each distinct finding with its replay command, stray warnings."""
     lines = [table(summary)]
     for f in summary["findings"]:
-        ours = f" (package: {f['project_frame']})" if f.get("project_frame") and f["project_frame"] != f["frame"] else ""
+        ours = f.get("project_frame") or ""
+        ours = f" (package: {ours})" if ours and ours != f["frame"] else ""
         lines.append(f"{f['kind']}: {f['target']} {f['stage']}: {f['type']} x{f['count']} at {f['frame']}{ours}: "
                      f"{f['message'][:160]} -> {f['reproducer']}  replay: {f.get('replay', '')}")
     for failure in summary.get("worker_failures", []):
-        lines.append(f"worker failed: {failure['target']} cases {failure['first']}..{failure['first'] + failure['count'] - 1}"
-                     f" exit status {failure['rc']}: {failure['tail'][-300:]}")
+        last = failure["first"] + failure["count"] - 1
+        lines.append(f"worker failed: {failure['target']} cases {failure['first']}..{last} exit status "
+                     f"{failure['rc']}: {failure['tail'][-300:]}")
     for key, message in summary["unlocated_errors"].items():
         lines.append(f"unlocated: {key}: {message[:160]}")
     for key, message in summary["stray_warnings"].items():
@@ -192,5 +194,6 @@ def run(args: argparse.Namespace, tool: Path, say: Callable[[str], None]) -> int
     path.write_text(json.dumps(summary, indent=2, default=str), encoding="utf-8")
     if not args.quiet:
         print(report(summary, path))
-    bad = sum(t["crashes"] + t["hangs"] + t["memory"] + t["peak"] + t["mismatches"] for t in summary["targets"].values())
+    bad = sum(t["crashes"] + t["hangs"] + t["memory"] + t["peak"] + t["mismatches"]
+              for t in summary["targets"].values())
     return 1 if bad or failures else 0

@@ -137,7 +137,7 @@ def speak(case, text: str, name: str, *, espeak_share: float = ESPEAK_SHARE) -> 
 
 
 def run_text(case) -> None:
-    """Typed text: ``parse_markup`` (any length, up to 1 MB lines), then ``encode_text`` for texts of a script's size."""
+    """Typed text: ``parse_markup`` (any length, up to 1 MB lines), then the speech for texts of a script's size."""
     text = bytes_text(case.data)
     markup = case.stage("parse_markup", lambda: parse_markup(text, name="case.txt"))
     _check_tags(markup)
@@ -266,7 +266,8 @@ def run_conform(case) -> None:
     if pick < (0.9 if looks_text else 0.05):  # the decoder's stderr on a rejection
         text = case.data.decode("utf-8", "replace")
         bit = case.stage("bit_from_text", lambda: bit_from_text(text))
-        case.stage("compare_rejected", lambda: compare_rejected({"bit_offset": 1234}, DecoderResult(REJECTED, None, bit)))
+        result = DecoderResult(REJECTED, None, bit)
+        case.stage("compare_rejected", lambda: compare_rejected({"bit_offset": 1234}, result))
         return
     (out if looks_json != (pick > 0.9) else csv_out).write_bytes(case.data)
     output = case.stage("read_output", lambda: read_output(out))

@@ -57,7 +57,8 @@ def wav_bytes(samples: np.ndarray, rate: int, bits: int, *, float_format: bool =
         data = v.view(np.uint8).reshape(-1, 4)[:, :3].tobytes()
     else:
         kind = {16: "<i2", 32: "<i4"}[bits]
-        data = np.clip(np.rint(flat * (2 ** (bits - 1) - 1)), -2 ** (bits - 1), 2 ** (bits - 1) - 1).astype(kind).tobytes()
+        top = 2 ** (bits - 1)
+        data = np.clip(np.rint(flat * (top - 1)), -top, top - 1).astype(kind).tobytes()
     tag = 0xFFFE if extensible else (3 if float_format else 1)
     align = channels * bits // 8
     fmt = struct.pack("<HHIIHH", tag, channels, rate, rate * align, align, bits)
@@ -98,7 +99,8 @@ def bap_seeds() -> list[tuple[str, bytes]]:
 
     rng = np.random.default_rng(5)
     out = []
-    for name, n, width, version, gaps in (("own/186.bap", 6, None, "3.1", False), ("own/296-v32.bap", 4, 296, "3.2", False),
+    for name, n, width, version, gaps in (("own/186.bap", 6, None, "3.1", False),
+                                          ("own/296-v32.bap", 4, 296, "3.2", False),
                                           ("own/gaps.bap", 8, None, "3.1", True)):
         s = FapStream.empty(n)
         s.source_fps = 15.0
