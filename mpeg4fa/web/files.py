@@ -38,6 +38,15 @@ def read_mesh(data: bytes, filename: str, resolver=None) -> EditMesh:
     ext = filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
     if ext not in FORMATS:
         raise EditError(f"cannot read .{ext or '?'} files", where=filename, hint=f"formats: {', '.join(FORMATS)}")
+    try:
+        return _read_mesh(data, filename, ext, resolver)
+    except EditError as exc:
+        if exc.where:
+            raise
+        raise EditError(exc.message, where=filename, hint=exc.hint or "the file is damaged") from None
+
+
+def _read_mesh(data: bytes, filename: str, ext: str, resolver) -> EditMesh:
     if ext == "obj":  # one part per g group (or o object), the vertices in the file's order
         mesh, groups = mesh_and_groups_from_obj(data, filename)
         several = len(set(groups)) > 1

@@ -337,3 +337,31 @@ def test_traversal_looking_names_are_only_keys_among_the_uploaded_files(client, 
     files["head.gltf"] = json.dumps(doc).encode()
     r = _post(client, files)
     assert r.status_code == 422 and str(on_disk) in r.json()["error"], r.json()
+
+
+def _gltf_with_indices(indices: list[int]) -> bytes:
+    """A one-triangle .gltf with its buffer embedded, three vertices and the given indices."""
+    import base64
+
+    positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+    index_bytes = np.array(indices, np.uint16).tobytes() + b"\0\0"
+    blob = positions + index_bytes
+    return json.dumps({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(blob),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                        {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]},
+                      {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+    }).encode()
+
+
+def test_a_mesh_whose_triangles_name_missing_vertices_is_an_error_naming_the_file():
+    """Fuzz finding (gltf): make_mesh's 'indices must lie in 0..N' reached the user without the file's name."""
+    assert len(read_mesh(_gltf_with_indices([0, 1, 2]), "ok.gltf").triangles) == 1
+    with pytest.raises(MpegFaError) as info:
+        read_mesh(_gltf_with_indices([0, 1, 7]), "broken.gltf")
+    assert info.value.where and "broken.gltf" in info.value.where
