@@ -15,10 +15,10 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..speech.markup import MAX_TEXT_CHARS
+from ..speech.chunks import MAX_SOURCE_CHARS
 from .errors import InputError
 
-TEXT_MAX = MAX_TEXT_CHARS
+TEXT_MAX = MAX_SOURCE_CHARS
 """Most characters of text read from a file or standard input (the speech layer's bound)."""
 _EXTENSION = re.compile(r"[^./\\][^/\\]*\.[A-Za-z][A-Za-z0-9]{0,7}")
 _SPEAK_IT = "use --text to speak it as text"

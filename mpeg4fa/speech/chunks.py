@@ -22,6 +22,10 @@ from dataclasses import replace
 from mpeg4fa.speech.errors import MarkupError
 from mpeg4fa.speech.markup import MAX_TEXT_CHARS, Markup, parse_markup
 
+MAX_SOURCE_CHARS = 1 << 20
+"""Most characters of text a command reads (1 Mi, about 15 h of English speech): the streaming encoder holds
+a chunk at a time, so this bounds only the source string itself (at most 4 MiB of UTF-8) and the work."""
+
 CHUNK_CHARS = 2000
 """Most characters of plain text spoken at once (about two minutes of speech at 175 words a minute)."""
 
@@ -97,7 +101,7 @@ def parse_pieces(source: str, *, name: str = "<text>", **options) -> Iterator[Ma
     piece, the source itself, when it is that short); ``options`` go to ``parse_markup``. Lines and
     columns (of errors, tags and characters) are those of the whole source."""
     start, line, column = 0, 1, 1
-    while start < len(source) or not start:
+    while True:  # once at least: an empty source is one empty piece
         stop = _safe_cut(source, start, MAX_TEXT_CHARS)
         piece = source[start:stop]
         try:
@@ -112,6 +116,8 @@ def parse_pieces(source: str, *, name: str = "<text>", **options) -> Iterator[Ma
         line += len(breaks)
         column = len(piece) - breaks[-1].end() + 1 if breaks else column + len(piece)
         start = stop
+        if start >= len(source):
+            return
 
 
 def _moved(markup: Markup, line: int, column: int) -> Markup:
@@ -121,7 +127,7 @@ def _moved(markup: Markup, line: int, column: int) -> Markup:
 
     tags = tuple(replace(tag, line=place((tag.line, tag.column))[0], column=place((tag.line, tag.column))[1])
                  for tag in markup.tags)
-    return Markup(markup.text, tags, markup.name, tuple(place(p) for p in markup.places))
+    return Markup(markup.text, tags, markup.name, tuple(place(p) for p in markup.places), markup.malformed)
 
 
 def _safe_cut(source: str, start: int, limit: int) -> int:

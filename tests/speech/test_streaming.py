@@ -246,3 +246,13 @@ def test_blocks_stay_short_at_any_frame_rate():
     assert bits_module.block_frames(255.0) == bits_module.BLOCK_FRAMES
     assert bits_module.block_frames(1.0) == 60
     assert bits_module.block_frames(25.0, intra_period=7) % 7 == 0
+
+
+@pytest.mark.parametrize("text", ["", "   \n\t"])
+def test_empty_text_is_one_error_not_an_endless_loop(text):
+    """Fuzz finding (text): parse_pieces of an empty source yielded its one piece forever."""
+    from mpeg4fa.speech.chunks import parse_pieces
+
+    assert [m.text for m in parse_pieces(text)] == [""]
+    with pytest.raises(MarkupError, match="nothing to say"):
+        encode_text(text, engine="estimate")
