@@ -29,6 +29,7 @@ from mpeg4fa.fba.encoder import plan, write
 from mpeg4fa.fba.limits import frame_limit, span_hint
 from mpeg4fa.fba.params import FACE, dequantise, quantise
 from mpeg4fa.fba.stream import END_CODE, PLANE_START_CODE, FapStream
+from mpeg4fa.spec import N_FAPS
 from mpeg4fa.speech.errors import MarkupError
 from mpeg4fa.speech.frames import FrameBlock, join_blocks
 
@@ -54,10 +55,10 @@ class _Reconstruction:
 
     def __init__(self, options: EncodeOptions) -> None:
         quant = options.fap_quant if options.fap_quant is not None else 1
-        self.qstep = np.zeros(68, dtype=np.int64)
+        self.qstep = np.zeros(N_FAPS, dtype=np.int64)
         self.qstep[2:] = FACE.quant_step[2:] * FACE.step_multiplier(quant)
         self.period = options.intra_period or 0
-        self.recon = np.zeros(68, dtype=np.int64)
+        self.recon = np.zeros(N_FAPS, dtype=np.int64)
         self.frames = 0
 
     def follow(self, values: np.ndarray) -> None:
