@@ -35,3 +35,15 @@ class MpegFaWarning(UserWarning):
 
     The CLI prints each as one ``mpeg4fa COMMAND: warning: ...`` line.
     """
+
+
+def unreadable(exc: OSError) -> tuple[str, str]:
+    """What a reader says when the system will not give it a file: the problem and what to do, in the
+    same words for every reader (the caller names the file)."""
+    if isinstance(exc, FileNotFoundError):
+        return "no such file", "check the path and the current directory"
+    if isinstance(exc, IsADirectoryError):
+        return "is a directory, not a file", "name a file inside it"
+    if isinstance(exc, PermissionError):
+        return "permission denied", "check the file's permissions"
+    return f"cannot read the file: {exc.strerror or exc}", ""

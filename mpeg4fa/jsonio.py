@@ -31,7 +31,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from mpeg4fa.errors import MpegFaError
+from mpeg4fa.errors import MpegFaError, unreadable
 from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
 
 __all__ = ["JsonError", "MAX_JSON_BYTES", "MAX_DEPTH", "MAX_INT_DIGITS", "loads", "read_json", "decode_utf8",
@@ -250,28 +250,10 @@ def read_json(path: str | os.PathLike, *, max_bytes: int = MAX_JSON_BYTES, max_d
         with open(path, "rb") as fh:
             raw = fh.read(max_bytes + 1)
     except OSError as exc:
-        raise error(name, None, None, _os_problem(exc), _os_hint(exc)) from None
+        raise error(name, None, None, *unreadable(exc)) from None
     if len(raw) > max_bytes:
         raise error(name, None, None, f"{what} is larger than the {max_bytes:,} bytes read", f"is this {what}?")
     return loads(raw, name, max_bytes=max_bytes, max_depth=max_depth, error=error, what=what,
                  object_pairs_hook=object_pairs_hook)
 
 
-def _os_problem(exc: OSError) -> str:
-    if isinstance(exc, FileNotFoundError):
-        return "no such file"
-    if isinstance(exc, IsADirectoryError):
-        return "is a directory, not a file"
-    if isinstance(exc, PermissionError):
-        return "permission denied"
-    return f"cannot read the file: {exc.strerror or exc}"
-
-
-def _os_hint(exc: OSError) -> str:
-    if isinstance(exc, FileNotFoundError):
-        return "check the path and the current directory"
-    if isinstance(exc, IsADirectoryError):
-        return "name a file inside it"
-    if isinstance(exc, PermissionError):
-        return "check the file's permissions"
-    return ""

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mpeg4fa.errors import MpegFaError
+from mpeg4fa.errors import MpegFaError, unreadable
 from mpeg4fa.filetype import HEAD_BYTES, foreign_kind, head_hex
 
 __all__ = ["WavError", "WavInfo", "MAX_SECONDS", "MAX_CHANNELS", "MIN_RATE", "MAX_RATE", "wav_info", "read_wav"]
@@ -76,7 +76,8 @@ def wav_info(path: str | os.PathLike) -> WavInfo:
             size = os.fstat(fh.fileno()).st_size
             return _walk(fh, name, size)
     except OSError as exc:
-        raise WavError(_os_problem(exc), name, "give the WAV file of the speech") from None
+        problem, hint = unreadable(exc)
+        raise WavError(problem, name, hint or "give the WAV file of the speech") from None
 
 
 def _walk(fh, name: str, size: int) -> WavInfo:
@@ -178,7 +179,8 @@ def read_wav(path: str | os.PathLike, *, max_seconds: float = MAX_SECONDS) -> tu
                                    "the file is truncated")
                 out[start:start + n] = _mono_int16(raw, info)
     except OSError as exc:
-        raise WavError(_os_problem(exc), info.path) from None
+        problem, hint = unreadable(exc)
+        raise WavError(problem, info.path, hint) from None
     return out, info.rate
 
 
@@ -200,11 +202,3 @@ def _mono_int16(raw: bytes, info: WavInfo) -> np.ndarray:
     return np.clip(np.rint(x * 32768.0), -32768, 32767).astype(np.int16)
 
 
-def _os_problem(exc: OSError) -> str:
-    if isinstance(exc, FileNotFoundError):
-        return "no such file"
-    if isinstance(exc, IsADirectoryError):
-        return "is a directory, not a file"
-    if isinstance(exc, PermissionError):
-        return "permission denied"
-    return f"cannot read the file: {exc.strerror or exc}"

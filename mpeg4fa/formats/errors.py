@@ -7,7 +7,7 @@ type (it is a :class:`~mpeg4fa.errors.MpegFaError` and a :class:`ValueError`).
 """
 from __future__ import annotations
 
-from mpeg4fa.errors import MpegFaError, MpegFaWarning
+from mpeg4fa.errors import MpegFaError, MpegFaWarning, unreadable
 
 
 class FormatError(MpegFaError, ValueError):
@@ -37,13 +37,7 @@ class FormatError(MpegFaError, ValueError):
     @classmethod
     def from_os_error(cls, path: str, exc: OSError) -> "FormatError":
         """A file that cannot be opened, read or written, said plainly and naming the file."""
-        if isinstance(exc, FileNotFoundError):
-            return cls.no_place(path, "no such file", "check the path and the current directory")
-        if isinstance(exc, IsADirectoryError):
-            return cls.no_place(path, "is a directory, not a file", "name a file inside it")
-        if isinstance(exc, PermissionError):
-            return cls.no_place(path, "permission denied", "check the file's permissions")
-        return cls.no_place(path, f"cannot access the file: {exc.strerror or exc}")
+        return cls.no_place(path, *unreadable(exc))
 
     @property
     def message(self) -> str:  # type: ignore[override]
