@@ -88,14 +88,34 @@ def read_text(source: TextArgument) -> tuple[str, str]:
         with open(source.path, "rb") as handle:
             text = _decoded(handle.read(4 * TEXT_MAX + 1), name)
     else:
-        return source.argument, "<text>"
+        return _argv_text(source.argument), "<text>"
     if len(text) > TEXT_MAX:
         raise InputError(f"the text is longer than {TEXT_MAX} characters", where=name,
                          hint="split it and encode the parts one after another")
     return text, name
 
 
-def _decoded(data: bytes, name: str) -> str:
+def _argv_text(text: str) -> str:
+    """Text from the command line, its bytes held to standard input's rule.
+
+    Python decodes the command line with ``surrogateescape``: a byte that is not UTF-8 arrives as a
+    lone surrogate, which no engine can take. The bytes are recovered and decoded by :func:`_decoded`,
+    so ``--text $'hello \\xff'`` and the same bytes on standard input get the same located message.
+    (Under a locale whose encoding is not UTF-8 the text is left as it came; the parse pass refuses any
+    surrogate left, :func:`mpeg4fa.speech.markup.check_characters`.)
+    """
+    if text.isascii() or not any("\udc80" <= c <= "\udcff" for c in text):
+        return text
+    try:
+        data = os.fsencode(text)
+    except UnicodeEncodeError:  # a surrogate no byte stands for: the parse pass names it
+        return text
+    if sys.getfilesystemencoding().lower().replace("-", "") != "utf8":
+        return text
+    return _decoded(data, "<text>", hint="give the text as UTF-8; check the terminal's encoding")
+
+
+def _decoded(data: bytes, name: str, hint: str | None = None) -> str:
     """UTF-8 text (a byte-order mark dropped); a MarkupError at line:column and byte offset where it is not.
 
     Standard input is read as bytes, not through the locale's codec: under a strict UTF-8 locale
@@ -108,5 +128,5 @@ def _decoded(data: bytes, name: str) -> str:
     if len(data) > 4 * TEXT_MAX:  # UTF-8 takes at most 4 bytes a character
         raise InputError(f"the text is longer than {TEXT_MAX} characters", where=name,
                          hint="split it and encode the parts one after another")
-    return decode_utf8(data, name, lambda path, line, column, problem, hint: MarkupError(
-        problem, line or 1, column or 1, hint=hint, source=path), what="text")
+    return decode_utf8(data, name, lambda path, line, column, problem, said: MarkupError(
+        problem, line or 1, column or 1, hint=hint or said, source=path), what="text")

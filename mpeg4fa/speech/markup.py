@@ -155,6 +155,36 @@ class _Positions:
         return line, index - self._starts[line - 1] + 1
 
 
+_NOT_TEXT = re.compile("[\0\ud800-\udfff]")
+"""What a ``str`` may hold but no text is: NUL, and a lone UTF-16 surrogate (U+D800..U+DFFF), which no UTF-8
+writer (a speech engine's input, a timings file) can encode."""
+
+
+def check_characters(source: str, name: str = "<text>") -> None:
+    """MarkupError at the first NUL or lone surrogate of ``source`` (see :data:`_NOT_TEXT`), else nothing.
+
+    The parse pass is the one door every text goes through (a command's argument, a file, standard input, a
+    library caller's string), so no engine sees such a character. Python puts a byte that is not UTF-8 in
+    a command line as a surrogate U+DC80..U+DCFF (``surrogateescape``): that byte is named.
+    """
+    found = _NOT_TEXT.search(source)
+    if found is None:
+        return
+    char = found.group()
+    line, column = _Positions(source)(found.start())
+    if char == "\0":
+        raise MarkupError("a NUL character (U+0000) is no text to speak", line, column,
+                          "remove it; a binary file is no text", name)
+    code = ord(char)
+    if 0xDC80 <= code <= 0xDCFF:
+        problem = f"not a character: byte 0x{code - 0xDC00:02x} is not UTF-8 (it came as U+{code:04X})"
+        hint = "give the text as UTF-8"
+    else:
+        problem = f"not a character: U+{code:04X} is half of a UTF-16 surrogate pair"
+        hint = "remove it, or write the character the pair stood for"
+    raise MarkupError(problem, line, column, hint, name)
+
+
 class _Parser:
     """One pass over the source; builds the plain text character by character.
 
@@ -380,6 +410,7 @@ def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name:
         line, column = _Positions(source)(MAX_TEXT_CHARS)
         raise MarkupError(f"the text is {len(source):,} characters long, more than the {MAX_TEXT_CHARS:,} "
                           "read at once", line, column, "split it and encode the parts one after another", name)
+    check_characters(source, name)
     names = EXPRESSION_PROFILES if expressions is None else expressions
     known = tuple(dict.fromkeys(str(n).lower() for n in names))
     markup = _Parser(source, known, name, lenient).run()
