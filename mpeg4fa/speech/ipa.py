@@ -427,8 +427,10 @@ def split_event(event: Event, parts: list[tuple[str, str]]) -> list[tuple[str, s
     heads = [known.get(p[0][:1]) for p in parts]
     cut = shares(heads[0], heads[1], len(parts))
     out, t = [], event.start
-    for (symbol, viseme), share in zip(parts, cut):
-        stop = t + share * (event.end - event.start)
+    for k, ((symbol, viseme), share) in enumerate(zip(parts, cut)):
+        # the last part ends exactly where the phoneme does: the sum of the shares, rounded, can land an ulp
+        # past it, into the next phoneme (the timeline refuses overlapping spans)
+        stop = event.end if k == len(parts) - 1 else min(t + share * (event.end - event.start), event.end)
         out.append((f"{event.text}:{symbol}", viseme, t, stop))
         t = stop
     return out
