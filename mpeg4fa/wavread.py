@@ -28,10 +28,15 @@ import numpy as np
 from mpeg4fa.errors import MpegFaError, unreadable
 from mpeg4fa.filetype import HEAD_BYTES, foreign_kind, head_hex
 
-__all__ = ["WavError", "WavInfo", "MAX_SECONDS", "MAX_CHANNELS", "MIN_RATE", "MAX_RATE", "wav_info", "read_wav"]
+__all__ = ["WavError", "WavInfo", "MAX_SECONDS", "MAX_SPEECH_SECONDS", "MAX_CHANNELS", "MIN_RATE", "MAX_RATE", "wav_info", "read_wav"]
 
-MAX_SECONDS = 30 * 60.0
-"""Longest recording read by default (30 min), refused from the header before any sample is read."""
+MAX_SPEECH_SECONDS = 30 * 60.0
+"""Longest speech the in-memory encoder takes (30 min): a ``--speech`` recording and ``--visemes`` events
+(:data:`mpeg4fa.speech.viseme_events.MAX_SECONDS`) are timed and coded whole, in time and memory that grow
+with the duration (30 min of visemes: about 9 s and 400 MB). Kept here, at the bottom of the package,
+so that the WAV reader and the speech layer read one number."""
+MAX_SECONDS = MAX_SPEECH_SECONDS
+"""Longest recording read by default, refused from the header before any sample is read."""
 MAX_CHANNELS = 64
 MIN_RATE = 1000
 MAX_RATE = 768_000
@@ -187,7 +192,9 @@ def read_wav(path: str | os.PathLike, *, max_seconds: float = MAX_SECONDS) -> tu
 def _mono_int16(raw: bytes, info: WavInfo) -> np.ndarray:
     if info.format == "float":
         x = np.frombuffer(raw, "<f4" if info.bits == 32 else "<f8").astype(np.float64)
-        x = np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=-1.0)
+        # full scale is +-1: NaN is silence, beyond (inf, 1e308) is clipped here, before the channels are
+        # summed (1e308 + 1e308 overflows, inf - inf is NaN: numpy warnings, then a NaN cast to int16)
+        x = np.clip(np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=-1.0), -1.0, 1.0)
     elif info.bits == 8:
         x = (np.frombuffer(raw, np.uint8).astype(np.float64) - 128.0) / 128.0
     elif info.bits == 16:

@@ -45,6 +45,7 @@ from mpeg4fa.speech.tts.base import Speech
 from mpeg4fa.speech.utterance import Timing, Utterance
 from mpeg4fa.speech.ipa import FIRST_SHARE
 from mpeg4fa.speech.visemes import PAUSE
+from mpeg4fa.wavread import MAX_SPEECH_SECONDS
 
 __all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "MAX_SECONDS", "MAX_EVENTS", "MAX_BYTES", "TICKS_PER_SECOND", "parse_viseme_events",
            "read_viseme_events", "events_utterance", "encode_viseme_events"]
@@ -56,11 +57,14 @@ LAST_VISEME = 0.15
 """Seconds the last viseme lasts when no event (silence) ends it: about one spoken phoneme."""
 TAIL = 0.2
 """Seconds the stream runs past the end of the last viseme, long enough for the mouth to reach rest."""
-MAX_SECONDS = 3600.0
-"""Events later than this (1 h) are refused, before anything is allocated: a time that large is a unit
-mistake (a cloud TTS request gives minutes of speech), and the stream would be huge."""
+MAX_SECONDS = MAX_SPEECH_SECONDS
+"""Events later than this (30 min, :data:`mpeg4fa.wavread.MAX_SPEECH_SECONDS`, as for a ``--speech``
+recording) are refused, before anything is allocated: the events are encoded in memory
+(:func:`.encoder.encode_utterance`), whose time and memory grow with the duration (an event just under
+1 h took 9.9 s and 622 MB), and a time that large is a unit mistake (a cloud TTS request gives minutes of
+speech)."""
 MAX_EVENTS = 200_000
-"""Most events (or speech marks) a file may hold: an hour of speech has about 50,000 visemes."""
+"""Most events (or speech marks) a file may hold: half an hour of speech has about 25,000 visemes."""
 MAX_BYTES = 32 << 20
 """Largest viseme event file read (32 MiB): 200,000 events of Polly's verbose marks."""
 _RATE = 1000  # sample rate of the silent audio that only gives the utterance its duration
@@ -122,7 +126,7 @@ def _counted(records: list[tuple[dict, int | None]], name: str) -> list[tuple[di
 
 def _too_many(n: int, name: str) -> None:
     raise FormatError(name, None, None, f"{n:,} events, more than the {MAX_EVENTS:,} read",
-                      hint=f"a viseme event file covers at most {MAX_SECONDS / 3600:g} h of speech; split it")
+                      hint=f"a viseme event file covers at most {MAX_SECONDS / 60:g} min of speech; split it")
 
 
 def _item_lines(text: str) -> list[int]:
