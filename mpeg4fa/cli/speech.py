@@ -72,19 +72,25 @@ def run_voices(args: argparse.Namespace) -> int:
     from ..speech.tts.espeak import voices
 
     rows = []
-    for v in voices():
+    mute = [v for v in voices() if not v.speaks]  # espeak-ng lists them, but their dictionary is not installed
+    for v in voices(speaking=True):
         entry = v.as_dict()
         entry["visemes"] = _viseme_route(v.language)
         rows.append(entry)
+    left_out = (f"left out: {', '.join(v.language for v in mute)} (espeak-ng has no dictionary for "
+                f"{'them' if len(mute) > 1 else 'it'} in this installation)") if mute else ""
     if args.json:
         print(json.dumps(rows, ensure_ascii=False, indent=1))
+        if left_out:
+            print(left_out, file=sys.stderr)
         return 0
     width = max((len(r["language"]) for r in rows), default=4)
     for r in rows:
         others = [c for c in r["languages"] if c != r["language"]]
         also = f"  (also {', '.join(others)})" if others else ""
         print(f"{r['language']:<{width}}  {r['name']}{also}  [{r['visemes']}]")
-    print(f"{len(rows)} voices; --lang takes any code above, or auto, en, zh", file=sys.stderr)
+    print(f"{len(rows)} voices; --lang takes any code above, or auto, en, zh" + (f"; {left_out}" if left_out else ""),
+          file=sys.stderr)
     return 0
 
 

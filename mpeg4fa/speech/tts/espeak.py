@@ -17,6 +17,7 @@ from __future__ import annotations
 import bisect
 import ctypes
 import html
+import os
 import threading
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -139,6 +140,7 @@ class _Collector:
 _lock = threading.RLock()
 _lib: ctypes.CDLL | None = None
 _sample_rate = 0
+_data_path = ""
 _collector: _Collector | None = None
 _callback_ref = None  # keeps the C function pointer alive for the life of the process
 
@@ -174,7 +176,7 @@ def _on_synth(wav, n: int, events) -> int:
 
 def _load() -> ctypes.CDLL:
     """Load and initialise the wheel's libespeak-ng once per process (caller holds ``_lock``)."""
-    global _lib, _sample_rate, _callback_ref
+    global _lib, _sample_rate, _callback_ref, _data_path
     if _lib is not None:
         return _lib
     hint = "install the espeakng-loader wheel (pip install espeakng-loader==0.2.4)"
@@ -223,7 +225,7 @@ def _load() -> ctypes.CDLL:
         )
     _callback_ref = SYNTH_CALLBACK(_on_synth)
     lib.espeak_SetSynthCallback(_callback_ref)
-    _lib, _sample_rate = lib, rate
+    _lib, _sample_rate, _data_path = lib, rate, data_path
     return lib
 
 
@@ -240,9 +242,19 @@ def _languages(ptr: int | None) -> tuple[str, ...]:
     return tuple(out)
 
 
+def _c_string(name: str) -> bytes | None:
+    """``name`` as the C library takes it (UTF-8, no NUL), or None: a voice so named cannot exist (a lone
+    surrogate, from a command-line byte that is not UTF-8, has no UTF-8 at all)."""
+    try:
+        code = name.encode("utf-8")
+    except UnicodeEncodeError:
+        return None
+    return None if b"\0" in code else code
+
+
 def _set_voice_by_language(lib, language: str) -> bool:
     """Choose a voice by language code ("en-gb"): voice files are named by case-sensitive paths."""
-    code = language.encode("utf-8")
+    code = _c_string(language)
     if not code or any(c in code for c in b"/ "):
         return False
     spec = EspeakVoice()
@@ -253,7 +265,7 @@ def _set_voice_by_language(lib, language: str) -> bool:
 def _set_voice_by_file(lib, language: str) -> bool:
     """Last resort: the file of a listed voice that speaks ``language`` (codes espeak's own search misses,
     like ``chr-US-Qaaa-x-west``)."""
-    for v in voices():
+    for v in voices(speaking=True):
         if language.lower() in (code.lower() for code in v.languages) and v.identifier:
             if lib.espeak_SetVoiceByName(v.identifier.encode("utf-8")) == EE_OK:
                 return True
@@ -283,20 +295,48 @@ def list_voices() -> list[tuple[str, tuple[str, ...]]]:
 @dataclass(frozen=True)
 class Voice:
     """One installed espeak-ng voice: its first language code (what ``--lang`` and ``--voice`` take),
-    its name, its file (``identifier``, also accepted as a voice) and every language it speaks."""
+    its name, its file (``identifier``, also accepted as a voice), every language it speaks, and the
+    pronunciation dictionary it reads (``dictionary``; ``speaks``: whether that file is installed)."""
 
     language: str
     name: str
     identifier: str
     languages: tuple[str, ...]
+    dictionary: str = ""
+    speaks: bool = True
 
     def as_dict(self) -> dict:
         return {"language": self.language, "name": self.name, "identifier": self.identifier,
-                "languages": list(self.languages)}
+                "languages": list(self.languages), "dictionary": self.dictionary}
 
 
-def voices() -> list[Voice]:
-    """Every installed voice, sorted by language code then name (the list ``mpeg4fa voices`` prints)."""
+def _voice_dictionary(data_path: str, identifier: str, language: str) -> tuple[str, bool]:
+    """The dictionary a voice file names and whether ``NAME_dict`` is in the data: espeak-ng's rule (its
+    first ``language`` line up to the first ``-``, unless a ``dictionary`` line names one). A voice whose
+    dictionary is missing (``fo``, ``kaa``, ``xex`` in the espeakng-loader wheel) is listed by espeak-ng but
+    cannot speak: loading it prints "Can't read dictionary file" on stderr and falls back to no phonemes."""
+    name = language.split("-")[0]
+    for folder in ("lang", "voices"):
+        try:
+            with open(os.path.join(data_path, folder, identifier), encoding="utf-8", errors="replace") as handle:
+                lines = handle.read(1 << 16).splitlines()
+        except (OSError, ValueError):
+            continue
+        first_language = True
+        for line in lines:
+            words = line.split("//", 1)[0].split()
+            if len(words) >= 2 and words[0] == "language" and first_language and words[1] != "variant":
+                name, first_language = words[1].split("-")[0], False
+            elif len(words) >= 2 and words[0] == "dictionary":
+                name = words[1]
+        break
+    else:  # no voice file where expected: say nothing against it
+        return name, True
+    return name, bool(name) and os.path.isfile(os.path.join(data_path, f"{name}_dict"))
+
+
+@lru_cache(maxsize=1)
+def _all_voices() -> tuple[Voice, ...]:
     with _lock:
         lib = _load()
         table = lib.espeak_ListVoices(None)
@@ -305,10 +345,31 @@ def voices() -> list[Voice]:
         while table and table[i]:
             v = table[i].contents
             langs = _languages(v.languages)
-            out.append(Voice(langs[0] if langs else "", (v.name or b"").decode("utf-8", "replace"),
-                             (v.identifier or b"").decode("utf-8", "replace"), langs))
+            language = langs[0] if langs else ""
+            identifier = (v.identifier or b"").decode("utf-8", "replace")
+            dictionary, speaks = _voice_dictionary(_data_path, identifier, language)
+            out.append(Voice(language, (v.name or b"").decode("utf-8", "replace"), identifier, langs,
+                             dictionary, speaks))
             i += 1
-    return sorted(out, key=lambda v: (v.language, v.name))
+    return tuple(sorted(out, key=lambda v: (v.language, v.name)))
+
+
+def voices(*, speaking: bool = False) -> list[Voice]:
+    """Every installed voice, sorted by language code then name; ``speaking``: only those whose dictionary
+    is installed (the list ``mpeg4fa voices`` prints)."""
+    return [v for v in _all_voices() if v.speaks or not speaking]
+
+
+def missing_dictionary(voice: str) -> str | None:
+    """The dictionary ``voice`` (a voice's language code, name or file, ``+variant`` allowed) would need and
+    this installation lacks, when every voice it names lacks it; None when it can speak (or names none)."""
+    key = voice.split("+", 1)[0].strip().lower()
+    named = [v for v in _all_voices() if key and (
+        key in (v.name.lower(), v.identifier.lower(), v.identifier.lower().rsplit("/", 1)[-1])
+        or key in (code.lower() for code in v.languages))]
+    if named and not any(v.speaks for v in named):
+        return named[0].dictionary
+    return None
 
 
 @lru_cache(maxsize=1)
@@ -429,10 +490,16 @@ class EspeakEngine:
         else:
             source, back, mark_names = text, list(range(len(text) + 1)), {}
 
+        name = _c_string(voice)
         with _lock:
             lib = _load()
-            if (lib.espeak_SetVoiceByName(voice.encode("utf-8")) != EE_OK and not _set_voice_by_language(lib, voice)
-                    and not _set_voice_by_file(lib, voice)):
+            dictionary = missing_dictionary(voice) if name is not None else None
+            if dictionary is not None:  # refused before espeak-ng tries it (and prints on stderr)
+                raise TTSError(f"espeak-ng has no dictionary for {voice} in this installation "
+                               f"({dictionary}_dict is missing)", where=WHERE,
+                               hint="choose another voice: 'mpeg4fa voices' lists those that speak")
+            if name is None or (lib.espeak_SetVoiceByName(name) != EE_OK and not _set_voice_by_language(lib, voice)
+                                and not _set_voice_by_file(lib, voice)):
                 raise TTSError(f"unknown voice {voice!r}", where=WHERE, hint=_voice_hint(voice))
             lib.espeak_SetParameter(espeakRATE, int(wpm), 0)
             col = _collector = _Collector()
