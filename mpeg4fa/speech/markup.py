@@ -402,9 +402,10 @@ def parse_markup(source: str, *, expressions: Iterable[str] | None = None, name:
     by default those of :data:`~mpeg4fa.spec.profiles.EXPRESSION_PROFILES`, so
     an expression added to ``expression_faps.csv`` can be tagged at once.
     ``name`` labels error messages. Raises :class:`MarkupError` (with line,
-    column and a hint) for a malformed tag, and nothing else for any text;
+    column and a hint) for a malformed tag or a character no text holds (NUL, a
+    lone surrogate: :func:`check_characters`), and nothing else for any text;
     with ``lenient``, malformed tags are spoken as text and said in one
-    :class:`MarkupWarning` (the text's length bound still raises).
+    :class:`MarkupWarning` (the text's length bound and the characters still raise).
     """
     if len(source) > MAX_TEXT_CHARS:
         line, column = _Positions(source)(MAX_TEXT_CHARS)

@@ -332,7 +332,7 @@ def check_error(source: str, e: MarkupError) -> None:
 
 
 @settings(max_examples=400, deadline=None, derandomize=True)
-@given(st.one_of(st.text(), markup_like))
+@given(st.one_of(st.text(), markup_like, st.text(st.characters(exclude_categories=()))))  # surrogates too
 def test_any_text_parses_or_raises_markup_error(source: str) -> None:
     try:
         m = parse_markup(source)
@@ -355,7 +355,7 @@ def test_any_text_with_custom_expressions(source: str, names: list[str]) -> None
 
 
 @settings(max_examples=300, deadline=None, derandomize=True)
-@given(st.text().map(lambda s: s.replace("(", "").replace("\\", "")))
+@given(st.text().map(lambda s: s.replace("(", "").replace("\\", "").replace("\0", "")))  # NUL: no text
 def test_text_without_tags_parses_to_itself_stripped(source: str) -> None:
     m = parse_markup(source)
     assert m.text == source.strip()
@@ -365,7 +365,8 @@ def test_text_without_tags_parses_to_itself_stripped(source: str) -> None:
 @settings(max_examples=300, deadline=None, derandomize=True)
 @given(st.one_of(st.text(), markup_like))
 def test_escaped_text_parses_to_itself(text: str) -> None:
-    """Escaping every parenthesis and backslash turns any text, tags included, into plain text."""
+    """Escaping every parenthesis and backslash turns any text, tags included, into plain text (NUL is no text)."""
+    text = text.replace("\0", "")
     escaped = text.replace("\\", "\\\\").replace("(", "\\(").replace(")", "\\)")
     m = parse_markup(escaped)
     assert m.text == text.strip()
