@@ -38,6 +38,12 @@ MAX_TEXT_BYTES = 0xFFFF
 """Longest name or media type (UTF-8 bytes): the binary form stores lengths in a u16."""
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 UINT32_MAX = 2**32 - 1
+MAX_COORDINATE = 1e9
+"""Largest magnitude of a mesh's coordinate (vertex position or texture coordinate) in any unit: a head is
+about 0.2 m, 200 mm, 2e8 nm. Beyond it the arithmetic on a mesh (squared lengths, areas, FAPU, trimesh's
+transforms, float32 for the GPU) overflows to infinity or NaN; within it, sums of squares over a million
+vertices stay far inside a double. The OBJ reader, :class:`FdpMesh`, the editor's readers and the face
+rig (:func:`mpeg4fa.face.custom.head_from_mesh`) refuse a mesh beyond it, naming the vertex."""
 
 Where = tuple[Any, ...]
 _MEDIA_TYPE = re.compile(r"[A-Za-z0-9][A-Za-z0-9!#$&^_.+-]*/[A-Za-z0-9][A-Za-z0-9!#$&^_.+-]*\Z")
@@ -84,6 +90,25 @@ def _float_array(value: ArrayLike, cols: int, what: str, where: Where) -> np.nda
     if bad.size:
         raise FdpValueError(f"{what} must be finite numbers", where + (int(bad[0]),))
     return _frozen(arr)
+
+
+def first_unbounded(values: ArrayLike, bound: float = MAX_COORDINATE) -> int | None:
+    """Index of the first row of ``values`` holding a number that is not finite or beyond +-``bound``
+    (:data:`MAX_COORDINATE`), or None: the one test every mesh reader makes before its arithmetic."""
+    arr = np.asarray(values, dtype=np.float64)
+    bad = ~(np.abs(arr) <= bound)  # NaN compares false: caught with the infinities
+    if arr.ndim > 1:
+        bad = bad.any(axis=tuple(range(1, arr.ndim)))
+    hits = np.flatnonzero(bad)
+    return int(hits[0]) if hits.size else None
+
+
+def _bounded_rows(arr: np.ndarray, what: str, where: Where) -> np.ndarray:
+    row = first_unbounded(arr)
+    if row is not None:
+        raise FdpValueError(f"{what} {row} is beyond +-{MAX_COORDINATE:g}", where + (row,),
+                            hint="check the values or the file's unit")
+    return arr
 
 
 def _int_array(value: ArrayLike, what: str, where: Where, lo: int, hi: int, cols: int = 0) -> np.ndarray:
@@ -204,14 +229,15 @@ class FdpMesh(_ValueEquality):
     name: str = ""
 
     def __post_init__(self) -> None:
-        verts = _float_array(self.vertices, 3, "mesh vertices", ("vertices",))
+        verts = _bounded_rows(_float_array(self.vertices, 3, "mesh vertices", ("vertices",)), "mesh vertex",
+                              ("vertices",))
         n = len(verts)
         tris = _int_array(self.triangles, "triangle vertex indices", ("triangles",), 0, max(n - 1, 0), cols=3)
         if n == 0 and len(tris):
             raise FdpValueError("triangles refer to vertices but the mesh has none", ("triangles", 0))
         uvs = None
         if self.uvs is not None:
-            uvs = _float_array(self.uvs, 2, "mesh uvs", ("uvs",))
+            uvs = _bounded_rows(_float_array(self.uvs, 2, "mesh uvs", ("uvs",)), "the uv of vertex", ("uvs",))
             if len(uvs) != n:
                 raise FdpValueError(f"mesh has {n} vertices but {len(uvs)} uvs", ("uvs",))
         _set(self, "vertices", verts)

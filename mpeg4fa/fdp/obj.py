@@ -39,7 +39,7 @@ import trimesh
 
 from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
-from mpeg4fa.fdp.model import FdpMesh
+from mpeg4fa.fdp.model import MAX_COORDINATE, FdpMesh, first_unbounded
 
 _INDEX_HINT = "OBJ indices count from 1; negative ones count back from the last one defined above the face"
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
@@ -110,6 +110,8 @@ def _read(text: str | bytes, path: str, groups: bool) -> tuple[FdpMesh, list[str
         feed = re.sub(r"(/-?\d+)/-?\d*|//-?\d*", r"\1", feed)
     plain_feed = re.sub(r"/-?\d*", "", feed)
     vertices, faces, _ = _trimesh_read(plain_feed, plain, counts, triangles, path, uv=False)
+    if first_unbounded(vertices) is not None:
+        _locate_unbounded(plain, "v", path)
     names = _groups(plain_feed, faces, path) if groups else None
     uvs = None
     if counts["vt"] and "/" in feed:
@@ -119,6 +121,8 @@ def _read(text: str | bytes, path: str, groups: bool) -> tuple[FdpMesh, list[str
             uv = None  # no usable texture pairs (e.g. some corners have none): read without uvs
         if uv is not None and len(v_uv) == len(vertices) and np.array_equal(f_uv, faces):
             uvs = uv  # trimesh's (v, vt) pairs are exactly the file's vertices
+            if first_unbounded(uvs) is not None:
+                _locate_unbounded(plain, "vt", path)
         else:
             _locate_range(plain, counts, path)  # trimesh drops uvs it cannot index: say which one
     name = _NAME.search(plain)
@@ -247,19 +251,59 @@ def _locate_range(plain: str, counts: dict[str, int], path: str) -> None:
     """Raise at the first corner whose v or vt index is outside the file's vertices / texture coordinates."""
     text = "\n".join(m.group() for m in _FACE_LINE.finditer(plain))
     for key, what in (("v", "vertex"), ("vt", "texture coordinate")):
-        values = np.array(_INDEX[key].findall(text) or ["1"]).astype(np.int64)
+        tokens = _INDEX[key].findall(text)
+        values = _index_values(tokens, _LONG_INDEX.search(text) is not None)
         bad = (values > counts[key]) | (values < -counts[key])
         if not bad.any():
             continue
-        written = int(values[np.argmax(bad)])
-        for face in _FACE_LINE.finditer(plain):
-            hit = next((h for h in _INDEX[key].finditer(face.group()) if int(h.group(1)) == written), None)
+        first = int(np.argmax(bad))
+        written, value, digits = tokens[first], int(values[first]), len(tokens[first].lstrip("-"))
+        shown = written if digits <= 20 else str(value) if abs(value) < _INDEX_CLAMP else \
+            f"{written[:10]}...({digits:,} digits)"
+        for face in _FACE_LINE.finditer(plain):  # its first place in the file (a same token is as bad)
+            hit = next((h for h in _INDEX[key].finditer(face.group()) if h.group(1) == written), None)
             if hit:
                 number, _, offset = _line_at(plain, face.start() + hit.start(1))
-                problem = (f"{what} index {written} points before the first {what}" if written < 0 else
-                           f"{what} index {written} is out of range: the file has {counts[key]} "
+                problem = (f"{what} index {shown} points before the first {what}" if written.startswith("-") else
+                           f"{what} index {shown} is out of range: the file has {counts[key]} "
                            f"{'vertices' if key == 'v' else what + 's'}")
                 raise FdpError(path, number, offset + 1, problem, _INDEX_HINT)
+
+
+_LONG_INDEX = re.compile(r"\d{19}")
+_INDEX_CLAMP = 10 ** 18
+"""An index of 19 or more digits reads as +-10**18: past any count a file can hold (and past what int64, or
+Python's ``int()`` of a string of over 4,300 digits, takes), so it is out of range whatever its value."""
+
+
+def _index_values(tokens: list[str], long: bool) -> np.ndarray:
+    """The int64 value of each index token (``long``: some token may have 19 digits or more, clamped)."""
+    if not long:  # the common case in C: every token fits int64 (and a fixed-width array stays small)
+        return np.array(tokens or ["1"]).astype(np.int64)
+    return np.fromiter((_clamped(t) for t in tokens), np.int64, len(tokens))
+
+
+def _clamped(token: str) -> int:
+    digits = token.lstrip("-").lstrip("0")
+    value = int(digits or "0") if len(digits) < 19 else _INDEX_CLAMP
+    return -value if token.startswith("-") else value
+
+
+def _locate_unbounded(plain: str, key: str, path: str) -> None:
+    """Raise at the first number of a ``v`` (x y z) or ``vt`` (u v) statement that is not finite or beyond
+    :data:`MAX_COORDINATE` (trimesh read it; a mesh that far out overflows the arithmetic done on it)."""
+    used = 3 if key == "v" else 2
+    for statement in _STATEMENT[key].finditer(plain):
+        end = plain.find("\n", statement.end())
+        line = plain[statement.end():end if end >= 0 else len(plain)]
+        for token in list(re.finditer(r"\S+", line))[:used]:
+            if not abs(float(token.group())) <= MAX_COORDINATE:
+                number, _, offset = _line_at(plain, statement.end() + token.start())
+                shown = token.group() if len(token.group()) <= 24 else f"{token.group()[:12]}..."
+                raise FdpError(path, number, offset + 1, f"coordinate {shown} is beyond +-{MAX_COORDINATE:g}",
+                               "a mesh's coordinates must be finite and within that bound: check the file's unit")
+    raise FdpError.no_place(path, f"a {'vertex' if key == 'v' else 'texture coordinate'} is beyond "
+                            f"+-{MAX_COORDINATE:g}", "check the file's unit")
 
 
 def _line_at(text: str, position: int) -> tuple[int, str, int]:
