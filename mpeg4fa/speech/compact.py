@@ -93,31 +93,33 @@ def _cheapest(n: int, start: State, options: Callable[[int, State], Iterable[Sta
     """
     counts = tuple(np.ones(m.size) for m in models)
     frames: list[dict[State, tuple[float, State | None]]] = []
-    current: dict[State, tuple[float, tuple[np.ndarray, ...]]] = {start: (0.0, counts)}
+    # a hypothesis: its cost, its models' counts, and how many changes it coded (each adds 1 to every model's
+    # counts, so a model's total is its size plus that: exactly what summing the counts gives, without the sum)
+    current: dict[State, tuple[float, tuple[np.ndarray, ...], int]] = {start: (0.0, counts, 0)}
     for k in range(n):
-        nxt: dict[State, tuple[float, State, tuple[np.ndarray, ...]]] = {}
-        for prev, (cost, held) in current.items():
+        nxt: dict[State, tuple[float, State, tuple[np.ndarray, ...], int]] = {}
+        for prev, (cost, held, changes) in current.items():
             for cand in options(k, prev):
-                grown = held
+                grown, coded = held, changes
                 if cand == prev:
                     step = REPEAT_BITS
                 else:
-                    step, grown = FRAME_BITS, []
+                    step, grown, coded = FRAME_BITS, [], changes + 1
                     for m, c, a, b in zip(models, held, cand, prev):
                         if m.qstep:
                             a, b = _rebuilt(a, m.qstep), _rebuilt(b, m.qstep)
                         symbol = m.symbol[a - b + FULL_INTENSITY]
-                        step -= math.log2(c[symbol] / c.sum())
+                        step -= math.log2(c[symbol] / (m.size + changes))
                         c = c.copy()
                         c[symbol] += 1.0
                         grown.append(c)
                 total = cost + step
                 if cand not in nxt or total < nxt[cand][0]:
-                    nxt[cand] = (total, prev, tuple(grown))
+                    nxt[cand] = (total, prev, tuple(grown), coded)
         if len(nxt) > BEAM:
             nxt = dict(sorted(nxt.items(), key=lambda item: item[1][0])[:BEAM])
-        frames.append({state: (total, prev) for state, (total, prev, _) in nxt.items()})
-        current = {state: (total, grown) for state, (total, _, grown) in nxt.items()}
+        frames.append({state: (total, prev) for state, (total, prev, _, _) in nxt.items()})
+        current = {state: (total, grown, coded) for state, (total, _, grown, coded) in nxt.items()}
     state = min(current, key=lambda s: current[s][0])
     path = [state]
     for k in range(n - 1, 0, -1):
