@@ -47,6 +47,7 @@ from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import fit_sphere
 from mpeg4fa.face.mesh import PARTS, HeadMesh
 from mpeg4fa.face.regions import LID_MARGIN_LOOPS, LIP_CONTACT_LOOP, edge_graph, smooth_down
+from mpeg4fa.fdp.model import MAX_COORDINATE, first_unbounded
 from mpeg4fa.spec import FEATURE_POINT_MIRROR, FEATURE_POINTS
 
 LABELS = tuple(fp.label for fp in FEATURE_POINTS)
@@ -79,17 +80,22 @@ def head_from_mesh(vertices, triangles, points: Mapping[str, int | Sequence[floa
     """A :class:`HeadMesh` the rig can animate, from any triangle mesh with feature points (see the module)."""
     v = np.asarray(vertices, dtype=np.float64)
     t = np.asarray(triangles, dtype=np.int64)
-    if v.ndim != 2 or v.shape[1] != 3 or not len(v) or not np.isfinite(v).all():
+    if v.ndim != 2 or v.shape[1] != 3 or not len(v):
         raise FaceError(f"vertices must be a finite (V, 3) array, got shape {v.shape}")
+    _check_bounded(v, "vertex", "vertices")
     if t.ndim != 2 or t.shape[1] != 3 or not len(t):
         raise FaceError(f"triangles must be a (T, 3) array of vertex indices, got shape {t.shape}")
     if t.min() < 0 or t.max() >= len(v):
         raise FaceError(f"a triangle names vertex {int(t.max() if t.max() >= len(v) else t.min())}, "
                         f"but the mesh has {len(v)} vertices")
+    if not np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]), axis=1).any():
+        raise FaceError("the mesh has no area: every triangle's corners lie on one line", where="triangles",
+                        hint="give the face's surface, with its vertices where the modelling tool put them")
     if uvs is not None:
         uvs = np.asarray(uvs, dtype=np.float64)
         if uvs.shape != (len(v), 2):
             raise FaceError(f"uvs must be (V, 2) = ({len(v)}, 2), got {uvs.shape}")
+        _check_bounded(uvs, "the uv of vertex", "uvs")
 
     part_of_tri = _triangle_parts(parts, len(t))
     given = _read_points(points, v)
@@ -267,6 +273,15 @@ def _triangle_parts(parts, n: int) -> np.ndarray:
     return out
 
 
+def _check_bounded(values: np.ndarray, what: str, where: str) -> None:
+    """Refuse a row not finite or beyond MAX_COORDINATE (the mesh readers' bound) before the rig's arithmetic."""
+    row = first_unbounded(values)
+    if row is not None:
+        raise FaceError(f"{what} {row} is at ({', '.join(f'{x:.6g}' for x in values[row])}): coordinates must be "
+                        f"finite and within +-{MAX_COORDINATE:g}", where=f"{where}/{row}",
+                        hint="check the values or the mesh's unit")
+
+
 def _read_points(points: Mapping, v: np.ndarray) -> dict[str, int | np.ndarray]:
     """label -> vertex index, or -> coordinates (points inside the head standing off the mesh)."""
     if not isinstance(points, Mapping):
@@ -284,7 +299,7 @@ def _read_points(points: Mapping, v: np.ndarray) -> dict[str, int | np.ndarray]:
             out[label] = int(value)
             continue
         p = np.asarray(value, dtype=np.float64)
-        if p.shape != (3,) or not np.isfinite(p).all():
+        if p.shape != (3,) or first_unbounded(p[None]) is not None:
             raise FaceError(f"feature point {label} must be a vertex index or [x, y, z], got {value!r}",
                             where=f"points/{label}")
         tree = tree or cKDTree(v)

@@ -96,7 +96,8 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         drop += np.sign(drop) * np.where(own == fp_vertex, 0.0, OVERLAP_MM)
         closure = np.array([motion.arc_angle(rest[i, 1:] - centre[1:], d) for i, d in zip(own, drop)])
         lid_closure = closure[list(own).index(fp_vertex)]
-        ratio = np.where(lid_closure != 0, closure / lid_closure, 0.0)
+        # a lid already on the other margin (an eye modelled shut) closes by nothing: no share to divide out
+        ratio = closure / lid_closure if lid_closure != 0 else np.zeros_like(closure)
 
         # the sheet: skin on this lid's side of the margins, within the orbit
         ball = rest[mesh.part(eye)]  # no eyeball part: the margin's nearest vertex bounds the eye
