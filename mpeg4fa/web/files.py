@@ -14,6 +14,7 @@ import trimesh
 
 from mpeg4fa.atomic import atomic_outputs
 from mpeg4fa.fdp.build import parse_points_json
+from mpeg4fa.fdp.model import MAX_COORDINATE, first_unbounded
 from mpeg4fa.fdp.obj import mesh_and_groups_from_obj
 from mpeg4fa.jsonio import loads
 from mpeg4fa.web.edits import EditError, EditMesh, make_mesh, validate
@@ -64,15 +65,21 @@ def _read_mesh(data: bytes, filename: str, ext: str, resolver) -> EditMesh:
 
 def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """``[(node name, world vertices, triangles)]`` of every scene node with triangles, as trimesh reads them
-    (glTF node names are the objects' names in the modelling tool; the mesh names are often ``Cube.001``)."""
-    if ext == "gltf":  # read by the package's JSON reader first (nesting, size), then by trimesh
-        external = _gltf_external(data, filename)
-        if resolver is None and external:
-            _refuse_external(external, filename)
+    (glTF node names are the objects' names in the modelling tool; the mesh names are often ``Cube.001``).
+    A glTF's JSON is read by the package's reader and its nodes and references checked first
+    (:func:`_check_gltf`); what trimesh gives back is checked (3D points, finite, within
+    :data:`~mpeg4fa.fdp.model.MAX_COORDINATE`) before the node transforms are applied."""
+    if ext in ("gltf", "glb"):  # read by the package's JSON reader first (nesting, size, shapes), then by trimesh
+        doc = _gltf_json(data, filename, ext)
+        if doc is not None:
+            _check_gltf(doc, filename)
+        if ext == "gltf" and resolver is None:
+            _refuse_external(_gltf_external(doc), filename)
     try:
-        scene = trimesh.load(io.BytesIO(data), file_type=ext, force="scene", process=False, maintain_order=True,
-                             resolver=resolver)
-        nodes = [(node, *scene.graph[node]) for node in sorted(scene.graph.nodes_geometry)]
+        with np.errstate(all="ignore"):  # overflow in trimesh's own arithmetic: its results are checked below
+            scene = trimesh.load(io.BytesIO(data), file_type=ext, force="scene", process=False, maintain_order=True,
+                                 resolver=resolver)
+            nodes = [(node, *scene.graph[node]) for node in sorted(scene.graph.nodes_geometry)]
         nodes = [(n, m, g) for n, m, g in nodes if isinstance(scene.geometry.get(g), trimesh.Trimesh)
                  and len(scene.geometry[g].faces)]
     except EditError:
@@ -84,14 +91,105 @@ def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[st
     out = []
     for node, matrix, geom in nodes:
         g = scene.geometry[geom]
-        v = trimesh.transform_points(np.asarray(g.vertices, np.float64), np.asarray(matrix, np.float64))
+        vertices, matrix = np.asarray(g.vertices, np.float64), np.asarray(matrix, np.float64)
+        if vertices.ndim != 2 or vertices.shape[1] != 3:
+            raise EditError(f"node {str(node)[:40]!r}: its positions are not 3D points (shape {vertices.shape})", where=filename,
+                            hint="a mesh's POSITION accessor is a VEC3")
+        _check_coordinates(vertices, f"node {str(node)[:40]!r}: vertex", filename)
+        if matrix.shape != (4, 4):
+            raise EditError(f"node {str(node)[:40]!r}: its transform is not a 4x4 matrix (shape {matrix.shape})", where=filename)
+        _check_coordinates(matrix, f"node {str(node)[:40]!r}: row of its world transform", filename)
+        v = trimesh.transform_points(vertices, matrix)
+        _check_coordinates(v, f"node {str(node)[:40]!r}: transformed vertex", filename)
         out.append((node, v, np.asarray(g.faces, np.int64)))
     return out
 
 
-def _gltf_external(data: bytes, filename: str) -> list[str]:
-    """The URIs of a .gltf's buffers and images that are files (not data: URIs), as written in its JSON."""
-    doc = loads(data, filename, max_bytes=GLTF_JSON_BYTES, what="a .gltf file")
+def _check_coordinates(values: np.ndarray, what: str, filename: str) -> None:
+    """Refuse a row that is not finite or beyond MAX_COORDINATE (the mesh readers' one bound)."""
+    row = first_unbounded(values)
+    if row is not None:
+        raise EditError(f"{what} {row} is ({', '.join(f'{x:.6g}' for x in values[row])}): its numbers must be "
+                        f"finite and within +-{MAX_COORDINATE:g}", where=filename,
+                        hint="check the values or the file's unit")
+
+
+def _gltf_json(data: bytes, filename: str, ext: str):
+    """The JSON document of a .gltf, or of a .glb's first chunk (read by the package's JSON reader); None for a
+    .glb whose header is too damaged to find it (trimesh then says what it cannot read)."""
+    if ext == "gltf":
+        return loads(data, filename, max_bytes=GLTF_JSON_BYTES, what="a .gltf file")
+    if len(data) < 20 or data[:4] != b"glTF" or data[16:20] != b"JSON":
+        return None
+    size = int.from_bytes(data[12:16], "little")
+    if size > len(data) - 20:
+        raise EditError(f"the GLB's JSON chunk (length at byte 12) claims {size:,} bytes, but the file has "
+                        f"{len(data) - 20:,} after its header", where=filename, hint="the file is truncated or damaged")
+    return loads(data[20:20 + size], f"{filename} (JSON chunk)", max_bytes=GLTF_JSON_BYTES, what="a .glb's JSON")
+
+
+_NODE_SIZES = {"matrix": 16, "translation": 3, "rotation": 4, "scale": 3}
+"""glTF 2.0 node transform properties and their number of components (column-major matrix, TRS quaternion)."""
+
+
+def _check_gltf(doc, filename: str) -> None:
+    """Refuse, naming the node or mesh, what trimesh reads wrong or with a bare traceback: a node transform of the
+    wrong size or not finite (a 4-number matrix), and a node, child, attribute or index reference that is not an
+    index into its array (-1 picked the last accessor)."""
+    if not isinstance(doc, dict):
+        raise EditError("a glTF document is a JSON object", where=filename)
+    arrays = {key: doc.get(key, []) for key in ("nodes", "meshes", "accessors")}
+    for key, items in arrays.items():
+        if not isinstance(items, list):
+            raise EditError(f"'{key}' is not an array", where=f"{filename}: {key}")
+    for i, node in enumerate(arrays["nodes"]):
+        where = f"{filename}: nodes/{i}"
+        if not isinstance(node, dict):
+            raise EditError(f"node {i} is not an object", where=where)
+        label = f"node {i}" + (f" ({node['name'][:40]!r})" if isinstance(node.get("name"), str) else "")
+        for key, size in _NODE_SIZES.items():
+            if key not in node:
+                continue
+            value = node[key]
+            if not (isinstance(value, list) and len(value) == size
+                    and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)):
+                raise EditError(f"{label}: '{key}' must be {size} numbers", where=f"{where}/{key}",
+                                hint="glTF 2.0: matrix 16 numbers, translation 3, rotation 4 (a quaternion), scale 3")
+            if first_unbounded(value) is not None:
+                raise EditError(f"{label}: '{key}' holds a number beyond +-{MAX_COORDINATE:g}",
+                                where=f"{where}/{key}", hint="check the values or the file's unit")
+        _check_index(node.get("mesh"), arrays["meshes"], f"{label}: 'mesh'", f"{where}/mesh")
+        children = node.get("children", [])
+        for child in children if isinstance(children, list) else [children]:
+            _check_index(child, arrays["nodes"], f"{label}: child", f"{where}/children")
+    for i, mesh in enumerate(arrays["meshes"]):
+        primitives = mesh.get("primitives", []) if isinstance(mesh, dict) else None
+        if not isinstance(primitives, list):
+            raise EditError(f"mesh {i} has no list of primitives", where=f"{filename}: meshes/{i}")
+        for j, primitive in enumerate(primitives):
+            where = f"{filename}: meshes/{i}/primitives/{j}"
+            attributes = primitive.get("attributes", {}) if isinstance(primitive, dict) else None
+            if not isinstance(attributes, dict):
+                raise EditError(f"mesh {i} primitive {j} has no attributes object", where=where)
+            for name, ref in attributes.items():
+                _check_index(ref, arrays["accessors"], f"mesh {i} primitive {j}: attribute {name}",
+                             f"{where}/attributes/{name}")
+            _check_index(primitive.get("indices"), arrays["accessors"], f"mesh {i} primitive {j}: 'indices'",
+                         f"{where}/indices")
+
+
+def _check_index(ref, items: list, what: str, where: str) -> None:
+    """A glTF reference (absent, or an index into ``items``)."""
+    if ref is None:
+        return
+    if type(ref) is not int or not 0 <= ref < len(items):
+        shown = repr(ref)[:30]
+        raise EditError(f"{what} is {shown}, not an index into the {len(items)} there are", where=where,
+                        hint="the file is damaged: glTF references count from 0")
+
+
+def _gltf_external(doc) -> list[str]:
+    """The URIs of a glTF's buffers and images that are files (not data: URIs), as written in its JSON."""
     items = [item for key in ("buffers", "images") for item in (doc.get(key) or [] if isinstance(doc, dict) else [])]
     uris = [item.get("uri") for item in items if isinstance(item, dict)]
     return list(dict.fromkeys(u for u in uris if isinstance(u, str) and not u.startswith("data:")))
@@ -178,7 +276,7 @@ def read_upload(files: Sequence[tuple[str, bytes]]) -> EditMesh:
     data, ext = by_name[model], _ext(model)
     wanted: list[str] = []
     if ext == "gltf":
-        external = _gltf_external(data, model)
+        external = _gltf_external(_gltf_json(data, model, ext))
         missing = [u for u in external if _plain_name(unquote(u)) not in by_name]
         if missing:
             raise EditError(f"{model} names {', '.join(missing)}, not among the uploaded files", where=model,
@@ -261,10 +359,12 @@ def _read_parts(data: bytes, where: str, n_triangles: int) -> list[str]:
     for i, (name, triangles) in enumerate(parts.items()):
         if not isinstance(triangles, list) or not all(type(t) is int for t in triangles):
             raise EditError(f"part {name!r} must list triangle indices", where=f"{where}: parts/{name}")
-        idx = np.asarray(triangles, np.int64)
-        if len(idx) and (idx.min() < 0 or idx.max() >= n_triangles):
-            raise EditError(f"part {name!r} names a triangle outside 0..{n_triangles - 1}",
+        outside = next((t for t in triangles if not 0 <= t < n_triangles), None)  # before int64 (JSON has 100 digits)
+        if outside is not None:
+            shown = str(outside) if len(str(outside)) <= 20 else f"{str(outside)[:10]}...({len(str(outside)):,} digits)"
+            raise EditError(f"part {name!r} names triangle {shown}, outside 0..{n_triangles - 1}",
                             where=f"{where}: parts/{name}", hint="the parts file belongs to the OBJ beside it")
+        idx = np.asarray(triangles, np.int64)
         if (names[idx] >= 0).any():
             raise EditError(f"part {name!r} repeats a triangle of another part", where=f"{where}: parts/{name}")
         names[idx] = i
