@@ -32,9 +32,10 @@ __all__ = ["WavError", "WavInfo", "MAX_SECONDS", "MAX_SPEECH_SECONDS", "MAX_CHAN
 
 MAX_SPEECH_SECONDS = 30 * 60.0
 """Longest speech the in-memory encoder takes (30 min): a ``--speech`` recording and ``--visemes`` events
-(:data:`mpeg4fa.speech.viseme_events.MAX_SECONDS`) are timed and coded whole, in time and memory that grow
-with the duration (30 min of visemes: about 9 s and 400 MB). Kept here, at the bottom of the package,
-so that the WAV reader and the speech layer read one number."""
+(:data:`mpeg4fa.speech.viseme_events.MAX_SECONDS`) are timed whole and, by the library's
+``encode_utterance``, coded whole, in time and memory that grow with the duration (30 min of visemes: about
+6 s and 400 MB). Kept here, at the bottom of the package, so that the WAV reader and the speech layer read
+one number."""
 MAX_SECONDS = MAX_SPEECH_SECONDS
 """Longest recording read by default, refused from the header before any sample is read."""
 MAX_CHANNELS = 64

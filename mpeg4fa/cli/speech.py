@@ -166,7 +166,9 @@ def viseme_event_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
 
 def _encode_visemes(args: argparse.Namespace) -> int:
     """``mpeg4fa encode --visemes EVENTS.json``: Azure/Polly viseme events -> FAP stream (+ timings, FDP)."""
-    from ..speech.viseme_events import encode_viseme_events, read_viseme_events
+    from ..fba import EncodeOptions
+    from ..speech.encoder import TEXT_CODING
+    from ..speech.viseme_events import read_viseme_events, stream_viseme_events
 
     clash = [flag for flag, given in (("INPUT", args.input != NO_INPUT), ("--speech", args.speech is not None),
                                       ("--audio", args.audio is not None)) if given]
@@ -180,10 +182,26 @@ def _encode_visemes(args: argparse.Namespace) -> int:
     fdp = _speaker_fdp(args) if args.fdp_out is not None else None
     kind, events = read_viseme_events(args.visemes, args.events_format)
     fps = args.fps if args.fps is not None else 25.0
-    encoded = encode_viseme_events(events, engine=kind, fps=fps, level=args.level, idle=args.idle,
-                                   name=str(args.visemes))
     print(f"{args.visemes}: {len(events)} {kind} viseme events", file=sys.stderr)
-    return _write_encoded(args, encoded, str(args.visemes), fps, fdp)
+    options = coding_options(args, EncodeOptions(**TEXT_CODING))
+    with atomic_outputs(args.output, args.timings, args.fdp_out) as (out, timings, fdp_out):
+        with contextlib.ExitStack() as files:  # coded block by block as it is written (memory of a block)
+            spoken = stream_viseme_events(
+                events, files.enter_context(open(out, "wb")),
+                timings=files.enter_context(open(timings, "w", encoding="utf-8")) if timings is not None else None,
+                engine=kind, fps=fps, level=args.level, idle=args.idle, options=options, name=str(args.visemes))
+        if fdp is not None:
+            from ..fdp import save_fdp
+            save_fdp(fdp, fdp_out)
+    written = [f"{args.output} ({spoken.bytes} bytes)"] + ([str(args.timings)] if args.timings is not None else [])
+    if fdp is not None:
+        written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points)")
+    frames = spoken.frames
+    print(f"{args.visemes}: {spoken.engine} speech {spoken.seconds:.2f} s, {frames} frames, "
+          f"{spoken.bytes * 8 / max(frames, 1):.1f} bits/frame "
+          f"({spoken.bytes * 8 / max(frames / fps, 1e-9) / 1000:.2f} kbit/s, {args.level}-level)", file=sys.stderr)
+    print("wrote " + ", ".join(written), file=sys.stderr)
+    return 0
 
 
 def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:

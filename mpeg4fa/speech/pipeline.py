@@ -233,6 +233,37 @@ def stream_text(text: str, out, *, audio=None, timings=None, engine: Engine | st
                   time.perf_counter() - started)
 
 
+def stream_utterance(utterance: Utterance, out, *, timings=None, fps: float = 25.0, level: str = "high",
+                     idle: bool = False, seed: int = 0, fold: bool = True, compact: bool = True, options=None,
+                     name: str = "<events>") -> Spoken:
+    """:func:`~.encoder.encode_utterance` of a timed utterance (viseme events, an aligned recording) written to
+    the binary file ``out`` as it is coded, block by block (:class:`~.bits.FbaBlocks`), and its timed visemes
+    to the text file ``timings``: the same passes (phones -> frames -> bits), the memory of the frames and a
+    block rather than of the whole coded stream (30 min of viseme events: 400 MB in memory, about half
+    streamed). A stream of one block has the bytes ``encode(encode_utterance(...).stream)`` gives."""
+    from mpeg4fa.fba import EncodeOptions
+    from mpeg4fa.speech.bits import FbaBlocks
+    from mpeg4fa.speech.encoder import LEVELS, TEXT_CODING, StreamBuilder, closure_hold, phones
+
+    if level not in LEVELS:
+        raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
+    started = time.perf_counter()
+    utterance = phones(utterance)
+    maker = FrameMaker(fps, idle=idle, seed=seed, closure_hold=closure_hold(fps), fields=level != "low")
+    builder = StreamBuilder(level, fps, fold=fold, compact=compact)
+    bits = FbaBlocks(out, builder.build, options if options is not None else EncodeOptions(**TEXT_CODING), fps,
+                     place=lambda: (name, 1, 1))
+    duration = utterance.speech.duration
+    bits.add(maker.add(utterance.spans(), utterance.cues, duration))
+    bits.add(maker.finish(duration))
+    bits.finish()
+    if timings is not None:
+        listed = TimingsWriter(timings)
+        listed.add(utterance.timings)
+        listed.close()
+    return Spoken(duration, bits.frames, bits.bytes, 1, utterance.speech.engine, time.perf_counter() - started)
+
+
 def encode_text_to(text: str, out: str | os.PathLike, *, audio: str | os.PathLike | None = None,
                    timings: str | os.PathLike | None = None, **kwargs) -> Spoken:
     """:func:`stream_text` to files: the stream ``out``, and ``audio`` (WAV) and ``timings`` (JSON) when

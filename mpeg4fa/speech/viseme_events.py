@@ -48,7 +48,7 @@ from mpeg4fa.speech.visemes import PAUSE
 from mpeg4fa.wavread import MAX_SPEECH_SECONDS
 
 __all__ = ["VisemeEvent", "FORMATS", "LAST_VISEME", "TAIL", "MAX_SECONDS", "MAX_EVENTS", "MAX_BYTES", "TICKS_PER_SECOND", "parse_viseme_events",
-           "read_viseme_events", "events_utterance", "encode_viseme_events"]
+           "read_viseme_events", "events_utterance", "encode_viseme_events", "stream_viseme_events"]
 
 FORMATS = ("auto", "azure", "polly")
 TICKS_PER_SECOND = 10_000_000
@@ -59,10 +59,11 @@ TAIL = 0.2
 """Seconds the stream runs past the end of the last viseme, long enough for the mouth to reach rest."""
 MAX_SECONDS = MAX_SPEECH_SECONDS
 """Events later than this (30 min, :data:`mpeg4fa.wavread.MAX_SPEECH_SECONDS`, as for a ``--speech``
-recording) are refused, before anything is allocated: the events are encoded in memory
-(:func:`.encoder.encode_utterance`), whose time and memory grow with the duration (an event just under
-1 h took 9.9 s and 622 MB), and a time that large is a unit mistake (a cloud TTS request gives minutes of
-speech)."""
+recording) are refused, before anything is allocated: :func:`encode_viseme_events` codes them in memory
+(:func:`.encoder.encode_utterance`), in time and memory that grow with the duration (an event just under
+1 h took 10.7 s and 655 MB through ``encode --visemes``), and a time that large is a unit mistake (a cloud
+TTS request gives minutes of speech). ``encode --visemes`` streams (:func:`stream_viseme_events`): 30 min
+take about 4 s and 285 MB there."""
 MAX_EVENTS = 200_000
 """Most events (or speech marks) a file may hold: half an hour of speech has about 25,000 visemes."""
 MAX_BYTES = 32 << 20
@@ -258,6 +259,17 @@ def events_utterance(events: list[VisemeEvent], engine: str = "events", name: st
     duration = (timings[-1].end if timings else events[-1].time) + TAIL
     speech = Speech(np.zeros(int(math.ceil(duration * _RATE)), np.int16), _RATE, (), engine, "")
     return Utterance(speech=speech, timings=tuple(timings), cues=(), markup=Markup("", (), name=name))
+
+
+def stream_viseme_events(events: list[VisemeEvent], out, *, timings=None, engine: str = "events", fps: float = 25.0,
+                         level: str = "high", idle: bool = False, seed: int = 0, options=None, name: str = "<events>"):
+    """The events' stream written to the binary file ``out`` block by block (and the timed visemes to the text
+    file ``timings``): :func:`.pipeline.stream_utterance`, what ``encode --visemes`` runs; a
+    :class:`~.pipeline.Spoken` says what was written."""
+    from mpeg4fa.speech.pipeline import stream_utterance
+
+    return stream_utterance(events_utterance(events, engine, name), out, timings=timings, fps=fps, level=level,
+                            idle=idle, seed=seed, options=options, name=name)
 
 
 def encode_viseme_events(events: list[VisemeEvent], *, engine: str = "events", fps: float = 25.0,

@@ -8,6 +8,7 @@ in-memory encoder's ceiling, and an espeak-ng voice without its dictionary is re
 from __future__ import annotations
 
 import io
+import json
 import struct
 import warnings
 
@@ -144,3 +145,31 @@ def test_a_voice_without_its_dictionary_is_refused_in_one_line_with_nothing_on_s
             espeak.EspeakEngine().synthesize("Hello there", voice=voice)
     assert "dictionary" not in capfd.readouterr().err
     assert espeak.EspeakEngine().synthesize("Hello", voice="en-us").samples.size > 0
+
+
+def test_encode_visemes_streams_the_same_stream(tmp_path, cli):
+    """``encode --visemes`` codes block by block (:func:`~mpeg4fa.speech.pipeline.stream_utterance`): a short
+    file gets the bytes the in-memory encoder gives; a long one decodes to the frames it gives."""
+    from mpeg4fa.decoded import resolve
+    from mpeg4fa.fba import decode, encode
+    from mpeg4fa.speech import viseme_events as ve
+
+    def grid(stream) -> np.ndarray:
+        return np.repeat(resolve(stream), stream.skip.astype(int) + 1, axis=0)
+
+    events = [{"AudioOffset": k * 900_000, "VisemeId": (k * 7) % 22} for k in range(60)]
+    late = events + [{"AudioOffset": 250 * ve.TICKS_PER_SECOND, "VisemeId": 4}]
+    for name, listed, level in (("short", events, "high"), ("long", late, "low")):
+        path, out = tmp_path / f"{name}.json", tmp_path / f"{name}.fba"
+        path.write_text(json.dumps(listed), encoding="utf-8")
+        code, _, err = cli("encode", "--visemes", path, "-o", out, "--level", level)
+        assert code == 0, err
+        kind, parsed = ve.read_viseme_events(path)
+        memory = ve.encode_viseme_events(parsed, engine=kind, name=str(path), level=level)
+        whole = encode(memory.stream, memory.coding())
+        if name == "short":
+            assert out.read_bytes() == whole
+        else:
+            streamed, held = grid(decode(out.read_bytes())), grid(decode(whole))
+            assert streamed.shape == held.shape and len(held) > 6000 and np.abs(held).max() > 0
+            assert np.array_equal(streamed, held)
