@@ -227,7 +227,7 @@ def _json_entries(text: str, path: Path) -> tuple[dict, list[tuple[int, Any]]]:
     document = jsonio.loads(text, str(path), max_bytes=4 * MAX_MANIFEST_BYTES, max_depth=MAX_DEPTH, error=_located,
                             what="a batch manifest")
     decoder = json.JSONDecoder()
-    start = _skip(text, 0)
+    start = _skip(text, len(text) - len(jsonio.json_text(text, str(path))))  # where loads began: past a BOM it dropped
     if isinstance(document, dict):
         unknown = sorted(set(document) - {"defaults", "jobs"})
         if unknown:
