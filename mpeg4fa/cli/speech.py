@@ -57,11 +57,13 @@ def register(commands: Commands) -> None:
     p = commands.add_parser(
         "voices", help="list espeak-ng's voices and language codes (what --lang and --voice take)",
         description="List the installed espeak-ng voices: the language code (give it to --lang or --voice), "
-                    "the voice's name and every code it answers to. English (en, en-*) and Mandarin (zh) "
+                    "the voice's name and every code it answers to (voices whose dictionary is not installed are left "
+                    "out, and named on stderr). English (en, en-*) and Mandarin (zh) "
                     "map phonemes through their own tables; every other language through IPA features "
                     "(spec/ipa_*.csv).")
     p.add_argument("--json", action="store_true",
-                   help='print a JSON list: [{"language", "name", "identifier", "languages", "visemes"}, ...]')
+                   help='print a JSON list: [{"language", "name", "identifier", "languages", "dictionary", "visemes"}, '
+                        '...] of the voices that can speak here')
     p.set_defaults(run=run_voices)
 
 
