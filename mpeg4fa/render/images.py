@@ -35,7 +35,9 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
     else:
         source, where = path, where or os.fsdecode(path)
     try:
-        with warnings.catch_warnings():
+        _check_png_chunks(source, what, where)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
             warnings.simplefilter("error", Image.DecompressionBombWarning)
             with Image.open(source) as img:
                 width, height = img.size
@@ -44,7 +46,10 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
                                       f"{MAX_PIXELS:,} pixels read", where=where, hint="scale the image down to 8192 x 8192 or less")
                 if width == 0 or height == 0:
                     raise RenderError(f"the {what} has no pixels ({width} x {height})", where=where)
-                return np.asarray(img.convert("RGB"))
+                pixels = np.asarray(img.convert("RGB"))
+                kind = img.format
+        _pillow_warnings(caught, kind, what, where)
+        return pixels
     except FileNotFoundError:
         raise RenderError(f"no such {what}", where=where) from None
     except IsADirectoryError:
@@ -55,10 +60,64 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
         raise RenderError(f"the {what} has more than the {MAX_PIXELS:,} pixels read ({exc})", where=where,
                           hint="scale the image down to 8192 x 8192 or less") from None
-    except (OSError, ValueError, SyntaxError, EOFError, struct.error, IndexError, TypeError, ZeroDivisionError,
-            MemoryError) as exc:  # Pillow's decoders fail in all of these ways on damaged files
-        raise RenderError(f"cannot read the {what}: damaged or truncated image ({exc})", where=where,
-                          hint="open it in an image viewer, or save it again as PNG") from None
+    except MemoryError:  # a size the header checks let through (a huge chunk or profile) that memory cannot hold
+        raise RenderError(f"cannot read the {what}: too large to decode in the memory available", where=where,
+                          hint="scale the image down, or save it again as PNG") from None
+    except (OSError, ValueError, SyntaxError, EOFError, struct.error, IndexError, TypeError,
+            ZeroDivisionError) as exc:  # Pillow's decoders fail in all of these ways on damaged files
+        raise RenderError(f"cannot read the {what}: damaged or truncated image ({str(exc) or type(exc).__name__})",
+                          where=where, hint="open it in an image viewer, or save it again as PNG") from None
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _check_png_chunks(source: str | os.PathLike | io.BytesIO, what: str, where: str) -> None:
+    """A PNG whose chunk claims more bytes than the file has (a 4 GB IDAT in 800 bytes) is refused from the
+    chunk headers, naming the chunk and its byte offset, before Pillow allocates what it claims. Other files
+    pass untouched; reading stops at IEND or at the end of the file (a chunk at a time: linear in the file)."""
+    fh = source if isinstance(source, io.BytesIO) else open(source, "rb")
+    try:
+        size = fh.seek(0, io.SEEK_END)
+        fh.seek(0)
+        if fh.read(8) != _PNG_SIGNATURE:
+            return
+        pos = 8
+        while pos + 8 <= size:
+            head = fh.read(8)
+            length, name = int.from_bytes(head[:4], "big"), head[4:8]
+            if pos + 12 + length > size:
+                shown = name.decode("latin-1") if name.isalpha() else "0x" + name.hex().upper()
+                raise RenderError(f"cannot read the {what}: damaged or truncated PNG: chunk {shown} at byte {pos:,} "
+                                  f"claims {length:,} bytes, but the file has {max(size - pos - 12, 0):,} after "
+                                  "its header", where=where, hint="open it in an image viewer, or save it again as PNG")
+            if name == b"IEND":
+                return
+            pos += 12 + length
+            fh.seek(pos)
+    finally:
+        if fh is source:
+            fh.seek(0)
+        else:
+            fh.close()
+
+
+_STRUCTURE_WARNINGS = {"TIFF": "TiffImagePlugin"}
+"""Formats whose own layout Pillow reads with the module that warns: there a warning (a tag skipped, a count
+wrong) means the pixels may be read wrong, so it is the file's fault."""
+
+
+def _pillow_warnings(caught: list[warnings.WarningMessage], kind: str | None, what: str, where: str) -> None:
+    """Pillow's warnings while reading: an error where they concern the image's own layout (a TIFF's directory);
+    silenced where they concern what is not read (EXIF of a JPEG, read for its DPI; an APNG's animation
+    control, whose default image is what is used). Anyone else's warnings go on as they came."""
+    for w in caught:
+        module = os.path.basename(str(w.filename)).removesuffix(".py")
+        if "PIL" not in str(w.filename):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        elif _STRUCTURE_WARNINGS.get(kind or "") == module:
+            raise RenderError(f"cannot read the {what}: damaged {kind} image ({str(w.message).strip()})", where=where,
+                              hint="open it in an image viewer, or save it again as PNG")
 
 
 def _not_an_image(source: str | os.PathLike | io.BytesIO) -> str:
