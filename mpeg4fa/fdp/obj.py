@@ -42,8 +42,8 @@ from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
 from mpeg4fa.fdp.model import MAX_COORDINATE, FdpMesh, first_unbounded
 
 _INDEX_HINT = "OBJ indices count from 1; negative ones count back from the last one defined above the face"
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_CORNER = r"-?\d+(?:/-?\d*(?:/-?\d*)?)?"
+_NUM = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
+_CORNER = r"-?[0-9]+(?:/-?[0-9]*(?:/-?[0-9]*)?)?"
 _WS = r"[ \t\r]"
 # First statement of each kind that is not well formed (checked by regex, located by _explain_*).
 _BAD_V = re.compile(rf"(?m)^{_WS}*v(?={_WS}|$)(?!(?:{_WS}+{_NUM}){{3,}}{_WS}*$)")
@@ -54,9 +54,9 @@ _FACE_LINE = re.compile(rf"(?m)^{_WS}*f{_WS}[^\n]*")
 _IN_FACE = rf"(?m)^{_WS}*f{_WS}[^\n]*?"
 _ZERO_ANY = re.compile(r"[ \t\r/]-?0+(?![\w.])")  # fast pre-checks over the face lines alone
 _ZERO = re.compile(_IN_FACE + r"(?<![\w.-])(-?0+)(?![\w.])")
-_NEG_ANY = {"v": re.compile(r"[ \t\r]-\d"), "vt": re.compile(r"/-\d")}
-_NEG = {"v": re.compile(_IN_FACE + r"(?<![\w/-])(-\d+)"), "vt": re.compile(_IN_FACE + r"(?<![\w/-])-?\d+/(-\d+)")}
-_INDEX = {"v": re.compile(r"(?<![\w/-])(-?\d+)"), "vt": re.compile(r"(?<![\w/-])-?\d+/(-?\d+)")}
+_NEG_ANY = {"v": re.compile(r"[ \t\r]-[0-9]"), "vt": re.compile(r"/-[0-9]")}
+_NEG = {"v": re.compile(_IN_FACE + r"(?<![\w/-])(-[0-9]+)"), "vt": re.compile(_IN_FACE + r"(?<![\w/-])-?[0-9]+/(-[0-9]+)")}
+_INDEX = {"v": re.compile(r"(?<![\w/-])(-?[0-9]+)"), "vt": re.compile(r"(?<![\w/-])-?[0-9]+/(-?[0-9]+)")}
 _GROUP, _OBJECT = re.compile(r"(?m)^g "), re.compile(r"(?m)^o ")
 _NAME = re.compile(rf"(?m)^{_WS}*o{_WS}+([^\n]*\S)")
 
@@ -105,10 +105,10 @@ def _read(text: str | bytes, path: str, groups: bool) -> tuple[FdpMesh, list[str
     triangles = sum(sizes) - 2 * len(sizes)
     slashes = faces_text.count("/")
     if slashes == 2 * sum(sizes):  # every corner v/vt/vn or v//vn: drop the last part (and a bare //)
-        feed = re.sub(r"/-?\d*(?=[ \n]|$)", "", re.sub(r"//-?\d*", "", feed))
-    elif re.search(r"\d/-?\d*/", faces_text):  # some corners with normals: v/vt/vn -> v/vt, v//vn -> v
-        feed = re.sub(r"(/-?\d+)/-?\d*|//-?\d*", r"\1", feed)
-    plain_feed = re.sub(r"/-?\d*", "", feed)
+        feed = re.sub(r"/-?[0-9]*(?=[ \n]|$)", "", re.sub(r"//-?[0-9]*", "", feed))
+    elif re.search(r"[0-9]/-?[0-9]*/", faces_text):  # some corners with normals: v/vt/vn -> v/vt, v//vn -> v
+        feed = re.sub(r"(/-?[0-9]+)/-?[0-9]*|//-?[0-9]*", r"\1", feed)
+    plain_feed = re.sub(r"/-?[0-9]*", "", feed)
     vertices, faces, _ = _trimesh_read(plain_feed, plain, counts, triangles, path, uv=False)
     if first_unbounded(vertices) is not None:
         _locate_unbounded(plain, "v", path)
@@ -222,7 +222,7 @@ def _explain_face(tokens: list[re.Match[str]], line: str, path: str, number: int
                            "corners are v, v/vt, v//vn or v/vt/vn")
         column = m.start() + 1
         for i, part in enumerate(parts):
-            if (part or i == 0) and not re.fullmatch(r"-?\d+", part):
+            if (part or i == 0) and not re.fullmatch(r"-?[0-9]+", part):
                 raise FdpError(path, number, column, f"{part!r} is not an index", _INDEX_HINT)
             column += len(part) + 1
     raise FdpError(path, number, tokens[0].start() + 1, f"a face needs at least 3 corners, got {len(tokens) - 1}",
@@ -252,6 +252,8 @@ def _locate_range(plain: str, counts: dict[str, int], path: str) -> None:
     text = "\n".join(m.group() for m in _FACE_LINE.finditer(plain))
     for key, what in (("v", "vertex"), ("vt", "texture coordinate")):
         tokens = _INDEX[key].findall(text)
+        if not tokens:  # faces without texture references
+            continue
         values = _index_values(tokens, _LONG_INDEX.search(text) is not None)
         bad = (values > counts[key]) | (values < -counts[key])
         if not bad.any():
@@ -270,7 +272,7 @@ def _locate_range(plain: str, counts: dict[str, int], path: str) -> None:
                 raise FdpError(path, number, offset + 1, problem, _INDEX_HINT)
 
 
-_LONG_INDEX = re.compile(r"\d{19}")
+_LONG_INDEX = re.compile(r"[0-9]{19}")
 _INDEX_CLAMP = 10 ** 18
 """An index of 19 or more digits reads as +-10**18: past any count a file can hold (and past what int64, or
 Python's ``int()`` of a string of over 4,300 digits, takes), so it is out of range whatever its value."""
@@ -279,7 +281,7 @@ Python's ``int()`` of a string of over 4,300 digits, takes), so it is out of ran
 def _index_values(tokens: list[str], long: bool) -> np.ndarray:
     """The int64 value of each index token (``long``: some token may have 19 digits or more, clamped)."""
     if not long:  # the common case in C: every token fits int64 (and a fixed-width array stays small)
-        return np.array(tokens or ["1"]).astype(np.int64)
+        return np.array(tokens).astype(np.int64)
     return np.fromiter((_clamped(t) for t in tokens), np.int64, len(tokens))
 
 

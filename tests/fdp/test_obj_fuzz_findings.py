@@ -74,3 +74,16 @@ def test_first_unbounded():
     assert first_unbounded([[0, 0, 0], [1, np.nan, 0], [np.inf, 0, 0]]) == 1
     assert first_unbounded([1.0, -2e9]) == 1
     assert first_unbounded(np.ones((2, 4, 4)) * [[[1]], [[1e10]]]) == 1
+
+
+def test_a_file_trimesh_cannot_read_for_another_reason_is_still_its_error():
+    """obj:546@0 (found by the campaign after the fixes above): trimesh failed on a line 'f\ufffd\ufffd 2 3 4 5'
+    among quads, and the search for a bad index, finding no texture references at all, indexed an empty list."""
+    with pytest.raises(FdpError, match="trimesh cannot read the OBJ file"):
+        mesh_from_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\nf 1 2 3 4\nf\ufffd\ufffd 2 3 4 5\nf 1 2 4 5\n",
+                      "m.obj")
+
+
+def test_digits_of_other_scripts_are_not_indices():
+    with pytest.raises(FdpError, match=r"m\.obj:4:7: '\u0663' is not an index"):
+        mesh_from_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \u0663\n", "m.obj")
