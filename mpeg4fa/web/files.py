@@ -93,11 +93,12 @@ def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[st
         g = scene.geometry[geom]
         vertices, matrix = np.asarray(g.vertices, np.float64), np.asarray(matrix, np.float64)
         if vertices.ndim != 2 or vertices.shape[1] != 3:
-            raise EditError(f"node {str(node)[:40]!r}: its positions are not 3D points (shape {vertices.shape})", where=filename,
-                            hint="a mesh's POSITION accessor is a VEC3")
+            raise EditError(f"node {str(node)[:40]!r}: its positions are not 3D points (shape {vertices.shape})",
+                            where=filename, hint="a mesh's POSITION accessor is a VEC3")
         _check_coordinates(vertices, f"node {str(node)[:40]!r}: vertex", filename)
         if matrix.shape != (4, 4):
-            raise EditError(f"node {str(node)[:40]!r}: its transform is not a 4x4 matrix (shape {matrix.shape})", where=filename)
+            raise EditError(f"node {str(node)[:40]!r}: its transform is not a 4x4 matrix (shape {matrix.shape})",
+                            where=filename)
         _check_coordinates(matrix, f"node {str(node)[:40]!r}: row of its world transform", filename)
         v = trimesh.transform_points(vertices, matrix)
         _check_coordinates(v, f"node {str(node)[:40]!r}: transformed vertex", filename)

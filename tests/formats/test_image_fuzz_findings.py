@@ -44,8 +44,9 @@ def test_a_png_chunk_longer_than_the_file_is_refused_from_its_header(tmp_path):
     for source, where in ((path, str(path)), (bytes(png), "<image bytes>")):
         with pytest.raises(RenderError) as info:
             read_image(source, "texture image")
-        assert str(info.value).startswith(f"{where}: cannot read the texture image: damaged or truncated PNG: chunk "
-                                          f"IDAT at byte 33 claims 4,261,412,864 bytes, but the file has "), str(info.value)
+        text = str(info.value)
+        assert text.startswith(f"{where}: cannot read the texture image: damaged or truncated PNG: chunk "
+                               f"IDAT at byte 33 claims 4,261,412,864 bytes, but the file has "), text
 
 
 def test_a_png_cut_inside_a_chunk_says_so_and_a_whole_one_reads():
