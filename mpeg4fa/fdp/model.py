@@ -42,8 +42,9 @@ MAX_COORDINATE = 1e9
 """Largest magnitude of a mesh's coordinate (vertex position or texture coordinate) in any unit: a head is
 about 0.2 m, 200 mm, 2e8 nm. Beyond it the arithmetic on a mesh (squared lengths, areas, FAPU, trimesh's
 transforms, float32 for the GPU) overflows to infinity or NaN; within it, sums of squares over a million
-vertices stay far inside a double. The OBJ reader, :class:`FdpMesh`, the editor's readers and the face
-rig (:func:`mpeg4fa.face.custom.head_from_mesh`) refuse a mesh beyond it, naming the vertex."""
+vertices stay far inside a double. The OBJ reader, the editor's readers and the face rig
+(:func:`mpeg4fa.face.custom.head_from_mesh`, which also takes an FDP's own mesh) refuse a mesh beyond it,
+naming the vertex. (:class:`FdpMesh` holds any finite numbers: what a stream carries.)"""
 
 Where = tuple[Any, ...]
 _MEDIA_TYPE = re.compile(r"[A-Za-z0-9][A-Za-z0-9!#$&^_.+-]*/[A-Za-z0-9][A-Za-z0-9!#$&^_.+-]*\Z")
@@ -101,14 +102,6 @@ def first_unbounded(values: ArrayLike, bound: float = MAX_COORDINATE) -> int | N
         bad = bad.any(axis=tuple(range(1, arr.ndim)))
     hits = np.flatnonzero(bad)
     return int(hits[0]) if hits.size else None
-
-
-def _bounded_rows(arr: np.ndarray, what: str, where: Where) -> np.ndarray:
-    row = first_unbounded(arr)
-    if row is not None:
-        raise FdpValueError(f"{what} {row} is beyond +-{MAX_COORDINATE:g}", where + (row,),
-                            hint="check the values or the file's unit")
-    return arr
 
 
 def _int_array(value: ArrayLike, what: str, where: Where, lo: int, hi: int, cols: int = 0) -> np.ndarray:
@@ -229,15 +222,14 @@ class FdpMesh(_ValueEquality):
     name: str = ""
 
     def __post_init__(self) -> None:
-        verts = _bounded_rows(_float_array(self.vertices, 3, "mesh vertices", ("vertices",)), "mesh vertex",
-                              ("vertices",))
+        verts = _float_array(self.vertices, 3, "mesh vertices", ("vertices",))
         n = len(verts)
         tris = _int_array(self.triangles, "triangle vertex indices", ("triangles",), 0, max(n - 1, 0), cols=3)
         if n == 0 and len(tris):
             raise FdpValueError("triangles refer to vertices but the mesh has none", ("triangles", 0))
         uvs = None
         if self.uvs is not None:
-            uvs = _bounded_rows(_float_array(self.uvs, 2, "mesh uvs", ("uvs",)), "the uv of vertex", ("uvs",))
+            uvs = _float_array(self.uvs, 2, "mesh uvs", ("uvs",))
             if len(uvs) != n:
                 raise FdpValueError(f"mesh has {n} vertices but {len(uvs)} uvs", ("uvs",))
         _set(self, "vertices", verts)

@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from mpeg4fa.fdp import FdpError, FdpMesh, FdpValueError, mesh_from_obj, read_obj
+from mpeg4fa.fdp import FdpError, mesh_from_obj, read_obj
 from mpeg4fa.fdp.model import MAX_COORDINATE, first_unbounded
 
 TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
@@ -56,17 +56,6 @@ def test_a_coordinate_beyond_the_bound_is_refused_at_its_place(lines, where):
 
 def test_vertex_colours_after_the_position_are_not_coordinates():
     assert len(mesh_from_obj("v 0 0 0 1e300 1 1\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").vertices) == 3
-
-
-def test_the_mesh_model_holds_the_same_bound():
-    with pytest.raises(FdpValueError) as info:
-        FdpMesh([[0, 0, 0], [1, 0, 0], [0, 1, 2e9]], [[0, 1, 2]])
-    assert info.value.field == ("vertices", 2)
-    with pytest.raises(FdpValueError) as info:
-        FdpMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], uvs=[[0, 0], [1, 0], [-1e10, 1]])
-    assert info.value.field == ("uvs", 2)
-    edge = FdpMesh([[0, 0, 0], [MAX_COORDINATE, 0, 0], [0, -MAX_COORDINATE, 0]], [[0, 1, 2]])
-    assert len(edge.vertices) == 3
 
 
 def test_first_unbounded():
