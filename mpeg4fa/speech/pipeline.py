@@ -31,7 +31,6 @@ from mpeg4fa.speech.chunks import CHUNK_CHARS, parse_pieces, sentence_chunks
 from mpeg4fa.speech.errors import MarkupError, TTSError
 from mpeg4fa.speech.frames import FrameBlock, FrameMaker
 from mpeg4fa.speech.ipa import phoneme_fallbacks
-from mpeg4fa.speech.ipa import phoneme_fallbacks
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.timeline import ExpressionCue
 from mpeg4fa.speech.tts.base import Engine, Event, Speech

@@ -16,6 +16,7 @@ from scipy.spatial import cKDTree
 
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.face.fapu import Fapu, measure_fapu
+from mpeg4fa.fdp.model import MAX_COORDINATE, first_unbounded
 from mpeg4fa.spec import FEATURE_POINT_MIRROR, FEATURE_POINTS
 
 LABELS = tuple(fp.label for fp in FEATURE_POINTS)
@@ -23,9 +24,6 @@ PART_NAME = re.compile(r"^[a-z][a-z0-9_]{0,39}$")
 UNASSIGNED = "unassigned"
 CLOSED_PARTS = ("eye_l", "eye_r", "tongue")
 """Parts that must be closed surfaces (watertight) on save; the skin and teeth may be open."""
-MAX_COORDINATE = 1e9
-"""The largest absolute vertex coordinate a mesh may have, in any unit (a head is about 0.2 m, 200 mm):
-beyond it areas, FAPU and the 6-decimal JSON of the model (x 1e6) would overflow to infinity."""
 
 
 class EditError(MpegFaError):
@@ -91,10 +89,8 @@ def from_head(head) -> EditMesh:
 
 def check_vertices(vertices: np.ndarray) -> None:
     """Refuse coordinates a mesh cannot hold: not finite, or beyond :data:`MAX_COORDINATE`."""
-    with np.errstate(invalid="ignore"):
-        bad = ~(np.abs(vertices) <= MAX_COORDINATE).all(axis=-1)
-    if bad.any():
-        i = int(np.argmax(bad))
+    i = first_unbounded(vertices)
+    if i is not None:
         raise EditError(f"vertex {i} would lie at ({', '.join(f'{x:.6g}' for x in vertices[i])}): coordinates must be "
                         f"finite and within +-{MAX_COORDINATE:g}", where="vertices",
                         hint="check the values (or the file's unit); nothing was changed")
