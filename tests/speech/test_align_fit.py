@@ -19,6 +19,9 @@ from mpeg4fa.speech.tts.espeak import EspeakEngine
 
 TEXT = "Please bring the maps back before the boat leaves."
 WRONG = "Bring me some bread and butter for the boat."
+WRONG_SAME_SPAN = "Fetch me the bread and butter before the boat leaves."
+"""Other words that DTW warps over the whole recording (100 % of its speech). WRONG spans 80-84 % of it,
+depending on what espeak-ng spoke before in the process: on the coverage rule's edge (MIN_COVERAGE 0.8)."""
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +53,7 @@ def test_no_fit_check_aligns_anyway(rec):
 def test_dtw_reports_its_path_cost_but_does_not_judge_it(rec):
     """No limit for DTW: on real speech the right transcript's cost overlaps a wrong one's (bench_align)."""
     assert FIT_LIMITS["dtw"] is None
-    al = align_recording(rec, WRONG, lang="en", method="dtw")
+    al = align_recording(rec, WRONG_SAME_SPAN, lang="en", method="dtw")
     assert math.isfinite(al.fit) and al.fit > 0
 
 
