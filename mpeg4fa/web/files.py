@@ -191,7 +191,8 @@ def _check_index(ref, items: list, what: str, where: str) -> None:
 
 def _gltf_external(doc) -> list[str]:
     """The URIs of a glTF's buffers and images that are files (not data: URIs), as written in its JSON."""
-    items = [item for key in ("buffers", "images") for item in (doc.get(key) or [] if isinstance(doc, dict) else [])]
+    lists = [doc.get(key) for key in ("buffers", "images")] if isinstance(doc, dict) else []
+    items = [item for value in lists if isinstance(value, list) for item in value]  # other shapes: refused later
     uris = [item.get("uri") for item in items if isinstance(item, dict)]
     return list(dict.fromkeys(u for u in uris if isinstance(u, str) and not u.startswith("data:")))
 

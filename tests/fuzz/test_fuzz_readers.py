@@ -211,6 +211,8 @@ FOUND = [  # (target, seed, index, what the case found when it was found)
     ("text", 0, 364, "UnicodeEncodeError in espeak.synthesize: a lone surrogate in the text"),
     ("text", 0, 770, "ValueError 'spans overlap' (1e-14 s) in timeline._checked_spans across chunks"),
     ("text", 2, 8, "UnicodeEncodeError in espeak.synthesize: a lone surrogate in the text (IPA voice)"),
+    ("gltf", 0, 20472, "TypeError in web/files._gltf_external: a .gltf whose 'buffers' is a number"),
+    ("gltf", 0, 29887, "TypeError in web/files._gltf_external: a .gltf whose 'images' is a number (upload)"),
     ("text", 1, 134, "ValueError 'spans overlap' (4e-15 s): a diphthong's offglide split past its phoneme's end"),
     ("obj", 0, 1439, "OverflowError in fdp/obj.py _locate_range: a face index past int64"),
     ("obj", 0, 2267, "ValueError in fdp/obj.py _locate_range: a face index of 4301 digits"),
