@@ -140,6 +140,7 @@ def _split_final(s: Syllable, final_visemes: tuple[str, ...], phones: list[Event
     roles = final_roles(s.final, len(final_visemes))
     weights = np.array([FINAL_WEIGHT[r] for r in roles])
     edges = start + (end - start) * np.r_[0.0, np.cumsum(weights) / weights.sum()]
+    edges[-1] = end  # start + (end - start) can round an ulp past end, into the next phoneme
     return [Timing(f"{s.pinyin}:{role}", v, float(a), float(b), "zh")
             for v, role, a, b in zip(final_visemes, roles, edges[:-1], edges[1:])]
 
@@ -190,10 +191,15 @@ def _speak_zh(engine: Engine, text: str, start: int, end: int, marks: list[tuple
                               speech.duration, spu)
         timings = [Timing(u.label, u.viseme, a, b, "zh") for u, a, b in placed_units]
         return speech, timings, _mark_times(speech, local)
+    taken: set[int] = set()
     for syl, word in found:
         stop = words[words.index(word) + 1].start if words.index(word) + 1 < len(words) else speech.duration
-        phones = [p for p in phonemes if word.start - 0.02 <= p.start < stop and not p.text.startswith("_")]
-        timings += _syllable_timings(syl, phones)
+        # a phoneme up to 20 ms before the word is its own, unless the syllable before has it: given to both,
+        # its time was spoken twice and the second syllable started inside the first (spans overlap)
+        mine = [k for k, p in enumerate(phonemes)
+                if k not in taken and word.start - 0.02 <= p.start < stop and _voiced_phoneme(p.text)]
+        taken.update(mine)
+        timings += _syllable_timings(syl, [phonemes[k] for k in mine])
     timings += [Timing(p.text, PAUSE, p.start, p.end) for p in phonemes if p.text.startswith("_")]
     return speech, sorted(timings, key=lambda t: t.start), _mark_times(speech, local)
 
@@ -227,6 +233,13 @@ def _speak_ipa(engine: Engine, text: str, start: int, end: int, marks: list[tupl
                          is_sound=sounding(speech.samples, speech.rate))
     timings = [Timing(label, viseme, a, b) for label, viseme, a, b in placed]
     return speech, timings, _mark_times(speech, local)
+
+
+def _voiced_phoneme(name: str) -> bool:
+    """Whether a phoneme event of the pinyin voice is a sound: not a pause (``_``, ``_|``) nor a language
+    switch (``(en)`` ... ``(cmn)``, around a syllable the voice spells out in English), which is no initial."""
+    bare = name.strip()
+    return not bare.startswith("_") and not (bare.startswith("(") and bare.endswith(")"))
 
 
 def _has_phonemes(speech: Speech) -> bool:

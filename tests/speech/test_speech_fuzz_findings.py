@@ -1,7 +1,8 @@
 """What the fuzz campaigns of issue 26 found on the speech path, each as the smallest case that shows it.
 
 The replays of the campaigns' own cases are in ``tests/fuzz/test_fuzz_readers.py``; these say which rule
-each fix put where: the parse pass refuses what is no text, a split phoneme ends where it ends, a float
+each fix put where: the parse pass refuses what is no text, a split phoneme ends where it ends, a pinyin
+syllable's phonemes are its own (a language switch is none), a float
 WAV's NaN and 1e308 are silence and full scale without a numpy warning, viseme events stop at the
 in-memory encoder's ceiling, and an espeak-ng voice without its dictionary is refused in one line.
 """
@@ -83,6 +84,35 @@ def test_split_phonemes_never_overlap_the_next():
               for k, (a, b) in enumerate(zip(bounds, bounds[1:]))]
     placed = ipa_visemes(events)
     assert all(b[2] >= a[3] for a, b in zip(placed, placed[1:]))
+
+
+def test_an_affricate_split_at_the_stdin_case_times_ends_where_the_next_phoneme_starts():
+    """Fuzz stdin:2495@0 (``gigantes`` said over and over by the ca-nw voice): the d of dʒ took 0.3 of its
+    508 samples and the ʒ 0.7; added, they ended at 4.366938775510205, an ulp into the next i."""
+    end = 96291 / 22050
+    events = [Event("phoneme", (96291 - 508) / 22050, end, "dʒ", 0), Event("phoneme", end, 4.43, "i", 1)]
+    placed = ipa_visemes(events)
+    assert [p[1] for p in placed] == ["DD", "CH", "ih"]
+    assert placed[1][3] == end == placed[2][2]
+
+
+# -- 2b. a pinyin syllable's phonemes are its own ----------------------------------------------------------------
+
+def test_a_phoneme_near_a_syllable_boundary_belongs_to_one_syllable():
+    """Fuzz text:22873@0: espeak-ng's pinyin voice spells qiong2 out in English between the switches (en) and
+    (cmn); the (cmn) event, 7 ms before the next syllable's word, was the last phoneme of qiong and the
+    initial of cun too, so cun started inside qiong ('spans overlap'). A language switch is no phoneme."""
+    from mpeg4fa.speech.encoder import make_engine
+    from mpeg4fa.speech.markup import parse_markup
+    from mpeg4fa.speech.utterance import speak
+
+    utterance = speak(parse_markup("穹村"), make_engine("espeak"), lang="zh")
+    spans = utterance.spans()
+    assert all(b.start >= a.end for a, b in zip(spans, spans[1:]))
+    assert not any(t.phoneme.startswith("(") for t in utterance.timings)
+    initials = [t for t in utterance.timings if t.phoneme == "tsh"]
+    assert [t.viseme for t in initials] == ["zcs"]  # cun's initial is its own tsh, not the switch before it
+    assert encode_text("穹村", engine="espeak").stream.n_frames > 0
 
 
 # -- 4. a float WAV's NaN, inf and 1e308 -------------------------------------------------------------------------
