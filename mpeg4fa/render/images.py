@@ -19,7 +19,9 @@ from mpeg4fa.filetype import HEAD_BYTES, foreign_kind, head_hex
 from mpeg4fa.render.errors import RenderError
 
 MAX_PIXELS = 1 << 26
-"""Largest image read (67,108,864 pixels: 8192 x 8192); decoding it takes up to ~450 MB."""
+"""Largest image read (67,108,864 pixels: 8192 x 8192); decoding it takes up to ~450 MB (~520 MB from a palette)."""
+MAX_SIDE = 1 << 14
+"""Longest side read (16,384 pixels): a photo or texture is never a 16 x 4,000,000 strip."""
 
 _IMAGE_KINDS = ("a JPEG image", "a PNG image", "a GIF image", "a TIFF image", "a WebP image")
 
@@ -41,12 +43,12 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
             warnings.simplefilter("error", Image.DecompressionBombWarning)
             with Image.open(source) as img:
                 width, height = img.size
-                if width * height > MAX_PIXELS:
+                if width * height > MAX_PIXELS or max(width, height) > MAX_SIDE:
                     raise RenderError(f"the {what} is {width:,} x {height:,} pixels, more than the "
-                                      f"{MAX_PIXELS:,} pixels read", where=where, hint="scale the image down to 8192 x 8192 or less")
+                                      f"{MAX_PIXELS:,} pixels or {MAX_SIDE:,} a side read", where=where, hint="scale the image down to 8192 x 8192 or less")
                 if width == 0 or height == 0:
                     raise RenderError(f"the {what} has no pixels ({width} x {height})", where=where)
-                pixels = np.asarray(img.convert("RGB"))
+                pixels = _rgb(img)
                 kind = img.format
         _pillow_warnings(caught, kind, what, where)
         return pixels
@@ -118,6 +120,13 @@ def _pillow_warnings(caught: list[warnings.WarningMessage], kind: str | None, wh
         elif _STRUCTURE_WARNINGS.get(kind or "") == module:
             raise RenderError(f"cannot read the {what}: damaged {kind} image ({str(w.message).strip()})", where=where,
                               hint="open it in an image viewer, or save it again as PNG")
+
+
+def _rgb(img) -> np.ndarray:
+    """(H, W, 3) uint8; a grey image repeated into three channels without Pillow's 4-byte RGB copy."""
+    if img.mode == "L":
+        return np.repeat(np.asarray(img)[:, :, None], 3, axis=2)
+    return np.asarray(img.convert("RGB"))
 
 
 def _not_an_image(source: str | os.PathLike | io.BytesIO) -> str:
