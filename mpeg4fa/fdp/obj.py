@@ -42,7 +42,9 @@ from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
 from mpeg4fa.fdp.model import MAX_COORDINATE, FdpMesh, first_unbounded
 
 _INDEX_HINT = "OBJ indices count from 1; negative ones count back from the last one defined above the face"
-_NUM = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
+# A number, matched one way only: "[0-9]+\.?[0-9]*" matched "4333" four ways, so a line of many numbers that
+# then failed backtracked exponentially (fuzz obj:39238: a 1 kB file ran past 10 s).
+_NUM = r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
 _CORNER = r"-?[0-9]+(?:/-?[0-9]*(?:/-?[0-9]*)?)?"
 _WS = r"[ \t\r]"
 # First statement of each kind that is not well formed (checked by regex, located by _explain_*).

@@ -76,3 +76,24 @@ def test_a_file_trimesh_cannot_read_for_another_reason_is_still_its_error():
 def test_digits_of_other_scripts_are_not_indices():
     with pytest.raises(FdpError, match=r"m\.obj:4:7: '\u0663' is not an index"):
         mesh_from_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \u0663\n", "m.obj")
+
+
+def test_a_line_of_many_numbers_run_together_is_refused_at_once(tmp_path):
+    """Fuzz finding (obj:39238@0): the statement check's number pattern matched '43' two ways, so a 'v' line of
+    many numbers ending in '-43-43.3' backtracked 2**n times. The alarm ends the old code's endless search."""
+    import signal
+
+    def stuck(signum, frame):
+        raise TimeoutError("the statement check backtracked for over 5 s")
+
+    path = tmp_path / "run.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0" + " -43" * 60 + "-43.3013\nf 1 2 3\n")
+    old = signal.signal(signal.SIGALRM, stuck)
+    signal.alarm(5)
+    try:
+        with pytest.raises(FdpError) as info:
+            read_obj(path)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    assert info.value.line == 4
