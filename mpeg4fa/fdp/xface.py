@@ -43,7 +43,7 @@ from mpeg4fa.spec import N_FAPS
 MAX_ELEMENTS = 200_000
 """Most XML elements read; Xface's alice has about 1,000."""
 _INT = re.compile(r"[+-]?[0-9]{1,18}\Z")
-_FLOAT = re.compile(r"\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\s*\Z")
+_FLOAT = re.compile(r"\s*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\s*\Z")
 
 
 class XfaceInfluence(NamedTuple):

@@ -41,7 +41,7 @@ Target = Union[str, "os.PathLike[str]", IO[str]]
 
 _TOKEN = re.compile(r"\S+")
 _INT = re.compile(r"[+-]?[0-9]+\Z")
-_FLOAT = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")
+_FLOAT = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z")
 _MAX_INT_DIGITS = 12  # longer than any int32, short enough for int() to stay cheap and safe
 _MAX_TOKEN = 24
 """Longest number token read; an int32 with sign takes 11 characters, a few leading zeros are tolerated."""
@@ -204,7 +204,7 @@ def integer(line: Line, index: int, path: str, what: str, low: int, high: int, h
 def _fps(line: Line, index: int, path: str) -> float:
     token = line.tokens[index]
     hint = "the third header field is frames per second, e.g. 25 or 29.97"
-    if not _FLOAT.match(token) or len(token) > 64:
+    if len(token) > 64 or not _FLOAT.match(token):
         raise FormatError(path, line.number, line.column(index), f"frame rate {short(token)!r} is not a number", hint)
     value = float(token)
     problem = fps_problem(value)

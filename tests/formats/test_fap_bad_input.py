@@ -214,3 +214,32 @@ def test_format_error_is_the_base_error():
     back = pickle.loads(pickle.dumps(err))
     assert (back.path, back.line, back.column, back.problem, back.hint, str(back)) == \
         ("a.fap", 3, 7, "bad value", "fix it", str(err))
+
+
+def test_a_long_digit_run_in_a_number_is_refused_at_once(tmp_path):
+    """The number pattern matched '4333' several ways, so one long digit run that was not a number took
+    quadratic time (8,000 digits: 2.6 s; a 60,000-digit frame rate in a .fap header: minutes). Numbers are
+    matched one way only now (masked_text, xface, obj). The alarm ends the old patterns' search."""
+    import re
+    import signal
+
+    from mpeg4fa.fdp import xface
+    from mpeg4fa.formats import masked_text
+
+    def stuck(signum, frame):
+        raise TimeoutError("a number pattern backtracked for over 5 s")
+
+    token = "4" * 100_000 + "x"
+    path = tmp_path / "rate.fap"
+    path.write_text("2.1 x " + token[:60_000] + " 3\n")
+    old = signal.signal(signal.SIGALRM, stuck)
+    signal.alarm(5)
+    try:
+        for pattern in (masked_text._FLOAT, xface._FLOAT):
+            assert pattern.match(token) is None
+        with pytest.raises(FormatError, match="frame rate"):
+            read_fap(path)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    assert re.fullmatch(masked_text._FLOAT, "12.5e3") and re.fullmatch(xface._FLOAT, " .5 ")
