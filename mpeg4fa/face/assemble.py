@@ -30,6 +30,10 @@ def mesh_face(mesh_path: PathLike, points_path: PathLike) -> FaceModel:
         return FaceModel.from_mesh(mesh.vertices, mesh.triangles, points, uvs=mesh.uvs, name=Path(mesh_path).stem)
     except FdpValueError as exc:
         raise FdpError.no_place(str(points_path), exc.message) from None
+    except FaceError as exc:  # the mesh and its points rig no face (points out of order...): say which files
+        if exc.where:
+            raise
+        raise FaceError(exc.message, where=f"{mesh_path} + {points_path}", hint=exc.hint) from None
 
 
 def assemble_face(*, fdp: PathLike | None = None, method: str = "dffd", skull: str = "triangles",

@@ -192,3 +192,22 @@ def test_play_with_a_bad_points_file_says_one_line(cli, procedural_head, tmp_pat
     assert code == 1 and "points.json" in err and err.count("\n") == 1
     code, _, err = cli("play", stream, "--face-mesh", tmp_path / "head.obj", "-o", tmp_path / "x.mp4")
     assert code == 2 and "--face-points" in err
+
+
+def test_points_that_rig_no_face_name_both_files(procedural_head, tmp_path, monkeypatch):
+    """Fuzz finding (obj, unlocated): 'non-positive FAPU MNS0 (feature points out of order)' from the rig named
+    no file; a rig fault without a place is said with the mesh and points files."""
+    from mpeg4fa.face import assemble
+    from mpeg4fa.face.model import FaceModel
+
+    v, t, points = skin_only(procedural_head)
+    _write_obj(tmp_path / "head.obj", v, t)
+    (tmp_path / "points.json").write_text(json.dumps(points))
+
+    def unrigged(*args, **kwargs):
+        raise FaceError("non-positive FAPU MNS0 (feature points out of order)")
+
+    monkeypatch.setattr(FaceModel, "from_mesh", unrigged)
+    with pytest.raises(FaceError) as info:
+        assemble.mesh_face(tmp_path / "head.obj", tmp_path / "points.json")
+    assert "head.obj" in info.value.where and "points.json" in info.value.where and "MNS0" in info.value.message
