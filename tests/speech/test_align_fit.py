@@ -44,7 +44,16 @@ def test_a_wrong_transcript_is_refused_with_its_location(rec):
         encode_recording(rec, WRONG, lang="en")
 
 
-def test_no_fit_check_aligns_anyway(rec):
+@pytest.fixture
+def coverage_off_the_edge(monkeypatch):
+    """WRONG spans 79-84 % of the recording once aligned, by what espeak-ng spoke before in the process: on the
+    edge of the coverage rule (MIN_COVERAGE 0.8), which the tests using this are not about."""
+    import mpeg4fa.speech.align.core as core
+
+    monkeypatch.setattr(core, "MIN_COVERAGE", 0.7)
+
+
+def test_no_fit_check_aligns_anyway(rec, coverage_off_the_edge):
     al = align_recording(rec, WRONG, lang="en", method="pocketsphinx", fit_check=False)
     assert al.fit < FIT_LIMITS["pocketsphinx"]
     assert encode_recording(rec, WRONG, lang="en", fit_check=False).speech.duration == pytest.approx(rec.duration)
@@ -66,7 +75,7 @@ def _write(path, samples, rate):
     return path
 
 
-def test_cli_exit_1_with_one_line_and_no_fit_check(cli, tmp_path, rec):
+def test_cli_exit_1_with_one_line_and_no_fit_check(cli, tmp_path, rec, coverage_off_the_edge):
     wav = _write(tmp_path / "please.wav", rec.samples, rec.rate)
     out = tmp_path / "talk.fba"
     code, _, err = cli("encode", "--speech", wav, "--transcript", WRONG, "-o", out)
