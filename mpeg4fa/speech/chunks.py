@@ -28,6 +28,11 @@ a chunk at a time, so this bounds only the source string itself (at most 4 MiB o
 
 CHUNK_CHARS = 2000
 """Most characters of plain text spoken at once (about two minutes of speech at 175 words a minute)."""
+MAX_RUN = 128
+"""Longest run without white space spoken at once (the longest English words are under 50 letters): espeak-ng
+1.52 overruns a buffer on about 200 single letters run together with dots ('a.a.a...', 400 characters: stack
+smashing, found by the fuzz campaign), so a longer run is cut, between characters, into chunks of its own."""
+_LONG_RUN = re.compile(rf"\S{{{MAX_RUN + 1},}}")
 
 _SENTENCE_END = re.compile(r"[.!?\u2026]+[\"'\u201d\u2019\u00bb)\]]*(?=\s)|[\u3002\uff01\uff1f]+[\u201d\u2019\u300d\u300f\uff09]*"
                            r"|\n[^\S\n]*\n")
@@ -49,11 +54,18 @@ def _last_end(pattern: re.Pattern[str], text: str, start: int, stop: int) -> int
 
 def _cut(text: str, start: int, limit: int) -> int:
     """Where the chunk from ``start`` ends: after the last sentence that fits, else a clause, else a
-    word, else (one run of letters) at ``limit`` characters, never inside a combining sequence."""
-    stop = start + limit
+    word, else (one run of letters) at ``limit`` characters, never inside a combining sequence. A run
+    without white space longer than :data:`MAX_RUN` is a chunk of its own, cut every MAX_RUN characters."""
+    run = _LONG_RUN.search(text, start, start + limit + MAX_RUN + 1)
+    if run is not None and run.start() >= start + limit:
+        run = None  # it starts after this chunk
+    if run is not None and run.start() > start:
+        return run.start()  # the chunk ends before the run
+    stop = start + (MAX_RUN if run is not None else limit)
     if stop >= len(text):
         return len(text)
-    for pattern in (_SENTENCE_END, _CLAUSE_END, _SPACE):
+    patterns = () if run is not None else (_SENTENCE_END, _CLAUSE_END, _SPACE)
+    for pattern in patterns:
         end = _last_end(pattern, text, start, stop)
         if end > start:
             return end

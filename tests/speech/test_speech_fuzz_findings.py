@@ -203,3 +203,24 @@ def test_encode_visemes_streams_the_same_stream(tmp_path, cli):
             streamed, held = grid(decode(out.read_bytes())), grid(decode(whole))
             assert streamed.shape == held.shape and len(held) > 6000 and np.abs(held).max() > 0
             assert np.array_equal(streamed, held)
+
+
+def test_a_long_run_of_dotted_letters_is_spoken_in_pieces_not_crashing_espeak(tmp_path):
+    """Fuzz finding (stdin:12268@0, a worker killed by SIGSEGV): espeak-ng 1.52 overruns a buffer on about 200
+    single letters run together with dots ('stack smashing detected', SIGABRT/SIGSEGV/SIGBUS). Runs without
+    white space longer than chunks.MAX_RUN are cut into chunks of their own. In a child process: the old code
+    killed the process that spoke it."""
+    import subprocess
+    import sys
+
+    from mpeg4fa.speech.chunks import MAX_RUN, sentence_chunks
+    from mpeg4fa.speech.markup import parse_markup
+
+    text = "Hello. " + ".a" * 250 + " there."
+    pieces = [m.text for m in sentence_chunks(parse_markup(text))]
+    assert max(len(p) for p in pieces) <= MAX_RUN and "".join(pieces).replace(" ", "") == text.replace(" ", "")
+    out = tmp_path / "dots.fba"
+    done = subprocess.run([sys.executable, "-m", "mpeg4fa.cli", "encode", "--text", text, "-o", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-500:]
+    assert out.stat().st_size > 0
