@@ -224,3 +224,12 @@ def test_a_long_run_of_dotted_letters_is_spoken_in_pieces_not_crashing_espeak(tm
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-500:]
     assert out.stat().st_size > 0
+
+
+def test_the_engine_refuses_a_run_it_cannot_speak_whole():
+    """Callers that do not chunk (the aligner speaks a transcript whole) get one error, not espeak-ng's overrun."""
+    from mpeg4fa.speech.errors import TTSError
+    from mpeg4fa.speech.tts.espeak import EspeakEngine
+
+    with pytest.raises(TTSError, match="500 characters without a space at character 7"):
+        EspeakEngine().synthesize("Hello " + ".a" * 250)

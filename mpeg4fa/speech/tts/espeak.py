@@ -18,6 +18,7 @@ import bisect
 import ctypes
 import html
 import os
+import re
 import threading
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -472,6 +473,13 @@ class EspeakEngine:
         if "\0" in text:
             raise TTSError("the text contains a NUL character", where=WHERE,
                            hint="remove NUL characters from the text")
+        from mpeg4fa.speech.chunks import MAX_RUN  # the parse pass cuts text there; other callers are checked
+
+        run = re.search(rf"\S{{{MAX_RUN + 1},}}", text)
+        if run is not None:  # espeak-ng 1.52 overruns a buffer on ~200 dotted letters: never hand it such a run
+            raise TTSError(f"{len(run.group()):,} characters without a space at character {run.start() + 1}: "
+                           f"espeak-ng speaks at most {MAX_RUN} at a time", where=WHERE,
+                           hint="put spaces in the run (text given to encode or say is cut there by itself)")
         if not RATE_RANGE[0] <= int(wpm) <= RATE_RANGE[1]:
             raise TTSError(f"rate {wpm} words per minute is out of range", where=WHERE,
                            hint=f"use {RATE_RANGE[0]}..{RATE_RANGE[1]} (default {DEFAULT_RATE})")
