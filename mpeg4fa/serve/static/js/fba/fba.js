@@ -1,0 +1,743 @@
+// fba.js: an MPEG-4 FBA (face and body animation) bitstream decoder, for browsers and Node.
+//
+// A port of the reference decoder of mpeg4fa (mpeg4fa/fba: bits.py, arith.py, syntax.py, params.py,
+// decoder.py): the same frames, the same errors at the same bit offsets. No dependencies; the
+// standard's numbers come from spec.js, which tools/fbajs_spec.py writes from spec/.
+//
+//   import { decode, StreamDecoder } from "./fba.js";
+//   const stream = decode(bytes);                 // {frames, objectStartCode, fps}; throws FbaError
+//   const dec = new StreamDecoder();              // bytes in pieces, frames out as soon as complete
+//   for (const frame of dec.push(chunk)) ...; for (const frame of dec.end()) ...;
+//
+// A frame: {index, timestamp, objectMask, fapMask (Uint8Array 68), fapValues (Int32Array 68),
+// viseme (Int32Array 4: select1, select2, blend, viseme_def), expression (Int32Array 6: select1,
+// intensity1, select2, intensity2, init_face, expression_def), bapMask (Uint8Array 296), bapValues
+// (Int32Array 296), skip, startCode, bits, params (intra headers only, else null)}.
+import SPEC from "./spec.js";
+
+export { SPEC };
+export const OBJECT_START_CODE = 0x1BA;
+export const OBJECT_START_CODE_OLD = 0x101;
+export const PLANE_START_CODE = 0x1BB;
+export const PLANE_START_CODE_OLD = 0x103;
+export const END_CODE = 0x1B1;
+export const DEFAULT_FPS = 30.0;  // frame rate assumed before an intra header sends one (visage DEF_FRAME_RATE)
+const FACE_BIT = 1, BODY_BIT = 2;
+const MASK_HOLD = 1, MASK_INTERPOLATE = 2, MASK_ALL = 3;
+const RANGE_SET_NAMES = ["i_max", "i_min", "p_max", "p_min"];
+const RANGE_DELTA = 60;  // a 5-bit range code c stands for c * 60 quantised units
+const TOP = 65535, Q1 = 16384, Q2 = 32768, Q3 = 49152, MAX_FREQUENCY = 16383, MAX_ZERO_RUN = 22, REWIND_BITS = 14;
+const N_FAPS = SPEC.n_faps, N_BAPS = SPEC.n_baps;
+
+export const NO_END_CODE = "stream ends without the end code 0x000001B1 (truncated?)";
+const SEGMENT_ENDS = "stream ends inside an arithmetic-coded segment";
+const STUFFING_EXPECTED = "stuffing '1' expected after 22 zero bits";
+const OBJECT_MASK_ZERO = "fba_object_mask is 0: the plane carries neither face nor body data";
+
+/** A stream that cannot be decoded: where (bit offset, frame) and the frames decoded before it. */
+export class FbaError extends Error {
+  constructor(message, bitOffset = null, frame = null, hint = "") {
+    super(message);
+    this.name = "FbaError";
+    this.bitOffset = bitOffset;
+    this.frame = frame;
+    this.hint = hint;
+    this.partial = null;  // {frames, ...} decoded before the fault, filled in by decode()
+  }
+  /** "bit N (byte M), frame F", as the Python decoder words it. */
+  get where() {
+    const parts = [];
+    if (this.bitOffset !== null) parts.push(`bit ${this.bitOffset} (byte ${Math.floor(this.bitOffset / 8)})`);
+    if (this.frame !== null) parts.push(`frame ${this.frame}`);
+    return parts.length ? parts.join(", ") : null;
+  }
+  toString() {
+    const where = this.where;
+    const text = where ? `${this.message} at ${where}` : this.message;
+    return this.hint ? `${text} (${this.hint})` : text;
+  }
+}
+
+class UnsupportedFeature extends FbaError {}
+
+/** Thrown inside the decoder when a streaming input has not delivered enough bytes yet. */
+const NEED_MORE = { needMore: true };
+
+const truncated = (what, n, left) => `stream ends inside ${what} (needs ${n} bits, ${left} left)`;
+const badStuffing = (bits, n) =>
+  `stuffing bits ${bits.toString(2).padStart(n, "0")} before a start code should be ` +
+  `${((1 << (n - 1)) - 1).toString(2).padStart(n, "0")} (a '0' then '1's)`;
+const hex8 = (code) => "0x" + (code >>> 0).toString(16).toUpperCase().padStart(8, "0");
+
+// ---- bits --------------------------------------------------------------------------------------
+class BitReader {
+  constructor() {
+    this.buf = new Uint8Array(0);
+    this.nbytes = 0;     // valid bytes in buf
+    this.baseBits = 0;   // absolute bit offset of buf[0]
+    this.p = 0;          // read index in bits into buf
+    this.final = false;  // no more bytes will come: a short read is the stream's end
+  }
+  get pos() { return this.baseBits + this.p; }
+  get nbits() { return this.nbytes * 8; }
+  append(chunk) {
+    const need = this.nbytes + chunk.length;
+    if (need > this.buf.length) {
+      const grown = new Uint8Array(Math.max(need, this.buf.length * 2, 4096));
+      grown.set(this.buf.subarray(0, this.nbytes));
+      this.buf = grown;
+    }
+    this.buf.set(chunk, this.nbytes);
+    this.nbytes = need;
+  }
+  /** Forget the bytes before byte ``keep`` (a plane's start), so memory stays flat on a long stream. */
+  drop(keepBits) {
+    const dropBytes = Math.floor((keepBits - this.baseBits) / 8);
+    if (dropBytes < 65536) return;
+    this.buf.copyWithin(0, dropBytes, this.nbytes);
+    this.nbytes -= dropBytes;
+    this.baseBits += dropBytes * 8;
+    this.p -= dropBytes * 8;
+  }
+  available(n) {
+    if (this.p + n <= this.nbytes * 8) return true;
+    if (this.final) return false;
+    throw NEED_MORE;
+  }
+  left() { return this.nbytes * 8 - this.p; }
+  require(n, what) {
+    if (!this.available(n)) throw new FbaError(truncated(what, n, this.left()), this.pos);
+  }
+  bitsAt(p, n) {
+    const buf = this.buf;
+    let v = 0;
+    for (let i = p; i < p + n; i++) v = v * 2 + ((buf[i >> 3] >> (7 - (i & 7))) & 1);
+    return v;
+  }
+  read(n, what = "a field") {
+    this.require(n, what);
+    const v = this.bitsAt(this.p, n);
+    this.p += n;
+    return v;
+  }
+  /** The start code at the next byte boundary as [code, stuffing bits], or null (see bits.py). */
+  peekStartCode() {
+    const candidates = [8 - (this.pos % 8)];
+    if (this.pos % 8 === 0) candidates.unshift(0);
+    for (const skip of candidates) {
+      if (!this.available(skip + 32)) continue;
+      const word = this.bitsAt(this.p + skip, 32);
+      if (Math.floor(word / 256) === 1) return [word, skip];
+    }
+    return null;
+  }
+  skipStuffing(n) {
+    if (n === 0) return;
+    const start = this.pos;
+    const bits = this.read(n, "next_start_code() stuffing");
+    if (bits !== (1 << (n - 1)) - 1) throw new FbaError(badStuffing(bits, n), start);
+  }
+}
+
+// ---- the adaptive arithmetic decoder ----------------------------------------------------------
+// A uniform intra model is a number (its alphabet size); an adaptive model an Int32Array ``cum`` of
+// n + 1 descending cumulative counts (cum[0] = total, cum[n] = 0), all counts starting at 1.
+function adaptiveModel(n) {
+  const cum = new Int32Array(n + 1);
+  for (let j = 0; j <= n; j++) cum[j] = n - j;
+  return cum;
+}
+
+function updateModel(cum, symbol) {
+  const n = cum.length - 1;
+  if (cum[0] === MAX_FREQUENCY) {  // halve every count first
+    let next = cum[n], acc = 0;
+    for (let j = n - 1; j >= 0; j--) {
+      const old = cum[j];
+      acc += (old - next + 1) >> 1;
+      next = old;
+      cum[j] = acc;
+    }
+  }
+  for (let j = 0; j <= symbol; j++) cum[j] += 1;
+}
+
+/** One arithmetic-coded segment: one symbol per model, written into ``out``. */
+function decodeSegment(r, models, adapt, out) {
+  const buf = r.buf, nbits = r.nbytes * 8;
+  let p = r.p, zerorun = 0;
+  const nextBit = () => {
+    for (;;) {
+      if (p >= nbits) {
+        if (!r.final) throw NEED_MORE;
+        throw new FbaError(SEGMENT_ENDS, r.baseBits + p);
+      }
+      const bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
+      p++;
+      if (zerorun === MAX_ZERO_RUN) {
+        if (!bit) throw new FbaError(STUFFING_EXPECTED, r.baseBits + p - 1);
+        zerorun = 0;
+        continue;  // the stuffed '1' carries no information
+      }
+      zerorun = bit === 0 ? zerorun + 1 : 0;
+      return bit;
+    }
+  };
+  let code = 0;
+  for (let i = 0; i < 16; i++) code = (code << 1) | nextBit();
+  let low = 0, high = TOP;
+  for (let m = 0; m < models.length; m++) {
+    const model = models[m];
+    const length = high - low + 1;
+    let total, cumHi, cumLo, symbol;
+    if (typeof model === "number") {
+      total = model;
+      const target = Math.floor(((code - low + 1) * total - 1) / length);
+      symbol = total - target - 1;
+      cumHi = target + 1;
+      cumLo = target;
+    } else {
+      total = model[0];
+      const target = Math.floor(((code - low + 1) * total - 1) / length);
+      let i = 1;
+      while (model[i] > target) i++;
+      cumHi = model[i - 1];
+      cumLo = model[i];
+      symbol = i - 1;
+    }
+    high = low - 1 + Math.floor((length * cumHi) / total);
+    low = low + Math.floor((length * cumLo) / total);
+    for (;;) {
+      if (high < Q2) {
+        // nothing
+      } else if (low >= Q2) {
+        code -= Q2; low -= Q2; high -= Q2;
+      } else if (low >= Q1 && high < Q3) {
+        code -= Q1; low -= Q1; high -= Q1;
+      } else break;
+      low <<= 1;
+      high = (high << 1) | 1;
+      code = (code << 1) | nextBit();
+    }
+    if (adapt && typeof model !== "number") updateModel(model, symbol);
+    out[m] = symbol;
+  }
+  r.p = p - REWIND_BITS;
+}
+
+// ---- the two parts: face (FAP) and body (BAP) --------------------------------------------------
+const groupRanges = (slices) => slices.map(([a, b]) => Array.from({ length: b - a }, (_, k) => a + k));
+const FACE = {
+  name: "face", label: "FAP", n: N_FAPS,
+  maskGroups: groupRanges(SPEC.fap_group_slices),
+  rangeGroups: groupRanges(SPEC.fap_group_slices.slice(1)),
+  quantStep: SPEC.fap_quant_step,
+  stepMultiplier: (q) => q,
+  defaultI: SPEC.fap_i_max_default, defaultP: SPEC.fap_p_max_default,
+};
+const BODY = {
+  name: "body", label: "BAP", n: N_BAPS,
+  maskGroups: SPEC.bap_groups, rangeGroups: SPEC.bap_groups,
+  quantStep: SPEC.bap_quant_step,
+  stepMultiplier: (q) => SPEC.bap_pred_scale[q],
+  defaultI: null, defaultP: null,
+};
+for (const part of [FACE, BODY]) part.order = part.rangeGroups.flat();
+
+const floorDiv = (a, b) => Math.floor(a / b);
+
+/** FAPs 3..68 or the BAPs: ranges, quantiser steps, prediction and models since the last intra header. */
+class ValueCoder {
+  constructor(part) {
+    this.part = part;
+    this.ranges = [0, 1, 2, 3].map(() => new Float64Array(part.n));  // I max, I min, P max, P min
+    this.defaultsApplied = false;
+    this.prev = new Float64Array(part.n);
+    this.idx = [];
+    this.pModels = null;
+  }
+  startIntra(params) {
+    const part = this.part;
+    const step = part.stepMultiplier(params.quant);
+    const scaler = step || 1;
+    if (!this.defaultsApplied && part.defaultI !== null) {
+      for (const [k, def] of [[0, part.defaultI], [2, part.defaultP]]) {
+        for (let i = 0; i < part.n; i++) {
+          const rounded = -floorDiv(-def[i], RANGE_DELTA) * RANGE_DELTA;
+          this.ranges[k][i] = floorDiv(rounded, scaler);
+          this.ranges[k + 1][i] = -this.ranges[k][i];
+        }
+      }
+    }
+    this.defaultsApplied = true;
+    for (let k = 0; k < 4; k++) {
+      if (!params.ranges.flags[k]) continue;
+      for (let i = 0; i < part.n; i++) {
+        if (!params.mask[i]) continue;
+        const magnitude = floorDiv(params.ranges.codes[k][i] * RANGE_DELTA, scaler);
+        this.ranges[k][i] = k % 2 === 0 ? magnitude : -magnitude;
+      }
+    }
+    const idx = part.order.filter((i) => params.mask[i]);
+    this.idx = idx;
+    this.qstep = idx.map((i) => part.quantStep[i] * step);
+    this.imin = idx.map((i) => this.ranges[1][i]);
+    this.isize = idx.map((i, k) => this.ranges[0][i] - this.imin[k] + 1);
+    this.pmin = idx.map((i) => this.ranges[3][i]);
+    this.psize = idx.map((i, k) => this.ranges[2][i] - this.pmin[k] + 1);
+    this.intraModels = this.isize.slice();
+    this.pModels = null;
+    this.symbols = new Int32Array(idx.length);
+  }
+  models(intra) {
+    if (intra) return this.intraModels;
+    if (this.pModels === null) this.pModels = this.psize.map((s) => adaptiveModel(s));
+    return this.pModels;
+  }
+  /** Values (numbers, in coding order) from the symbols of one segment. */
+  decode(symbols, intra) {
+    const n = this.idx.length, values = new Float64Array(n), lo = intra ? this.imin : this.pmin;
+    for (let k = 0; k < n; k++) {
+      const level = symbols[k] + lo[k];
+      let v = this.qstep[k] === 0 ? level : level * this.qstep[k];
+      if (!intra) v += this.prev[this.idx[k]];
+      this.prev[this.idx[k]] = v;
+      values[k] = v;
+    }
+    return values;
+  }
+  snapshot() {
+    return { ranges: this.ranges.map((a) => a.slice()), prev: this.prev.slice(), defaultsApplied: this.defaultsApplied,
+      idx: this.idx, qstep: this.qstep, imin: this.imin, isize: this.isize, pmin: this.pmin, psize: this.psize,
+      intraModels: this.intraModels, symbols: this.symbols,
+      pModels: this.pModels && this.pModels.map((m) => m.slice()) };
+  }
+  restore(s) { Object.assign(this, s); }
+}
+
+const FIELDS = SPEC.high_level_fields;
+
+/** The fields of FAP 1 (viseme) or FAP 2 (expression), whose ranges are fixed. */
+class FieldCoder {
+  constructor(fap) {
+    this.fields = FIELDS.filter((f) => f.fap === fap);
+    const n = this.fields.length;
+    this.idx = Array.from({ length: n }, (_, k) => k);
+    this.quantised = this.fields.map((f) => f.quantised);
+    this.iMax = this.fields.map((f) => f.i_max);
+    this.imin = this.fields.map((f) => f.i_min);
+    this.pMax = this.fields.map((f) => f.p_max);
+    this.pmin = this.fields.map((f) => f.p_min);
+    this.prev = new Float64Array(n);
+    this.qstep = new Array(n).fill(0);
+    this.names = this.fields.map((f) => `FAP ${fap} ${f.field}`);
+    this.pModels = null;
+    this.symbols = new Int32Array(n);
+  }
+  startIntra(q) {
+    if (q) {
+      const top = floorDiv(SPEC.full_intensity + (q >> 1), q);
+      this.fields.forEach((f, k) => {
+        if (f.quantised) { this.iMax[k] = top; this.pMax[k] = top; this.pmin[k] = -top; }
+      });
+    }
+    this.qstep = this.quantised.map((isQ) => (isQ ? q : 0));
+    this.isize = this.iMax.map((m, k) => m - this.imin[k] + 1);
+    this.psize = this.pMax.map((m, k) => m - this.pmin[k] + 1);
+    this.intraModels = this.isize.slice();
+    this.pModels = null;
+  }
+  models(intra) { return ValueCoder.prototype.models.call(this, intra); }
+  decode(symbols, intra) { return ValueCoder.prototype.decode.call(this, symbols, intra); }
+  /** Selects must name a viseme 0..14 / expression 0..6. */
+  checkSelects(values, bitOffset, frame) {
+    for (let k = 0; k < values.length; k++) {
+      if (this.quantised[k]) continue;
+      const v = values[k], max = this.fields[k].i_max;
+      if (!(v >= 0 && v <= max)) throw new FbaError(`${this.names[k]} decodes to ${v}, outside 0..${max}`, bitOffset, frame);
+    }
+  }
+  snapshot() {
+    return { iMax: this.iMax.slice(), pMax: this.pMax.slice(), pmin: this.pmin.slice(), prev: this.prev.slice(),
+      qstep: this.qstep, isize: this.isize, psize: this.psize, intraModels: this.intraModels,
+      pModels: this.pModels && this.pModels.map((m) => m.slice()) };
+  }
+  restore(s) { Object.assign(this, s); }
+}
+
+// ---- header syntax (syntax.py) ----------------------------------------------------------------
+function flag(r, what) { return r.read(1, what) === 1; }
+
+function marker(r, what) {
+  const pos = r.pos;
+  if (r.read(1, what) !== 1) throw new FbaError(`marker bit of ${what} is 0`, pos);
+}
+
+/** Many fixed-width fields: the stream's end is checked for all before any marker (as syntax.py). */
+function fields(r, widths, what, markers) {
+  let total = 0;
+  for (const w of widths) total += w;
+  if (!r.available(total)) {
+    for (let f = 0; f < widths.length; f++) { r.require(widths[f], what(f)); r.p += widths[f]; }
+  }
+  const start = r.pos, out = new Array(widths.length);
+  let p = r.p;
+  for (let f = 0; f < widths.length; f++) { out[f] = r.bitsAt(p, widths[f]); p += widths[f]; }
+  r.p = p;
+  let offset = 0;
+  for (let f = 0; f < widths.length; f++) {
+    if (markers[f] && out[f] !== 1) throw new FbaError(`marker bit of ${what(f)} is 0`, start + offset);
+    offset += widths[f];
+  }
+  return out;
+}
+
+function frameRate(r) {
+  if (!flag(r, "is_frame_rate")) return null;
+  const frameRate = r.read(SPEC.frame_rate_bits, "frame_rate");
+  const seconds = r.read(SPEC.seconds_bits, "seconds");
+  const frequencyOffset = r.read(SPEC.frequency_offset_bits, "frequency_offset");
+  let fps = frameRate + seconds / SPEC.fps_steps;
+  if (frequencyOffset) fps = fps * 1000.0 / 1001.0;
+  return { frameRate, seconds, frequencyOffset, fps };
+}
+
+function timeCode(r) {
+  if (!flag(r, "is_time_code")) return null;
+  const hours = r.read(5, "time_code_hours");
+  const minutes = r.read(6, "time_code_minutes");
+  marker(r, "time_code");
+  const seconds = r.read(6, "time_code_seconds");
+  return { hours, minutes, seconds, totalSeconds: 3600 * hours + 60 * minutes + seconds };
+}
+
+function skipFrames(r) {
+  if (!flag(r, "skip_frames")) return 0;
+  let total = 0;
+  for (;;) {
+    const chunk = r.read(4, "number_of_frames_to_skip");
+    total += chunk;
+    if (chunk !== 15) return total;
+  }
+}
+
+function groupMasks(r, groups, n, label) {
+  const types = [], mask = new Uint8Array(n);
+  groups.forEach((members, g) => {
+    marker(r, `group ${g + 1} mask`);
+    const t = r.read(2, `mask type of ${label} group ${g + 1}`);
+    types.push(t);
+    if (t === MASK_HOLD || t === MASK_INTERPOLATE) {
+      const bits = fields(r, members.map(() => 1), (f) => `mask bit of ${label} ${members[f] + 1}`, members.map(() => false));
+      members.forEach((i, f) => { mask[i] = bits[f]; });
+    } else if (t === MASK_ALL) {
+      for (const i of members) mask[i] = 1;
+    }
+  });
+  return [types, mask];
+}
+
+function newMinmax(r, groups, mask, n, label) {
+  const flags = RANGE_SET_NAMES.map((name) => flag(r, `is_${name}_new`));
+  const codes = [0, 1, 2, 3].map(() => new Int32Array(n));
+  const sets = [0, 1, 2, 3].filter((k) => flags[k]);
+  if (!sets.length) return { flags, codes };
+  const layout = [];
+  for (const members of groups) {
+    members.forEach((i, j) => {
+      if (j % 4 === 0) layout.push(null);
+      if (mask[i]) layout.push(i);
+    });
+  }
+  const size = layout.length;
+  const isMarker = layout.map((i) => i === null);
+  const widths = [], markers = [];
+  for (const _ of sets) for (const m of isMarker) { widths.push(m ? 1 : 5); markers.push(m); }
+  const what = (f) => {
+    const name = RANGE_SET_NAMES[sets[Math.floor(f / size)]], i = layout[f % size];
+    return i === null ? `new ${name} ranges` : `new ${name} of ${label} ${i + 1}`;
+  };
+  const got = fields(r, widths, what, markers);
+  sets.forEach((k, row) => {
+    layout.forEach((i, j) => { if (i !== null) codes[k][i] = got[row * size + j]; });
+  });
+  return { flags, codes };
+}
+
+function partIntraHeader(r, part) {
+  const label = part.label;
+  const quant = r.read(5, `${label.toLowerCase()}_quant`);
+  const [maskTypes, mask] = groupMasks(r, part.maskGroups, part.n, label);
+  const gender = r.read(1, "suggested_gender");
+  const pos = r.pos;
+  const codingType = r.read(1, "coding_type");
+  if (codingType === 1) {
+    throw new UnsupportedFeature("DCT segment mode (coding_type 1) is not supported: its syntax is not " +
+      "published in any source available to this project", pos);
+  }
+  const ranges = newMinmax(r, part.rangeGroups, mask, part.n, label);
+  return { quant, maskTypes, mask, gender, codingType, ranges };
+}
+
+// ---- the decoder (decoder.py) -----------------------------------------------------------------
+const ZERO_BAP_MASK = new Uint8Array(N_BAPS);
+const ZERO_BAP_VALUES = new Int32Array(N_BAPS);
+
+function foreignKind(head) {
+  const at = (offset, magic) => magic.every((b, k) => head[offset + k] === b);
+  const four = String.fromCharCode(...head.slice(0, 4));
+  if (["RIFF", "RIFX", "RF64"].includes(four)) {
+    const form = String.fromCharCode(...head.slice(8, 12));
+    return { WAVE: "a WAV audio file", "AVI ": "an AVI video", WEBP: "a WebP image" }[form] || "a RIFF file";
+  }
+  for (const [offset, magic, kind] of SPEC.signatures) {
+    if (head.length >= offset + magic.length && at(offset, magic)) return kind;
+  }
+  if (head.length >= 2 && head[0] === 0xFF && (head[1] & 0xF6) === 0xF0) return "an AAC (ADTS) audio file";
+  if (head.length >= 2 && head[0] === 0xFF && (head[1] & 0xE0) === 0xE0 && (head[1] & 0x06)) return "an MP3 audio file";
+  return null;
+}
+
+class Decoder {
+  constructor() {
+    this.r = new BitReader();
+    this.faps = new ValueCoder(FACE);
+    this.baps = new ValueCoder(BODY);
+    this.viseme = new FieldCoder(1);
+    this.expression = new FieldCoder(2);
+    this.face = null;
+    this.body = null;
+    this.fps = DEFAULT_FPS;
+    this.nextPts = 0.0;
+    this.objectStartCode = null;  // set once the object start code is read
+    this.k = 0;
+    this.done = false;
+  }
+
+  objectStart() {
+    const r = this.r;
+    if (!r.available(32)) throw new FbaError("stream is shorter than a start code: not an FBA stream", 0);
+    const code = r.read(32);
+    if (code !== OBJECT_START_CODE && code !== OBJECT_START_CODE_OLD) {
+      const more = [96, 64, 32, 0].find((n) => r.available(n));
+      const head = [code >>> 24, (code >> 16) & 255, (code >> 8) & 255, code & 255];
+      for (let b = 0; b < more / 8; b++) head.push(r.read(8));
+      const kind = foreignKind(head);
+      throw new FbaError(`not an FBA stream: starts with ${hex8(code)}${kind ? ` (${kind})` : ""}, expected ` +
+        `the fba_object_start_code ${hex8(OBJECT_START_CODE)}`, 0);
+    }
+    this.objectStartCode = code;
+  }
+
+  /** Consume a plane start code (returned, 0 if none) or the end code (null). */
+  betweenPlanes() {
+    const r = this.r;
+    const found = r.peekStartCode();
+    if (found === null) {
+      if (!r.available(8)) throw new FbaError(NO_END_CODE, r.pos);
+      return 0;
+    }
+    const [code, stuffing] = found;
+    if (code !== END_CODE && code !== PLANE_START_CODE && code !== PLANE_START_CODE_OLD) {
+      throw new FbaError(`unexpected start code ${hex8(code)} between planes`, r.pos + stuffing);
+    }
+    r.skipStuffing(stuffing);
+    r.read(32);
+    return code === END_CODE ? null : code;
+  }
+
+  segment(coder, intra) {
+    const models = coder.models(intra);
+    const symbols = new Int32Array(models.length);
+    decodeSegment(this.r, models, !intra, symbols);
+    return coder.decode(symbols, intra);
+  }
+
+  plane(k, planeCode) {
+    const r = this.r;
+    const pos = r.pos;
+    const isIntra = flag(r, "is_intra");
+    const mask = r.read(2, "fba_object_mask");
+    if (mask === 0) throw new FbaError(OBJECT_MASK_ZERO, pos + 1);
+    const fr = isIntra ? frameRate(r) : null;
+    const tc = isIntra ? timeCode(r) : null;
+    const skip = skipFrames(r);
+    const params = isIntra ? { frameRate: fr, timeCode: tc, face: null, body: null } : null;
+    if (fr !== null) {
+      if (fr.fps <= 0) throw new FbaError("frame rate 0 in the intra header", pos);
+      this.fps = fr.fps;
+    }
+    const frame = {
+      index: k, timestamp: 0.0, objectMask: mask, fapMask: new Uint8Array(N_FAPS), fapValues: new Int32Array(N_FAPS),
+      viseme: new Int32Array(4), expression: new Int32Array(6), bapMask: ZERO_BAP_MASK, bapValues: ZERO_BAP_VALUES,
+      skip, startCode: planeCode, bits: 0, params,
+    };
+    if (mask & FACE_BIT) this.faceData(frame, isIntra);
+    if (mask & BODY_BIT) this.bodyData(frame, isIntra);
+    frame.timestamp = tc !== null ? tc.totalSeconds : this.nextPts;
+    this.nextPts = frame.timestamp + (skip + 1) / this.fps;
+    return frame;
+  }
+
+  faceData(frame, intra) {
+    const r = this.r;
+    if (intra) {
+      this.face = partIntraHeader(r, FACE);
+      frame.params.face = this.face;
+      this.faps.startIntra(this.face);
+      this.viseme.startIntra(this.face.quant);
+      this.expression.startIntra(this.face.quant);
+    } else if (this.face === null) {
+      throw new FbaError("a predicted plane carries face data but no intra plane has set up the face", r.pos);
+    }
+    const mask = this.face.mask;
+    const high = [[0, this.viseme, frame.viseme, ["viseme_def"]],
+      [1, this.expression, frame.expression, ["init_face", "expression_def"]]];
+    for (const [fap, coder, out, rawBits] of high) {
+      if (!mask[fap]) continue;
+      const pos = r.pos;
+      const values = this.segment(coder, intra);
+      coder.checkSelects(values, pos, frame.index);
+      for (let j = 0; j < values.length; j++) out[j] = values[j];
+      rawBits.forEach((name, j) => { out[values.length + j] = r.read(1, name); });
+    }
+    const values = this.segment(this.faps, intra);
+    const idx = this.faps.idx;
+    for (let k = 0; k < idx.length; k++) frame.fapValues[idx[k]] = values[k];
+    frame.fapMask.set(mask);
+  }
+
+  bodyData(frame, intra) {
+    const r = this.r;
+    frame.bapMask = new Uint8Array(N_BAPS);
+    frame.bapValues = new Int32Array(N_BAPS);
+    if (intra) {
+      this.body = partIntraHeader(r, BODY);
+      frame.params.body = this.body;
+      this.baps.startIntra(this.body);
+    } else if (this.body === null) {
+      throw new FbaError("a predicted plane carries body data but no intra plane has set up the body", r.pos);
+    }
+    const values = this.segment(this.baps, intra);
+    const idx = this.baps.idx;
+    for (let k = 0; k < idx.length; k++) frame.bapValues[idx[k]] = values[k];
+    frame.bapMask.set(this.body.mask);
+  }
+
+  snapshot() {
+    return { p: this.r.p, face: this.face, body: this.body, fps: this.fps, nextPts: this.nextPts,
+      faps: this.faps.snapshot(), baps: this.baps.snapshot(), viseme: this.viseme.snapshot(),
+      expression: this.expression.snapshot() };
+  }
+
+  restore(s) {
+    this.r.p = s.p; this.face = s.face; this.body = s.body; this.fps = s.fps; this.nextPts = s.nextPts;
+    this.faps.restore(s.faps); this.baps.restore(s.baps); this.viseme.restore(s.viseme);
+    this.expression.restore(s.expression);
+  }
+
+  /** Decode every frame the bytes so far allow; ``emit(frame)`` each. Stops quietly when more bytes are
+   * needed (unless the input is final); throws FbaError at a fault, with ``frame`` set. */
+  run(emit) {
+    const r = this.r;
+    if (this.done) return;
+    if (this.objectStartCode === null) {
+      try {
+        this.objectStart();
+      } catch (e) {
+        if (e === NEED_MORE) { r.p = 0; return; }
+        throw e;
+      }
+    }
+    for (;;) {
+      const streaming = !r.final;
+      if (streaming) r.drop(r.pos);
+      const saved = streaming ? this.snapshot() : null;
+      try {
+        const planeCode = this.betweenPlanes();
+        if (planeCode === null) { this.done = true; return; }
+        const start = r.pos;
+        const frame = this.plane(this.k, planeCode);
+        frame.bits = r.pos - start;
+        emit(frame);
+        this.k += 1;
+      } catch (e) {
+        if (e === NEED_MORE) { this.restore(saved); return; }
+        if (e instanceof FbaError) {
+          if (e.frame === null) e.frame = this.k;
+          throw e;
+        }
+        // a guard, not an expected path: any stray error is a malformed stream at the current bit
+        const err = new FbaError(`malformed stream (${e && e.name}: ${e && e.message})`, r.pos, this.k);
+        throw err;
+      }
+    }
+  }
+}
+
+/** Decode a whole stream (Uint8Array / ArrayBuffer). Returns {frames, objectStartCode, fps}; on a fault
+ * throws an FbaError whose ``partial`` holds the same for the frames decoded before it. */
+export function decode(bytes) {
+  const data = bytes instanceof Uint8Array ? bytes : new Uint8Array(bytes);
+  const dec = new Decoder();
+  dec.r.buf = data;
+  dec.r.nbytes = data.length;
+  dec.r.final = true;
+  const frames = [];
+  const result = () => ({ frames, objectStartCode: dec.objectStartCode, fps: streamFps(frames) });
+  try {
+    dec.run((f) => frames.push(f));
+  } catch (e) {
+    e.partial = result();
+    throw e;
+  }
+  return result();
+}
+
+/** Frame rate of the first intra header that sends one, else 30 (as FapStream.fps). */
+export function streamFps(frames) {
+  for (const f of frames) if (f.params && f.params.frameRate) return f.params.frameRate.fps;
+  return DEFAULT_FPS;
+}
+
+/** Bytes in pieces, frames out as soon as complete: ``push(chunk)`` and ``end()`` return the new frames.
+ * A fault throws an FbaError (``frame``: its index); its ``partial.frames`` are the frames that call
+ * completed before the fault (the earlier ones were returned by earlier calls). */
+export class StreamDecoder {
+  constructor() { this.dec = new Decoder(); this.frames = 0; }
+  get bitOffset() { return this.dec.r.pos; }
+  get objectStartCode() { return this.dec.objectStartCode; }
+  get finished() { return this.dec.done; }
+  push(chunk) {
+    this.dec.r.append(chunk instanceof Uint8Array ? chunk : new Uint8Array(chunk));
+    return this._run();
+  }
+  end() {
+    this.dec.r.final = true;
+    return this._run();
+  }
+  _run() {
+    const out = [];
+    try {
+      this.dec.run((f) => out.push(f));
+    } catch (e) {
+      // the frames this call completed before the fault: not returned, so they travel with the error
+      e.partial = { frames: out, objectStartCode: this.dec.objectStartCode, fps: streamFps(out) };
+      throw e;
+    } finally {
+      this.frames += out.length;
+    }
+    return out;
+  }
+}
+
+/** A one-line summary of a decoded stream: frames, fps, duration, kbit/s (what `mpeg4fa info` shows). */
+export function summary(stream, byteLength) {
+  const frames = stream.frames, n = frames.length, fps = stream.fps;
+  const duration = n ? frames[n - 1].timestamp - frames[0].timestamp + (frames[n - 1].skip + 1) / fps : 0;
+  const bits = frames.reduce((s, f) => s + f.bits, 0);
+  return { frames: n, fps, duration, bytes: byteLength, bitsPerFrame: n ? bits / n : 0,
+    kbps: duration > 0 ? (byteLength * 8) / duration / 1000 : 0,
+    intra: frames.filter((f) => f.params).length,
+    body: frames.some((f) => f.objectMask & BODY_BIT), face: frames.some((f) => f.objectMask & FACE_BIT) };
+}
