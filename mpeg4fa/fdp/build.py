@@ -3,6 +3,8 @@
 * :func:`fdp_from_mesh`: the user's own mesh (e.g. from :func:`~mpeg4fa.fdp.obj.read_obj`)
   with each feature point given as a vertex index or as coordinates; the FDP carries
   the mesh, and the points' uvs when the mesh has them.
+* :func:`fdp_from_front`: one front photo whose points have depth (a landmark model's), the
+  photo as the texture.
 * :func:`fdp_from_photos`: a front and a side photo with annotated 2D feature
   points (``{label: [x, y]}`` in pixels, x right, y down, as in
   :class:`mpeg4fa.render.texture.PhotoView`). Depth comes from the side photo by
@@ -269,6 +271,32 @@ def fdp_from_photos(front_points: Mapping[str, Sequence[float]], side_points: Ma
         front = _photo_points(front_points, "front")
         uv = _texture_coords({label: front[label] for label in points}, size)
     return Fdp.from_points(points, uv, textures=() if texture is None else (texture,), name=name)
+
+
+def fdp_from_front(points: Mapping[str, Sequence[float]], front_points: Mapping[str, Sequence[float]], *,
+                   front_size: tuple[int, int] | None = None, texture: TextureImage | None = None,
+                   name: str = "") -> Fdp:
+    """An FDP from one front photo whose points already have depth (e.g. from a face landmark model).
+
+    ``points`` are the 3D feature points (+x toward the face's left, +y up, +z out of the face, any
+    unit); ``front_points`` the same labels' pixel positions on the photo, which give each point's
+    texture coordinate into ``texture`` (the photo) as :func:`fdp_from_photos` does. Without a side
+    photo nothing else is needed: the landmark model's depth stands in for it.
+    """
+    coords = {}
+    for label, value in points.items():
+        _check_label(label, "points")
+        coords[label] = _point(value, 3, f"feature point {label}", "[x, y, z]", ("points", label))
+    front = _photo_points(front_points, "front")
+    if set(front) != set(coords):
+        differ = sorted(set(front) ^ set(coords), key=LABEL_INDEX.__getitem__)
+        raise FdpValueError(f"the 3D points and the front photo's points must name the same labels; differ on "
+                            f"{', '.join(differ)}", ("front",))
+    _check_front_across(front)
+    _check_upright(front, "front")
+    size = _texture_size(texture, front_size)
+    uv = None if size is None else _texture_coords(front, size)
+    return Fdp.from_points(coords, uv, textures=() if texture is None else (texture,), name=name)
 
 
 def _texture_size(texture: TextureImage | None, front_size: tuple[int, int] | None) -> tuple[int, int] | None:

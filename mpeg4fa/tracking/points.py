@@ -9,7 +9,7 @@ from mpeg4fa.tracking.landmarks import Landmarks
 __all__ = ["SEEN_LABELS", "feature_points", "feature_point_array"]
 
 SEEN_LABELS: tuple[str, ...] = tuple(LANDMARK_POINTS)
-"""The feature points a photo shows (66 of 84), in label order; the rest come from the calibrated head."""
+"""The feature points a photo shows (59 of 84), in label order; the rest come from the calibrated head."""
 _MIX = np.zeros((len(SEEN_LABELS), 478))
 for _row, _label in enumerate(SEEN_LABELS):
     _MIX[_row, list(LANDMARK_POINTS[_label].indices)] = LANDMARK_POINTS[_label].weights

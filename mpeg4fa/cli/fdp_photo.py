@@ -1,0 +1,63 @@
+"""``mpeg4fa fdp``: one photo of a face -> an FDP (its feature points in 3D and the photo as its texture)."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from ..atomic import atomic_outputs
+from ..face.calibrate import METHODS
+from .options import Commands
+from .paths import refuse_overlaps
+
+
+def register(commands: Commands) -> None:
+    p = commands.add_parser(
+        "fdp", help="make an FDP (feature points + texture) from a photo of a face",
+        description="Find the face in a photo (MediaPipe Face Mesh: 478 landmarks, offline; the 'photo' extra), "
+                    "map its landmarks to the MPEG-4 feature points a photo shows (59 of 84, table "
+                    "spec/landmark_points.csv; tongue, teeth, ears and skull come from the receiver's head), take "
+                    "their depth from the landmark model, turn them upright into the generic head's frame (mm), and "
+                    "write the FDP with the photo as its texture (each point's texture coordinate into it). "
+                    "'mpeg4fa play --fdp' then shows that face, wearing the photo. Several faces: the largest, "
+                    "said in a warning.",
+        epilog="examples:\n  mpeg4fa fdp me.jpg -o me.fdp --preview check.png\n"
+               "  mpeg4fa fdp me.jpg -o me.json --deformer rbf      # JSON FDP; preview calibrated with RBF\n"
+               "  mpeg4fa play talk.fba --fdp me.fdp -o talk.mp4",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("photo", type=Path, help="a photo of a face seen from the front (JPEG, PNG...)")
+    p.add_argument("-o", "--output", type=Path, required=True,
+                   help="the FDP to write: binary (.fdp), or JSON when the name ends in .json")
+    p.add_argument("--preview", type=Path,
+                   help="also write a PNG: the photo with the found points, and the calibrated textured head "
+                        "front and three-quarter")
+    p.add_argument("--deformer", choices=METHODS, default="dffd",
+                   help="calibration warp for the preview and the check: Dirichlet FFD (default), RBF or elastic "
+                        "(the FDP itself holds points; a receiver calibrates with its own)")
+    p.add_argument("--no-texture", action="store_true", help="leave the photo out of the FDP (points only)")
+    p.set_defaults(run=run_fdp)
+
+
+def run_fdp(args: argparse.Namespace) -> int:
+    from PIL import Image
+
+    from ..fdp import save_fdp
+    from ..tracking.photo import fdp_from_photo, preview
+
+    refuse_overlaps({"photo": args.photo}, {"-o": args.output, "--preview": args.preview})
+    started = time.perf_counter()
+    made = fdp_from_photo(args.photo, texture=not args.no_texture)
+    found = time.perf_counter()
+    picture = preview(made, args.deformer) if args.preview is not None else None
+    with atomic_outputs(args.output, args.preview) as (out, check):
+        save_fdp(made.fdp, out)
+        if check is not None:
+            Image.fromarray(picture).save(check, format="PNG")
+    width, height = made.image.shape[1], made.image.shape[0]
+    texture = "" if args.no_texture else f", texture {made.fdp.textures[0].name} ({width}x{height})"
+    print(f"{args.photo}: face found ({made.landmarks.faces} in the photo), {len(made.fdp.labels)} feature points "
+          f"in {found - started:.1f} s; {made.scale:.3f} mm per pixel", file=sys.stderr)
+    print(f"wrote {args.output} ({len(made.fdp.labels)} feature points{texture})"
+          + (f", {args.preview} (preview, calibrated with {args.deformer})" if args.preview else ""))
+    return 0

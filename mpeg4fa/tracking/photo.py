@@ -1,0 +1,171 @@
+"""One photo of a face -> its feature points in 3D -> an FDP that carries the photo as its texture.
+
+>>> made = fdp_from_photo("me.jpg")                  # or an (H, W, 3) uint8 array
+>>> save_fdp(made.fdp, "me.fdp")
+>>> face = made.calibrated()                          # the generic head fitted to it (dffd, rbf, elastic)
+
+Steps: the landmark model finds the face (:func:`~.landmarks.find_landmarks`); the table of
+``spec/landmark_points.csv`` turns landmarks into the feature points a photo shows
+(:func:`~.points.feature_points`); their depth is the landmark model's z, in the photo's own
+pixel scale. The points are then turned into the generic head's frame (mm, x toward the face's
+left, y up, z out) by the similarity (scale, rotation, shift: :func:`mpeg4fa.face.calibrate.similarity_fit`)
+that best lays them on the head's own points, so a face turned or tilted in the photo gives an
+upright, frontal FDP. Points a photo cannot show (tongue, teeth, ears, skull) are not sent: the
+receiver's head keeps its own, carried along by the calibration. The photo goes into the FDP as
+its texture with every point's texture coordinate (FDP case 3, as ``encode --front`` does), so
+any receiver paints the head with it (:mod:`mpeg4fa.render.fdp_texture`).
+"""
+from __future__ import annotations
+
+import io
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mpeg4fa.fdp.build import fdp_from_front, texture_from_file
+from mpeg4fa.fdp.model import Fdp, TextureImage
+from mpeg4fa.tracking.landmarks import Landmarks, find_landmarks
+from mpeg4fa.tracking.points import feature_points
+
+__all__ = ["PhotoFdp", "fdp_from_photo", "photo_points", "read_photo"]
+
+PhotoSource = str | os.PathLike | np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class PhotoFdp:
+    """An FDP made from a photo, with what it was made from (for previews and checks)."""
+
+    fdp: Fdp
+    image: np.ndarray
+    """The photo, (H, W, 3) uint8 RGB."""
+    landmarks: Landmarks
+    pixels: dict[str, np.ndarray]
+    """The seen feature points on the photo, (x, y) pixels (x right, y down)."""
+    points: dict[str, np.ndarray]
+    """The same points in 3D in the generic head's frame (mm): what the FDP carries."""
+    scale: float
+    """Head millimetres per photo pixel."""
+    _faces: dict = field(default_factory=dict, repr=False)
+
+    def calibrated(self, method: str = "dffd"):
+        """The generic head calibrated to the FDP with ``method`` (dffd, rbf or elastic); kept once made."""
+        if method not in self._faces:
+            from mpeg4fa.face import FaceModel
+            self._faces[method] = FaceModel.default().calibrate(self.fdp, method=method)
+        return self._faces[method]
+
+
+def read_photo(photo: PhotoSource, where: str | None = None) -> tuple[np.ndarray, str]:
+    """The photo as (H, W, 3) uint8 RGB and the name its errors carry."""
+    if isinstance(photo, np.ndarray):
+        return photo, where or "photo"
+    from mpeg4fa.render.images import read_image
+    name = where or os.fsdecode(photo)
+    return read_image(photo, "photo", name), name
+
+
+def photo_points(landmarks: Landmarks, head_points: dict[str, np.ndarray] | None = None
+                 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], float]:
+    """(pixels, points, scale): the seen feature points on the photo and in 3D in the head's frame.
+
+    ``head_points`` (label -> the generic head's point, mm) default to the generic head's own; the
+    photo's points (x right, -y, -z: up and out of the face) are laid on them by the least-squares
+    similarity, which takes the photo's pose and scale out.
+    """
+    from mpeg4fa.face.calibrate import similarity_fit
+
+    found = feature_points(landmarks)
+    pixels = {label: p[:2].copy() for label, p in found.items()}
+    photo3 = {label: np.array([p[0], -p[1], -p[2]]) for label, p in found.items()}
+    if head_points is None:
+        from mpeg4fa.face import FaceModel
+        head_points = FaceModel.default().feature_points()
+    shared = [label for label in photo3 if label in head_points]
+    src = np.array([photo3[label] for label in shared])
+    dst = np.array([head_points[label] for label in shared], dtype=np.float64)
+    scale, rot, shift = similarity_fit(src, dst)
+    points = {label: scale * (rot @ p) + shift for label, p in photo3.items()}
+    return pixels, points, float(scale)
+
+
+def _texture(photo: PhotoSource, image: np.ndarray, name: str) -> TextureImage:
+    """The photo as the FDP's texture: the file's own bytes when it is a PNG or JPEG, else a PNG of it."""
+    if not isinstance(photo, np.ndarray):
+        data = Path(photo).read_bytes()[:16]
+        if data.startswith(b"\x89PNG\r\n\x1a\n") or data.startswith(b"\xff\xd8\xff"):
+            return texture_from_file(photo)
+    from PIL import Image
+    buffer = io.BytesIO()
+    Image.fromarray(image).save(buffer, format="PNG")
+    stem = Path(name).stem if name else "photo"
+    return TextureImage(f"{stem}.png", "image/png", buffer.getvalue())
+
+
+def fdp_from_photo(photo: PhotoSource, *, where: str | None = None, name: str | None = None,
+                   texture: bool = True) -> PhotoFdp:
+    """The FDP of the face in ``photo`` (a path or an RGB array): its seen feature points in 3D and, with
+    ``texture``, the photo as its texture. One face is used (the largest, said in a warning); no face
+    is a :class:`~.errors.NoFaceError` naming the photo."""
+    image, label = read_photo(photo, where)
+    landmarks = find_landmarks(image, label)
+    pixels, points, scale = photo_points(landmarks)
+    height, width = image.shape[:2]
+    tex = _texture(photo, image, label) if texture else None
+    stem = name if name is not None else Path(label).stem
+    fdp = fdp_from_front(points, pixels, front_size=(width, height), texture=tex, name=stem)
+    return PhotoFdp(fdp=fdp, image=image, landmarks=landmarks, pixels=pixels, points=points, scale=1.0 / scale)
+
+
+PREVIEW_VIEWS = ("front", "three-quarter")
+
+
+def textured_head(made: PhotoFdp, method: str = "dffd"):
+    """(face, texture): the head calibrated to the photo's FDP and the skin texture a receiver bakes
+    from the FDP's photo (:func:`mpeg4fa.render.fdp_texture.bake_fdp_texture`)."""
+    from mpeg4fa.render.fdp_texture import bake_fdp_texture
+
+    face = made.calibrated(method)
+    return face, bake_fdp_texture(face.mesh, made.fdp).baked.image
+
+
+def marked_photo(made: PhotoFdp, height: int) -> np.ndarray:
+    """The photo around the face, ``height`` pixels high, with the found feature points drawn on it
+    (yellow: the face's left, cyan: its right, white: the midline)."""
+    from PIL import Image, ImageDraw
+
+    from mpeg4fa.spec import FEATURE_POINTS
+
+    side = {fp.label: fp.side for fp in FEATURE_POINTS}
+    x0, y0, x1, y1 = made.landmarks.box
+    h, w = made.image.shape[:2]
+    half = 0.75 * max(x1 - x0, y1 - y0)
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    box = [int(max(cx - half, 0)), int(max(cy - half, 0)), int(min(cx + half, w)), int(min(cy + half, h))]
+    zoom = height / (box[3] - box[1])
+    crop = Image.fromarray(made.image[box[1]:box[3], box[0]:box[2]])
+    crop = crop.resize((max(int(round(crop.width * zoom)), 1), height), Image.LANCZOS)
+    draw = ImageDraw.Draw(crop)
+    colours = {"left": (255, 230, 0), "right": (0, 220, 255), None: (255, 255, 255)}
+    r = max(2.0, height / 160)
+    for label, (x, y) in made.pixels.items():
+        px, py = (x - box[0]) * zoom, (y - box[1]) * zoom
+        draw.ellipse([px - r, py - r, px + r, py + r], fill=colours[side[label]], outline=(0, 0, 0))
+    return np.asarray(crop)
+
+
+def preview(made: PhotoFdp, method: str = "dffd", size: int = 384, extra: np.ndarray | None = None) -> np.ndarray:
+    """One picture: the photo with its points, then the calibrated textured head front and three-quarter
+    (``extra``: a further panel of the same height, e.g. a talking frame)."""
+    from mpeg4fa.render import Renderer
+
+    face, texture = textured_head(made, method)
+    panels = [marked_photo(made, size)]
+    for view in PREVIEW_VIEWS:
+        with Renderer(face, width=size, height=size, samples=4, view=view, texture=texture) as renderer:
+            panels.append(renderer.render(face.neutral()))
+    if extra is not None:
+        panels.append(extra)
+    return np.concatenate(panels, axis=1)
