@@ -1,0 +1,137 @@
+"""Feature-point motion -> low-level FAPs: each FAP's own point, along its direction, over its FAPU.
+
+Why these rules: a FAP is defined as the displacement of one feature point along one axis
+in units of a distance measured on the neutral face (``spec/faps.csv``: feature point,
+direction, FAPU; ``spec/fapu.csv``). So with the head's motion taken out
+(:mod:`.pose`) and the FAPU measured on the person's own neutral face
+(:func:`mpeg4fa.face.fapu.measure_fapu`, the one home of the FAPU rules), a tracked point's
+displacement divided by its FAPU is the value to send, in every face's units.
+
+Two rules come from the receiving head rather than the standard, and are read off it
+(:class:`Receiver`, by default the generic head that ``play`` shows): the jaw (FAP 3) carries
+the lower lip and the lip corners with it, so the lip FAPs are what is left of a point's drop
+after the jaw's share (the fraction of 2.1's drop that point follows on that head); and the
+eyeball turns (FAPs 23-26, angles) are read from the iris's shift over the radius at which the
+head's pupil turns, as a fraction of ES0.
+
+Points are ``(..., L, 3)`` arrays over :data:`LABELS` (the feature points the landmark model
+sees), in MPEG-4 axes: x to the face's left, y up, z out of the face (:func:`to_face_axes`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from mpeg4fa.face.fapu import Fapu, measure_fapu
+from mpeg4fa.face import motion
+from mpeg4fa.spec import ANGLE_UNIT, FAPS, N_FAPS
+from mpeg4fa.tracking.points import SEEN_LABELS
+
+LABELS: tuple[str, ...] = SEEN_LABELS
+INDEX = {label: i for i, label in enumerate(LABELS)}
+
+JAW = 3
+LIDS = (19, 20, 21, 22)
+GAZE_YAW = {23: "3.5", 24: "3.6"}
+GAZE_PITCH = {25: "3.5", 26: "3.6"}
+HEAD = (48, 49, 50)
+TRANSLATIONS: tuple[int, ...] = (3, *range(4, 14), 19, 20, 21, 22, *range(31, 39), *range(39, 43), *range(51, 61))
+"""Translational FAPs read from their point's displacement: jaw, inner lips, lids, brows, cheeks, outer lips.
+Depth FAPs (14, 16, 17, 27, 28) are left out: a camera's depth is too rough for them."""
+SENT: tuple[int, ...] = tuple(sorted((*TRANSLATIONS, *GAZE_YAW, *GAZE_PITCH, *HEAD)))
+"""Every FAP a tracked stream sends (a fixed set, so the mask never changes and costs no extra intra frame)."""
+
+RIGID_LABELS: tuple[str, ...] = tuple(label for label in LABELS if label in {
+    "3.7", "3.8", "3.11", "3.12", "9.3", "9.4", "9.5", "9.6", "9.7", "9.12", "9.13", "9.14", "9.15",
+    "10.9", "10.10", "11.1", "11.2", "11.3"})
+"""Points no sent FAP moves (eye corners, nose, forehead, face oval at the ears): the head pose is fitted on them."""
+RIGID = np.array([INDEX[label] for label in RIGID_LABELS])
+
+
+def to_face_axes(pixels: np.ndarray) -> np.ndarray:
+    """Image points (x right, y down, z toward the camera negative, pixels) in MPEG-4 axes (x to the face's
+    left, which the camera sees on the image's right; y up; z toward the camera)."""
+    p = np.asarray(pixels, dtype=np.float64)
+    return p * np.array([1.0, -1.0, -1.0])
+
+
+@dataclass(frozen=True)
+class Receiver:
+    """What the head that will play the FAPs does beyond the standard's one-point rules."""
+
+    jaw_carry: np.ndarray
+    """(L,) fraction of 2.1's vertical drop each of :data:`LABELS` follows when the jaw opens (FAP 3)."""
+    eye_radius: float
+    """Radius of the pupil's turn about the eyeball's centre, as a fraction of ES0."""
+
+
+@lru_cache(maxsize=4)
+def receiver(face=None) -> Receiver:
+    """The jaw's carry and the eye's radius of ``face`` (default: the generic head), measured by posing it."""
+    from mpeg4fa.face import FaceModel
+
+    face = face if face is not None else FaceModel.default()
+    labels = list(face.mesh.fp_labels)
+    rest = face.deform({}).feature_points
+    jaw = face.deform({JAW: 512}).feature_points - rest
+    drop = jaw[labels.index("2.1"), 1]
+    carry = np.array([jaw[labels.index(label), 1] / drop if label in labels and drop else 0.0 for label in LABELS])
+    angle = 0.2
+    turned = face.deform({23: angle / ANGLE_UNIT}).feature_points - rest
+    shift = float(turned[labels.index("3.5"), 0])
+    return Receiver(jaw_carry=carry, eye_radius=abs(shift) / np.sin(angle) / face.fapu.ES0)
+
+
+@dataclass(frozen=True)
+class Neutral:
+    """The neutral face in MPEG-4 axes, the FAPU measured on it, and the head that will play the FAPs."""
+
+    points: np.ndarray  # (L, 3), pixels
+    fapu: Fapu
+
+    @classmethod
+    def from_points(cls, points: np.ndarray) -> "Neutral":
+        """A neutral from its feature points (MPEG-4 axes); FaceError when they give no FAPU (out of order)."""
+        points = np.asarray(points, dtype=np.float64)
+        return cls(points=points, fapu=measure_fapu(dict(zip(LABELS, points))))
+
+
+def _table() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per translational FAP: column (FAP - 1), point index, unit direction, FAPU symbol."""
+    cols, points, dirs, units = [], [], [], []
+    for fap in TRANSLATIONS:
+        record = FAPS[fap - 1]
+        cols.append(fap - 1)
+        points.append(INDEX[record.feature_point[0]])
+        dirs.append(motion.direction(fap))
+        units.append(record.fapu)
+    return np.array(cols), np.array(points), np.array(dirs), np.array(units)
+
+
+_COLS, _POINTS, _DIRS, _UNITS = _table()
+
+
+def fap_values(local: np.ndarray, neutral: Neutral, angles: np.ndarray, geometry: Receiver) -> np.ndarray:
+    """``(n, 68)`` FAP values (float, FAPU or AU; unsent FAPs 0) from points with the head's motion taken out.
+
+    ``local``: ``(n, L, 3)`` feature points in the neutral's coordinates (MPEG-4 axes); ``angles``:
+    ``(n, 3)`` head pitch, yaw, roll in radians (:mod:`.pose`). NaN points give NaN values."""
+    local = np.asarray(local, dtype=np.float64)
+    n = local.shape[0]
+    d = local - neutral.points[None]
+    jaw_drop = d[:, INDEX["2.1"], 1].copy()
+    d[:, :, 1] -= geometry.jaw_carry[None, :] * jaw_drop[:, None]
+    d[:, INDEX["2.1"], 1] = jaw_drop  # the jaw's own point is the jaw
+    unit = np.array([neutral.fapu.unit(u) for u in _UNITS])
+    out = np.zeros((n, N_FAPS))
+    out[:, _COLS] = np.einsum("nkc,kc->nk", d[:, _POINTS], _DIRS) / unit
+    radius = geometry.eye_radius * neutral.fapu.ES0
+    for fap, label in GAZE_YAW.items():  # positive turns either eye toward the face's left (+x)
+        out[:, fap - 1] = np.arcsin(np.clip(d[:, INDEX[label], 0] / radius, -1, 1)) / ANGLE_UNIT
+    for fap, label in GAZE_PITCH.items():  # positive looks down (-y)
+        out[:, fap - 1] = np.arcsin(np.clip(-d[:, INDEX[label], 1] / radius, -1, 1)) / ANGLE_UNIT
+    for fap, column in zip(HEAD, range(3)):
+        out[:, fap - 1] = np.asarray(angles, dtype=np.float64)[:, column] / ANGLE_UNIT
+    return out
