@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from mpeg4fa.face import FaceModel  # noqa: E402
-from mpeg4fa.face.frames import resolve  # noqa: E402
+from mpeg4fa.decoded import resolve  # noqa: E402
 from mpeg4fa.fba import decode, demo_stream, encode  # noqa: E402
 from mpeg4fa.render import Renderer, play  # noqa: E402
 from mpeg4fa.render.context import describe_context, gl_context  # noqa: E402

@@ -12,6 +12,10 @@ deforms them (like the lip tint in :mod:`.materials`):
   along it lies (0 at the inner end 4.1/4.2, 1 at the outer end 4.5/4.6) and its
   height in mm above the curve through the brow's three points; the shader draws
   the brow's shape from these, sharp at any mesh density.
+* **nose wrinkle** (:func:`nose_coordinates`): for skin over the upper nose, a window (0..1)
+  and a coordinate in mm that runs up the bridge and down its sides, along which the shader
+  lays the creases of a wrinkled nose (disgust), as strong as :func:`mpeg4fa.face.looks.nose_wrinkle`
+  says the pose draws the tip toward the bridge.
 * **teeth** (:func:`tooth_coordinates`): position along the dental arch in teeth (0 on
   the midline, the integer part says which tooth, the sign which side) and height in
   mm from the incisal edge, for the gaps, rounded tips and gum line of each tooth.
@@ -30,6 +34,11 @@ CAVITY_MIN_DEPTH_MM = 10.0  # a bag shallower than this is no mouth (a face whos
 BROWS = (("4.1", "4.3", "4.5"), ("4.2", "4.4", "4.6"))  # inner, top, outer; left (x > 0) then right
 BROW_DEPTH_MM = 20.0  # only skin at most this far behind the brow points carries a brow
 BROW_FAR = (10.0, 99.0)  # (along, |height|) of vertices that carry no brow: far outside it
+
+NOSE_ROOT = ("9.12", "9.6", "9.7")  # nose bump and the upper edges of the nose bone
+WRINKLE_SIDE_MM = (7.0, 14.0)  # |x| where the creases fade out (full inside the first)
+WRINKLE_SPAN_MM = (-1.0, 14.0)  # along the bridge from the nose bump: where the creases lie
+WRINKLE_SLOPE = 0.6  # the creases fall this many mm per mm toward the sides (bunny lines)
 
 UPPER_TOOTH_MM = (8.5, 6.5, 7.5, 7.0, 6.5, 10.0, 9.0)  # mesio-distal widths from the midline
 LOWER_TOOTH_MM = (5.0, 5.5, 7.0, 7.0, 7.0, 11.0, 10.5)
@@ -76,6 +85,25 @@ def brow_coordinates(mesh: HeadMesh, vertices: np.ndarray) -> np.ndarray:
         near = vertices[side, 2] >= pts[:, 2].min() - BROW_DEPTH_MM
         out[side, 0] = np.where(near, along, BROW_FAR[0])
         out[side, 1] = np.where(near, height, np.copysign(BROW_FAR[1], height)).clip(-BROW_FAR[1], BROW_FAR[1])
+    return out
+
+
+def nose_coordinates(mesh: HeadMesh, vertices: np.ndarray) -> np.ndarray:
+    """``(N, 2)``: (window 0..1, mm along the creases' ladder) of ``vertices`` for the nose wrinkle."""
+    out = np.zeros((len(vertices), 2))
+    if not all(label in mesh.fp_labels for label in NOSE_ROOT):
+        return out
+    bump, right, left = (mesh.fp(label) for label in NOSE_ROOT)
+    v = np.asarray(vertices, float)
+    ax = np.abs(v[:, 0] - bump[0])
+    along = v[:, 1] - bump[1] + WRINKLE_SLOPE * ax
+    lo, hi = WRINKLE_SPAN_MM
+    a, b = WRINKLE_SIDE_MM
+    side = smooth_down((ax - a) / (b - a))
+    ends = np.minimum((along - lo) / 4.0, (hi - along) / 4.0).clip(0.0, 1.0)
+    front = v[:, 2] >= min(right[2], left[2]) - 6.0  # the nose's front, not the inner eye corner behind it
+    out[:, 0] = np.where(front, side * ends, 0.0)
+    out[:, 1] = along
     return out
 
 

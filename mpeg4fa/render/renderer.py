@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mpeg4fa.face.looks import nose_wrinkle, points_of
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.limits import SAMPLES, LimitError
@@ -55,6 +56,7 @@ class Renderer:
         self.set_texture(texture)
         self._vertex_data = np.empty((self.layout.n_vertices, 6), np.float32)
         self._pixels = np.empty((self.height, self.width, 3), np.uint8)
+        self._neutral_points = face.feature_points()
 
     # -- set-up ----------------------------------------------------------------------------
 
@@ -79,12 +81,12 @@ class Renderer:
                                           ctx.depth_renderbuffer(size, samples=self.samples))
         lay = self.layout
         self.dynamic = ctx.buffer(reserve=lay.n_vertices * 6 * 4, dynamic=True)
-        static = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail].astype(np.float32)
+        static = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail, lay.nose].astype(np.float32)
         self.static = ctx.buffer(static.tobytes())
         self.index = ctx.buffer(lay.indices.astype(np.uint32).tobytes())
         self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                   (self.static, "2f 1f 2f 2f", "in_uv", "in_material", "in_tints",
-                                                    "in_detail")],
+                                                   (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints",
+                                                    "in_detail", "in_nose")],
                                     index_buffer=self.index, index_element_size=4)
 
     def _apply_uniforms(self) -> None:
@@ -146,6 +148,8 @@ class Renderer:
         prog["eye_centre"].write(np.array(centres, np.float32).tobytes())
         prog["eye_axis"].write(np.array(axes, np.float32).tobytes())
         prog["pupil_radius"].write(np.array(pupils, np.float32).tobytes())
+        prog["nose_wrinkle"].value = nose_wrinkle(self._neutral_points,
+                                                  points_of(self.face.mesh.fp_labels, pose.feature_points))
 
     def draw(self, pose: Pose) -> None:
         """Draw a pose into the framebuffer (resolved if anti-aliased); read it with :meth:`read`."""

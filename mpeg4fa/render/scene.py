@@ -12,7 +12,7 @@ import numpy as np
 from scipy import sparse
 
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.render.details import brow_coordinates, cavity_weights, tooth_coordinates
+from mpeg4fa.render.details import brow_coordinates, cavity_weights, nose_coordinates, tooth_coordinates
 from mpeg4fa.render.materials import LIP_OUTLINE, PART_MATERIAL, lip_weights
 
 
@@ -24,6 +24,7 @@ class SceneLayout:
     lips: np.ndarray       # (N,) float32 0..1, how much of the lip colour the untextured skin takes
     cavity: np.ndarray     # (N,) float32 0..1, how deep in the mouth (dark) a skin vertex is
     detail: np.ndarray     # (N, 2) float32: brow coordinates on the skin, tooth coordinates on the teeth
+    nose: np.ndarray       # (N, 2) float32: nose wrinkle window and coordinate on the skin (0 elsewhere)
     indices: np.ndarray    # (T, 3) uint32 GL vertex indices, all drawn parts
     triangles: np.ndarray  # (T, 3) mesh vertex indices (for normals)
     incidence: sparse.csr_matrix  # (V, T): sums face normals onto vertices
@@ -56,6 +57,8 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
         lips[skin] = lip_weights(mesh.vertices[source[skin]], outline)
     detail = np.zeros((len(source), 2), np.float32)
     detail[skin] = brow_coordinates(mesh, mesh.vertices[source[skin]])
+    nose = np.zeros((len(source), 2), np.float32)
+    nose[skin] = nose_coordinates(mesh, mesh.vertices[source[skin]])
     for part in ("teeth_upper", "teeth_lower"):
         if part in mesh.part_ranges and len(mesh.triangles.get(part, ())):
             a, b = mesh.part_ranges[part]
@@ -69,6 +72,7 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
         lips=lips,
         cavity=cavity_weights(mesh)[source].astype(np.float32),
         detail=detail,
+        nose=nose,
         indices=inverse.reshape(-1, 3).astype(np.uint32),
         triangles=tri,
         incidence=incidence_matrix(tri, mesh.n_vertices),

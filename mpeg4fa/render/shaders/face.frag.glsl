@@ -25,6 +25,8 @@ uniform vec3 eye_axis[2];         // unit gaze direction
 uniform float iris_radius;        // mm
 uniform float pupil_radius[2];    // mm
 
+uniform float nose_wrinkle;       // 0..1 (face/looks.py)
+
 uniform bool use_texture;
 uniform sampler2D skin_texture;
 
@@ -38,12 +40,14 @@ in vec2 v_uv;
 flat in int v_material;
 in vec2 v_tints;
 in vec2 v_detail;
+in vec2 v_nose;
 
 out vec4 colour;
 
 const float TOOTH_MM = 7.0;       // a typical tooth width, for the tip rounding
 const float TIP_MM = 1.1;         // radius of a tooth's rounded corners
 const float CROWN_MM = 9.5;       // crown height at the middle of a tooth (gum line above)
+const float WRINKLE_MM = 4.2;     // spacing of the nose creases
 const float BACK_TEETH_SHADE = 0.3;  // premolars and molars: the light that reaches inside the mouth
 
 vec3 eye_colour(int eye, out int slot) {
@@ -91,6 +95,12 @@ void main() {
             }
             base = mix(base, cavity_colour, v_tints.y);
             shade = 1.0 - 0.85 * v_tints.y;
+            float w = nose_wrinkle * v_nose.x;
+            if (w > 0.0) {                                // creases across the upper nose: the skin bunches
+                float phase = 6.2831853 * v_nose.y / WRINKLE_MM;
+                n = normalize(n + 0.4 * w * sin(phase) * vec3(0.0, 1.0, 0.0));
+                shade *= 1.0 - 0.22 * w * pow(0.5 + 0.5 * cos(phase), 4.0);
+            }
         } else {
             slot = 1;
             base = base_colour[1];

@@ -8,6 +8,7 @@ in vec2 in_uv;
 in float in_material;
 in vec2 in_tints;    // lips, oral cavity (0..1)
 in vec2 in_detail;   // skin: brow coordinates; teeth: tooth coordinates (see render/details.py)
+in vec2 in_nose;     // skin: nose wrinkle window and coordinate (mm)
 
 out vec3 v_position;
 out vec3 v_normal;
@@ -15,6 +16,7 @@ out vec2 v_uv;
 flat out int v_material;
 out vec2 v_tints;
 out vec2 v_detail;
+out vec2 v_nose;
 
 void main() {
     v_position = in_position;
@@ -23,5 +25,6 @@ void main() {
     v_material = int(in_material + 0.5);
     v_tints = in_tints;
     v_detail = in_detail;
+    v_nose = in_nose;
     gl_Position = world_to_clip * vec4(in_position, 1.0);
 }
