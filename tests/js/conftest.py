@@ -1,6 +1,7 @@
 """Helpers for the fba.js tests: run Node on many files at once and compare with the Python decoder."""
 from __future__ import annotations
 
+import functools
 import json
 import shutil
 import subprocess
@@ -21,9 +22,11 @@ def need_node() -> str:
     return NODE
 
 
-def js_decode(paths: list[Path], chunk: int = 0) -> dict[str, dict]:
-    """fba.js's answer per path (one Node process for all of them); ``chunk`` feeds bytes in pieces."""
-    cmd = [need_node(), str(DUMP)] + (["--chunk", str(chunk)] if chunk else []) + [str(p) for p in paths]
+def js_decode(paths: list[Path], chunk: int = 0, shown: bool = False) -> dict[str, dict]:
+    """fba.js's answer per path (one Node process for all of them); ``chunk`` feeds bytes in pieces,
+    ``shown`` adds the values shown.js shows."""
+    cmd = [need_node(), str(DUMP)] + (["--shown"] if shown else []) + (["--chunk", str(chunk)] if chunk else []) \
+        + [str(p) for p in paths]
     run = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]
     out = {}
@@ -33,6 +36,7 @@ def js_decode(paths: list[Path], chunk: int = 0) -> dict[str, dict]:
     return out
 
 
+@functools.lru_cache(maxsize=None)
 def python_decode(path: Path):
     """(stream, error) from the Python reference decoder; on a fault the stream is the partial one."""
     from mpeg4fa.fba import FbaError, decode

@@ -1,10 +1,12 @@
 // Decode .fba files with fba.js and print one JSON line per file (for the Python tests to compare).
-// node tests/js/dump.mjs [--chunk N] FILE...   (--chunk: feed the bytes N at a time to StreamDecoder)
+// node tests/js/dump.mjs [--shown] [--chunk N] FILE...   (--shown: + the values shown, shown.js)   (--chunk: feed the bytes N at a time to StreamDecoder)
 import { readFileSync } from "node:fs";
 import { decode, StreamDecoder, FbaError } from "../../mpeg4fa/serve/static/js/fba/fba.js";
+import { shownValues } from "../../mpeg4fa/serve/static/js/fba/shown.js";
 
 const args = process.argv.slice(2);
-let chunk = 0;
+let chunk = 0, shown = false;
+if (args[0] === "--shown") { shown = true; args.splice(0, 1); }
 if (args[0] === "--chunk") { chunk = Number(args[1]); args.splice(0, 2); }
 
 function frameJson(f) {
@@ -35,5 +37,7 @@ for (const path of args) {
     if (e.partial) { frames.push(...e.partial.frames); osc = e.partial.objectStartCode; }  // whole: all; pieces: this call's
     error = { message: e.message, bit: e.bitOffset, frame: e.frame, text: e.toString() };
   }
-  process.stdout.write(JSON.stringify({ path, osc, frames: frames.map(frameJson), error }) + "\n");
+  const doc = { path, osc, frames: frames.map(frameJson), error };
+  if (shown) doc.shown = shownValues(frames).map((row) => Array.from(row));
+  process.stdout.write(JSON.stringify(doc) + "\n");
 }

@@ -78,12 +78,39 @@ def test_damaged_streams_fail_as_python(damaged):
         compare(path, got[str(path)])
 
 
+@pytest.fixture(scope="module")
+def streamed(damaged) -> tuple[list[Path], dict]:
+    paths = [p for p in CONFORMANCE if "syntax" in p.parts][::6] + damaged[::5]
+    return paths, js_decode(paths)
+
+
 @pytest.mark.parametrize("chunk", [1, 7, 1000])
-def test_streaming_input_gives_the_same_frames(damaged, chunk):
+def test_streaming_input_gives_the_same_frames(streamed, chunk):
     """Bytes in pieces (1, 7, 1000 at a time): the same frames and the same faults as the whole file."""
-    paths = [p for p in CONFORMANCE if "syntax" in p.parts][::4] + damaged[::3]
-    whole, pieces = js_decode(paths), js_decode(paths, chunk=chunk)
+    paths, whole = streamed
+    pieces = js_decode(paths, chunk=chunk)
     for path in paths:
         a, b = whole[str(path)], pieces[str(path)]
         assert a["frames"] == b["frames"], path
         assert a["error"] == b["error"], path
+
+
+def test_shown_values_match_resolve():
+    """shown.js shows what mpeg4fa.decoded.resolve shows: hold, interpolate, FAP 1/2 profiles, clamps."""
+    import warnings
+
+    from mpeg4fa.decoded import ClampWarning, resolve
+
+    from .conftest import python_decode
+
+    paths = [p for p in CONFORMANCE if "reject" not in p.parts]
+    if SHARED.is_dir():
+        paths += sorted(p for p in SHARED.rglob("*") if p.suffix.lower() == ".fba")
+    got = js_decode(paths, shown=True)
+    for path in paths:
+        stream, error = python_decode(path)
+        assert error is None, path
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ClampWarning)
+            want = resolve(stream)
+        np.testing.assert_array_equal(np.array(got[str(path)]["shown"]).reshape(want.shape), want, err_msg=str(path))

@@ -77,6 +77,7 @@ class BitReader {
     this.baseBits = 0;   // absolute bit offset of buf[0]
     this.p = 0;          // read index in bits into buf
     this.final = false;  // no more bytes will come: a short read is the stream's end
+    this.wanted = 0;     // absolute bit count the last attempt needed: no retry before it has arrived
   }
   get pos() { return this.baseBits + this.p; }
   get nbits() { return this.nbytes * 8; }
@@ -102,6 +103,7 @@ class BitReader {
   available(n) {
     if (this.p + n <= this.nbytes * 8) return true;
     if (this.final) return false;
+    this.wanted = this.baseBits + this.p + n;
     throw NEED_MORE;
   }
   left() { return this.nbytes * 8 - this.p; }
@@ -169,7 +171,7 @@ function decodeSegment(r, models, adapt, out) {
   const nextBit = () => {
     for (;;) {
       if (p >= nbits) {
-        if (!r.final) throw NEED_MORE;
+        if (!r.final) { r.wanted = r.baseBits + p + 1; throw NEED_MORE; }
         throw new FbaError(SEGMENT_ENDS, r.baseBits + p);
       }
       const bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
@@ -640,7 +642,7 @@ class Decoder {
    * needed (unless the input is final); throws FbaError at a fault, with ``frame`` set. */
   run(emit) {
     const r = this.r;
-    if (this.done) return;
+    if (this.done || (!r.final && r.baseBits + r.nbits < r.wanted)) return;
     if (this.objectStartCode === null) {
       try {
         this.objectStart();
