@@ -70,7 +70,8 @@ def _face_mesh():
 @contextlib.contextmanager
 def _quiet_native_stderr():
     """The model's native code (TF Lite, absl) writes INFO/W lines straight to file descriptor 2 when
-    its graph first runs; send that descriptor to /dev/null meanwhile, so a run prints only our lines."""
+    its graphs start (the first image, and again after images without a face); send that descriptor
+    to /dev/null meanwhile (~10 us a call), so a run prints only our lines."""
     try:
         fd = sys.stderr.fileno()
     except (AttributeError, OSError, ValueError):   # stderr replaced (pytest capture, a GUI): nothing to quieten
@@ -118,7 +119,6 @@ class LandmarkFinder:
         self.static = bool(static)
         self.max_faces = max_faces
         self._mesh = None
-        self._ran = False
         self._warned = False
 
     def __enter__(self) -> "LandmarkFinder":
@@ -127,6 +127,10 @@ class LandmarkFinder:
             self._mesh = face_mesh.FaceMesh(static_image_mode=self.static, refine_landmarks=True,
                                             max_num_faces=self.max_faces, min_detection_confidence=0.5,
                                             min_tracking_confidence=0.5)
+            # its graph starts in threads of its own that log as they come up: one blank image waits for them
+            self._mesh.process(np.zeros((MIN_SIDE * 2, MIN_SIDE * 2, 3), np.uint8))
+            if not self.static:   # a video's tracker must not carry the blank frame into the first real one
+                self._mesh.reset()
         return self
 
     def __exit__(self, *exc) -> None:
@@ -135,7 +139,8 @@ class LandmarkFinder:
     def close(self) -> None:
         """Free the model (the context manager does it)."""
         if self._mesh is not None:
-            self._mesh.close()
+            with _quiet_native_stderr():
+                self._mesh.close()
             self._mesh = None
 
     def find(self, rgb: np.ndarray, where: str | None = None) -> Landmarks | None:
@@ -143,12 +148,8 @@ class LandmarkFinder:
         if self._mesh is None:
             raise TrackingError("the LandmarkFinder is not open: use it in a 'with' block")
         image = check_rgb(rgb, where)
-        if self._ran:
+        with _quiet_native_stderr():    # the model starts graphs (and logs) again on later images too
             result = self._mesh.process(image)
-        else:
-            with _quiet_native_stderr():
-                result = self._mesh.process(image)
-            self._ran = True
         faces = result.multi_face_landmarks or []
         if not faces:
             return None
