@@ -1,10 +1,11 @@
 """decode() and iter_decode(): the decoder chosen by backend, frames stacked in bounded memory.
 
 This module sits above both decoders (:mod:`.decoder`, the reference, and :mod:`.fastpath`, which
-builds on it), so that neither imports the other back. :func:`decode` holds the stream's arrays only
-(:mod:`.stacking`: about 400 bytes a frame for a face stream, peak included) and refuses a stream of
-more than :data:`~mpeg4fa.fba.limits.MAX_DECODE_FRAMES` frames, which :func:`iter_decode` reads frame
-by frame in constant memory.
+builds on it), so that neither imports the other back. :func:`decode` holds the stream's arrays only,
+each as narrow as its values allow (:mod:`.stacking`: 228 bytes a frame for a face stream of small
+values, 364 when FAP values need int32; the peak adds a few MB) and refuses a stream of more than
+:data:`~mpeg4fa.fba.limits.MAX_DECODE_FRAMES` frames, which :func:`iter_decode` reads frame by frame in
+constant memory.
 """
 from __future__ import annotations
 
@@ -46,10 +47,14 @@ def decode(source: Source, *, backend: str = "auto", max_frames: int = MAX_DECOD
     """Decode a whole FBA stream (bytes, a path or a binary file) into a :class:`FapStream`.
 
     On a fault the :class:`FbaError` carries the frames decoded before it in ``.partial``.
-    Memory is that of the stream's arrays (:mod:`mpeg4fa.fba.stacking`): about 400 bytes a
-    frame for a face stream, at the peak too; a stream without body data shares one read-only zero
-    row for its ``bap_mask``/``bap_values``. More than ``max_frames`` frames (default
-    :data:`~mpeg4fa.fba.limits.MAX_DECODE_FRAMES`) is an :class:`FbaError` at the first frame past it:
+    Memory is that of the stream's arrays (:mod:`mpeg4fa.fba.stacking`), at the peak too (plus a few
+    MB): 228 bytes a frame for a face stream of small values, 364 when its FAP values need int32; a
+    stream without body data shares one read-only zero row for its ``bap_mask``/``bap_values``.
+    Integer arrays come back as narrow as their values allow (``fap_values`` int16 or int32, see
+    :data:`~mpeg4fa.fba.stream.STORAGE`): widen before arithmetic that may overflow, and call
+    :meth:`~mpeg4fa.fba.FapStream.widen` before writing larger values into the stream. More than
+    ``max_frames`` frames (default :data:`~mpeg4fa.fba.limits.MAX_DECODE_FRAMES`) is an
+    :class:`FbaError` at the first frame past it:
     :func:`iter_decode` reads such a stream in constant memory. ``backend`` as for :func:`iter_decode`.
     """
     with _opened(source) as src:

@@ -174,9 +174,9 @@ def _p_overflow(s: FapStream, part: PartSpec, quant: int, a: int, b: int, compil
     if compiled:
         from .compiled.kernels import first_overflow
 
-        k, i, level = first_overflow(values, np.ascontiguousarray(qstep, dtype=np.int64),
-                                     np.ascontiguousarray(masks[a]), limit, a, b)
-        return None if k < 0 else (int(k), int(i), int(level))
+        k, i, level = first_overflow(_kernel_rows(values, a, b), np.ascontiguousarray(qstep, dtype=np.int64),
+                                     np.ascontiguousarray(masks[a]), limit, 0, b - a)
+        return None if k < 0 else (a + int(k), int(i), int(level))
     recon = dequantise(quantise(values[a], qstep), qstep)
     for k in range(a + 1, b):
         level = quantise(values[k] - recon, qstep)
@@ -270,7 +270,7 @@ def _fold_repeats(s: FapStream, protect: Sequence[int]) -> tuple[FapStream, list
 
 
 def _grid_times(s: FapStream, fps: float) -> np.ndarray:
-    slots = np.concatenate([[0], np.cumsum(s.skip[:-1] + 1)])
+    slots = np.concatenate([[0], np.cumsum(s.skip[:-1].astype(np.int64) + 1)])
     return s.timestamps[0] + slots / fps
 
 
@@ -295,6 +295,19 @@ def _mask_types(mask: np.ndarray, part: PartSpec, requested, carried) -> tuple[i
     return tuple(types)
 
 
+def _at_least(array: np.ndarray, dtype) -> np.ndarray:
+    """``array`` contiguous and at least as wide as ``dtype``, the type the compiled kernels are used with: a
+    decoded stream's arrays may be narrower (:data:`~mpeg4fa.fba.stream.STORAGE`), and numba would compile
+    a version of each kernel per dtype; wider ones (hand-made int64) are kept, never cut."""
+    return np.ascontiguousarray(array, dtype=np.promote_types(array.dtype, dtype))
+
+
+def _kernel_rows(values: np.ndarray, a: int, b: int) -> np.ndarray:
+    """Rows ``a..b-1`` of a value array for the compiled kernels (:func:`_at_least` int32): only the rows a
+    call reads are copied."""
+    return _at_least(values[a:b], np.int32)
+
+
 def _period_levels(values: np.ndarray, qstep: np.ndarray, a: int, b: int, compiled: bool = False) -> np.ndarray:
     """(4, n): the intra level, its negation, and the largest P level up and down over frames a+1..b-1,
     each against the closed-loop reconstruction the decoder will have."""
@@ -303,7 +316,7 @@ def _period_levels(values: np.ndarray, qstep: np.ndarray, a: int, b: int, compil
         from .compiled.kernels import closed_loop_extremes
 
         raw = np.zeros_like(gop)
-        closed_loop_extremes(np.ascontiguousarray(values), np.ascontiguousarray(qstep, dtype=np.int64), a, b, raw)
+        closed_loop_extremes(_kernel_rows(values, a, b), np.ascontiguousarray(qstep, dtype=np.int64), 0, b - a, raw)
         gop[0], gop[1], gop[2], gop[3] = raw[2], raw[3], raw[0], raw[1]
         return gop
     level = quantise(values[a], qstep)
@@ -475,8 +488,10 @@ class _CompiledPlanes:
         self.pads[[k for k in writer.pads if 0 <= k < len(s)]] = True
         self.res = np.zeros(kernels.RESULT_SIZE, dtype=np.int64)
         self.scratch = np.zeros(N_BAPS + 8, dtype=np.int64)
-        self.arrays = tuple(np.ascontiguousarray(a) for a in (s.object_mask, s.skip, s.start_code, self.pads, s.viseme,
-                                                              s.expression, s.fap_values))
+        # the kernel's types, whatever the stream holds (a decoded stream's arrays may be narrow: STORAGE)
+        self.arrays = tuple(_at_least(a, d) for a, d in (
+            (s.object_mask, np.uint8), (s.skip, np.int32), (s.start_code, np.uint32), (self.pads, np.bool_),
+            (s.viseme, np.int32), (s.expression, np.int32), (s.fap_values, np.int32)))
         self.baps: np.ndarray | None = None  # the body's values, made contiguous when a body part is coded
 
     def after_intra(self, k: int) -> None:

@@ -22,9 +22,9 @@ from .stream import FapStream, FrameRate
 MAX_SPAN_SECONDS = 24 * 3600
 """Longest stretch of time a stream may cover, skipped frames included: 24 hours."""
 MAX_DECODE_FRAMES = 1 << 21
-"""Most frames :func:`~mpeg4fa.fba.decode` holds in memory: 2,097,152 (23.3 h at 25 fps, about 850 MB at
-~400 bytes a frame); a 6-bit frame makes this a 1.5 MB stream. :func:`~mpeg4fa.fba.iter_decode` has no
-such ceiling (constant memory)."""
+"""Most frames :func:`~mpeg4fa.fba.decode` holds in memory: 2,097,152 (23.3 h at 25 fps; about 480 MB at the
+228 bytes a frame of a face stream of small values, 763 MB at 364 when FAP values need int32, face only); a
+6-bit frame makes this a 1.5 MB stream. :func:`~mpeg4fa.fba.iter_decode` has no such ceiling (constant memory)."""
 
 
 def fps_problem(fps: object) -> str | None:

@@ -1,11 +1,18 @@
-"""Stacking frames into a :class:`FapStream` in memory proportional to its arrays.
+"""Stacking frames into a :class:`FapStream` in memory proportional to its arrays, each held narrow.
 
 :func:`~mpeg4fa.fba.decode` used to keep every decoded :class:`Frame` (a dozen small
 numpy arrays each, 296-wide body rows included) and stack them at the end: about
 4.7 KB a frame. :class:`StreamBuilder` copies each frame's rows into blocks of
 :data:`STORE_BLOCK` frames instead, and joins the blocks field by field, freeing each
-field's blocks as soon as it is joined, so a face stream costs its ~400 bytes a
-frame (peak under 700 bytes while joining).
+block as soon as it is copied, so a stream costs its arrays (and one block) at the peak.
+
+Each integer array is held in the narrowest dtype of its :data:`~mpeg4fa.fba.stream.STORAGE`
+ladder that keeps every value seen so far within half the dtype's range; the first value that
+does not fit widens that field's blocks, all of them, to the next dtype that holds it. A face
+stream of small values (one FAP of a few units, no skips) costs 228 bytes a frame: ``fap_mask``
+68, ``fap_values`` int16 136, ``viseme``/``expression`` int8 10, ``timestamps`` 8,
+``object_mask`` 1, ``skip`` 1, ``start_code`` 2, ``bits`` 2; a stream whose values need int32
+(head rotations at a fine quantiser) 364.
 
 Body arrays are the exception that makes this pay: ``bap_mask`` and ``bap_values``
 take ~1.5 KB a frame, and most streams send no body. A block gets them only when
@@ -20,19 +27,21 @@ from typing import Iterable
 
 import numpy as np
 
-from .stream import FACE, N_BAPS, N_FAPS, OBJECT_START_CODE, CodingParams, FapStream, Frame
+from .stream import (FACE, N_BAPS, N_FAPS, OBJECT_START_CODE, STORAGE, CodingParams, FapStream, Frame, fits,
+                     storage_dtype)
 
 BLOCK = 1024
-"""Frames per block of rows handed over at once (the compiled decoder's unit)."""
+"""Frames per block of rows handed over at once (the compiled decoder's unit, and :meth:`StreamBuilder.add`'s)."""
 STORE_BLOCK = 16384
 """Frames per storage block of a :class:`StreamBuilder`: few mappings even for millions of frames, and
 pages are committed only as rows are written, so a short stream pays for what it fills."""
 
-_ROWS = {  # field -> (row shape, dtype): the FapStream layout of every per-frame array but the body's
-    "fap_mask": ((N_FAPS,), bool), "fap_values": ((N_FAPS,), np.int32), "viseme": ((4,), np.int32),
-    "expression": ((6,), np.int32), "timestamps": ((), np.float64), "object_mask": ((), np.uint8),
-    "skip": ((), np.int32), "start_code": ((), np.uint32), "bits": ((), np.int32),
+_SHAPES = {  # field -> row shape, for every per-frame array but the body's
+    "fap_mask": (N_FAPS,), "fap_values": (N_FAPS,), "viseme": (4,), "expression": (6,), "timestamps": (),
+    "object_mask": (), "skip": (), "start_code": (), "bits": (),
 }
+_LADDERS: dict[str, tuple[type, ...]] = {"fap_mask": (np.bool_,), "timestamps": (np.float64,),
+                                         "object_mask": (np.uint8,), **STORAGE}
 _BODY = {"bap_mask": bool, "bap_values": np.int32}
 
 ZERO_BAP_MASK = np.zeros(N_BAPS, dtype=bool)
@@ -56,62 +65,80 @@ def no_body(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 class StreamBuilder:
-    """Frames in, one :class:`FapStream` out, holding only the arrays the stream will hold."""
+    """Frames in, one :class:`FapStream` out, holding only the arrays the stream will hold, each as narrow
+    as its values allow (module docstring)."""
 
     def __init__(self, object_start_code: int = OBJECT_START_CODE) -> None:
         self.object_start_code = object_start_code
         self.intra: dict[int, CodingParams] = {}
         self._blocks: list[dict[str, np.ndarray | None]] = []
         self._fill = STORE_BLOCK  # rows used in the last block (full: the next frame opens a block)
+        self._dtypes = {name: ladder[0] for name, ladder in _LADDERS.items()}
+        self._stage: dict[str, np.ndarray] | None = None  # rows add() collects, stored BLOCK at a time
+        self._stage_body: tuple[np.ndarray, np.ndarray] | None = None
+        self._staged = 0
         self.n = 0
 
     def __len__(self) -> int:
         return self.n
 
-    def _open_block(self) -> None:
-        block: dict[str, np.ndarray | None] = {
-            name: _fresh((STORE_BLOCK, *shape), dtype) for name, (shape, dtype) in _ROWS.items()}
-        block.update(dict.fromkeys(_BODY))
-        self._blocks.append(block)
-        self._fill = 0
-
-    def _row(self) -> tuple[dict[str, np.ndarray | None], int]:
-        if self._fill == STORE_BLOCK:
-            self._open_block()
-        row = self._fill
-        self._fill += 1
-        self.n += 1
-        return self._blocks[-1], row
+    @property
+    def dtypes(self) -> dict[str, np.dtype]:
+        """The dtype each per-frame array is held in now (it only ever widens)."""
+        return {name: np.dtype(dtype) for name, dtype in self._dtypes.items()}
 
     def add(self, *, fap_mask: np.ndarray, fap_values: np.ndarray, viseme: np.ndarray, expression: np.ndarray,
             timestamp: float = 0.0, object_mask: int = FACE, skip: int = 0, start_code: int = 0, bits: int = 0,
             bap_mask: np.ndarray | None = None, bap_values: np.ndarray | None = None,
             params: CodingParams | None = None) -> None:
         """Append one frame given as rows; body rows may be None (no body data)."""
-        block, k = self._row()
-        block["fap_mask"][k] = fap_mask  # type: ignore[index]
-        block["fap_values"][k] = fap_values  # type: ignore[index]
-        block["viseme"][k] = viseme  # type: ignore[index]
-        block["expression"][k] = expression  # type: ignore[index]
+        if self._stage is None:  # rows at full width here; narrowed when a block of them is stored
+            self._stage = {name: np.zeros((BLOCK, *_SHAPES[name]), dtype=ladder[-1])
+                           for name, ladder in _LADDERS.items()}
+        stage, k = self._stage, self._staged
+        stage["fap_mask"][k] = fap_mask
+        stage["fap_values"][k] = fap_values
+        stage["viseme"][k] = viseme
+        stage["expression"][k] = expression
         for name, value in (("timestamps", timestamp), ("object_mask", object_mask), ("skip", skip),
                             ("start_code", start_code), ("bits", bits)):
-            block[name][k] = value  # type: ignore[index]
+            stage[name][k] = value
         has_body = (bap_mask is not None and bap_mask is not ZERO_BAP_MASK and bap_mask.any()) or \
             (bap_values is not None and bap_values is not ZERO_BAP_VALUES and bap_values.any())
         if has_body:
-            for name, value in (("bap_mask", bap_mask), ("bap_values", bap_values)):
-                if block[name] is None:
-                    block[name] = _fresh((STORE_BLOCK, N_BAPS), _BODY[name])
+            if self._stage_body is None:
+                self._stage_body = (np.zeros((BLOCK, N_BAPS), bool), np.zeros((BLOCK, N_BAPS), np.int32))
+            for rows, value in zip(self._stage_body, (bap_mask, bap_values)):
                 if value is not None:
-                    block[name][k] = value  # type: ignore[index]
+                    rows[k] = value
+        self._staged += 1
+        self.n += 1
         if params is not None:
             self.intra[self.n - 1] = params
+        if self._staged == len(stage["timestamps"]):
+            self._flush()
+
+    def _flush(self) -> None:
+        """Store the rows :meth:`add` collected."""
+        m, self._staged = self._staged, 0
+        if not m:
+            return
+        body, self._stage_body = self._stage_body, None
+        rows = {name: value[:m] for name, value in self._stage.items()}  # type: ignore[union-attr]
+        self._store(rows, *((body[0][:m], body[1][:m]) if body is not None else (None, None)))
 
     def extend(self, rows: dict[str, np.ndarray], bap_mask: np.ndarray | None = None,
                bap_values: np.ndarray | None = None) -> None:
-        """Append many frames given as arrays (the fields of ``_ROWS``, one row per frame), as :meth:`add`
-        would one by one: a block gets body arrays only when one of its frames carries body data."""
+        """Append many frames given as arrays (the fields of ``FapStream`` but the body's, one row per frame),
+        as :meth:`add` would one by one: a block gets body arrays only when one of its frames carries body data."""
+        self._flush()
+        self._store(rows, bap_mask, bap_values)
+        self.n += len(rows["timestamps"])
+
+    def _store(self, rows: dict[str, np.ndarray], bap_mask: np.ndarray | None, bap_values: np.ndarray | None) -> None:
         n = len(rows["timestamps"])
+        for name in STORAGE:
+            self._fit(name, rows[name])
         body = None
         if bap_mask is not None and bap_values is not None:
             body = bap_mask.any(axis=1) | bap_values.any(axis=1)
@@ -121,7 +148,7 @@ class StreamBuilder:
                 self._open_block()
             block, start = self._blocks[-1], self._fill
             take = min(STORE_BLOCK - start, n - done)
-            for name in _ROWS:
+            for name in _SHAPES:
                 block[name][start:start + take] = rows[name][done:done + take]  # type: ignore[index]
             if body is not None and body[done:done + take].any():
                 for name, value in (("bap_mask", bap_mask), ("bap_values", bap_values)):
@@ -129,8 +156,31 @@ class StreamBuilder:
                         block[name] = _fresh((STORE_BLOCK, N_BAPS), _BODY[name])
                     block[name][start:start + take] = value[done:done + take]  # type: ignore[index]
             self._fill += take
-            self.n += take
             done += take
+
+    def _fit(self, name: str, values: np.ndarray) -> None:
+        """Widen field ``name``, in every block, when ``values`` do not fit its dtype now."""
+        current = self._dtypes[name]
+        if not values.size or current is _LADDERS[name][-1]:
+            return
+        low, high = values.min(), values.max()
+        if fits(current, low, high):
+            return
+        ladder = _LADDERS[name]
+        wide = storage_dtype(ladder, low, high, ladder.index(current) + 1)
+        self._dtypes[name] = wide
+        for block in self._blocks:  # one block at a time: the peak grows by one block, not the stream
+            narrow = block[name]
+            block[name] = _fresh(narrow.shape, wide)  # type: ignore[union-attr]
+            block[name][...] = narrow  # type: ignore[index]
+            del narrow
+
+    def _open_block(self) -> None:
+        block: dict[str, np.ndarray | None] = {
+            name: _fresh((STORE_BLOCK, *shape), self._dtypes[name]) for name, shape in _SHAPES.items()}
+        block.update(dict.fromkeys(_BODY))
+        self._blocks.append(block)
+        self._fill = 0
 
     def append(self, frame: Frame) -> None:
         """Append a decoded (or hand-made) :class:`Frame`."""
@@ -141,11 +191,12 @@ class StreamBuilder:
 
     def build(self) -> FapStream:
         """The stream of every frame added so far. The builder is emptied: its blocks are freed as they are joined."""
+        self._flush()
         n, blocks = self.n, self._blocks
         sizes = [STORE_BLOCK] * (len(blocks) - 1) + ([self._fill] if blocks else [])
         arrays: dict[str, np.ndarray] = {}
-        for name, (shape, dtype) in _ROWS.items():
-            arrays[name] = self._join(name, (n, *shape), dtype, sizes)
+        for name, shape in _SHAPES.items():
+            arrays[name] = self._join(name, (n, *shape), self._dtypes[name], sizes)
         if any(block["bap_mask"] is not None for block in blocks):
             for name, dtype in _BODY.items():
                 arrays[name] = self._join(name, (n, N_BAPS), dtype, sizes)

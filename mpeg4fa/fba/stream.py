@@ -9,6 +9,18 @@ presence in columns 0 and 1 of ``fap_mask``.
 ``intra`` maps the index of every intra frame to the :class:`CodingParams` its
 header carried; everything the bitstream says about a frame is kept, so that a
 stream re-encodes to the same bytes.
+
+Integer arrays come in two widths (:data:`STORAGE`). :meth:`FapStream.empty` and
+hand-made streams use the widest (``fap_values`` int32, ...); a stream built from
+frames (:func:`~mpeg4fa.fba.decode`, the ``.fap``/``.bap`` readers) holds each
+array in the narrowest type of its ladder that keeps every value within half the
+type's range, so that a decoded stream of small values costs about 230 bytes a
+frame instead of 400: ``fap_values`` int16 or int32, ``viseme``/``expression``
+int8, int16 or int32, ``skip`` int8, int16 or int32, ``start_code`` uint16 or
+uint32, ``bits`` int16 or int32. The half-range margin means the sum or difference
+of two values of one array cannot wrap; anything more (products, running sums)
+widens first (``astype(np.int64)``), and writing larger values into a stream
+calls :meth:`FapStream.widen` first.
 """
 from __future__ import annotations
 
@@ -30,6 +42,36 @@ OBJECT_START_CODE_OLD = 0x101
 PLANE_START_CODE = 0x1BB
 PLANE_START_CODE_OLD = 0x103
 END_CODE = 0x1B1
+
+STORAGE: dict[str, tuple[type, ...]] = {
+    "fap_values": (np.int16, np.int32), "viseme": (np.int8, np.int16, np.int32),
+    "expression": (np.int8, np.int16, np.int32), "skip": (np.int8, np.int16, np.int32),
+    "start_code": (np.uint16, np.uint32), "bits": (np.int16, np.int32),
+}
+"""Integer per-frame arrays a stream built from frames may hold narrow: field -> dtypes, narrowest first;
+the last is the field's dtype in :meth:`FapStream.empty` (see the module docstring)."""
+
+
+def fits(dtype, low: int, high: int) -> bool:
+    """Whether values ``low..high`` lie within half of integer ``dtype``'s range (the storage margin)."""
+    info = np.iinfo(dtype)
+    return info.min // 2 <= int(low) and int(high) <= info.max // 2
+
+
+def storage_dtype(ladder: tuple[type, ...], low: int, high: int, at_least: int = 0) -> type:
+    """The narrowest dtype of ``ladder`` (from index ``at_least`` on) that :func:`fits` ``low..high``;
+    the widest when none does."""
+    return next((d for d in ladder[at_least:-1] if fits(d, low, high)), ladder[-1])
+
+
+def narrowed(values: np.ndarray, field: str) -> np.ndarray:
+    """``values`` of per-frame array ``field`` as a stream built from frames holds them (:data:`STORAGE`)."""
+    values = np.asarray(values)
+    ladder = STORAGE[field]
+    if not values.size:
+        return values.astype(ladder[0])
+    return values.astype(storage_dtype(ladder, values.min(), values.max()))
+
 
 DEFAULT_FPS = 30.0
 """Frame rate assumed when no intra header sends one (visage ``DEF_FRAME_RATE``)."""
@@ -173,16 +215,16 @@ class FapStream:
     """Coding parameters plus frames: see the module docstring for the layout."""
 
     fap_mask: np.ndarray        # (n, 68) bool
-    fap_values: np.ndarray      # (n, 68) int32, FAPU integers (AU for rotations)
-    viseme: np.ndarray          # (n, 4) int32: select1, select2, blend, viseme_def
-    expression: np.ndarray      # (n, 6) int32: select1, intensity1, select2, intensity2, init_face, def
+    fap_values: np.ndarray      # (n, 68) int16 or int32 (STORAGE), FAPU integers (AU for rotations)
+    viseme: np.ndarray          # (n, 4) int8/16/32: select1, select2, blend, viseme_def
+    expression: np.ndarray      # (n, 6) int8/16/32: select1, intensity1, select2, intensity2, init_face, def
     bap_mask: np.ndarray        # (n, 296) bool
     bap_values: np.ndarray      # (n, 296) int32
     timestamps: np.ndarray      # (n,) float64 seconds
     object_mask: np.ndarray     # (n,) uint8: 1 face, 2 body, 3 both
-    skip: np.ndarray            # (n,) int32: frames skipped after this one
-    start_code: np.ndarray      # (n,) uint32: plane start code sent before the frame, 0 if none
-    bits: np.ndarray            # (n,) int32: bits the frame took in its stream (0 if not decoded)
+    skip: np.ndarray            # (n,) int8/16/32: frames skipped after this one
+    start_code: np.ndarray      # (n,) uint16 or uint32: plane start code sent before the frame, 0 if none
+    bits: np.ndarray            # (n,) int16 or int32: bits the frame took in its stream (0 if not decoded)
     intra: dict[int, CodingParams] = field(default_factory=dict)
     object_start_code: int = OBJECT_START_CODE
     source_fps: float | None = None
@@ -273,7 +315,17 @@ class FapStream:
         """Seconds from the first frame to the end of the last (including its skipped frames)."""
         if not len(self):
             return 0.0
-        return float(self.timestamps[-1] - self.timestamps[0] + (self.skip[-1] + 1) / self.fps)
+        return float(self.timestamps[-1] - self.timestamps[0] + (int(self.skip[-1]) + 1) / self.fps)
+
+    def widen(self) -> "FapStream":
+        """Hold every integer array in its widest dtype (:data:`STORAGE`), in place, and return the stream:
+        call it before writing values into a decoded stream that its narrow arrays may not hold (numpy
+        would wrap them silently). Arrays already wide are kept as they are."""
+        for name, ladder in STORAGE.items():
+            array = getattr(self, name)
+            if array.dtype != ladder[-1]:
+                setattr(self, name, array.astype(ladder[-1]))
+        return self
 
     def take(self, frames: list[int]) -> "FapStream":
         """The given frames as a new stream (intra parameters are not carried: re-plan them)."""

@@ -31,7 +31,7 @@ import numpy as np
 
 from mpeg4fa.fba.limits import MAX_SPAN_SECONDS, fps_problem, frame_limit
 from mpeg4fa.fba.stacking import StreamBuilder
-from mpeg4fa.fba.stream import FapStream
+from mpeg4fa.fba.stream import FapStream, narrowed
 from mpeg4fa.formats.errors import FormatError
 
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
@@ -336,8 +336,10 @@ def build_stream(records: Iterable[R], fps: float, add: Callable[[StreamBuilder,
         add(builder, record, record.frame_number / fps)
     stream = builder.build()
     stream.source_fps = fps
-    if len(numbers) > 1:
-        stream.skip[:-1] = np.diff(np.frombuffer(numbers, dtype=np.int64)) - 1
+    if len(numbers) > 1:  # a new array: the builder's may be too narrow for the gaps (fba.stream.STORAGE)
+        skip = np.zeros(len(numbers), dtype=np.int64)
+        skip[:-1] = np.diff(np.frombuffer(numbers, dtype=np.int64)) - 1
+        stream.skip = narrowed(skip, "skip")
     return stream
 
 
