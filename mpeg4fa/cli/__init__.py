@@ -15,15 +15,37 @@ or origin, is one ``mpeg4fa COMMAND: warning: ...`` line (no source lines).
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 import warnings
+from typing import Callable
 
 from .. import __version__
 from ..atomic import Terminated, clean_up_on_signals
 from ..errors import MpegFaError
-from . import batch, codec, conform, edit, export, model, play, serve, speech, texture
 from .errors import UsageError, os_error_line
 from .media import one_line
+
+MODULES: dict[str, tuple[str, ...]] = {
+    "codec": ("info", "decode", "encode", "validate", "demo"),
+    "model": ("model",),
+    "play": ("play", "snapshot"),
+    "texture": ("texture",),
+    "fdp_photo": ("fdp",),
+    "speech": ("say", "voices"),
+    "conform": ("conform",),
+    "edit": ("edit",),
+    "export": ("export",),
+    "batch": ("batch",),
+    "serve": ("serve",),
+}
+"""Each module of this package that registers commands (in the order ``--help`` lists them) -> its commands.
+
+Why: registering a command imports what its options list (the deformers, the calibration methods, the
+camera views: the face and the renderer, ~1 s), so :func:`main` registers only the module of the command
+it runs; ``mpeg4fa info x.fba`` then imports the codec alone. A command missing here still runs (a word
+that names no command here builds the whole parser); ``tests/cli/test_imports.py`` checks the table
+against what the modules register."""
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -37,8 +59,34 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {one_line(message)}\n")
 
+    def defer(self, add_options: Callable[[argparse.ArgumentParser], object]) -> None:
+        """Add options when this parser is first used (to parse or to help), not when it is made.
 
-def build_parser() -> argparse.ArgumentParser:
+        Why: ``encode``'s text options list the speech layer's engines and levels; deferred, registering
+        ``encode`` beside ``info`` does not import the speech layer that ``mpeg4fa info`` never uses.
+        :func:`build_parser` of every command completes them all (what the reference docs read)."""
+        self.__dict__.setdefault("_deferred", []).append(add_options)
+
+    def complete(self) -> argparse.ArgumentParser:
+        """Run the deferred option adders (:meth:`defer`), once; the parser."""
+        deferred = self.__dict__.pop("_deferred", [])
+        for add_options in deferred:
+            add_options(self)
+        return self
+
+    def parse_known_args(self, args=None, namespace=None):
+        return super(OneLineParser, self.complete()).parse_known_args(args, namespace)
+
+    def format_usage(self) -> str:
+        return super(OneLineParser, self.complete()).format_usage()
+
+    def format_help(self) -> str:
+        return super(OneLineParser, self.complete()).format_help()
+
+
+def build_parser(only: tuple[str, ...] | None = None) -> argparse.ArgumentParser:
+    """The whole ``mpeg4fa`` parser; ``only``: just the commands of these modules of :data:`MODULES` (what
+    :func:`main` builds to run one command without importing every other command's layers)."""
     parser = OneLineParser(
         prog="mpeg4fa",
         description="MPEG-4 Face Animation: encode, decode, inspect and validate FBA streams and .fap files; "
@@ -47,24 +95,38 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"mpeg4fa {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    codec.register(commands)
-    model.register(commands)
-    play.register(commands)
-    texture.register(commands)
-    speech.register(commands)
-    conform.register(commands)
-    edit.register(commands)
-    export.register(commands)
-    batch.register(commands)
-    serve.register(commands)
+    for name in MODULES if only is None else only:
+        importlib.import_module(f"{__name__}.{name}").register(commands)
+    if only is None:
+        _complete_all(parser)
     return parser
+
+
+def _complete_all(parser: argparse.ArgumentParser) -> None:
+    """Every deferred option of ``parser`` and its subcommands added (:meth:`OneLineParser.defer`)."""
+    if isinstance(parser, OneLineParser):
+        parser.complete()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                _complete_all(sub)
+
+
+def _modules_for(argv: list[str]) -> tuple[str, ...] | None:
+    """The module of :data:`MODULES` whose command ``argv`` runs; None (all of them) for ``--help``, no
+    command or a word that names none; no module for ``--version``."""
+    word = next((a for a in argv if not a.startswith("-")), None)
+    if word is None:
+        return () if "--version" in argv and not {"-h", "--help"} & set(argv) else None
+    return next(((name,) for name, words in MODULES.items() if word in words), None)
 
 
 def main(argv: list[str] | None = None) -> int:
     with warnings.catch_warnings(), clean_up_on_signals():
         warnings.showwarning = _one_line_warnings("mpeg4fa")
         try:
-            args = build_parser().parse_args(argv)
+            argv = sys.argv[1:] if argv is None else list(argv)
+            args = build_parser(_modules_for(argv)).parse_args(argv)
         except KeyboardInterrupt as exc:  # before any work: nothing to clean up
             return _stopped("mpeg4fa", exc)
         warnings.showwarning = _one_line_warnings(_command(args))

@@ -80,7 +80,7 @@ def register(commands: Commands) -> None:
     p.add_argument("--bap", type=Path, metavar="FILE",
                    help="with a .fap INPUT: the .bap file of its body animation, frames matched by frame number")
     coding_flags(p)
-    speech.text_encoding_options(p)
+    p.defer(speech.text_encoding_options)  # the speech layer only when encode runs (or --help)
     p.set_defaults(run=run_encode)
 
     p = commands.add_parser("validate", help="check that a .fba stream decodes to its end code",

@@ -9,10 +9,7 @@ import warnings
 from pathlib import Path
 from typing import Iterator
 
-
 from ..errors import MpegFaWarning
-from ..render import RenderError
-from ..render.images import read_image
 from .errors import UsageError
 from .progress import ProgressBar
 
@@ -58,6 +55,7 @@ def save_image(image, path: Path) -> None:
     """Save a PIL image whole or not at all (format from the name); RenderError for a name PIL has no format for
     (an OS error names the file itself: :func:`mpeg4fa.atomic.atomic_output`)."""
     from ..atomic import atomic_output
+    from ..render import RenderError
 
     try:
         with atomic_output(path) as partial:
@@ -72,6 +70,8 @@ AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")
 
 def skin_texture(args: argparse.Namespace, face):
     """--texture, else the texture the FDP carries (mapped through its points' texture coordinates), else None."""
+    from ..render.images import read_image
+
     if args.texture is not None:
         return read_image(args.texture, "texture image")
     if args.fdp is None or args.no_fdp_texture:

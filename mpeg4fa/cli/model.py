@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -193,12 +194,33 @@ def run_pose(args: argparse.Namespace) -> int:
         print()
         return 0
     sent = {i + 1: v for i, v in enumerate(values) if v}
-    print("FAPs: " + (", ".join(f"{f} {FAPS[f - 1].name}={v:g}" for f, v in sent.items()) or "none (neutral)"))
+    print(f"pose: {_pose_asked(args)}")
+    if sent:
+        items = ", ".join(f"{f}\u00a0{FAPS[f - 1].name}={v:g}" for f, v in sent.items())  # no break inside one
+        print(textwrap.fill(items, width=100, initial_indent=f"  {len(sent)} low-level FAPs (FAPU): ",
+                            subsequent_indent="    ").replace("\u00a0", " "))
     print("FAPU (mm): " + ", ".join(f"{k} {v:.3f}" for k, v in result["fapu"].items()))
-    print(f"{'point':<6} {'neutral x y z':>30} {'posed x y z':>30} {'moved':>8}")
-    for label in neutral:
-        a, b = np.array(neutral[label]), np.array(posed[label])
-        moved = float(np.linalg.norm(b - a))
-        if moved > 1e-9 or not sent:
-            print(f"{label:<6} {a[0]:9.3f} {a[1]:9.3f} {a[2]:9.3f}  {b[0]:9.3f} {b[1]:9.3f} {b[2]:9.3f} {moved:8.3f}")
+    labels = list(neutral)
+    a, b = np.array([neutral[k] for k in labels]), np.array([posed[k] for k in labels])
+    moved = np.linalg.norm(b - a, axis=1)
+    shown = np.flatnonzero(moved > 1e-9) if sent else np.arange(len(labels))
+    said = f"that moved: {len(shown)} of {len(labels)}" if sent else f"(neutral): {len(labels)}"
+    print(f"\nfeature points {said}, in mm (x toward the face's left, y up, z out of the face"
+          f"{'; --json lists all' if sent else ''})")
+    print(f"{'point':<6} {'neutral x':>9} {'y':>9} {'z':>9}  {'posed x':>9} {'y':>9} {'z':>9} {'moved':>8}")
+    for i in shown:
+        print(f"{labels[i]:<6} {a[i, 0]:9.3f} {a[i, 1]:9.3f} {a[i, 2]:9.3f}  "
+              f"{b[i, 0]:9.3f} {b[i, 1]:9.3f} {b[i, 2]:9.3f} {moved[i]:8.3f}")
+    if sent and len(shown):
+        most = shown[np.argmax(moved[shown])]
+        print(f"most moved: {labels[most]} by {moved[most]:.3f} mm")
     return 0
+
+
+def _pose_asked(args: argparse.Namespace) -> str:
+    """What the options ask for, in words: ``viseme AA, expression joy at 40 of 63, FAP 19=300``."""
+    asked = [f"viseme {args.viseme}"] if args.viseme else []
+    if args.expression:
+        asked.append(f"expression {args.expression[0]} at {args.expression[1]} of {FULL_INTENSITY}")
+    asked += [f"FAP {f}={v:g}" for f, v in args.fap]
+    return ", ".join(asked) if asked else "none (the neutral face)"

@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 
 from ..atomic import atomic_outputs
-from ..speech.encoder import ENGINES, LEVELS
 from . import options, text_input
 from .coding import coding_options
 from .errors import UsageError
@@ -18,6 +17,8 @@ from .paths import refuse_overlaps
 
 
 def register(commands: Commands) -> None:
+    from ..speech.encoder import LEVELS
+
     p = commands.add_parser(
         "say", help="speak tagged text and render the face saying it (MP4 with audio)",
         description="Speak TEXT with espeak-ng (phonemes with sample-exact times), turn phonemes into "
@@ -112,6 +113,8 @@ def text_flag(p: argparse.ArgumentParser) -> None:
 def text_encoding_options(p: argparse.ArgumentParser) -> None:
     """The options of ``encode`` when INPUT is text (speech, FAP timeline, FDP of the speaker), or when a
     recording and its transcript stand in for it (INPUT is then left out: :data:`NO_INPUT`)."""
+    from ..speech.encoder import LEVELS
+
     text_flag(p)
     added = recording_options(p) + viseme_event_options(p)
     g = p.add_argument_group("text input: speech and FAPs")
@@ -263,6 +266,8 @@ def _aligned(args: argparse.Namespace, inputs: dict, outputs: dict):
 
 def speech_options(g) -> list[argparse.Action]:
     """Engine, language, voice, rate and idle motion: shared by ``encode`` (text) and ``say``; the actions added."""
+    from ..speech.encoder import ENGINES
+
     return [
         g.add_argument("--engine", choices=ENGINES, default="espeak",
                        help="espeak (phoneme times; default), pyttsx3 (word boundaries, visemes estimated in "

@@ -15,11 +15,16 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..speech.chunks import MAX_SOURCE_CHARS
 from .errors import InputError
 
-TEXT_MAX = MAX_SOURCE_CHARS
-"""Most characters of text read from a file or standard input (the speech layer's bound)."""
+
+def text_max() -> int:
+    """Most characters of text read from a file or standard input: the speech layer's bound (imported when
+    text is read, so that commands that read none do not load the speech layer)."""
+    from ..speech.chunks import MAX_SOURCE_CHARS
+
+    return MAX_SOURCE_CHARS
+
 _EXTENSION = re.compile(r"[^./\\][^/\\]*\.[A-Za-z][A-Za-z0-9]{0,7}")
 _SPEAK_IT = "use --text to speak it as text"
 
@@ -75,7 +80,9 @@ def _readable(path: Path, hint: str) -> Path:
 
 
 def read_text(source: TextArgument) -> tuple[str, str]:
-    """The text and its name for messages (``<text>``, ``<stdin>`` or the file), at most TEXT_MAX characters."""
+    """The text and its name for messages (``<text>``, ``<stdin>`` or the file), at most :func:`text_max`
+    characters."""
+    TEXT_MAX = text_max()
     if source.stdin:
         name = "<stdin>"
         binary = getattr(sys.stdin, "buffer", None)
@@ -125,6 +132,7 @@ def _decoded(data: bytes, name: str, hint: str | None = None) -> str:
     from ..jsonio import decode_utf8
     from ..speech.errors import MarkupError
 
+    TEXT_MAX = text_max()
     if len(data) > 4 * TEXT_MAX:  # UTF-8 takes at most 4 bytes a character
         raise InputError(f"the text is longer than {TEXT_MAX} characters", where=name,
                          hint="split it and encode the parts one after another")

@@ -9,6 +9,8 @@ constant memory.
 """
 from __future__ import annotations
 
+import os
+import stat
 from typing import Iterator
 
 from .bits import BitReader
@@ -19,10 +21,22 @@ from .stacking import StreamBuilder
 from .stream import FapStream, Frame
 
 
-def _decoder(reader: BitReader, backend: str) -> _Decoder:
+def _size(src) -> int | None:
+    """Bytes left in ``src`` when known (bytes, a regular file), else None: what ``auto`` weighs
+    (:data:`~mpeg4fa.fba.compiled.SMALL_STREAM`)."""
+    if isinstance(src, (bytes, bytearray, memoryview)):
+        return len(src)
+    try:
+        status = os.fstat(src.fileno())
+        return status.st_size - src.tell() if stat.S_ISREG(status.st_mode) else None
+    except (AttributeError, OSError, ValueError):  # no file number (BytesIO, a socket's file), closed...
+        return None
+
+
+def _decoder(reader: BitReader, backend: str, size: int | None = None) -> _Decoder:
     from .compiled import use_compiled
 
-    if use_compiled(backend):
+    if use_compiled(backend, size):
         from .fastpath import FastDecoder  # numba only when the compiled path is taken
 
         return FastDecoder(reader)
@@ -32,11 +46,12 @@ def _decoder(reader: BitReader, backend: str) -> _Decoder:
 def iter_decode(source: Source, *, backend: str = "auto") -> Iterator[Frame]:
     """Decode frame by frame without holding the whole stream; raises :class:`FbaError` at a fault.
 
-    ``backend``: ``"auto"`` (compiled when numba is there, see :mod:`mpeg4fa.fba.compiled`),
+    ``backend``: ``"auto"`` (compiled when numba is there and the stream is not known to be under
+    :data:`~mpeg4fa.fba.compiled.SMALL_STREAM` bytes, see :mod:`mpeg4fa.fba.compiled`),
     ``"compiled"`` or ``"python"`` (the reference); both give the same frames and the same errors.
     """
     with _opened(source) as src:
-        for item in _guarded(_decoder(BitReader(src), backend)):
+        for item in _guarded(_decoder(BitReader(src), backend, _size(src))):
             if isinstance(item, Frame):
                 yield item
             else:
@@ -58,7 +73,7 @@ def decode(source: Source, *, backend: str = "auto", max_frames: int = MAX_DECOD
     :func:`iter_decode` reads such a stream in constant memory. ``backend`` as for :func:`iter_decode`.
     """
     with _opened(source) as src:
-        decoder = _decoder(BitReader(src), backend)
+        decoder = _decoder(BitReader(src), backend, _size(src))
         builder = StreamBuilder()
         try:
             for item in _guarded(decoder):

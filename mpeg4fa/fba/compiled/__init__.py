@@ -7,28 +7,47 @@ disk (``numba`` ``cache=True``), and the tests decode every vector both ways and
 
 ``MPEG4FA_CODEC=python`` in the environment forces the reference path; ``available()`` says
 whether the compiled one can run here, and ``why_not()`` why not.
+
+numba is imported the first time the compiled path is asked for, not with this package: loading it and
+the cached kernels takes ~0.5 s and ~70 MB, more than the reference needs for a stream under
+:data:`SMALL_STREAM` bytes, which ``auto`` therefore decodes on the reference path.
 """
 from __future__ import annotations
 
 import os
+from types import ModuleType
 
-try:  # numba installs from wheels; a platform without them still decodes, on the reference path
-    import numba as _numba
-except ImportError as exc:  # pragma: no cover - depends on the platform
-    _numba = None
-    _IMPORT_ERROR = f"numba is not installed ({exc})"
-else:
-    _IMPORT_ERROR = ""
+_numba: ModuleType | None = None
+_IMPORT_ERROR: str | None = None  # None: numba not tried yet
 
 ENV = "MPEG4FA_CODEC"
 """Environment variable: ``python`` forces the reference path, ``compiled`` requires the compiled one."""
+
+SMALL_STREAM = 16_384
+"""Bytes below which ``auto`` decodes on the reference path: it reads 10-30 us a byte, so such a stream
+takes under ~0.4 s, less than importing numba and loading its kernels (``mpeg4fa info`` of a small
+stream in ~0.2 s and ~40 MB instead of ~1 s and ~170 MB)."""
+
+
+def _load() -> ModuleType | None:
+    """numba, imported once on first need (a platform without its wheels decodes on the reference path)."""
+    global _numba, _IMPORT_ERROR
+    if _IMPORT_ERROR is None:
+        try:
+            import numba
+        except ImportError as exc:  # pragma: no cover - depends on the platform
+            _IMPORT_ERROR = f"numba is not installed ({exc})"
+        else:
+            _numba, _IMPORT_ERROR = numba, ""
+    return _numba
 
 
 def why_not() -> str:
     """Why the compiled path is off ('' when it is on)."""
     if os.environ.get(ENV, "").strip().lower() == "python":
         return f"{ENV}=python"
-    return _IMPORT_ERROR
+    _load()
+    return _IMPORT_ERROR or ""
 
 
 def available() -> bool:
@@ -39,12 +58,13 @@ def available() -> bool:
 BACKENDS = ("auto", "compiled", "python")
 
 
-def use_compiled(backend: str = "auto") -> bool:
-    """Whether to take the compiled path for ``backend`` (auto: when available); ``compiled`` where it
-    cannot run is an error that says why."""
+def use_compiled(backend: str = "auto", size: int | None = None) -> bool:
+    """Whether to take the compiled path for ``backend`` (auto: when available, and for ``size`` bytes of
+    input, when known, of at least :data:`SMALL_STREAM`); ``compiled`` where it cannot run is an error
+    that says why."""
     if backend not in BACKENDS:
         raise ValueError(f"backend {backend!r} is not one of {', '.join(BACKENDS)}")
-    if backend == "python":
+    if backend == "python" or (backend == "auto" and size is not None and size < SMALL_STREAM):
         return False
     if backend == "compiled" and not available():
         from mpeg4fa.fba.errors import FbaError
@@ -56,6 +76,7 @@ def use_compiled(backend: str = "auto") -> bool:
 
 def jit(fn):
     """Compile ``fn`` with numba in nopython mode, cached on disk; the plain function without numba."""
-    if _numba is None:  # pragma: no cover
+    numba = _load()
+    if numba is None:  # pragma: no cover
         return fn
-    return _numba.njit(cache=True, nogil=True)(fn)
+    return numba.njit(cache=True, nogil=True)(fn)
