@@ -48,6 +48,23 @@ RIGID_LABELS: tuple[str, ...] = tuple(label for label in LABELS if label in {
     "10.9", "10.10", "11.1", "11.2", "11.3"})
 """Points no sent FAP moves (eye corners, nose, forehead, face oval at the ears): the head pose is fitted on them."""
 RIGID = np.array([INDEX[label] for label in RIGID_LABELS])
+_MOVING_GROUPS = ("3", "4")  # eyes, lids and brows move: landmarks near them are not rigid
+RIGID_CLEARANCE = 0.15
+"""How far (a fraction of the eye distance) a landmark must lie from every eye and brow point to be rigid."""
+
+
+def rigid_landmarks(landmarks: np.ndarray) -> np.ndarray:
+    """Indices of the landmarks no sent FAP moves, read off one face (MPEG-4 axes): above the bottom of the
+    nose (the jaw, lips and cheeks move below it) and clear of the eyes and brows. Dozens of landmarks
+    over the forehead, temples and nose hold the head's pose steadier than the few rigid feature points."""
+    from mpeg4fa.tracking.points import feature_point_array
+
+    landmarks = np.asarray(landmarks, dtype=np.float64)
+    points = feature_point_array(landmarks)
+    eyes = float(np.linalg.norm(points[INDEX["3.5"]] - points[INDEX["3.6"]]))
+    moving = [INDEX[label] for label in LABELS if label.split(".")[0] in _MOVING_GROUPS]
+    gap = np.linalg.norm(landmarks[:, None, :2] - points[None, moving, :2], axis=2).min(axis=1)
+    return np.flatnonzero((landmarks[:, 1] > points[INDEX["9.15"], 1]) & (gap > RIGID_CLEARANCE * eyes))
 
 
 def to_face_axes(pixels: np.ndarray) -> np.ndarray:

@@ -30,6 +30,7 @@ from mpeg4fa.tracking.landmarks import LandmarkFinder, Landmarks
 from mpeg4fa.tracking.neutral import NeutralChoice, SEARCH_SECONDS, calmest_neutral, given_neutral
 from mpeg4fa.tracking.points import feature_point_array
 from mpeg4fa.tracking.pose import fit_similarity
+from mpeg4fa.tracking.video import VideoInfo
 
 TRANSLATION_SCALE = 64.0
 """Filter scale of translational FAPs (FAPU): a speed of one scale a second counts as one unit of speed."""
@@ -82,8 +83,10 @@ class FaceTracker:
         self._filter = OneEuroFilter(self.fps, MIN_CUTOFF, BETA, scale=filter_scale()) if smooth else None
         self._own_finder = finder is None
         self._finder = finder
-        self._points: list[np.ndarray] = []   # per frame (L, 3) MPEG-4 axes, NaN when lost
-        self._rows: list[np.ndarray] = []     # per frame (68,) float, once the neutral is known
+        self._points: list[np.ndarray] = []   # per frame until the neutral is known: (L + R, 3), NaN when lost
+        self._rows: list[np.ndarray] = []     # per frame (68,) float32, once the neutral is known
+        self._rigid: np.ndarray | None = None  # the R landmarks the head pose is fitted on (from the first face)
+        self._count = 0
         self._neutral: NeutralChoice | None = None
         self._rules: fap_rules.Neutral | None = None
         self._receiver: fap_rules.Receiver | None = None
@@ -106,7 +109,8 @@ class FaceTracker:
     # -- input ----------------------------------------------------------------------------------
     @property
     def frames(self) -> int:
-        return len(self._points)
+        """Frames pushed so far."""
+        return self._count
 
     def push(self, rgb: np.ndarray) -> np.ndarray | None:
         """Track one RGB frame ((H, W, 3) uint8); its FAP row (68,) int32, or None while the neutral is chosen."""
@@ -120,13 +124,17 @@ class FaceTracker:
     def push_landmarks(self, found: Landmarks | np.ndarray | None) -> np.ndarray | None:
         """As :meth:`push`, for landmarks found elsewhere (a :class:`Landmarks`, a (478, 3) pixel array, or
         None for a frame without a face)."""
-        if found is None:
-            points = np.full((len(fap_rules.LABELS), 3), np.nan)
-        else:
+        self._count += 1
+        if found is not None:
             pixels = found.points if isinstance(found, Landmarks) else np.asarray(found, dtype=np.float64)
-            points = fap_rules.to_face_axes(feature_point_array(pixels))
-        self._points.append(points.astype(np.float32))
+            landmarks = fap_rules.to_face_axes(pixels)
+            if self._rigid is None:
+                self._rigid = fap_rules.rigid_landmarks(landmarks)
+            points = np.concatenate([feature_point_array(landmarks), landmarks[self._rigid]])
+        else:
+            points = None
         if self._neutral is None:
+            self._points.append(points)
             if not self._settle(final=False):
                 return None
             return self._row_int(len(self._rows) - 1)
@@ -137,7 +145,11 @@ class FaceTracker:
     def _settle(self, final: bool) -> bool:
         """Choose the neutral once enough frames are in (or at the end); work off the kept frames."""
         n = len(self._points)
-        points = np.asarray(self._points, dtype=np.float64)
+        width = len(fap_rules.LABELS) + (len(self._rigid) if self._rigid is not None else 0)
+        points = np.full((n, width, 3), np.nan)
+        for k, frame in enumerate(self._points):
+            if frame is not None:
+                points[k] = frame
         if self._neutral_at is not None:
             if n <= self._neutral_at:
                 if not final:
@@ -166,30 +178,31 @@ class FaceTracker:
                                        choice.motion)
         self._neutral = choice
         try:
-            self._rules = fap_rules.Neutral.from_points(choice.points)
+            self._rules = fap_rules.Neutral.from_points(choice.points[:len(fap_rules.LABELS)])
         except ValueError as exc:  # FaceError: the neutral's points give no FAPU
             raise NoFaceError(f"the neutral face (frame {choice.first}) gives no face units: {exc}", self.where,
                               "choose a frame with the face upright and seen from the front (--neutral)") from None
         self._receiver = fap_rules.receiver(self._face)
         for frame in self._points:
-            self._rows.append(self._track(np.asarray(frame, dtype=np.float64)))
+            self._rows.append(self._track(frame))
+        self._points = []  # from here on each frame is worked off as it comes
         return True
 
     # -- per frame ------------------------------------------------------------------------------
-    def _track(self, points: np.ndarray) -> np.ndarray:
-        if not np.isfinite(points).all():
+    def _track(self, points: np.ndarray | None) -> np.ndarray:
+        if points is None or not np.isfinite(points).all():
             self.lost += 1
             if self._filter is not None:
                 self._filter(np.full(N_FAPS, np.nan))
             return self._last.copy()
-        neutral = self._rules.points
-        pose = fit_similarity(neutral[fap_rules.RIGID], points[fap_rules.RIGID])
-        local = pose.to_neutral(points)
+        labels = len(fap_rules.LABELS)
+        pose = fit_similarity(self._neutral.points[labels:], points[labels:])
+        local = pose.to_neutral(points[:labels])
         values = fap_rules.fap_values(local[None], self._rules, np.array([pose.angles()]), self._receiver)[0]
         if self._filter is not None:
             values = self._filter(values)
-        self._last = values
-        return values
+        self._last = values.astype(np.float32)
+        return self._last
 
     def _row_int(self, k: int) -> np.ndarray:
         return np.rint(self._rows[k]).astype(np.int32)
@@ -197,22 +210,16 @@ class FaceTracker:
     # -- output ---------------------------------------------------------------------------------
     def finish(self) -> TrackSummary:
         """Settle the neutral if the video ended before it was chosen; NoFaceError if no frame had a face."""
-        if not self._points:
+        if not self._count:
             raise NoFaceError("no frames to track", self.where, "the video holds no frames")
         if self._neutral is None:
             self._settle(final=True)
-        if self.lost == len(self._points):  # pragma: no cover - the neutral needs a face
-            raise NoFaceError("no face found in any frame", self.where)
-        return TrackSummary(frames=len(self._points), lost=self.lost, neutral=self._neutral, fps=self.fps)
+        return TrackSummary(frames=self._count, lost=self.lost, neutral=self._neutral, fps=self.fps)
 
     def values(self) -> np.ndarray:
         """(n, 68) float FAP values of every frame pushed (after :meth:`finish`)."""
         self.finish()
         return np.asarray(self._rows, dtype=np.float64).reshape(-1, N_FAPS)
-
-    def local_points(self) -> np.ndarray:
-        """(n, L, 3) the tracked feature points (MPEG-4 axes, pixels; NaN where lost), for inspection."""
-        return np.asarray(self._points, dtype=np.float64)
 
     def stream(self) -> FapStream:
         """The FAP stream of every frame pushed: the tracked FAPs (:data:`.faps.SENT`) in every frame."""
@@ -241,3 +248,40 @@ def fap_stream(values: np.ndarray, fps: float) -> FapStream:
     stream.bits = np.zeros(n, dtype=np.int32)
     stream.source_fps = fps
     return stream
+
+
+@dataclass(frozen=True)
+class TrackedVideo:
+    """A video tracked whole: its stream, what the track holds, and the video's header facts."""
+
+    stream: FapStream
+    summary: TrackSummary
+    info: VideoInfo
+
+
+def track_video(path, *, fps: float | None = None, neutral: int | float | None = None, face=None,
+                smooth: bool = True, progress=None) -> TrackedVideo:
+    """Track every frame of the video at ``path`` into a FapStream at the video's frame rate (or ``fps``).
+
+    ``neutral``: None (the calmest stretch of the first seconds), a frame index (int) or a time in seconds
+    (float). ``progress(done, total)`` is called per frame (total: the header's frame count, an estimate).
+    Frames where the face is lost hold the last values and are counted (``summary.lost``); a video with no
+    face at all, or one that is not a readable video, is a TrackingError naming the file (and frame)."""
+    from mpeg4fa.tracking.video import probe_video, read_frames
+
+    info = probe_video(path)
+    rate = fps if fps is not None else info.fps
+    if not rate or not np.isfinite(rate) or rate <= 0:
+        raise TrackingError("the video does not say its frame rate", info.path, "give --fps")
+    if isinstance(neutral, float):
+        if not (np.isfinite(neutral) and neutral >= 0):
+            raise TrackingError(f"neutral time {neutral!r} s is not a time >= 0", info.path)
+        neutral = int(round(neutral * rate))
+    total = max(info.frames, 1)
+    with FaceTracker(rate, neutral=neutral, face=face, smooth=smooth, where=info.path) as tracker:
+        for k, rgb in enumerate(read_frames(path, rate)):
+            tracker.push(rgb)
+            if progress is not None:
+                progress(k + 1, max(total, k + 1))
+        summary = tracker.finish()
+        return TrackedVideo(tracker.stream(), summary, info)

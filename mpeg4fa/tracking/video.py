@@ -116,3 +116,12 @@ def read_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[n
             raise TrackingError("the video holds no frames", where)
     finally:
         container.close()
+
+
+def frame_at(path: str | os.PathLike, index: int) -> np.ndarray:
+    """Frame ``index`` of the video as RGB (decoded from the start: exact for any codec, time linear in
+    ``index``); a TrackingError if the video is shorter."""
+    for k, rgb in enumerate(read_frames(path)):
+        if k == index:
+            return rgb
+    raise TrackingError(f"the video has no frame {index}", str(path))
