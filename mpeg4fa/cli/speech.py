@@ -116,7 +116,8 @@ def text_encoding_options(p: argparse.ArgumentParser) -> None:
     from ..speech.encoder import LEVELS
 
     text_flag(p)
-    added = recording_options(p) + viseme_event_options(p)
+    from .video_input import video_options
+    added = recording_options(p) + viseme_event_options(p) + video_options(p)
     g = p.add_argument_group("text input: speech and FAPs")
     added += [g.add_argument("--audio", type=Path, metavar="WAV", help="write the speech here (16-bit mono WAV)"),
              g.add_argument("--timings", type=Path, metavar="JSON",
@@ -298,6 +299,9 @@ def reject_text_options(args: argparse.Namespace) -> None:
 
 def run_encode_text(args: argparse.Namespace, source: text_input.TextArgument) -> int:
     """``mpeg4fa encode TEXT``: speech -> FAP stream (+ WAV, timings, FDP), all written or none."""
+    if args.video is not None:
+        from .video_input import encode_video
+        return encode_video(args, args.input != NO_INPUT)
     if args.visemes is not None:
         return _encode_visemes(args)
     if args.events_format != "auto":

@@ -9,9 +9,12 @@ from __future__ import annotations
 from mpeg4fa.tracking.errors import MissingExtraError, NoFaceError, TrackingError, TrackingWarning
 from mpeg4fa.tracking.landmarks import N_LANDMARKS, LandmarkFinder, Landmarks, find_landmarks
 from mpeg4fa.tracking.points import SEEN_LABELS, feature_point_array, feature_points
+from mpeg4fa.tracking.filters import OneEuroFilter
+from mpeg4fa.tracking.tracker import FaceTracker, TrackedVideo, fap_stream, track_video
 
 __all__ = [
     "TrackingError", "NoFaceError", "MissingExtraError", "TrackingWarning",
     "N_LANDMARKS", "LandmarkFinder", "Landmarks", "find_landmarks",
     "SEEN_LABELS", "feature_point_array", "feature_points",
+    "OneEuroFilter", "FaceTracker", "TrackedVideo", "fap_stream", "track_video",
 ]
