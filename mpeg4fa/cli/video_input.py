@@ -67,7 +67,6 @@ def encode_video(args: argparse.Namespace, given_text: bool) -> int:
     if not info.has_audio:
         if args.audio is not None:
             raise UsageError(f"--audio {args.audio}: {args.video} has no sound track to write", hint="drop --audio")
-        print(f"{args.video}: no sound track, so no WAV is written", file=sys.stderr)
     bar = ProgressBar("tracking")
     try:
         tracked = track_video(args.video, fps=args.fps, neutral=args.neutral, progress=bar)
@@ -75,6 +74,8 @@ def encode_video(args: argparse.Namespace, given_text: bool) -> int:
         bar.close()
     summary, stream = tracked.summary, tracked.stream
     print(f"{args.video}: {summary.neutral.describe(summary.fps)}", file=sys.stderr)
+    if not info.has_audio:
+        print(f"{args.video}: no sound track, so no WAV is written", file=sys.stderr)
     if summary.lost:
         warnings.warn(f"{args.video}: the face was lost in {summary.lost} of {summary.frames} frames; they hold the "
                       f"last values", TrackingWarning)

@@ -1,0 +1,94 @@
+"""``mpeg4fa encode --video``: a rendered face video with sound -> stream + WAV (+ FDP); bad videos are one line."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mpeg4fa.cli import main
+from mpeg4fa.fba import decode
+
+FPS = 25
+
+
+@pytest.fixture(scope="module")
+def videos(tmp_path_factory):
+    """A 2 s talking head with a tone as its sound, the same without sound, and one without a face."""
+    from mpeg4fa.face import FaceModel
+    from mpeg4fa.render import Renderer
+    from mpeg4fa.render.audio import Audio
+    from mpeg4fa.render.video import Mp4Writer
+
+    folder = tmp_path_factory.mktemp("videos")
+    face = FaceModel.default()
+    n = 2 * FPS
+    jaw = np.where(np.arange(n) > FPS, 500.0 * np.sin(np.pi * (np.arange(n) - FPS) / 8) ** 2, 0.0)
+    tone = Audio((0.2 * np.sin(2 * np.pi * 220 * np.arange(32000) / 16000)).astype(np.float32)[:, None], 16000)
+    with Renderer(face, width=256, height=256, samples=0) as renderer:
+        frames = [renderer.render(face.deform({3: float(j)})).copy() for j in jaw]
+    paths = {"sound": folder / "talk.mp4", "mute": folder / "mute.mp4", "blank": folder / "blank.mp4"}
+    for name, audio in (("sound", tone), ("mute", None)):
+        with Mp4Writer(paths[name], 256, 256, FPS, audio) as out:
+            for image in frames:
+                out.write(image)
+    with Mp4Writer(paths["blank"], 64, 64, FPS) as out:
+        for _ in range(10):
+            out.write(np.full((64, 64, 3), 90, np.uint8))
+    return paths, jaw
+
+
+def run(capsys, *argv) -> tuple[int, str]:
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err
+
+
+def test_video_gives_a_stream_its_sound_and_an_fdp(videos, tmp_path, capsys):
+    paths, jaw = videos
+    out = tmp_path / "talk.fba"
+    code, err = run(capsys, "encode", "--video", paths["sound"], "-o", out, "--fdp-out", tmp_path / "me.fdp")
+    assert code == 0, err
+    assert "neutral face: frame" in err and "calmest" in err
+    stream = decode(out)
+    assert len(stream) == len(jaw) and stream.fps == pytest.approx(FPS)
+    tracked = stream.fap_values[:, 2].astype(float)
+    assert np.corrcoef(tracked, jaw)[0, 1] > 0.9  # the jaw opens when it did
+    assert (tmp_path / "talk.wav").stat().st_size > 40000 and (tmp_path / "me.fdp").stat().st_size > 0
+    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "mute.fba", "--neutral", "0.2s")
+    assert code == 0, err
+    assert err.count("no sound track") == 1 and "frame 5, as given" in err
+    assert not (tmp_path / "mute.wav").exists()
+
+
+@pytest.mark.parametrize("kind", ["blank", "text", "missing"])
+def test_a_bad_video_is_one_line_naming_it_and_writes_nothing(videos, tmp_path, capsys, kind):
+    paths, _ = videos
+    if kind == "blank":
+        video = paths["blank"]
+    elif kind == "text":
+        video = tmp_path / "notes.mp4"
+        video.write_text("not a video at all\n")
+    else:
+        video = tmp_path / "nowhere.mp4"
+    code, err = run(capsys, "encode", "--video", video, "-o", tmp_path / "x.fba")
+    assert code == 1, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and str(video) in lines[0] and "Traceback" not in err, err
+    if kind == "blank":
+        assert "no face found in any of the 10 frames" in err
+    assert not (tmp_path / "x.fba").exists() and not list(tmp_path.glob(".*partial*"))
+
+
+def test_video_refuses_what_has_no_place_beside_it(videos, tmp_path, capsys):
+    paths, _ = videos
+    code, err = run(capsys, "encode", "Hello", "--video", paths["mute"], "-o", tmp_path / "x.fba")
+    assert code == 2 and "--video" in err
+    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "x.fba", "--audio", tmp_path / "a.wav")
+    assert code == 2 and "no sound track" in err
+    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "x.fba", "--neutral", "soon")
+    assert code == 2 and "neither a frame number nor a time" in err
+    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", paths["mute"])
+    assert code == 2 and "overwritten" in err
