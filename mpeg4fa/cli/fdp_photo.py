@@ -29,6 +29,12 @@ def register(commands: Commands) -> None:
     p.add_argument("photo", type=Path, help="a photo of a face seen from the front (JPEG, PNG...)")
     p.add_argument("-o", "--output", type=Path, required=True,
                    help="the FDP to write: binary (.fdp), or JSON when the name ends in .json")
+    p.add_argument("--side", type=Path, metavar="SIDE_PHOTO",
+                   help="a second photo of the face turned 20 to 60 degrees (the landmark model finds no face in a "
+                        "full profile): the points on the side it shows become the mean of both photos' estimates")
+    p.add_argument("--points", type=Path, metavar="JSON",
+                   help='your own pixel positions of some points on the photo ({"3.5": [246, 102], ...}): they win '
+                        "over the found ones")
     p.add_argument("--preview", type=Path,
                    help="also write a PNG: the photo with the found points, and the calibrated textured head "
                         "front and three-quarter")
@@ -39,15 +45,30 @@ def register(commands: Commands) -> None:
     p.set_defaults(run=run_fdp)
 
 
+def photo_points_file(path: Path) -> dict[str, tuple[float, float]]:
+    """A JSON of photo pixels {label: [x, y]} (the one points reader, located errors); mesh points refused."""
+    from ..fdp import FdpError
+    from ..fdp.build import read_points_json
+
+    points = read_points_json(path)
+    for label, value in points.items():
+        if not (isinstance(value, tuple) and len(value) == 2):
+            raise FdpError.no_place(str(path), f"point {label} is not photo pixels [x, y]",
+                                    hint='a JSON object like {"3.5": [246, 102], ...}')
+    return points  # type: ignore[return-value]
+
+
 def run_fdp(args: argparse.Namespace) -> int:
     from PIL import Image
 
     from ..fdp import save_fdp
     from ..tracking.photo import fdp_from_photo, preview
 
-    refuse_overlaps({"photo": args.photo}, {"-o": args.output, "--preview": args.preview})
+    refuse_overlaps({"photo": args.photo, "--side": args.side, "--points": args.points},
+                    {"-o": args.output, "--preview": args.preview})
+    given = photo_points_file(args.points) if args.points is not None else None
     started = time.perf_counter()
-    made = fdp_from_photo(args.photo, texture=not args.no_texture)
+    made = fdp_from_photo(args.photo, side=args.side, points=given, texture=not args.no_texture)
     found = time.perf_counter()
     picture = preview(made, args.deformer) if args.preview is not None else None
     with atomic_outputs(args.output, args.preview) as (out, check):
@@ -57,7 +78,10 @@ def run_fdp(args: argparse.Namespace) -> int:
     width, height = made.image.shape[1], made.image.shape[0]
     texture = "" if args.no_texture else f", texture {made.fdp.textures[0].name} ({width}x{height})"
     print(f"{args.photo}: face found ({made.landmarks.faces} in the photo), {len(made.fdp.labels)} feature points "
-          f"in {found - started:.1f} s; {made.scale:.3f} mm per pixel", file=sys.stderr)
+          f"in {found - started:.1f} s; {made.scale:.3f} mm per pixel"
+          + (f"; {made.side[0]} shows the face's {made.side[1]} side: {made.side[2]} points from both photos"
+             if made.side else "")
+          + (f"; {len(given)} points from {args.points}" if given else ""), file=sys.stderr)
     print(f"wrote {args.output} ({len(made.fdp.labels)} feature points{texture})"
           + (f", {args.preview} (preview, calibrated with {args.deformer})" if args.preview else ""))
     return 0

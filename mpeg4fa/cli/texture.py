@@ -27,10 +27,14 @@ def register(commands: Commands) -> None:
                     "'mpeg4fa play --texture' (or any renderer using the head's UVs) can use. Points files are "
                     'JSON objects of feature point label -> [x, y] pixels (x right, y down), e.g. '
                     '{"3.5": [246, 102], "3.6": [203, 100], "9.3": [223, 126], "2.1": [224, 170]}.',
-        epilog="example: mpeg4fa texture me-front.jpg --points me-front.json --side me-left.jpg "
-               "--side-points me-left.json --side-view left -o skin.png --preview check.png")
+        epilog="examples:\n  mpeg4fa texture me-front.jpg -o skin.png --preview check.png   # points found in the photo\n"
+               "  mpeg4fa texture me-front.jpg --points me-front.json --side me-left.jpg "
+               "--side-points me-left.json --side-view left -o skin.png --preview check.png",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("front", type=Path, help="the front photo")
-    p.add_argument("--points", type=Path, required=True, help="JSON: the front photo's feature points")
+    p.add_argument("--points", type=Path,
+                   help="JSON: the front photo's feature points (default: the face is found in the photo, "
+                        "mpeg4fa.tracking; the 'photo' extra)")
     p.add_argument("--side", type=Path, help="a side photo (optional; without it: front-only mode)")
     p.add_argument("--side-points", type=Path, help="JSON: the side photo's feature points")
     p.add_argument("--side-view", choices=("left", "right"), default="left",
@@ -51,6 +55,15 @@ def _points(path: Path) -> dict[str, tuple[float, float]]:
     return points  # type: ignore[return-value]
 
 
+def _found(image: np.ndarray, path: Path) -> dict[str, tuple[float, float]]:
+    """The feature points the landmark model finds on the photo (one error naming it when there is no face)."""
+    from ..tracking import feature_points, find_landmarks
+
+    found = feature_points(find_landmarks(image, str(path)))
+    print(f"{path}: face found, {len(found)} feature points", file=sys.stderr)
+    return {label: (float(p[0]), float(p[1])) for label, p in found.items()}
+
+
 def run_texture(args: argparse.Namespace) -> int:
     from PIL import Image
 
@@ -63,7 +76,8 @@ def run_texture(args: argparse.Namespace) -> int:
                      "--side-points": args.side_points, "--fdp": args.fdp},
                     {"-o": args.output, "--preview": args.preview})
     face = face_from_args(args)
-    front = PhotoView(read_image(args.front, "photo"), _points(args.points), "front")
+    image = read_image(args.front, "photo")
+    front = PhotoView(image, _points(args.points) if args.points is not None else _found(image, args.front), "front")
     side = PhotoView(read_image(args.side, "photo"), _points(args.side_points), args.side_view) if args.side else None
     baked = bake_texture(face.mesh, front, side, size=args.size)
     preview = None

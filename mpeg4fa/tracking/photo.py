@@ -21,11 +21,12 @@ import io
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from mpeg4fa.fdp.build import fdp_from_front, texture_from_file
-from mpeg4fa.fdp.model import Fdp, TextureImage
+from mpeg4fa.fdp.model import LABEL_INDEX as _LABEL_ORDER, Fdp, TextureImage
 from mpeg4fa.tracking.landmarks import Landmarks, find_landmarks
 from mpeg4fa.tracking.points import feature_points
 
@@ -48,6 +49,8 @@ class PhotoFdp:
     """The same points in 3D in the generic head's frame (mm): what the FDP carries."""
     scale: float
     """Head millimetres per photo pixel."""
+    side: tuple[str, str, int] | None = None
+    """With a side photo: its name, the side of the face it shows, and how many points it refined."""
     _faces: dict = field(default_factory=dict, repr=False)
 
     def calibrated(self, method: str = "dffd"):
@@ -67,57 +70,130 @@ def read_photo(photo: PhotoSource, where: str | None = None) -> tuple[np.ndarray
     return read_image(photo, "photo", name), name
 
 
-def photo_points(landmarks: Landmarks, head_points: dict[str, np.ndarray] | None = None
+def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | None = None, *,
+                 given: Mapping[str, Sequence[float]] | None = None
                  ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], float]:
-    """(pixels, points, scale): the seen feature points on the photo and in 3D in the head's frame.
+    """(pixels, points, scale): the feature points on the photo and in 3D in the head's frame (mm per pixel).
 
     ``head_points`` (label -> the generic head's point, mm) default to the generic head's own; the
     photo's points (x right, -y, -z: up and out of the face) are laid on them by the least-squares
-    similarity, which takes the photo's pose and scale out.
+    similarity, which takes the photo's pose and scale out. ``given`` pixel positions (a user's
+    annotation) win over the found ones; a given point the model does not see takes its depth from
+    the head's point, brought into the photo by the same similarity.
     """
     from mpeg4fa.face.calibrate import similarity_fit
 
+    head = dict(head_points) if head_points is not None else _generic_points()
     found = feature_points(landmarks)
-    pixels = {label: p[:2].copy() for label, p in found.items()}
     photo3 = {label: np.array([p[0], -p[1], -p[2]]) for label, p in found.items()}
-    if head_points is None:
-        from mpeg4fa.face import FaceModel
-        head_points = FaceModel.default().feature_points()
-    shared = [label for label in photo3 if label in head_points]
-    src = np.array([photo3[label] for label in shared])
-    dst = np.array([head_points[label] for label in shared], dtype=np.float64)
-    scale, rot, shift = similarity_fit(src, dst)
-    points = {label: scale * (rot @ p) + shift for label, p in photo3.items()}
-    return pixels, points, float(scale)
+    shared = [label for label in photo3 if label in head]
+    scale, rot, shift = similarity_fit(np.array([photo3[label] for label in shared]),
+                                       np.array([head[label] for label in shared], dtype=np.float64))
+    pixels = {label: p[:2].copy() for label, p in found.items()}
+    for label, xy in (given or {}).items():
+        x, y = (float(v) for v in xy)
+        if label in photo3:
+            z = photo3[label][2]
+        elif label in head:   # the head's point in the photo's frame: its depth there
+            z = (rot.T @ (np.asarray(head[label], float) - shift) / scale)[2]
+        else:
+            continue
+        pixels[label] = np.array([x, y])
+        photo3[label] = np.array([x, -y, z])
+    order = sorted(photo3, key=_LABEL_ORDER.__getitem__)
+    points = {label: scale * (rot @ photo3[label]) + shift for label in order}
+    return {label: pixels[label] for label in order}, points, float(1.0 / scale)
 
 
-def _texture(photo: PhotoSource, image: np.ndarray, name: str) -> TextureImage:
-    """The photo as the FDP's texture: the file's own bytes when it is a PNG or JPEG, else a PNG of it."""
-    if not isinstance(photo, np.ndarray):
-        data = Path(photo).read_bytes()[:16]
-        if data.startswith(b"\x89PNG\r\n\x1a\n") or data.startswith(b"\xff\xd8\xff"):
-            return texture_from_file(photo)
+def _generic_points() -> dict[str, np.ndarray]:
+    from mpeg4fa.face import FaceModel
+    return FaceModel.default().feature_points()
+
+
+def side_view_of(landmarks: Landmarks) -> str:
+    """Which side of the face a turned photo shows: "left" when the nose points to the image's left
+    (the face's own left side toward the camera), else "right"."""
+    nose = feature_points(landmarks)["9.3"][0]
+    return "left" if nose < float(landmarks.points[:, 0].mean()) else "right"
+
+
+def _merge_side(points: dict[str, np.ndarray], side: Landmarks, where: str) -> tuple[dict[str, np.ndarray], str, int]:
+    """The front's head-frame points averaged with a turned photo's, on the side it shows and the midline
+    (its far side is hidden: the model guesses it)."""
+    from mpeg4fa.spec import FEATURE_POINTS
+
+    view = side_view_of(side)
+    facing = {fp.label for fp in FEATURE_POINTS if fp.side in (None, view)}
+    _, other, _ = photo_points(side)
+    used = [label for label in points if label in facing and label in other]
+    merged = dict(points)
+    for label in used:
+        merged[label] = (points[label] + other[label]) / 2.0
+    return merged, view, len(used)
+
+
+def _head_mask(person: np.ndarray, pixels: Mapping[str, np.ndarray]) -> np.ndarray:
+    """The person's head and neck: above the chin all of the person (face, hair, ears), below it only
+    the band between the jaw's corners (the neck), so shoulders and collars do not count; a receiver's
+    head wider than the face then wears the colours of the face's own sides."""
+    height, width = person.shape
+    rows, cols = np.mgrid[0:height, 0:width]
+    chin = float(pixels["2.1"][1])
+    left, right = sorted((float(pixels["2.13"][0]), float(pixels["2.14"][0])))
+    return person & ((rows <= chin) | ((cols >= left) & (cols <= right)))
+
+
+def _texture(photo: PhotoSource, image: np.ndarray, name: str, extend: bool,
+             pixels: Mapping[str, np.ndarray]) -> TextureImage:
+    """The photo as the FDP's texture: with ``extend``, its background painted with the person's nearest
+    colours (:func:`.segment.extend_person`), as a JPEG (quality 92) when it came as one, else a PNG;
+    without, the file's own bytes when it is a PNG or JPEG."""
+    stem = Path(name).stem if name else "photo"
+    head = b"" if isinstance(photo, np.ndarray) else Path(photo).read_bytes()[:16]
+    jpeg = head.startswith(b"\xff\xd8\xff")
+    if not extend and (jpeg or head.startswith(b"\x89PNG\r\n\x1a\n")):
+        return texture_from_file(photo)
+    if extend:
+        from mpeg4fa.tracking.segment import extend_person, person_mask
+        image = extend_person(image, _head_mask(person_mask(image, name), pixels))
     from PIL import Image
     buffer = io.BytesIO()
+    if jpeg:
+        Image.fromarray(image).save(buffer, format="JPEG", quality=92)
+        return TextureImage(f"{stem}.jpg", "image/jpeg", buffer.getvalue())
     Image.fromarray(image).save(buffer, format="PNG")
-    stem = Path(name).stem if name else "photo"
     return TextureImage(f"{stem}.png", "image/png", buffer.getvalue())
 
 
-def fdp_from_photo(photo: PhotoSource, *, where: str | None = None, name: str | None = None,
-                   texture: bool = True) -> PhotoFdp:
-    """The FDP of the face in ``photo`` (a path or an RGB array): its seen feature points in 3D and, with
-    ``texture``, the photo as its texture. One face is used (the largest, said in a warning); no face
-    is a :class:`~.errors.NoFaceError` naming the photo."""
+def fdp_from_photo(photo: PhotoSource, *, side: PhotoSource | None = None,
+                   points: Mapping[str, Sequence[float]] | None = None, where: str | None = None,
+                   side_where: str | None = None, name: str | None = None, texture: bool = True,
+                   extend_background: bool = True) -> PhotoFdp:
+    """The FDP of the face in ``photo`` (a path or an RGB array): its feature points in 3D and, with
+    ``texture``, the photo as its texture.
+
+    ``points`` (label -> (x, y) pixels on the photo, e.g. a user's annotation) win over the found ones.
+    ``extend_background``: the texture's background takes the person's nearest colours, so a receiver's
+    head wider than the face wears skin and hair at its sides, not the wall (:mod:`.segment`).
+    ``side``: a second photo of the face turned 20 to 60 degrees (the landmark model finds no face in a
+    full profile); the points of the side it shows are the mean of both photos' estimates. One face
+    is used (the largest, said in a warning); no face is a :class:`~.errors.NoFaceError` naming the photo.
+    """
     image, label = read_photo(photo, where)
     landmarks = find_landmarks(image, label)
-    pixels, points, scale = photo_points(landmarks)
+    pixels, points3, mm_per_pixel = photo_points(landmarks, given=points)
+    side_info = None
+    if side is not None:
+        side_image, side_label = read_photo(side, side_where)
+        side_marks = find_landmarks(side_image, side_label)
+        points3, view, used = _merge_side(points3, side_marks, side_label)
+        side_info = (side_label, view, used)
     height, width = image.shape[:2]
-    tex = _texture(photo, image, label) if texture else None
+    tex = _texture(photo, image, label, extend_background, pixels) if texture else None
     stem = name if name is not None else Path(label).stem
-    fdp = fdp_from_front(points, pixels, front_size=(width, height), texture=tex, name=stem)
-    return PhotoFdp(fdp=fdp, image=image, landmarks=landmarks, pixels=pixels, points=points, scale=1.0 / scale)
-
+    fdp = fdp_from_front(points3, pixels, front_size=(width, height), texture=tex, name=stem)
+    return PhotoFdp(fdp=fdp, image=image, landmarks=landmarks, pixels=pixels, points=points3, scale=mm_per_pixel,
+                    side=side_info)
 
 PREVIEW_VIEWS = ("front", "three-quarter")
 

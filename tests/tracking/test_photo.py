@@ -115,3 +115,46 @@ def test_not_a_photo_is_one_line(cli, tmp_path):
     code, _, stderr = cli("fdp", bad, "-o", tmp_path / "x.fdp")
     assert code == 1 and stderr.count("\n") == 1 and "notes.jpg" in stderr
     assert not (tmp_path / "x.fdp").exists()
+
+
+def test_background_takes_the_persons_nearest_colours():
+    from mpeg4fa.tracking.segment import extend_person
+    image = np.zeros((40, 40, 3), np.uint8)
+    image[:, :20] = (200, 150, 120)             # the person on the left half, a blue wall on the right
+    image[:, 20:] = (0, 0, 255)
+    mask = np.zeros((40, 40), bool)
+    mask[:, :20] = True
+    out = extend_person(image, mask)
+    assert (out == (200, 150, 120)).all(axis=2).all()
+    assert extend_person(image, np.zeros((40, 40), bool)) is image     # no person: the photo as it is
+
+
+def test_sent_texture_has_no_wall_beside_the_face(made):
+    """The FDP's texture: the grey studio wall beside the astronaut's head is painted with her own colours."""
+    from mpeg4fa.render.fdp_texture import decode_texture
+    sent = decode_texture(made.fdp.textures[0])
+    wall = sent[40:60, 440:500].reshape(-1, 3).astype(int)           # the grey wall, top right of the photo
+    assert made.image[40:60, 440:500].std(axis=(0, 1)).max() < 25    # a plain wall (a soft gradient)
+    assert np.abs(wall.mean(axis=0) - made.image[40:60, 440:500].reshape(-1, 3).mean(axis=0)).max() > 30
+
+
+def test_texture_and_encode_find_the_points_themselves(cli, photos, tmp_path):
+    """`texture PHOTO` without --points and `encode --front PHOTO` without points or side photo."""
+    require_generic()
+    code, out, err = cli("texture", photos / "astronaut.jpg", "-o", tmp_path / "skin.png", "--size", 256)
+    assert code == 0, err
+    assert "face found, 59 feature points" in err and Image.open(tmp_path / "skin.png").size == (256, 256)
+    code, out, err = cli("encode", "Hello", "--engine", "estimate", "-o", tmp_path / "a.fba",
+                         "--fdp-out", tmp_path / "me.fdp", "--front", photos / "astronaut.jpg")
+    assert code == 0, err
+    fdp = load_fdp(tmp_path / "me.fdp")
+    assert len(fdp.labels) == 59 and fdp.texture_coords is not None
+    # given points win over the found ones
+    (tmp_path / "given.json").write_text('{"3.5": [250.0, 104.0]}')
+    code, out, err = cli("encode", "Hello", "--engine", "estimate", "-o", tmp_path / "b.fba",
+                         "--fdp-out", tmp_path / "me2.fdp", "--front", photos / "astronaut.jpg",
+                         "--front-points", tmp_path / "given.json")
+    assert code == 0, err
+    again = load_fdp(tmp_path / "me2.fdp")
+    uv = dict(zip(again.labels, again.texture_coords))["3.5"]
+    assert np.allclose(uv * 512, [250.0, 512 - 104.0])
