@@ -20,6 +20,7 @@ import numpy as np
 from mpeg4fa.conformance import reference
 from mpeg4fa.conformance.errors import ConformanceError
 from mpeg4fa.conformance.faces import TEMPLATE, read_template, write_faces
+from mpeg4fa.conformance.rules import check_rules
 from mpeg4fa.conformance.manifest import Face, Manifest, Vector, compact, default_root, sha256
 from mpeg4fa.conformance.vectors import Broken, Built, VectorDef, all_vectors
 from mpeg4fa.fba import FbaError, FapStream, decode
@@ -60,6 +61,12 @@ def presentation_times(s: FapStream) -> np.ndarray:
         out[k] = t
         next_time = t + (int(s.skip[k]) + 1) / fps
     return out
+
+
+def time_coded(s: FapStream) -> list[int]:
+    """Frames whose plane sends a time code (their time is the code's; the frames after them follow it by a
+    rule the sources do not settle, so the runner checks those apart: ``timestamps_after_time_code``)."""
+    return sorted(k for k, params in s.intra.items() if params is not None and params.time_code is not None)
 
 
 def _check_lossless(v: VectorDef, s: FapStream) -> None:
@@ -118,6 +125,9 @@ def expected_decode(v: VectorDef, built: Built, neutral: dict[str, np.ndarray] |
     doc: dict[str, Any] = {"frames": len(s), "fps": s.fps, "timestamps": presentation_times(s).tolist(),
                            "sent": {k: _ints(a) for k, a in sent.items()}, "shown": _numbers(shown),
                            "tolerance": {"shown": reference.TOLERANCE["shown"]}}
+    coded = time_coded(s)
+    if coded:
+        doc["time_coded"] = coded
     if neutral is not None:
         fp = _feature_points(neutral, shown)
         if fp is not None:
@@ -191,7 +201,8 @@ def generate(out: str | Path | None = None, template: str | Path | None = None) 
         manifest.vectors.append(Vector(
             id=v.id, group=v.group, confidence=v.confidence, description=v.description, stream=stream_rel,
             sha256=sha256(root / stream_rel), expect=v.expect, expected=expected_rel,
-            expected_sha256=sha256(root / expected_rel), face=v.face, rules=v.rules))
+            expected_sha256=sha256(root / expected_rel), face=v.face, rules=v.rules,
+            checks=tuple(sorted(check_rules(v.id, v.confidence).items()))))
     for path in sorted((root / "vectors").rglob("*")):
         if path.is_file() and path.resolve() not in written:
             path.unlink()

@@ -40,8 +40,13 @@ from pathlib import Path
 from collections.abc import Sequence
 from typing import Any
 
+import numpy as np
+
+from mpeg4fa import jsonio
 from mpeg4fa.conformance.errors import ConformanceError
+from mpeg4fa.conformance.rules import check_rules, rule_of
 from mpeg4fa.spec import N_FAPS
+from mpeg4fa.spec.conformance_rules import CONFORMANCE_RULES
 
 SUITE = "mpeg4fa-fba-conformance"
 VERSION = 1
@@ -70,11 +75,21 @@ class Vector:
     expected_sha256: str
     face: str | None = None
     rules: tuple[str, ...] = ()
+    checks: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def check_rules(self) -> dict[str, str]:
+        """Rule id per check name (``spec/conformance_rules.csv``): the manifest's ``checks``, else the
+        suite's table for this vector (:func:`mpeg4fa.conformance.rules.check_rules`)."""
+        return dict(self.checks) if self.checks else check_rules(self.id, self.confidence)
 
     @property
     def required(self) -> bool:
-        """Whether a decoder fails the suite when it fails this vector (not for unverified rules)."""
-        return self.confidence != "M"
+        """Whether any check of this vector can fail the suite (some check's rule is V or S and required)."""
+        rules = self.check_rules
+        names = ("reject", "reject_offset") if self.expect == "reject" else ("timestamps", "sent", "shown",
+                                                                             "feature_points")
+        return any(rule_of(name, rules).required for name in names)
 
 
 @dataclass
@@ -84,11 +99,18 @@ class Manifest:
     vectors: list[Vector] = field(default_factory=list)
 
     def path(self, relative: str) -> Path:
-        return self.root / relative
+        """``relative`` inside the suite's folder; ConformanceError for a path that leaves it (``..``, absolute)."""
+        inside = inside_suite(self.root, relative)
+        if inside is None:
+            raise ConformanceError(f"the path {relative!r} leaves the suite's folder", where=str(self.root / "manifest.json"),
+                                   hint="paths in a manifest are relative to its folder and stay inside it")
+        return inside
 
     def expected(self, vector: Vector) -> dict[str, Any]:
-        """The vector's expected file, with all 68 columns (:func:`full_width`)."""
-        return full_width(json.loads(self.path(vector.expected).read_text(encoding="utf-8")))
+        """The vector's expected file, checked and with all 68 columns as arrays (:func:`full_width`)."""
+        path = self.path(vector.expected)
+        doc = jsonio.read_json(path, max_bytes=MAX_EXPECTED_BYTES, error=_located, what="an expected file")
+        return checked_expected(doc, vector.expect, str(path))
 
     def groups(self) -> list[str]:
         return sorted({v.group for v in self.vectors}, key=lambda g: (GROUPS + (g,)).index(g))
@@ -97,7 +119,7 @@ class Manifest:
         doc = {"suite": SUITE, "version": VERSION,
                "faces": {name: {k: v for k, v in asdict(face).items() if k != "name"}
                          for name, face in sorted(self.faces.items())},
-               "vectors": [{**asdict(v), "rules": list(v.rules)} for v in self.vectors]}
+               "vectors": [{**asdict(v), "rules": list(v.rules), "checks": dict(v.checks)} for v in self.vectors]}
         target = self.root / "manifest.json"
         target.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
         return target
@@ -119,56 +141,173 @@ def compact(doc: dict[str, Any], columns: Sequence[int]) -> dict[str, Any]:
     return out
 
 
-def full_width(doc: dict[str, Any]) -> dict[str, Any]:
-    """An expected decode file with every column, whether or not it was stored compact (see the module)."""
-    if "columns" not in doc:
-        return doc
+MAX_EXPECTED_BYTES = 64 << 20
+"""Largest expected file read (64 MiB; the suite's largest is 0.4 MB)."""
+MAX_EXPECTED_FRAMES = 50_000
+"""Most frames an expected file may hold (the suite's longest has 12,700): bounds the arrays
+:func:`full_width` makes (68 columns a frame) whatever count a file claims."""
+
+
+def full_width(doc: dict[str, Any], where: str = "expected file") -> dict[str, Any]:
+    """An expected decode file with every column, as numpy arrays (``sent`` ints, ``shown`` floats),
+    whether or not it was stored compact (see the module); ConformanceError when its parts disagree."""
     try:
-        cols = [int(c) for c in doc["columns"]]
         n = int(doc["frames"])
+        if not 0 <= n <= MAX_EXPECTED_FRAMES:
+            raise ValueError(f"{n} frames (at most {MAX_EXPECTED_FRAMES:,})")
+        cols = [int(c) for c in doc["columns"]] if "columns" in doc else list(range(N_FAPS))
+        if len(set(cols)) != len(cols) or not all(0 <= c < N_FAPS for c in cols):
+            raise ValueError("columns must be distinct FAP columns 0..67")
         out = {key: value for key, value in doc.items() if key != "columns"}
 
-        def widen(rows, fill=0):
-            full = [[fill] * N_FAPS for _ in range(n)]
-            for k, row in enumerate(rows):
-                for c, x in zip(cols, row, strict=True):
-                    full[k][c] = x
+        def widen(rows, dtype) -> np.ndarray:
+            part = np.asarray(rows, dtype=dtype)
+            if part.shape != (n, len(cols)):
+                raise ValueError(f"rows of shape {part.shape}, expected ({n}, {len(cols)}): a row per frame, a value per listed columns")
+            full = np.zeros((n, N_FAPS), dtype=dtype)
+            full[:, cols] = part
             return full
 
-        out["shown"] = widen(doc["shown"], 0)
-        sent = dict(doc.get("sent", {}))
-        for key in ("mask", "values"):
-            if key in sent:
-                sent[key] = widen(sent[key])
+        shown = widen(doc["shown"], np.float64)
+        if not np.isfinite(shown).all():
+            raise ValueError("shown values not finite")
+        out["shown"] = shown
+        timestamps = np.asarray(doc["timestamps"], dtype=np.float64)
+        if timestamps.shape != (n,) or not np.isfinite(timestamps).all():
+            raise ValueError(f"timestamps of shape {timestamps.shape}, expected ({n},)")
+        out["timestamps"] = timestamps
+        given = doc.get("sent") or {}
+        if not isinstance(given, dict):
+            raise ValueError('"sent" is not an object')
+        sent = {key: widen(given[key], np.int64) for key in ("mask", "values")}
         for key, col in _HIGH_LEVEL_COLUMN.items():
-            if col not in cols:
-                sent[key] = [[0] * _WIDTHS[key] for _ in range(n)]
+            if col in cols:
+                sent[key] = np.asarray(given[key], dtype=np.int64)
+                if sent[key].shape != (n, _WIDTHS[key]):
+                    raise ValueError(f'"sent.{key}" of shape {sent[key].shape}')
+            else:
+                sent[key] = np.zeros((n, _WIDTHS[key]), dtype=np.int64)
         out["sent"] = sent
-    except (TypeError, ValueError, IndexError, KeyError) as exc:
-        raise ConformanceError(f"a compact expected file does not match its columns: {exc}") from None
+    except (TypeError, ValueError, IndexError, KeyError, OverflowError) as exc:
+        problem = f"no {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise ConformanceError(f"an expected file that does not hold together: {problem}", where=where) from None
     return out
+
+
+def checked_expected(doc: Any, expect: str, where: str) -> dict[str, Any]:
+    """An expected file checked for its kind: a reject file's ``bit_offset`` an integer, a decode file's
+    arrays of matching shapes (:func:`full_width`); ConformanceError at ``where`` otherwise."""
+    if not isinstance(doc, dict):
+        raise ConformanceError("an expected file must be a JSON object", where=where)
+    if expect == "reject":
+        bit = doc.get("bit_offset")
+        if isinstance(bit, bool) or not isinstance(bit, int) or bit < 0:
+            raise ConformanceError('a reject vector\'s expected file needs "bit_offset", a bit count', where=where)
+        return doc
+    doc = full_width(doc, where)
+    fp = doc.get("feature_points")
+    if fp is not None:
+        try:
+            labels = [str(label) for label in fp["labels"]]
+            positions = np.asarray(fp["positions"], dtype=np.float64)
+            if positions.shape != (doc["frames"], len(labels), 3) or not np.isfinite(positions).all():
+                raise ValueError(f"positions of shape {positions.shape}")
+            from mpeg4fa.conformance.compare import pinned_axes
+            pinned_axes(fp, int(doc["frames"]))
+        except (TypeError, ValueError, KeyError) as exc:
+            raise ConformanceError(f'"feature_points" does not hold together: {exc}', where=where) from None
+    return doc
+
+
+def inside_suite(root: Path, relative: Any) -> Path | None:
+    """``root / relative`` when ``relative`` is a relative path that stays inside ``root``; else None."""
+    if not isinstance(relative, str) or not relative or "\0" in relative:
+        return None
+    candidate = Path(relative)
+    if candidate.is_absolute() or ".." in candidate.parts:
+        return None
+    path = root / candidate
+    try:
+        path.resolve().relative_to(root.resolve())
+    except (ValueError, OSError):
+        return None
+    return path
+
+
+def _located(path: str, line: int | None, column: int | None, problem: str, hint: str) -> ConformanceError:
+    where = path if line is None else f"{path}:{line}" if column is None else f"{path}:{line}:{column}"
+    return ConformanceError(problem, where=where, hint=hint)
 
 
 def sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+_VECTOR_KEYS = {"id": str, "group": str, "confidence": str, "description": str, "stream": str, "sha256": str,
+                "expect": str, "expected": str, "expected_sha256": str}
+
+
 def load_manifest(path: str | Path) -> Manifest:
-    """The manifest at ``path`` (the file, or the folder holding ``manifest.json``)."""
+    """The manifest at ``path`` (the file, or the folder holding ``manifest.json``), checked: a missing key,
+    a wrong type, an unknown rule or a path that leaves the suite is one ConformanceError naming the entry."""
     path = Path(path)
     if path.is_dir():
         path = path / "manifest.json"
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConformanceError(f"cannot read the manifest: {exc.strerror or exc}", where=str(path)) from None
-    except ValueError as exc:
-        raise ConformanceError(f"not JSON: {exc}", where=str(path)) from None
+    where = str(path)
+    doc = jsonio.read_json(path, max_bytes=MAX_EXPECTED_BYTES, error=_located, what="a suite manifest")
     if not isinstance(doc, dict) or doc.get("suite") != SUITE or doc.get("version") != VERSION:
-        raise ConformanceError(f"not a {SUITE} manifest of version {VERSION}", where=str(path))
-    faces = {name: Face(name, **entry) for name, entry in doc.get("faces", {}).items()}
-    vectors = [Vector(**{**entry, "rules": tuple(entry.get("rules", ()))}) for entry in doc["vectors"]]
-    return Manifest(path.parent, faces, vectors)
+        raise ConformanceError(f"not a {SUITE} manifest of version {VERSION}", where=where)
+    faces_doc, vectors_doc = doc.get("faces", {}), doc.get("vectors")
+    if not isinstance(faces_doc, dict):
+        raise ConformanceError('"faces" must be an object of face name -> {"fdp", "sha256"}', where=where)
+    if not isinstance(vectors_doc, list):
+        raise ConformanceError('"vectors" must be a list of vector entries', where=where)
+    root = path.parent
+    faces = {}
+    for name, entry in faces_doc.items():
+        at = f"{where}: faces.{name}"
+        if not isinstance(entry, dict) or not isinstance(entry.get("fdp"), str) \
+                or not isinstance(entry.get("sha256", ""), str) or not isinstance(entry.get("description", ""), str):
+            raise ConformanceError('a face must be an object with "fdp" (a path) and "sha256"', where=at)
+        if inside_suite(root, entry["fdp"]) is None:
+            raise ConformanceError(f"the FDP path {entry['fdp']!r} leaves the suite's folder", where=at)
+        faces[name] = Face(name, entry["fdp"], entry.get("sha256", ""), entry.get("description", ""))
+    vectors, seen = [], set()
+    for i, entry in enumerate(vectors_doc):
+        vectors.append(_vector(entry, f"{where}: vectors[{i}]", root, faces))
+        if vectors[-1].id in seen:
+            raise ConformanceError(f"vector {vectors[-1].id!r} is listed twice", where=f"{where}: vectors[{i}]")
+        seen.add(vectors[-1].id)
+    return Manifest(root, faces, vectors)
+
+
+def _vector(entry: Any, at: str, root: Path, faces: dict[str, Face]) -> Vector:
+    """One manifest entry as a :class:`Vector`, or a ConformanceError at ``at`` saying what is wrong."""
+    if not isinstance(entry, dict):
+        raise ConformanceError("a vector entry must be an object", where=at)
+    for key, kind in _VECTOR_KEYS.items():
+        if not isinstance(entry.get(key), kind):
+            raise ConformanceError(f'"{key}" is missing or not a string', where=f"{at} ({entry.get('id', '?')})")
+    at = f"{at} ({entry['id']})"
+    if entry["expect"] not in ("decode", "reject") or entry["confidence"] not in CONFIDENCES:
+        raise ConformanceError('"expect" must be decode or reject, "confidence" V, S or M', where=at)
+    for key in ("stream", "expected"):
+        if inside_suite(root, entry[key]) is None:
+            raise ConformanceError(f"the {key} path {entry[key]!r} leaves the suite's folder", where=at)
+    face = entry.get("face")
+    if face is not None and (not isinstance(face, str) or face not in faces):
+        raise ConformanceError(f"face {face!r} is not one of the manifest's faces", where=at)
+    rules = entry.get("rules", [])
+    checks = entry.get("checks", {})
+    if not isinstance(rules, list) or not all(isinstance(r, str) for r in rules) or not isinstance(checks, dict) \
+            or not all(isinstance(k, str) and isinstance(v, str) for k, v in checks.items()):
+        raise ConformanceError('"rules" must be a list of strings and "checks" an object of check -> rule id', where=at)
+    unknown = sorted(set(checks.values()) - set(CONFORMANCE_RULES))
+    if unknown:
+        raise ConformanceError(f"unknown rule{'s' if len(unknown) > 1 else ''} {', '.join(unknown)}", where=at,
+                               hint="rules are the ids of spec/conformance_rules.csv")
+    known = {k: entry[k] for k in _VECTOR_KEYS}
+    return Vector(**known, face=face, rules=tuple(rules), checks=tuple(sorted(checks.items())))
 
 
 def default_root() -> Path:

@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import re
 import shlex
+import signal
 import subprocess
 import tempfile
 import time
@@ -52,6 +54,7 @@ class DecoderOutput:
     sent: dict[str, np.ndarray] | None = None   # mask (n,68) bool, values (n,68), viseme (n,4), expression (n,6)
     fp_labels: tuple[str, ...] | None = None
     fp_positions: np.ndarray | None = None      # (n, k, 3)
+    timestamp_resolution: float | None = None   # seconds per tick of the decoder's clock, if it says (<= 1 ms)
 
     def __len__(self) -> int:
         return len(self.timestamps)
@@ -63,6 +66,8 @@ class DecoderOutput:
             doc["sent"] = {k: np.asarray(v).astype(int).tolist() for k, v in self.sent.items()}
         if self.fp_labels is not None and self.fp_positions is not None:
             doc["feature_points"] = {"labels": list(self.fp_labels), "positions": self.fp_positions.tolist()}
+        if self.timestamp_resolution is not None:
+            doc["timestamp_resolution"] = self.timestamp_resolution
         return doc
 
 
@@ -128,7 +133,13 @@ def output_from_json(doc: Any, where: str = "decoder output") -> DecoderOutput:
         positions = _array(fp.get("positions"), (len(labels), 3), '"feature_points.positions"', where)
         if len(positions) != len(shown):
             raise ConformanceError('"feature_points" has a different number of frames than "shown"', where=where)
-    return DecoderOutput(timestamps, shown, sent, labels, positions)
+    resolution = doc.get("timestamp_resolution")
+    if resolution is not None and (isinstance(resolution, bool) or not isinstance(resolution, (int, float))
+                                   or not 0 < resolution <= 1.0):
+        raise ConformanceError('"timestamp_resolution" must be seconds per tick, above 0 and at most 1 '
+                               '(e.g. 0.001: whole milliseconds)', where=where)
+    return DecoderOutput(timestamps, shown, sent, labels, positions,
+                         None if resolution is None else float(resolution))
 
 
 def output_from_csv(text: str, where: str = "decoder output") -> DecoderOutput:
@@ -218,30 +229,82 @@ class CommandDecoder:
             out = Path(tmp) / "out.json"
             argv = [*self.argv, str(stream), str(out)] + (["--fdp", str(fdp)] if fdp is not None else [])
             started = time.perf_counter()
-            try:
-                done = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, timeout=timeout)
-            except subprocess.TimeoutExpired:
-                return DecoderResult(TIMEOUT, message=f"no answer within {timeout:g} s", seconds=timeout)
-            except OSError as exc:
-                return DecoderResult(CRASH, message=f"cannot run {self.argv[0]}: {exc.strerror or exc}")
-            seconds = time.perf_counter() - started
-            stderr = done.stderr.decode("utf-8", "replace").strip()
-            tail = stderr.splitlines()[-1] if stderr else ""
-            if done.returncode not in (0, 1):
-                how = f"signal {-done.returncode}" if done.returncode < 0 else f"exit status {done.returncode}"
-                return DecoderResult(CRASH, message=f"{how}{': ' + tail if tail else ''}", seconds=seconds)
-            try:
-                output = read_output(out)
-            except ConformanceError as exc:
-                if done.returncode == 1:
-                    output = None
-                else:
-                    return DecoderResult(CRASH, message=f"unreadable output: {exc}", seconds=seconds)
-            if done.returncode == 1:
-                return DecoderResult(REJECTED, output, bit_from_text(stderr), tail, seconds)
-            if output is None:
-                return DecoderResult(CRASH, message="exit status 0 but no output written", seconds=seconds)
-            return DecoderResult(DECODED, output, seconds=seconds)
+            with open(Path(tmp) / "stderr", "w+b") as err:
+                try:
+                    returncode = run_in_own_group(argv, err, timeout)
+                except OSError as exc:
+                    return DecoderResult(CRASH, message=f"cannot run {self.argv[0]}: {exc.strerror or exc}")
+                seconds = time.perf_counter() - started
+                if returncode is None:
+                    return DecoderResult(TIMEOUT, message=f"no answer within {timeout:g} s (its process group was "
+                                         "ended)", seconds=seconds)
+                stderr = read_bounded(err)
+            return self._result(returncode, out, stderr, seconds)
+
+    @staticmethod
+    def _result(returncode: int, out: Path, stderr: str, seconds: float) -> DecoderResult:
+        """Judge an exit status, the decoder's stderr and what it wrote at ``out``."""
+        lines = stderr.strip().splitlines()
+        tail = lines[-1][:500] if lines else ""
+        if returncode not in (0, 1):
+            how = f"signal {-returncode}" if returncode < 0 else f"exit status {returncode}"
+            return DecoderResult(CRASH, message=f"{how}{': ' + tail if tail else ''}", seconds=seconds)
+        try:
+            output = read_output(out)
+        except ConformanceError as exc:
+            if returncode == 1:
+                output = None
+            else:
+                return DecoderResult(CRASH, message=f"unreadable output: {exc}", seconds=seconds)
+        if returncode == 1:
+            return DecoderResult(REJECTED, output, bit_from_text(stderr), tail, seconds)
+        if output is None:
+            return DecoderResult(CRASH, message="exit status 0 but no output written", seconds=seconds)
+        return DecoderResult(DECODED, output, seconds=seconds)
+
+
+STDERR_KEEP = 64 << 10
+"""Bytes of a decoder's stderr read from each end (its first ``bit N`` and its last line): a decoder that
+prints megabytes costs the runner no more than this."""
+
+
+def run_in_own_group(argv: list[str], stderr, timeout: float) -> int | None:
+    """Run ``argv`` in a new session (its own process group), stderr to the file ``stderr``, stdout discarded;
+    its exit status, or None when it ran past ``timeout``. Either way the whole group is ended afterwards,
+    so a wrapper's children do not outlive the run."""
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=stderr,
+                            start_new_session=True)
+    try:
+        return proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None
+    finally:
+        _end_group(proc)
+
+
+def _end_group(proc: subprocess.Popen) -> None:
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    try:
+        proc.wait(timeout=5)
+    except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL not delivered
+        pass
+
+
+def read_bounded(fh) -> str:
+    """The first and last :data:`STDERR_KEEP` bytes of an open file, as text."""
+    fh.seek(0, os.SEEK_END)
+    size = fh.tell()
+    fh.seek(0)
+    if size <= 2 * STDERR_KEEP:
+        data = fh.read()
+    else:
+        head = fh.read(STDERR_KEEP)
+        fh.seek(size - STDERR_KEEP)
+        data = head + f"\n[... {size - 2 * STDERR_KEEP} bytes left out ...]\n".encode() + fh.read()
+    return data.decode("utf-8", "replace")
 
 
 class InProcessDecoder:

@@ -2,7 +2,7 @@
 
 Like Fluster's runner in shape: the suite is data (:mod:`.manifest`), the decoder is anything the
 protocol can call (:mod:`.protocol`), and each vector gives one result per check (:mod:`.compare`).
-The suite passes when no *required* check (of a vector whose confidence is not M) fails, crashes
+The suite passes when no check of a *required* rule (V or S, ``spec/conformance_rules.csv``) fails, crashes
 or times out; optional checks may be "not supported".
 """
 from __future__ import annotations
@@ -12,13 +12,14 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable
 
-from mpeg4fa.conformance.compare import CRASH, FAIL, NOT_SUPPORTED, PASS, STATUSES, TIMEOUT, Check, compare
+from mpeg4fa.conformance.compare import CRASH, DIFFERS, FAIL, NOT_SUPPORTED, PASS, STATUSES, TIMEOUT, Check, compare
 from mpeg4fa.conformance.errors import ConformanceError
 from mpeg4fa.conformance.manifest import GROUPS, Manifest, Vector, sha256
 from mpeg4fa.conformance.protocol import DEFAULT_TIMEOUT, Decoder, DecoderResult
+from mpeg4fa.conformance.rules import rule_of
 
 Progress = Callable[[int, int], None]
-_WORST = (CRASH, TIMEOUT, FAIL, NOT_SUPPORTED, PASS)
+_WORST = (CRASH, TIMEOUT, FAIL, DIFFERS, NOT_SUPPORTED, PASS)
 
 
 @dataclass
@@ -33,14 +34,14 @@ class VectorResult:
 
     @property
     def status(self) -> str:
-        """The worst status of its checks (crash > timeout > fail > not supported > pass)."""
+        """The worst status of its checks (crash > timeout > fail > differs > not supported > pass)."""
         present = {c.status for c in self.checks}
         return next((s for s in _WORST if s in present), PASS)
 
     @property
     def failed(self) -> bool:
-        """Whether this vector fails the suite: a required vector with a check failed, crashed or timed out."""
-        return self.vector.required and any(_counts_against(c) for c in self.checks)
+        """Whether this vector fails the suite: a check of a required rule failed, crashed or timed out."""
+        return any(_counts_against(c) for c in self.checks)
 
     def to_json(self) -> dict[str, Any]:
         v = self.vector
@@ -50,6 +51,9 @@ class VectorResult:
 
 
 def _counts_against(check: Check) -> bool:
+    """A check of a required rule (V or S) that failed, crashed, timed out, or is unsupported though not optional."""
+    if not check.required:
+        return False
     return check.status in (FAIL, CRASH, TIMEOUT) or (check.status == NOT_SUPPORTED and not check.optional)
 
 
@@ -80,6 +84,33 @@ class SuiteResult:
                           "required": any(v.vector.required for v in members)}
         return out
 
+    def by_rule(self) -> list[dict[str, Any]]:
+        """Checks that did not pass, grouped by rule (required first, most first): one finding per rule, with
+        its source, confidence, the vectors and the first of their messages."""
+        groups: dict[str, dict[str, Any]] = {}
+        for v in self.vectors:
+            for c in v.checks:
+                if c.status in (PASS, NOT_SUPPORTED):
+                    continue
+                rule = rule_of(c.name, {c.name: c.rule} if c.rule else None)
+                g = groups.setdefault(rule.id, {"rule": rule.id, "statement": rule.statement, "source": rule.source,
+                                                "confidence": rule.confidence, "required": rule.required,
+                                                "checks": 0, "vectors": [], "statuses": Counter(), "example": "",
+                                                "decoder_did": Counter()})
+                g["checks"] += 1
+                g["statuses"][c.status] += 1
+                if v.vector.id not in g["vectors"]:
+                    g["vectors"].append(v.vector.id)
+                if not g["example"]:
+                    g["example"] = f"{v.vector.id}: {c.name}: {c.message}"
+                if c.worst.get("decoder_did"):
+                    g["decoder_did"][c.worst["decoder_did"]] += 1
+        out = sorted(groups.values(), key=lambda g: (not g["required"], -len(g["vectors"]), g["rule"]))
+        for g in out:
+            g["statuses"] = dict(g["statuses"])
+            g["decoder_did"] = dict(g["decoder_did"])
+        return out
+
     def failing(self) -> list[str]:
         """Ids of the vectors that fail the suite (required and not passed)."""
         return [v.vector.id for v in self.vectors if v.failed]
@@ -87,7 +118,7 @@ class SuiteResult:
     def to_json(self) -> dict[str, Any]:
         return {"decoder": self.decoder, "suite": self.suite, "passed": self.passed,
                 "seconds": round(self.seconds, 3), "summary": self.summary(), "failing": self.failing(),
-                "vectors": [v.to_json() for v in self.vectors]}
+                "by_rule": self.by_rule(), "vectors": [v.to_json() for v in self.vectors]}
 
 
 def select(manifest: Manifest, only: Iterable[str] | None = None) -> list[Vector]:
@@ -125,7 +156,7 @@ def run_vector(manifest: Manifest, vector: Vector, decoder: Decoder, timeout: fl
     expected = manifest.expected(vector)
     started = time.perf_counter()
     result = decoder(stream, fdp, timeout)
-    checks = compare(expected, vector.expect, result)
+    checks = compare(expected, vector.expect, result, vector.check_rules)
     return VectorResult(vector, checks, time.perf_counter() - started, result, expected)
 
 

@@ -327,7 +327,9 @@ def _temporal_vectors() -> Iterator[VectorDef]:
                     repeats, ("SYNTAX.md 3 skip_frames", "SYNTAX.md 12"))
 
     def codes() -> Built:
-        return encoded(_basic(60), EncodeOptions(fps=25, intra_period=25, time_codes=True))
+        s = _basic(60)
+        s.timestamps[:] = np.arange(60) / 25  # the encoder writes a time code on the intras at whole seconds
+        return encoded(s, EncodeOptions(fps=25, intra_period=25, time_codes=True))
     yield VectorDef("syntax/time-codes", "syntax", "S", "intra planes at 0, 1 and 2 s each send a time code (hh:mm:ss)",
                     codes, ("SYNTAX.md 3 time code", "SYNTAX.md 4"))
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mpeg4fa.conformance.adapter import decode_for_suite, in_process
-from mpeg4fa.conformance.compare import FAIL, NOT_SUPPORTED, PASS, compare_rejected
+from mpeg4fa.conformance.compare import DIFFERS, FAIL, NOT_SUPPORTED, PASS, compare_rejected
 from mpeg4fa.conformance.errors import ConformanceError
 from mpeg4fa.conformance.faults import faulty_decoder
 from mpeg4fa.conformance.manifest import load_manifest
@@ -53,7 +53,7 @@ def test_without_feature_points_the_checks_are_not_supported_and_the_suite_passe
 
 def test_an_informative_failure_does_not_fail_the_suite(suite):
     result = run_suite(suite, faulty_decoder("sign-flipped"), only=["informative"])
-    assert result.vectors[0].status == FAIL and not result.vectors[0].failed
+    assert result.vectors[0].status == DIFFERS and not result.vectors[0].failed
     assert result.passed
 
 
@@ -148,13 +148,23 @@ def test_reject_offsets():
 # ---- report and CLI -----------------------------------------------------------------------
 
 def test_report_shows_failures_with_plots(suite, tmp_path):
-    result = run_suite(suite, faulty_decoder("hold-not-interpolate"))
+    result = run_suite(suite, faulty_decoder("left-right-swapped"))
     written = write_report(result, tmp_path / "report")
     md = written["markdown"].read_text(encoding="utf-8")
-    assert "**FAILED**" in md and "syntax/interpolate: shown (fail, required)" in md and "expected" in md
+    assert "**FAILED**" in md and "syntax/interpolate: shown (fail, rule plane-header [V], required)" in md
+    assert "expected" in md and "| plane-header | V | required |" in md
     png = tmp_path / "report" / "syntax_interpolate-shown.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "syntax_interpolate-shown.png" in written["html"].read_text(encoding="utf-8")
+
+
+def test_an_informative_rule_differs_and_the_suite_passes(suite, tmp_path):
+    result = run_suite(suite, faulty_decoder("hold-not-interpolate"))
+    assert result.passed
+    differs = [(v.vector.id, c) for v in result.vectors for c in v.checks if c.status == "differs"]
+    assert [(vid, c.name, c.rule) for vid, c in differs] == [("syntax/interpolate", "shown_partner", "partner-copy")]
+    md = write_report(result, tmp_path / "report")["markdown"].read_text(encoding="utf-8")
+    assert "**PASSED**" in md and "partner-copy" in md and "informative" in md
 
 
 def test_cli_passes_and_prints_json(cli, suite, passed, tmp_path):
