@@ -139,8 +139,11 @@ def text_encoding_options(p: argparse.ArgumentParser) -> None:
         g.add_argument("--front", type=Path, metavar="IMAGE",
                        help="a front photo of the speaker (sent as the texture)"),
         g.add_argument("--front-points", type=Path, metavar="JSON",
-                       help="the front photo's feature points, label -> [x, y]"),
-        g.add_argument("--side", type=Path, metavar="IMAGE", help="a side photo of the speaker"),
+                       help="the front photo's feature points, label -> [x, y] (optional: without them the face is "
+                            "found in the photo; given points win over found ones)"),
+        g.add_argument("--side", type=Path, metavar="IMAGE",
+                       help="a side photo of the speaker (with --side-points: a profile; without: turned 20-60 "
+                            "degrees, its face found)"),
         g.add_argument("--side-points", type=Path, metavar="JSON",
                        help="the side photo's feature points, label -> [x, y]"),
         g.add_argument("--side-view", choices=("left", "right"), default="left",
@@ -428,6 +431,9 @@ def _speaker_fdp(args: argparse.Namespace):
         with _located(str(args.face_points)):
             return fdp_io.fdp_from_mesh(mesh, fdp_io.read_points_json(args.face_points), name=args.face_mesh.stem)
     if args.front is not None or args.side is not None:
+        if args.side_points is None:  # the face is found in the photo(s); given front points win
+            need("front")
+            return _photo_fdp(args)
         need("front", "front_points", "side", "side_points")
         with _located(f"{args.front_points} + {args.side_points}"):
             return fdp_io.fdp_from_photos(fdp_io.read_points_json(args.front_points),
@@ -435,6 +441,16 @@ def _speaker_fdp(args: argparse.Namespace):
                                           texture=fdp_io.texture_from_file(args.front), name=args.front.stem)
     from ..face import FaceModel
     return FaceModel.default().to_fdp()
+
+
+def _photo_fdp(args: argparse.Namespace):
+    """The FDP of the face found in --front (and --side, turned 20-60 degrees): :func:`mpeg4fa.tracking.fdp_from_photo`."""
+    from ..tracking.photo import fdp_from_photo
+    from .fdp_photo import photo_points_file
+
+    given = photo_points_file(args.front_points) if args.front_points is not None else None
+    with _located(str(args.front_points or args.front)):
+        return fdp_from_photo(args.front, side=args.side, points=given).fdp
 
 
 @contextlib.contextmanager

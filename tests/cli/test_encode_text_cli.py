@@ -64,8 +64,11 @@ def test_errors_are_one_line(cli, tmp_path):
     code, _, err = cli("encode", "Hello", "-o", tmp_path / "a.fba", "--engine", "estimate", "--audio", tmp_path / "a.wav")
     assert code == 2 and "no audio" in err
     code, _, err = cli("encode", "Hello", "-o", tmp_path / "a.fba", "--fdp-out", tmp_path / "f.fdp",
-                       "--front", tmp_path / "missing.png")
-    assert code == 2 and "--front-points" in err
+                       "--front", tmp_path / "missing.png", "--side-points", tmp_path / "side.json")
+    assert code == 2 and "--front-points" in err and "--side missing" in err
+    code, _, err = cli("encode", "Hello", "-o", tmp_path / "a.fba", "--fdp-out", tmp_path / "f.fdp",
+                       "--front", tmp_path / "missing.png")   # no points: the face is to be found in the photo
+    assert code == 1 and "missing.png" in err and len(err.strip().splitlines()) == 1
 
 
 def _project(points: dict, view: str, scale: float) -> dict:
