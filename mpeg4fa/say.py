@@ -61,11 +61,13 @@ def write_timings(encoded: "Encoded", path: str | os.PathLike) -> None:
 def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str = "auto", voice: str | None = None,
         rate: int | None = None, fps: float = 25.0, level: str = "low", idle: bool = False, width: int = 512,
         height: int = 512, samples: int = 4, keep: bool = False, face: "FaceModel | None" = None,
-        name: str = "<text>", progress: Callable[[int, int], None] | None = None, lenient: bool = False) -> Said:
+        name: str = "<text>", progress: Callable[[int, int], None] | None = None, lenient: bool = False,
+        texture=None) -> Said:
     """Speak tagged ``text`` and render ``face`` (the generic head by default) saying it to ``out``.
 
     ``out``: .mp4/.mov/.m4v, else a folder of PNG frames (see :func:`mpeg4fa.render.play`).
     ``lenient`` speaks malformed tags as text, with one warning (:func:`mpeg4fa.speech.markup.parse_markup`).
+    ``texture``: the skin's UV texture image (e.g. baked from the FDP of a photo: ``mpeg4fa say --photo``).
     Speech longer than :data:`MAX_SAY_SECONDS` is refused (a :class:`~mpeg4fa.speech.MarkupError` at the
     place it runs over) before anything is rendered.
     ``keep`` also writes :func:`kept_paths` (the stream, the speech as WAV, the timings), after
@@ -77,12 +79,12 @@ def say(text: str, out: str | os.PathLike, *, engine: str = "espeak", lang: str 
     encoded = encode_text(text, engine=engine, lang=lang, voice=voice, rate=rate, fps=fps, level=level, idle=idle,
                           name=name, lenient=lenient, max_seconds=MAX_SAY_SECONDS)
     return say_encoded(encoded, out, width=width, height=height, samples=samples, keep=keep, face=face,
-                       progress=progress)
+                       progress=progress, texture=texture)
 
 
 def say_encoded(encoded, out: str | os.PathLike, *, width: int = 512, height: int = 512, samples: int = 4,
                 keep: bool = False, face: "FaceModel | None" = None,
-                progress: Callable[[int, int], None] | None = None) -> Said:
+                progress: Callable[[int, int], None] | None = None, texture=None) -> Said:
     """:func:`say` from an encoded stream on (spoken text, or a recording with its aligned transcript):
     coded, decoded again (the face plays what a receiver would decode), rendered with the speech, and
     the files of ``keep`` written once the render succeeded."""
@@ -97,7 +99,8 @@ def say_encoded(encoded, out: str | os.PathLike, *, width: int = 512, height: in
     speech = encoded.speech
     audio = Audio((speech.samples.astype(np.float32) / 32768.0)[:, None], speech.rate)
     result = play(stream, out, face=face if face is not None else FaceModel.default(), audio=audio, width=width,
-                  height=height, samples=samples, progress=progress)
+                  height=height, samples=samples, progress=progress,
+                  **({"texture": texture} if texture is not None else {}))
     kept: dict[str, Path] = {}
     if keep:
         kept = kept_paths(out)

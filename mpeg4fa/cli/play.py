@@ -28,6 +28,7 @@ def register(commands: Commands) -> None:
         epilog="examples:\n  mpeg4fa play talk.fba -o talk.mp4\n"
                "  mpeg4fa play talk.fap --fdp face.fdp --audio talk.wav -o frames/ --size 256\n"
                "  mpeg4fa play talk.fba --fdp face.fdp -o talk.mp4   # the skin wears the FDP's texture, if any\n"
+               "  mpeg4fa play talk.fba --photo me.jpg -o talk.mp4   # your own face, found in the photo\n"
                "  mpeg4fa play talk.fba --show",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("stream", type=Path, help="a .fba (binary) or .fap (text) stream")
@@ -75,13 +76,24 @@ def _render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--view", default="front", choices=tuple(VIEWS), help="camera position (default front)")
     p.add_argument("--texture", type=Path, help="a UV texture image for the skin (e.g. from photos); wins over the "
                                                 "FDP's own texture")
+    p.add_argument("--photo", type=Path, metavar="IMAGE",
+                   help="play on the face in this photo: its feature points found (the 'photo' extra), the head "
+                        "calibrated to them and wearing the photo, as 'mpeg4fa fdp' makes it")
     p.add_argument("--no-fdp-texture", action="store_true",
                    help="do not paint the skin with the texture the --fdp file carries (its front photo)")
 
 
-def _renderer_options(args: argparse.Namespace, face) -> dict:
+def _face(args: argparse.Namespace):
+    """(face, texture from --photo or None): the face of the options, or the one found in --photo."""
+    if args.photo is None:
+        return posed_face(args), None
+    from .fdp_photo import photo_face
+    return photo_face(args)
+
+
+def _renderer_options(args: argparse.Namespace, face, photo_texture=None) -> dict:
     chosen = {"width": args.size[0], "height": args.size[1], "samples": args.aa, "view": args.view}
-    texture = skin_texture(args, face)
+    texture = photo_texture if photo_texture is not None else skin_texture(args, face)
     if texture is not None:
         chosen["texture"] = texture
     return chosen
@@ -95,14 +107,14 @@ def run_play(args: argparse.Namespace) -> int:
     audio = audio_beside(args) if args.output is not None else None
     if args.output is not None:
         inputs = {"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture,
-                  "--face-mesh": args.face_mesh, "--face-points": args.face_points}
+                  "--face-mesh": args.face_mesh, "--face-points": args.face_points, "--photo": args.photo}
         refuse_overlaps(inputs, {"-o": args.output})
         if audio is not None and writes_folder(args.output):  # PNG frames, and the audio beside them
             refuse_overlaps(inputs, {f"-o {args.output}'s {AUDIO_WAV}": args.output / AUDIO_WAV})
         check_video_size(args.output, args.size)
     stream, _ = read_stream(args.stream)
-    face = posed_face(args)
-    render_options = _renderer_options(args, face)
+    face, photo_texture = _face(args)
+    render_options = _renderer_options(args, face, photo_texture)
     if args.show:
         from ..render.window import show
         with Renderer(face, **render_options) as renderer:
@@ -131,11 +143,12 @@ def run_snapshot(args: argparse.Namespace) -> int:
 
     from ..render import snapshot
 
-    refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture,
+    refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture, "--photo": args.photo,
                      "--face-mesh": args.face_mesh, "--face-points": args.face_points}, {"-o": args.output})
     stream, _ = read_stream(args.stream)
-    face = posed_face(args)
-    image = snapshot(stream, frame=args.frame, seconds=args.time, face=face, **_renderer_options(args, face))
+    face, photo_texture = _face(args)
+    image = snapshot(stream, frame=args.frame, seconds=args.time, face=face,
+                     **_renderer_options(args, face, photo_texture))
     save_image(Image.fromarray(image), args.output)
     print(f"{args.output}: {image.shape[1]}x{image.shape[0]}")
     return 0

@@ -36,6 +36,7 @@ def register(commands: Commands) -> None:
                '  mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o nihao.mp4 --keep\n'
                '  mpeg4fa say "Buenos días, ¿cómo estás?" --lang es -o hola.mp4\n'
                '  mpeg4fa say script.txt -o script.mp4\n'
+               '  mpeg4fa say --photo me.jpg "Hello, it is me." -o me.mp4\n'
                '  mpeg4fa say --speech me.wav --transcript "(joy, 30, 0.5) Hello there!" -o me.mp4',
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("text", nargs="?", help="the text with optional (expression, intensity 0-63, seconds) tags; a text "
@@ -51,6 +52,9 @@ def register(commands: Commands) -> None:
                    help="image size, 16 to 8192 (default 512; even for MP4)")
     p.add_argument("--aa", type=options.samples, default=4, metavar="N",
                    help="anti-aliasing samples: 0 (off), 1, 2, 4 (default), 8 or 16")
+    p.add_argument("--photo", type=Path, metavar="IMAGE",
+                   help="say it with the face in this photo: its feature points found (the 'photo' extra), the head "
+                        "calibrated to them and wearing the photo, as 'mpeg4fa fdp' makes it")
     p.add_argument("--keep", action="store_true",
                    help="also write OUT.fba, OUT.wav and OUT.timings.json beside it")
     p.set_defaults(run=run_say)
@@ -463,6 +467,14 @@ def _located(path: str):
         raise FdpError.no_place(path, exc.message, hint="check the feature point annotations") from None
 
 
+def _photo_face(args: argparse.Namespace):
+    """(face, texture) of ``say --photo``, or (None, None): the generic head."""
+    if args.photo is None:
+        return None, None
+    from .fdp_photo import photo_face
+    return photo_face(args)
+
+
 def run_say(args: argparse.Namespace) -> int:
     """``mpeg4fa say``: :func:`mpeg4fa.say.say` with a progress bar, after checking what it would write."""
     from ..say import kept_paths, say
@@ -473,15 +485,16 @@ def run_say(args: argparse.Namespace) -> int:
         raise UsageError("TEXT missing: give the text to say", hint='or --speech REC.wav --transcript "TEXT"')
     source = text_input.classify(args.text, as_text=args.as_text)
     kept = kept_paths(args.output) if args.keep else {}
-    refuse_overlaps({"text file": source.path}, {"-o": args.output, **{f"--keep ({what})": path
+    refuse_overlaps({"text file": source.path, "--photo": args.photo}, {"-o": args.output, **{f"--keep ({what})": path
                                                                         for what, path in kept.items()}})
     check_video_size(args.output, args.size)
     text, name = text_input.read_text(source)
     width, height = args.size
+    face, texture = _photo_face(args)
     with rendering("say", args.output) as progress:
         said = say(text, args.output, engine=args.engine, lang=args.lang, voice=args.voice, rate=args.rate,
                    fps=args.fps, level=args.level, idle=args.idle, width=width, height=height, samples=args.aa,
-                   keep=args.keep, name=name, progress=progress, lenient=args.lenient)
+                   keep=args.keep, name=name, progress=progress, lenient=args.lenient, face=face, texture=texture)
     result = said.result
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s), "
           f"{len(said.data) * 8 / max(len(said.stream), 1):.0f} bits/frame of FAPs ({args.level}-level); "
@@ -498,14 +511,15 @@ def _say_recording(args: argparse.Namespace) -> int:
 
     kept = kept_paths(args.output) if args.keep else {}
     outputs = {"-o": args.output, **{f"--keep ({what})": path for what, path in kept.items()}}
-    refuse_overlaps({"--speech": args.speech}, outputs)
+    refuse_overlaps({"--speech": args.speech, "--photo": args.photo}, outputs)
     check_video_size(args.output, args.size)
     aligned, name = _aligned(args, {}, outputs)
     encoded = encode_utterance(aligned.utterance, fps=args.fps, level=args.level, idle=args.idle)
     width, height = args.size
+    face, texture = _photo_face(args)
     with rendering("say", args.output) as progress:
         said = say_encoded(encoded, args.output, width=width, height=height, samples=args.aa, keep=args.keep,
-                           progress=progress)
+                           progress=progress, face=face, texture=texture)
     result, data, stream, kept = said.result, said.data, said.stream, said.kept
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s) of {args.speech} "
           f"({name} aligned by {aligned.method}), {len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs "

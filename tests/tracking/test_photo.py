@@ -158,3 +158,25 @@ def test_texture_and_encode_find_the_points_themselves(cli, photos, tmp_path):
     again = load_fdp(tmp_path / "me2.fdp")
     uv = dict(zip(again.labels, again.texture_coords))["3.5"]
     assert np.allclose(uv * 512, [250.0, 512 - 104.0])
+
+
+def test_play_and_say_with_the_face_of_a_photo(cli, photos, tmp_path):
+    """`snapshot/play --photo` and `say --photo`: the face found in the photo, calibrated and textured, talks."""
+    require_generic()
+    code, _, err = cli("encode", "Hello there", "--engine", "estimate", "-o", tmp_path / "hello.fba")
+    assert code == 0, err
+    code, _, err = cli("snapshot", tmp_path / "hello.fba", "--frame", 10, "--photo", photos / "astronaut.jpg",
+                       "-o", tmp_path / "own.png", "--size", 128)
+    assert code == 0 and "59 feature points found" in err, err
+    code, _, err = cli("snapshot", tmp_path / "hello.fba", "--frame", 10, "-o", tmp_path / "generic.png", "--size", 128)
+    assert code == 0, err
+    own, generic = (np.asarray(Image.open(tmp_path / n)).astype(int) for n in ("own.png", "generic.png"))
+    # her blond hair on the crown where the generic head is bare skin
+    crown_own, crown_generic = own[25:35, 55:75].mean(axis=(0, 1)), generic[25:35, 55:75].mean(axis=(0, 1))
+    assert np.abs(crown_own - crown_generic).max() > 20
+    code, _, err = cli("snapshot", tmp_path / "hello.fba", "--photo", photos / "astronaut.jpg", "--fdp",
+                       tmp_path / "x.fdp", "-o", tmp_path / "x.png")
+    assert code == 2 and "--photo and --fdp" in err
+    code, out, err = cli("say", "Hi.", "--engine", "estimate", "--photo", photos / "astronaut.jpg",
+                         "-o", tmp_path / "hi.mp4", "--size", 64, "--aa", 0)
+    assert code == 0 and (tmp_path / "hi.mp4").stat().st_size > 1000, err
