@@ -4,6 +4,7 @@
 A script run on demand, not a test::
 
     .venv/bin/python tools/bench_codec.py [--vectors DIR] [--json OUT] [--frames N] [--repeat R]
+                                          [--decode-frames N] [--tiny-frames N] [--only 0..4 ...]
 
 It measures, in one process pinned to one core where the platform allows it:
 
@@ -29,7 +30,10 @@ It measures, in one process pinned to one core where the platform allows it:
    frames cost a few bits) and of the real ``headmotion_long.fba``: tracemalloc peak
    and held bytes per frame, and the peak RSS growth of a fresh process decoding the
    file whole and streaming (the streaming figure is the reader's fixed cost). Target:
-   <= 1 KB a frame for the long stream.
+   <= 1 KB a frame for the long stream. Then the stream of issue 26 item 7 (``--tiny-frames``,
+   default 400,000 frames of one FAP, -1/0/1, about 6 bits each: a 300 KB file) decoded whole by
+   each backend in a fresh process: bytes a frame the stream holds (``FapStream.nbytes``, target
+   <= 230) and peak RSS above a warm import, the kernels loaded (target <= 100 MB).
 
 It prints plain-text tables, marks the targets PASS/FAIL, and writes the same
 figures as JSON (``bench_codec.json`` in the current directory unless ``--json``).
@@ -72,6 +76,11 @@ DECODE_FRAMES = 60000
 HELD_FRAMES = 500
 """Frames each value of the decode-memory stream is held for (20 s at 25 fps): most frames send zero deltas."""
 TARGET_DECODE_BYTES_PER_FRAME = 1024
+TINY_FRAMES = 400_000
+TARGET_TINY_HELD_BYTES_PER_FRAME = 230
+TARGET_TINY_RSS_BYTES = 100_000_000
+"""Issue 26 item 7: decode() of the 300 KB stream of 400,000 tiny frames peaks at <= 100 MB (10**6 bytes)
+above a warm import on either backend, and holds <= 230 bytes a frame (401 before narrow storage)."""
 """Streaming decode counts as flat when its peak over a whole stream is at most this times the
 peak it had reached at the stream's midpoint (a leak of ~30 bytes a frame fails this at 15000 frames)."""
 
@@ -565,7 +574,7 @@ def held_stream(n: int) -> FapStream:
 
 _RSS_CHILD = """
 import resource, sys
-from mpeg4fa.fba import decode, iter_decode
+from mpeg4fa.fba import EncodeOptions, FapStream, decode, encode, iter_decode
 
 
 def status(key):
@@ -573,7 +582,11 @@ def status(key):
         return next(int(line.split()[1]) * 1024 for line in fh if line.startswith(key + ":"))
 
 
-path, whole = sys.argv[1], sys.argv[2] == "whole"
+path, whole, backend = sys.argv[1], sys.argv[2] == "whole", sys.argv[3]
+warm = FapStream.empty(10)  # a warm import: the backend's kernels loaded by a 10-frame decode first
+warm.fap_mask[:, 2] = True
+warm.timestamps[:] = [k / 25 for k in range(10)]
+decode(encode(warm, EncodeOptions(fps=25, intra_period=0)), backend=backend)
 try:  # Linux: reset the peak-RSS mark, so the import's own peak does not hide the decode's
     with open("/proc/self/clear_refs", "w") as fh:
         fh.write("5")
@@ -581,18 +594,27 @@ try:  # Linux: reset the peak-RSS mark, so the import's own peak does not hide t
 except OSError:
     before, peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, \
         lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-n = len(decode(path)) if whole else sum(1 for _ in iter_decode(path))
-print(n, peak() - before)
+if whole:
+    stream = decode(path, backend=backend)
+    n, held = len(stream), stream.nbytes
+else:
+    n, held = sum(1 for _ in iter_decode(path, backend=backend)), 0
+print(n, peak() - before, held)
 """
 
 
-def _rss_peak(path: Path, whole: bool) -> int:
-    """Peak RSS growth (bytes) of a fresh process that imports the codec, then decodes ``path`` whole or
-    streaming (no tracing, so it runs at full speed): VmHWM after minus VmRSS before, the mark reset first."""
-    out = subprocess.run([sys.executable, "-c", _RSS_CHILD, str(path), "whole" if whole else "stream"],
+def _rss_child(path: Path, whole: bool, backend: str = "auto") -> tuple[int, int, int]:
+    """(frames, peak RSS growth, bytes the stream holds) of a fresh process that imports the codec, loads
+    ``backend``'s kernels with a 10-frame decode (a warm import), then decodes ``path`` whole or streaming
+    (no tracing, so it runs at full speed): VmHWM after minus VmRSS before, the mark reset first."""
+    out = subprocess.run([sys.executable, "-c", _RSS_CHILD, str(path), "whole" if whole else "stream", backend],
                          capture_output=True, text=True, check=True, cwd=REPO,
                          env={**os.environ, "PYTHONPATH": str(REPO)}).stdout.split()
-    return int(out[1])
+    return int(out[0]), int(out[1]), int(out[2])
+
+
+def _rss_peak(path: Path, whole: bool) -> int:
+    return _rss_child(path, whole)[1]
 
 
 def _decode_bytes(name: str, path: Path) -> dict:
@@ -629,6 +651,45 @@ def bench_decode_bytes(frames: int, vectors: Path) -> dict:
             "headmotion_long": "measured" if real.is_file() else f"skipped, not found at {real}"}
 
 
+def tiny_stream(n: int) -> FapStream:
+    """Issue 26 item 7's stream: ``n`` frames of one FAP (3) cycling -1, 0, 1 at 25 fps, one intra frame."""
+    s = FapStream.empty(n)
+    s.fap_mask[:, 2] = True
+    s.fap_values[:, 2] = np.arange(n) % 3 - 1
+    s.timestamps[:] = np.arange(n) / FPS
+    return s
+
+
+def bench_tiny_frames(frames: int) -> dict:
+    """Each backend decoding the tiny-frame stream whole in a fresh process: RSS peak and bytes held."""
+    from mpeg4fa.fba.compiled import available
+
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench_codec_") as tmp:
+        path = Path(tmp) / f"tiny_{frames}.fba"
+        path.write_bytes(encode(tiny_stream(frames), EncodeOptions(fps=FPS, intra_period=0)))
+        for backend in ("python", "compiled") if available() else ("python",):
+            n, rss, held = _rss_child(path, True, backend)
+            check(n == frames, f"tiny stream, {backend}: decoded {n} of {frames} frames")
+            rows.append({"backend": backend, "frames": n, "bytes": path.stat().st_size, "rss_peak_bytes": rss,
+                         "held_bytes_per_frame": held / n, "rss_bytes_per_frame": rss / n,
+                         "rss_pass": rss <= TARGET_TINY_RSS_BYTES,
+                         "held_pass": held / n <= TARGET_TINY_HELD_BYTES_PER_FRAME})
+    return {"rows": rows, "target_rss_bytes": TARGET_TINY_RSS_BYTES,
+            "target_held_bytes_per_frame": TARGET_TINY_HELD_BYTES_PER_FRAME}
+
+
+def print_tiny_frames(m: dict) -> None:
+    rows = [[r["backend"], r["frames"], r["bytes"], r["held_bytes_per_frame"], r["rss_peak_bytes"] / 1e6,
+             r["rss_bytes_per_frame"]] for r in m["rows"]]
+    note = (f"held: FapStream.nbytes over its frames; RSS: peak resident growth of a fresh process above a warm "
+            f"import (kernels loaded).\nTargets: held <= {m['target_held_bytes_per_frame']} B/frame, "
+            f"RSS <= {m['target_rss_bytes'] / 1e6:.0f} MB: "
+            + ", ".join(f"{r['backend']} {verdict(r['held_pass'] and r['rss_pass'])}" for r in m["rows"]))
+    print(table("4b. decode() of the tiny-frame stream (issue 26 item 7)",
+                ["backend", "frames", "file bytes", "held B/frame", "RSS peak MB", "RSS B/frame"], rows, note))
+
+
 def print_decode_bytes(m: dict) -> None:
     rows = [[r["name"], r["frames"], r["bytes"], r["bits_per_frame"], r["decode_peak_bytes_per_frame"],
              r["decode_held_bytes_per_frame"], r["rss_decode_bytes_per_frame"],
@@ -654,36 +715,48 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=3, help="timed runs per measurement; the best counts (default 3)")
     ap.add_argument("--decode-frames", type=int, default=DECODE_FRAMES,
                     help=f"frames of the decode-memory stream (default {DECODE_FRAMES:,}; traced, ~3 ms a frame)")
+    ap.add_argument("--tiny-frames", type=int, default=TINY_FRAMES,
+                    help=f"frames of the tiny-frame stream of item 4 (default {TINY_FRAMES:,}, a 300 KB file)")
+    ap.add_argument("--only", type=int, action="append", choices=range(5), metavar="ITEM",
+                    help="run only this item (0-4; repeat for several), e.g. --only 4 for decode memory")
     args = ap.parse_args(argv)
-    if args.frames < 1 or args.repeat < 1 or args.decode_frames < 1:
-        ap.error("--frames, --repeat and --decode-frames must be at least 1")
+    if args.frames < 1 or args.repeat < 1 or args.decode_frames < 1 or args.tiny_frames < 1:
+        ap.error("--frames, --repeat, --decode-frames and --tiny-frames must be at least 1")
+    items = set(args.only or range(5))
 
     started = time.perf_counter()
     info = machine_info(pin_one_core())
     print(f"mpeg4fa {info['mpeg4fa']} codec benchmark: Python {info['python']}, numpy {info['numpy']}, "
           f"{info['platform']}, {info['cpu_count']} CPUs ({info['process']})\n")
     report: dict = {"machine": info, "args": {"vectors": str(args.vectors), "frames": args.frames,
-                                              "repeat": args.repeat, "decode_frames": args.decode_frames}}
+                                              "repeat": args.repeat, "decode_frames": args.decode_frames,
+                                              "tiny_frames": args.tiny_frames, "items": sorted(items)}}
     ok = True
     try:
-        report["paths"] = paths = bench_paths(args.frames, args.repeat, args.vectors)
-        print_paths(paths, args.repeat)
+        if 0 in items:
+            report["paths"] = paths = bench_paths(args.frames, args.repeat, args.vectors)
+            print_paths(paths, args.repeat)
 
-        report["synthetic"] = syn = bench_synthetic(args.frames, args.repeat)
-        print_synthetic(syn, args.repeat)
+        if 1 in items:
+            report["synthetic"] = syn = bench_synthetic(args.frames, args.repeat)
+            print_synthetic(syn, args.repeat)
 
-        if args.vectors.is_dir() and find_vectors(args.vectors):
+        if 2 in items and args.vectors.is_dir() and find_vectors(args.vectors):
             report["vectors"] = vec = bench_vectors(args.vectors, args.repeat)
             print_vectors(vec, args.repeat)
-        else:
+        elif 2 in items:
             report["vectors"] = vec = None
             print(f"2. Real vectors: skipped, no .fba streams at {args.vectors}\n")
 
-        report["memory"] = mem = bench_memory()
-        print_memory(mem)
+        if 3 in items:
+            report["memory"] = mem = bench_memory()
+            print_memory(mem)
 
-        report["decode_memory"] = dm = bench_decode_bytes(args.decode_frames, args.vectors)
-        print_decode_bytes(dm)
+        if 4 in items:
+            report["decode_memory"] = dm = bench_decode_bytes(args.decode_frames, args.vectors)
+            print_decode_bytes(dm)
+            report["tiny_frames"] = tiny = bench_tiny_frames(args.tiny_frames)
+            print_tiny_frames(tiny)
     except CheckFailed as exc:
         ok = False
         report["check_failed"] = str(exc)
@@ -719,6 +792,12 @@ def main(argv: list[str] | None = None) -> int:
             targets.append([f"decode() peak bytes/frame, {r['name']}", f"{r['decode_peak_bytes_per_frame']:,.0f}",
                             verdict(r["decode_peak_bytes_per_frame"] <= TARGET_DECODE_BYTES_PER_FRAME)
                             if r is report["decode_memory"]["streams"][0] else "(fixed costs over few frames)"])
+    if "tiny_frames" in report:
+        for r in report["tiny_frames"]["rows"]:
+            targets.append([f"decode() of {r['frames']:,} tiny frames ({r['backend']}): held <= "
+                            f"{TARGET_TINY_HELD_BYTES_PER_FRAME} B/frame, RSS peak <= {TARGET_TINY_RSS_BYTES / 1e6:.0f} MB",
+                            f"{r['held_bytes_per_frame']:.0f} B/frame, {r['rss_peak_bytes'] / 1e6:.1f} MB",
+                            verdict(r["held_pass"] and r["rss_pass"])])
     report["targets"] = [{"target": t, "value": v, "result": r} for t, v, r in targets]
     report["elapsed_s"] = time.perf_counter() - started
     print(table("Targets", ["target", "measured", "result"], targets))

@@ -2,23 +2,25 @@
 
 :func:`~mpeg4fa.fba.decode` used to keep every decoded :class:`Frame` (a dozen small
 numpy arrays each, 296-wide body rows included) and stack them at the end: about
-4.7 KB a frame. :class:`StreamBuilder` copies each frame's rows into blocks of
-:data:`STORE_BLOCK` frames instead, and joins the blocks field by field, freeing each
-block as soon as it is copied, so a stream costs its arrays (and one block) at the peak.
+4.7 KB a frame. :class:`StreamBuilder` writes each frame's rows straight into the
+stream's arrays instead: one anonymous mapping per array that grows in place as frames
+arrive (``mremap``: no copy, and pages are committed only as rows are written), and is
+cut to its rows at the end. There is no joining step, so the peak is the stream's
+arrays themselves, plus the :data:`BLOCK` frames :meth:`StreamBuilder.add` collects.
 
 Each integer array is held in the narrowest dtype of its :data:`~mpeg4fa.fba.stream.STORAGE`
 ladder that keeps every value seen so far within half the dtype's range; the first value that
-does not fit widens that field's blocks, all of them, to the next dtype that holds it. A face
-stream of small values (one FAP of a few units, no skips) costs 228 bytes a frame: ``fap_mask``
-68, ``fap_values`` int16 136, ``viseme``/``expression`` int8 10, ``timestamps`` 8,
+does not fit widens that array, in place, to the next dtype that holds it. A face stream of
+small values (one FAP of a few units, no skips) costs 228 bytes a frame: ``fap_mask`` 68,
+``fap_values`` int16 136, ``viseme``/``expression`` int8 10, ``timestamps`` 8,
 ``object_mask`` 1, ``skip`` 1, ``start_code`` 2, ``bits`` 2; a stream whose values need int32
 (head rotations at a fine quantiser) 364.
 
 Body arrays are the exception that makes this pay: ``bap_mask`` and ``bap_values``
-take ~1.5 KB a frame, and most streams send no body. A block gets them only when
-a frame with body data arrives; a stream none of whose frames has any gets
-:func:`no_body`, read-only zero rows that take no memory per frame (assign new
-arrays to a stream to add BAPs to it).
+take ~1.5 KB a frame, and most streams send no body. They get a mapping only when
+a frame with body data arrives (the frames before read as zero rows and commit no
+memory); a stream none of whose frames has any gets :func:`no_body`, read-only zero
+rows that take no memory per frame (assign new arrays to a stream to add BAPs to it).
 """
 from __future__ import annotations
 
@@ -33,16 +35,20 @@ from .stream import (FACE, N_BAPS, N_FAPS, OBJECT_START_CODE, STORAGE, CodingPar
 BLOCK = 1024
 """Frames per block of rows handed over at once (the compiled decoder's unit, and :meth:`StreamBuilder.add`'s)."""
 STORE_BLOCK = 16384
-"""Frames per storage block of a :class:`StreamBuilder`: few mappings even for millions of frames, and
-pages are committed only as rows are written, so a short stream pays for what it fills."""
+"""Frames a :class:`StreamBuilder` array first makes room for; it doubles its room when full (address
+space only: pages are committed as rows are written, so a short stream pays for what it fills)."""
+WIDEN_CHUNK = 1 << 16
+"""Values converted at a time when an array widens in place."""
 
-_SHAPES = {  # field -> row shape, for every per-frame array but the body's
+_SHAPES = {  # field -> row shape, for every per-frame array
     "fap_mask": (N_FAPS,), "fap_values": (N_FAPS,), "viseme": (4,), "expression": (6,), "timestamps": (),
-    "object_mask": (), "skip": (), "start_code": (), "bits": (),
+    "object_mask": (), "skip": (), "start_code": (), "bits": (), "bap_mask": (N_BAPS,), "bap_values": (N_BAPS,),
 }
 _LADDERS: dict[str, tuple[type, ...]] = {"fap_mask": (np.bool_,), "timestamps": (np.float64,),
-                                         "object_mask": (np.uint8,), **STORAGE}
-_BODY = {"bap_mask": bool, "bap_values": np.int32}
+                                         "object_mask": (np.uint8,), "bap_mask": (np.bool_,),
+                                         "bap_values": (np.int32,), **STORAGE}
+_BODY = ("bap_mask", "bap_values")
+_FACE = tuple(name for name in _SHAPES if name not in _BODY)
 
 ZERO_BAP_MASK = np.zeros(N_BAPS, dtype=bool)
 ZERO_BAP_VALUES = np.zeros(N_BAPS, dtype=np.int32)
@@ -50,18 +56,68 @@ ZERO_BAP_MASK.flags.writeable = False
 ZERO_BAP_VALUES.flags.writeable = False
 
 
-def _fresh(shape: tuple[int, ...], dtype) -> np.ndarray:
-    """Zeroed rows in an anonymous mapping of their own: given back to the system the moment the block is
-    dropped (heap blocks of this size stay with the process), so joining blocks into the stream's arrays
-    costs the arrays plus one block, not twice the stream."""
-    count = int(np.prod(shape))
-    buffer = mmap.mmap(-1, max(1, count * np.dtype(dtype).itemsize))
-    return np.frombuffer(buffer, dtype=dtype, count=count).reshape(shape)
+def _mapping(size: int) -> mmap.mmap:
+    """Zeroed anonymous memory of its own, private so that it can grow in place (a shared one cannot)."""
+    flags = getattr(mmap, "MAP_PRIVATE", 0) | getattr(mmap, "MAP_ANONYMOUS", 0)
+    return mmap.mmap(-1, max(1, size), flags=flags) if flags else mmap.mmap(-1, max(1, size))
 
 
 def no_body(n: int) -> tuple[np.ndarray, np.ndarray]:
     """``bap_mask`` and ``bap_values`` of ``n`` frames without body data: read-only views of one zero row."""
     return (np.broadcast_to(ZERO_BAP_MASK, (n, N_BAPS)), np.broadcast_to(ZERO_BAP_VALUES, (n, N_BAPS)))
+
+
+class _Column:
+    """One per-frame array being filled: rows in a mapping that grows in place, in a dtype that only widens."""
+
+    def __init__(self, shape: tuple[int, ...], dtype, rows: int = 0) -> None:
+        self.shape, self.dtype = shape, np.dtype(dtype)
+        self.per_row = int(np.prod(shape))
+        self.rows = rows  # rows filled (those before a body column was made read as zero)
+        self.room = max(STORE_BLOCK, rows)
+        self.map = _mapping(self.room * self.per_row * self.dtype.itemsize)
+
+    def _resize(self, size: int) -> None:
+        try:
+            self.map.resize(max(1, size))  # Linux: mremap, the pages move without a copy
+        except (OSError, SystemError, ValueError):  # no mremap here: a new mapping, copied
+            old, self.map = self.map, _mapping(size)
+            keep = min(len(old), size)
+            self.map[:keep] = old[:keep]
+            old.close()
+
+    def values(self, rows: int) -> np.ndarray:
+        """The first ``rows`` rows, flat (drop the view before the column grows)."""
+        return np.frombuffer(self.map, self.dtype, count=rows * self.per_row)
+
+    def write(self, start: int, rows: np.ndarray) -> None:
+        """Rows ``start ..`` (written past :attr:`rows` they extend it)."""
+        stop = start + len(rows)
+        if stop > self.room:
+            self.room = max(stop, 2 * self.room)
+            self._resize(self.room * self.per_row * self.dtype.itemsize)
+        self.values(stop)[start * self.per_row:] = np.asarray(rows).reshape(-1)
+        self.rows = max(self.rows, stop)
+
+    def widen(self, dtype) -> None:
+        """Hold the values in ``dtype`` (wider), in place: converted from the end, so that a wider value never
+        lands on a narrower one not yet read."""
+        wide = np.dtype(dtype)
+        self._resize(self.room * self.per_row * wide.itemsize)
+        count = self.rows * self.per_row
+        old, new = self.values(self.rows), np.frombuffer(self.map, wide, count=count)
+        for stop in range(count, 0, -WIDEN_CHUNK):
+            start = max(0, stop - WIDEN_CHUNK)
+            new[start:stop] = old[start:stop].copy()
+        del old, new
+        self.dtype = wide
+
+    def array(self, n: int) -> np.ndarray:
+        """The column as an ``(n, *shape)`` array over its own mapping, cut to its rows; the column is spent."""
+        if n == 0:
+            return np.zeros((0, *self.shape), self.dtype)
+        self._resize(n * self.per_row * self.dtype.itemsize)
+        return self.values(n).reshape(n, *self.shape)
 
 
 class StreamBuilder:
@@ -71,12 +127,11 @@ class StreamBuilder:
     def __init__(self, object_start_code: int = OBJECT_START_CODE) -> None:
         self.object_start_code = object_start_code
         self.intra: dict[int, CodingParams] = {}
-        self._blocks: list[dict[str, np.ndarray | None]] = []
-        self._fill = STORE_BLOCK  # rows used in the last block (full: the next frame opens a block)
-        self._dtypes = {name: ladder[0] for name, ladder in _LADDERS.items()}
+        self._columns: dict[str, _Column] = {}  # made on the first rows (the body's on the first body rows)
         self._stage: dict[str, np.ndarray] | None = None  # rows add() collects, stored BLOCK at a time
         self._stage_body: tuple[np.ndarray, np.ndarray] | None = None
         self._staged = 0
+        self._stored = 0
         self.n = 0
 
     def __len__(self) -> int:
@@ -85,7 +140,8 @@ class StreamBuilder:
     @property
     def dtypes(self) -> dict[str, np.dtype]:
         """The dtype each per-frame array is held in now (it only ever widens)."""
-        return {name: np.dtype(dtype) for name, dtype in self._dtypes.items()}
+        return {name: (self._columns[name].dtype if name in self._columns else np.dtype(_LADDERS[name][0]))
+                for name in _SHAPES}
 
     def add(self, *, fap_mask: np.ndarray, fap_values: np.ndarray, viseme: np.ndarray, expression: np.ndarray,
             timestamp: float = 0.0, object_mask: int = FACE, skip: int = 0, start_code: int = 0, bits: int = 0,
@@ -93,8 +149,7 @@ class StreamBuilder:
             params: CodingParams | None = None) -> None:
         """Append one frame given as rows; body rows may be None (no body data)."""
         if self._stage is None:  # rows at full width here; narrowed when a block of them is stored
-            self._stage = {name: np.zeros((BLOCK, *_SHAPES[name]), dtype=ladder[-1])
-                           for name, ladder in _LADDERS.items()}
+            self._stage = {name: np.zeros((BLOCK, *_SHAPES[name]), dtype=_LADDERS[name][-1]) for name in _FACE}
         stage, k = self._stage, self._staged
         stage["fap_mask"][k] = fap_mask
         stage["fap_values"][k] = fap_values
@@ -130,57 +185,33 @@ class StreamBuilder:
     def extend(self, rows: dict[str, np.ndarray], bap_mask: np.ndarray | None = None,
                bap_values: np.ndarray | None = None) -> None:
         """Append many frames given as arrays (the fields of ``FapStream`` but the body's, one row per frame),
-        as :meth:`add` would one by one: a block gets body arrays only when one of its frames carries body data."""
+        as :meth:`add` would one by one: the body arrays are made when a frame first carries body data."""
         self._flush()
         self._store(rows, bap_mask, bap_values)
         self.n += len(rows["timestamps"])
 
     def _store(self, rows: dict[str, np.ndarray], bap_mask: np.ndarray | None, bap_values: np.ndarray | None) -> None:
-        n = len(rows["timestamps"])
-        for name in STORAGE:
-            self._fit(name, rows[name])
-        body = None
-        if bap_mask is not None and bap_values is not None:
-            body = bap_mask.any(axis=1) | bap_values.any(axis=1)
-        done = 0
-        while done < n:
-            if self._fill == STORE_BLOCK:
-                self._open_block()
-            block, start = self._blocks[-1], self._fill
-            take = min(STORE_BLOCK - start, n - done)
-            for name in _SHAPES:
-                block[name][start:start + take] = rows[name][done:done + take]  # type: ignore[index]
-            if body is not None and body[done:done + take].any():
-                for name, value in (("bap_mask", bap_mask), ("bap_values", bap_values)):
-                    if block[name] is None:
-                        block[name] = _fresh((STORE_BLOCK, N_BAPS), _BODY[name])
-                    block[name][start:start + take] = value[done:done + take]  # type: ignore[index]
-            self._fill += take
-            done += take
+        n, start = len(rows["timestamps"]), self._stored
+        body = {}
+        if bap_mask is not None and bap_values is not None and (bap_mask.any() or bap_values.any()):
+            body = {"bap_mask": bap_mask, "bap_values": bap_values}
+        for name, values in (*((name, rows[name]) for name in _FACE), *body.items()):
+            column = self._columns.get(name)
+            if column is None:
+                column = self._columns[name] = _Column(_SHAPES[name], _LADDERS[name][0], start)
+            self._fit(column, _LADDERS[name], values)
+            column.write(start, values)
+        self._stored += n
 
-    def _fit(self, name: str, values: np.ndarray) -> None:
-        """Widen field ``name``, in every block, when ``values`` do not fit its dtype now."""
-        current = self._dtypes[name]
-        if not values.size or current is _LADDERS[name][-1]:
+    @staticmethod
+    def _fit(column: _Column, ladder: tuple[type, ...], values: np.ndarray) -> None:
+        """Widen ``column`` when ``values`` do not fit its dtype now."""
+        if len(ladder) == 1 or column.dtype == ladder[-1] or not values.size:
             return
         low, high = values.min(), values.max()
-        if fits(current, low, high):
-            return
-        ladder = _LADDERS[name]
-        wide = storage_dtype(ladder, low, high, ladder.index(current) + 1)
-        self._dtypes[name] = wide
-        for block in self._blocks:  # one block at a time: the peak grows by one block, not the stream
-            narrow = block[name]
-            block[name] = _fresh(narrow.shape, wide)  # type: ignore[union-attr]
-            block[name][...] = narrow  # type: ignore[index]
-            del narrow
-
-    def _open_block(self) -> None:
-        block: dict[str, np.ndarray | None] = {
-            name: _fresh((STORE_BLOCK, *shape), self._dtypes[name]) for name, shape in _SHAPES.items()}
-        block.update(dict.fromkeys(_BODY))
-        self._blocks.append(block)
-        self._fill = 0
+        if not fits(column.dtype, low, high):
+            at = [np.dtype(d) for d in ladder].index(column.dtype) + 1
+            column.widen(storage_dtype(ladder, low, high, at))
 
     def append(self, frame: Frame) -> None:
         """Append a decoded (or hand-made) :class:`Frame`."""
@@ -190,32 +221,23 @@ class StreamBuilder:
                  bap_values=frame.bap_values, params=frame.params)
 
     def build(self) -> FapStream:
-        """The stream of every frame added so far. The builder is emptied: its blocks are freed as they are joined."""
+        """The stream of every frame added so far; its arrays are the builder's, cut to their rows. The
+        builder is emptied."""
         self._flush()
-        n, blocks = self.n, self._blocks
-        sizes = [STORE_BLOCK] * (len(blocks) - 1) + ([self._fill] if blocks else [])
-        arrays: dict[str, np.ndarray] = {}
-        for name, shape in _SHAPES.items():
-            arrays[name] = self._join(name, (n, *shape), self._dtypes[name], sizes)
-        if any(block["bap_mask"] is not None for block in blocks):
-            for name, dtype in _BODY.items():
-                arrays[name] = self._join(name, (n, N_BAPS), dtype, sizes)
-        else:
+        n = self.n
+        arrays = {}
+        for name in _SHAPES:
+            column = self._columns.pop(name, None)
+            if name in _BODY:
+                if column is not None:
+                    arrays[name] = column.array(n)
+                continue
+            arrays[name] = column.array(n) if column is not None else np.zeros((n, *_SHAPES[name]), _LADDERS[name][0])
+        if "bap_mask" not in arrays:
             arrays["bap_mask"], arrays["bap_values"] = no_body(n)
         stream = FapStream(**arrays, intra=self.intra, object_start_code=self.object_start_code)
         self.__init__(self.object_start_code)  # type: ignore[misc]
         return stream
-
-    def _join(self, name: str, shape: tuple[int, ...], dtype, sizes: list[int]) -> np.ndarray:
-        out = np.zeros(shape, dtype=dtype)
-        start = 0
-        for block, size in zip(self._blocks, sizes):
-            part = block[name]
-            if part is not None:
-                out[start:start + size] = part[:size]
-            block[name] = None  # freed now, before the next field is allocated
-            start += size
-        return out
 
 
 def stack_frames(frames: Iterable[Frame], object_start_code: int = OBJECT_START_CODE) -> FapStream:

@@ -299,6 +299,13 @@ class FapStream:
         return types
 
     @property
+    def nbytes(self) -> int:
+        """Bytes the per-frame arrays hold: what a stream costs in memory (a row shared by every frame,
+        as a stream without body data shares its zero ``bap_mask``/``bap_values`` row, counts once)."""
+        return sum(a[0].nbytes if a.ndim > 1 and len(a) and a.strides[0] == 0 else a.nbytes
+                   for a in (getattr(self, name) for name in ARRAY_FIELDS))
+
+    @property
     def first_params(self) -> CodingParams | None:
         return self.intra[min(self.intra)] if self.intra else None
 
