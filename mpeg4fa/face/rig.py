@@ -47,6 +47,8 @@ NECK_FADE_MM = 30.0  # the head rotation fades out over this height above the ne
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
 WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
 LID_CLEAR_MM = 6.0  # brow, cheek and nose weights fade to 0 over this surface distance before a lid margin
+CORNERS = (("2.4", "8.3"), ("2.5", "8.4"))  # (inner, outer) lip corner, left then right
+CORNER_MARGIN_MM = 1.0  # the outer lip corner stays at least this far outside the inner one
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,7 @@ class Rig:
     fp_vertex: np.ndarray
     chin_fp: int  # 2.1, the point FAP 3 drops
     head_fp: int  # 7.1, the head's rotation centre
+    corners: tuple[tuple[int, int], ...] = ()  # (inner, outer) lip corner feature points, left then right
 
 
 def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
@@ -120,6 +123,7 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
         jaw_rows=_jaw_weights(mesh), head_fade=_head_weights(mesh), roll_rows=roll_rows,
         parts={p: mesh.part(p) for p in mesh.part_ranges}, joints=dict(mesh.joints), fp_vertex=fp_vertex,
         chin_fp=index["2.1"], head_fp=index["7.1"],
+        corners=tuple((index[a], index[b]) for a, b in CORNERS if a in index and b in index),
     )
 
 

@@ -289,7 +289,9 @@ def test_displacement_continuous_across_the_border(generic_blocks):
     steps = np.linalg.norm(np.diff(d[skin][path], axis=0), axis=1)
     gaps = np.diff(along[path])
     assert len(path) > 5
-    assert np.all(steps <= 0.6 * np.maximum(gaps, 1.0) + 0.3)
+    # relative to how far the skin moves there (0.6 per mm + 0.3 mm when joy moved it 5.6 mm at most)
+    scale = np.linalg.norm(d[skin][path], axis=1).max() / 5.6
+    assert np.all(steps <= scale * (0.6 * np.maximum(gaps, 1.0) + 0.3))
 
 
 def test_registered(procedural_face):

@@ -21,6 +21,7 @@ from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, coupled_points
 from mpeg4fa.face.fapu import DISTANCES
 from mpeg4fa.face.model import FaceModel
+from mpeg4fa.face.rig import CORNER_MARGIN_MM, CORNERS
 from mpeg4fa.spec import FAPS, N_FAPS
 
 V = 200.0
@@ -177,6 +178,16 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
         errors.append((f"{label} coupled", float(np.linalg.norm(moved[i] - amount * motion.direction(fap))) / abs(value * fapu.unit(record.fapu))))
         coupled.add(i)
     coupled |= {index[label] for label in PASSIVE_POINTS if label in index}  # they ride on the skin
+    for inner, outer in CORNERS:  # a lip corner sent across the other one pushes it ahead
+        for mine, other, sign in ((inner, outer, 1.0), (outer, inner, -1.0)):
+            if mine in record.feature_point and other in index:
+                i, o = index[mine], index[other]
+                side = np.sign(rest[index[outer], 0] - rest[index[inner], 0]) * sign  # from mine toward other
+                want = side * max(side * rest[o, 0], side * pose.feature_points[i, 0] + CORNER_MARGIN_MM)
+                expected = np.array([want - rest[o, 0], 0.0, 0.0])
+                errors.append((f"{other} kept across {mine}",
+                               float(np.linalg.norm(moved[o] - expected)) / abs(value * fapu.unit(record.fapu))))
+                coupled.add(o)
     if fap in motion.JAW:
         jaw_vertices = set(rig.jaw_rows[0].tolist())
         coupled |= {i for i, v in enumerate(mesh.fp_vertex) if int(v) in jaw_vertices}

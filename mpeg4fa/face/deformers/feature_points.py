@@ -13,7 +13,7 @@ import numpy as np
 from mpeg4fa.face import motion
 from mpeg4fa.face.lids import turn_lid
 from mpeg4fa.face.pose import Pose
-from mpeg4fa.face.rig import Rig
+from mpeg4fa.face.rig import CORNER_MARGIN_MM, Rig
 
 EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
 _JAW_FAP = {kind: fap for fap, kind in motion.JAW.items()}  # "open" -> 3, "thrust" -> 14, "shift" -> 15
@@ -26,6 +26,26 @@ def _rotate_rows(points: np.ndarray, rows: np.ndarray, weights: np.ndarray, cent
     if shift is not None:
         step += shift
     points[rows] += weights[:, None] * step
+
+
+def point_motion(rig: Rig, v: np.ndarray) -> np.ndarray:
+    """``(84, 3)`` feature point motion of a frame's translational FAPs, with the lips' outline kept
+    around their opening: an inner lip corner (2.4/2.5, FAPs 6/7) and its outer corner (8.3/8.4,
+    FAPs 53/54) never come closer across than :data:`~mpeg4fa.face.rig.CORNER_MARGIN_MM`, or the
+    skin between folds over and shows its inside past the lips (a smile's 6/7 over a rounded
+    viseme's 53/54 did). Where they would, each gives way in proportion to how far it was sent, so a
+    lone FAP moves its own point exactly and pushes the other one ahead of it."""
+    m = (rig.translate @ v).reshape(-1, 3)
+    rest = rig.rest[rig.fp_vertex]
+    for inner, outer in rig.corners:
+        side = np.sign(rest[outer, 0] - rest[inner, 0]) or 1.0
+        past = side * ((rest[inner, 0] + m[inner, 0]) - (rest[outer, 0] + m[outer, 0])) + CORNER_MARGIN_MM
+        if past > 0:
+            a, b = abs(m[inner, 0]), abs(m[outer, 0])
+            share = a / (a + b) if a + b > 0 else 0.5  # the outer corner's share of the way
+            m[outer, 0] += side * past * share
+            m[inner, 0] -= side * past * (1.0 - share)
+    return m
 
 
 def apply_lids(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
@@ -45,7 +65,7 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[n
     p = rest.copy()
     fapu = rig.fapu
 
-    fp_motion = (rig.translate @ v).reshape(-1, 3)
+    fp_motion = point_motion(rig, v)
     if fp_motion.any():
         p[rig.moving] += rig.weights_moving @ fp_motion
 
