@@ -26,11 +26,14 @@ def register(commands: Commands) -> None:
     p = commands.add_parser(
         "conform", help="run the conformance suite on a decoder (this project's by default)",
         description="Decode every vector of the suite with a decoder and check what it shows (values per "
-                    "frame, time stamps, feature points with a face) and what it rejects. Exit status 0 "
-                    "only when every required check passes. An external decoder is called as "
-                    "'CMD STREAM OUT.json [--fdp FDP]' (see conformance/README.md).",
+                    "frame, time stamps, feature points with a face) and what it rejects. Every check names "
+                    "its rule (spec/conformance_rules.csv); exit status 0 only when every check of a required "
+                    "rule (V or S) passes: informative rules are reported as 'differs', never failed. An "
+                    "external decoder is called as 'CMD STREAM OUT.json [--fdp FDP]' (see conformance/README.md; "
+                    "example adapters in conformance/adapters/).",
         epilog="examples:\n  mpeg4fa conform\n  mpeg4fa conform --only syntax,reject --report out/conform\n"
-               "  mpeg4fa conform --decoder './mydecoder --suite-mode' --timeout 60 --json",
+               "  mpeg4fa conform --decoder './mydecoder --suite-mode' --timeout 60 --json\n"
+               "  mpeg4fa conform --decoder 'python3 conformance/adapters/mpeg4fa_decoder.py'",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--suite", type=Path, default=default_root(),
                    help="the folder holding manifest.json (default: the suite shipped with the project)")
@@ -79,13 +82,13 @@ def run_conform(args: argparse.Namespace) -> int:
         print(f"{suite.decoder} on {manifest.root}: {len(suite.vectors)} vectors in {suite.seconds:.1f} s")
         print(summary_table(suite))
         failing = suite.failing()
-        for vid in failing[:20]:
-            result = next(v for v in suite.vectors if v.vector.id == vid)
-            bad = next((c for c in result.checks if c.status != "pass"), None)
-            if bad is not None:
-                print(f"  {vid}: {bad.name} {bad.status}: {bad.message}")
-        if len(failing) > 20:
-            print(f"  ... and {len(failing) - 20} more")
+        findings = suite.by_rule()
+        if findings:
+            print("by rule:")
+        for g in findings:
+            kind = "required" if g["required"] else "informative"
+            print(f"  {g['rule']} [{g['confidence']}, {kind}]: {len(g['vectors'])} vector(s), {g['checks']} check(s); "
+                  f"e.g. {g['example'][:160]}")
         print("PASSED" if suite.passed else f"FAILED: {len(failing)} required vector(s)")
         if written:
             print(f"report: {written['html']}", file=sys.stderr)

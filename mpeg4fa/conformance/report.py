@@ -14,6 +14,7 @@ import numpy as np
 
 from mpeg4fa.conformance.compare import DIFFERS, FAIL, NOT_SUPPORTED, PASS, STATUSES, Check, pinned_axes
 from mpeg4fa.conformance.rules import rule_of
+from mpeg4fa.spec import FAP_PARTNERS
 from mpeg4fa.conformance.runner import SuiteResult, VectorResult
 
 MAX_PLOTS = 200
@@ -28,17 +29,28 @@ def _trajectories(v: VectorResult, check: Check) -> tuple[str, np.ndarray, dict[
     if "expected_frames" in check.worst:  # a frame count off: the worst FAP over the frames both have, by frame
         return _by_frame(out, exp)
     t = np.asarray(exp.get("timestamps", np.arange(len(out))), dtype=np.float64)
-    if check.name == "timestamps":
-        return "time (s)", np.arange(len(t), dtype=np.float64), {"timestamp": (t, out.timestamps)}
-    if check.name in ("shown", "sent") and "fap" in check.worst:
+    if check.name.startswith("timestamps"):  # the error, in ms: a 1 ms truncation is invisible on a time axis
+        frames = np.arange(len(t), dtype=np.float64)
+        if len(out.timestamps) == len(t):
+            tol = check.worst.get("tolerance", 0.0) * 1e3
+            return f"decoder - expected (ms), tolerance {tol:g}", frames, \
+                {"time stamp error": (np.zeros(len(t)), (out.timestamps - t) * 1e3)}
+        return "time (s)", frames, {"timestamp": (t, out.timestamps)}
+    if check.name.startswith(("shown", "sent")) and "fap" in check.worst:
         col = check.worst["fap"] - 1
-        if check.name == "shown":
+        if check.name.startswith("shown"):
             want, got = np.asarray(exp["shown"])[:, col], out.shown[:, col]
         elif out.sent is not None:
             want, got = np.asarray(exp["sent"]["values"])[:, col], out.sent["values"][:, col]
         else:
             return None
-        return f"FAP {col + 1} ({'FAPU' if check.name == 'shown' else 'sent'})", t, {f"FAP {col + 1}": (want, got)}
+        curves = {f"FAP {col + 1}": (want, got)}
+        if check.name == "shown_partner":  # the counterpart that was sent, whose value the decoder may copy
+            for partner in FAP_PARTNERS[col]:
+                if partner >= 0:
+                    curves[f"FAP {partner + 1} (sent counterpart)"] = (np.asarray(exp["shown"])[:, partner],
+                                                                       out.shown[:, partner])
+        return f"FAP ({'FAPU' if check.name.startswith('shown') else 'sent'})", t, curves
     if check.name == "feature_points" and "label" in check.worst and out.fp_positions is not None:
         label = check.worst["label"]
         fp = exp["feature_points"]
@@ -82,7 +94,8 @@ def plot(v: VectorResult, check: Check, path: Path) -> bool:
     for i, (ax, (name, (want, got))) in enumerate(zip(axes, curves.items())):
         colour = f"C{i}"
         want, got = np.asarray(want, dtype=np.float64), np.asarray(got, dtype=np.float64)
-        ax.plot(_axis(t, len(want)), want, "--", color=colour, linewidth=2.2, alpha=0.6, label=f"{name} expected")
+        ax.plot(_axis(t, len(want)), want, "--", color=colour, linewidth=2.2, alpha=0.6, marker="o", fillstyle="none",
+                markersize=7, label=f"{name} expected")
         ax.plot(_axis(t, len(got)), got, "-", color=colour, linewidth=1.2, marker=".", label=f"{name} decoder")
         ax.set_ylabel(ylabel, fontsize=8)
         ax.grid(alpha=0.3)
