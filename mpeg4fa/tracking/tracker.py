@@ -21,8 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mpeg4fa.decoded.limits import clamp
+from mpeg4fa.fba.params import RANGE_DELTA
 from mpeg4fa.fba.stream import FapStream
-from mpeg4fa.spec import ANGLE_UNIT, N_BAPS, N_FAPS
+from mpeg4fa.spec import ANGLE_UNIT, N_BAPS, N_FAPS, QUANT_STEP
 from mpeg4fa.tracking import faps as fap_rules
 from mpeg4fa.tracking.errors import NoFaceError, TrackingError
 from mpeg4fa.tracking.filters import OneEuroFilter
@@ -226,9 +228,19 @@ class FaceTracker:
         return fap_stream(self.values(), self.fps)
 
 
+CARRIED_LEVELS = 30 * RANGE_DELTA
+"""Quantised levels every tracked value is kept within: one range code below the largest (31 x 60), so any
+``fap_quant`` carries it (a tracker's outlier must not make the stream unencodable)."""
+
+
 def fap_stream(values: np.ndarray, fps: float) -> FapStream:
-    """A FapStream sending :data:`.faps.SENT` in every frame from ``(n, 68)`` float values (rounded)."""
+    """A FapStream sending :data:`.faps.SENT` in every frame from ``(n, 68)`` float values, rounded and held
+    within what a face shows (:func:`mpeg4fa.decoded.limits.clamp`: no negative jaw) and a stream carries."""
     n = len(values)
+    values = np.nan_to_num(np.asarray(values, dtype=np.float64).reshape(n, N_FAPS))
+    values, _ = clamp(values)
+    bound = CARRIED_LEVELS * QUANT_STEP
+    values = np.clip(values, -bound, bound)
     stream = FapStream.empty(0)
     sent = np.array(fap_rules.SENT) - 1
     mask = np.zeros((n, N_FAPS), dtype=bool)

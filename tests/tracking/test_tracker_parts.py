@@ -89,3 +89,16 @@ def test_the_calmest_stretch_is_where_the_face_holds_still_with_the_mouth_shut()
     choice = calmest_neutral(frames, fps)
     assert 40 <= choice.first and choice.last < 55, (choice.first, choice.last)
     assert "calmest" in choice.describe(fps)
+
+
+@pytest.mark.parametrize("fap_quant", [1, 3, 31])
+def test_outliers_are_held_to_what_a_face_shows_and_a_stream_carries(fap_quant):
+    from mpeg4fa.fba import EncodeOptions, decode, encode
+
+    values = np.zeros((20, 68))
+    values[:, 2] = np.linspace(-9000, 9000, 20)     # jaw: never negative, and within a range code
+    values[:, 48] = np.linspace(-4e5, 4e5, 20)     # yaw beyond a half turn
+    values[3, 18] = np.nan                          # a lost value
+    decoded = decode(encode(fap_stream(values, 25.0), EncodeOptions(fap_quant=fap_quant)))
+    assert decoded.fap_values[:, 2].min() == 0 and decoded.fap_values[:, 2].max() > 7000
+    assert np.abs(decoded.fap_values[:, 48]).max() <= np.pi / ANGLE_UNIT + 2000
