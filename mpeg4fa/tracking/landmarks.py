@@ -72,12 +72,13 @@ def _quiet_native_stderr():
     """The model's native code (TF Lite, absl) writes INFO/W lines straight to file descriptor 2 when
     its graphs start (the first image, and again after images without a face); send that descriptor
     to /dev/null meanwhile (~10 us a call), so a run prints only our lines."""
+    fd = 2                          # the native code writes to descriptor 2 whatever sys.stderr is
     try:
-        fd = sys.stderr.fileno()
-    except (AttributeError, OSError, ValueError):   # stderr replaced (pytest capture, a GUI): nothing to quieten
+        os.fstat(fd)
+        sys.stderr.flush()
+    except (AttributeError, OSError, ValueError):   # no descriptor 2 (a GUI without a console): nothing to quieten
         yield
         return
-    sys.stderr.flush()
     saved = os.dup(fd)
     try:
         with open(os.devnull, "wb") as null:

@@ -174,6 +174,10 @@ class BoxRequest(_Strict):
     dragged: dict[Literal["front", "side"], dict[str, Pixel]] = {}  # per view, the points put by hand (they stay put)
 
 
+class FindRequest(_Strict):
+    view: Literal["front", "side"] = "front"
+
+
 class CalibrateRequest(_Strict):
     front: dict[str, Pixel]
     side: dict[str, Pixel]
@@ -400,6 +404,19 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
         ph["guess"] = photos.guess(the_head().mesh, ph["sizes"], ph["side_view"], boxes, dragged)
         ph["dragged"] = dragged
         return {"guess": ph["guess"]}
+
+    @app.post("/api/photos/find")
+    def photo_find(req: FindRequest):
+        """The face found in a loaded photo: its points placed (they count as put by hand: a later box drag
+        leaves them), the box fitted to them so that the points not found follow."""
+        ph = need_photos()
+        view = "front" if req.view == "front" else ph["side_view"]
+        found, box = photos.find_points(the_head().mesh, ph["images"][req.view], view, req.view)
+        boxes = dict(ph["guess"]["box"], **{req.view: [round(v, 3) for v in box]})
+        dragged = {**ph["dragged"], req.view: {**ph["dragged"][req.view], **found}}
+        ph["guess"] = photos.guess(the_head().mesh, ph["sizes"], ph["side_view"], boxes, dragged)
+        ph["dragged"] = dragged
+        return {"guess": ph["guess"], "found": sorted(found)}
 
     @app.post("/api/calibrate")
     def calibrate(req: CalibrateRequest):

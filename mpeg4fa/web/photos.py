@@ -153,6 +153,32 @@ def guess(head_mesh, sizes: Mapping[str, tuple[int, int]], side_view: str, boxes
     return out
 
 
+def find_points(head_mesh, image: np.ndarray, view: str, where: str) -> tuple[dict[str, list[float]], list[float]]:
+    """(points, box): the feature points the landmark model finds on a photo (those ``view`` shows), and the
+    head's box fitted to them (least squares per axis), so that the points it does not find (ears,
+    hairline, tongue...) follow the found face. EditError when there is no face or no model."""
+    from mpeg4fa.tracking import TrackingError, feature_points, find_landmarks
+
+    try:
+        found = feature_points(find_landmarks(image, f"{where} photo"))
+    except TrackingError as exc:
+        hint = exc.hint if view == "front" else ("the landmark model finds faces turned up to about 60 degrees, "
+                                                 "not a profile: place the side points by hand")
+        raise EditError(exc.message, where=where, hint=hint) from None
+    outline_points, outline = head_outline(head_mesh, view)
+    labels = [label for label in found if label in outline_points]
+    head = np.array([outline_points[label] for label in labels])
+    pix = np.array([found[label][:2] for label in labels])
+    sx, cx = np.polyfit(head[:, 0], pix[:, 0], 1)           # x = cx + sx * across
+    sy, cy = np.polyfit(head[:, 1], pix[:, 1], 1)           # y = cy + sy * up (sy < 0: y grows down)
+    a0, u0, a1, u1 = outline
+    if sx <= 0 or sy >= 0:
+        raise EditError("the face found runs the wrong way across or up the photo", where=where,
+                        hint="check for a mirrored or upside-down photo")
+    box = [float(cx + sx * a0), float(cy + sy * u1), float(cx + sx * a1), float(cy + sy * u0)]
+    return {label: [round(float(found[label][0]), 3), round(float(found[label][1]), 3)] for label in labels}, box
+
+
 def _known_in(placed: Mapping, held: Mapping, where: str) -> None:
     unknown = sorted(set(held) - set(placed))
     if unknown:

@@ -1,7 +1,8 @@
 // The Photos panel: calibrate the head on a front and a side photo (issue 17 item 4).
 // Each photo is drawn in an SVG in its own pixels, with the head's box and feature points over it;
 // dragging a box edge refits the guessed points (POST /api/photos/box; the dragged ones stay put),
-// dragging a point moves it (x-y on the front, z-y on the side). Calibrate sends every point
+// dragging a point moves it (x-y on the front, z-y on the side). "Find the face" places the front photo's
+// points with the landmark model (POST /api/photos/find). Calibrate sends every point
 // (POST /api/calibrate); the calibrated head is drawn beside the photos in a small three.js view
 // wearing the blended texture (GET /api/texture-preview on the skin's texture coordinates).
 import * as THREE from "three";
@@ -235,9 +236,26 @@ async function loadPhotos() {
     setCalibrated(false, null);
     VIEWS.forEach(drawPhoto);
     $("btn-calibrate").disabled = false;
+    $("btn-photos-find").disabled = false;
     panel.dataset.loaded = "1";
     setStatus(`photos loaded: ${Object.keys(answer.guess.front).length} points on the front, `
       + `${Object.keys(answer.guess.side).length} on the side; drag the box edges and the points`, "ok");
+  } catch (e) { fail(e); }
+}
+
+async function findFace() {
+  // the landmark model places the front photo's points (POST /api/photos/find); they count as dragged, so a
+  // later box drag leaves them; the box is fitted to them and the points not found (ears, hairline) follow
+  try {
+    const { guess, found } = await call("/api/photos/find", { view: "front" });
+    state.guess = guess;
+    state.dragged.front = Object.fromEntries(guess.dragged.front.map((label) => [label, guess.front[label]]));
+    panel.dataset.finds = String(Number(panel.dataset.finds || 0) + 1);
+    fitViewBox("front");
+    VIEWS.forEach(placeOverlay);
+    setStatus(`face found: ${found.length} points placed on the front photo; the others follow the box. `
+      + "Drag any point that is off", "ok");
+    scheduleCalibration();
   } catch (e) { fail(e); }
 }
 
@@ -444,6 +462,7 @@ $("btn-photos-toggle").addEventListener("click", () => {
   requestAnimationFrame(() => { if (state.loaded) VIEWS.forEach(placeOverlay); live.resize(); });
 });
 $("btn-photos-load").addEventListener("click", loadPhotos);
+$("btn-photos-find").addEventListener("click", findFace);
 $("btn-calibrate").addEventListener("click", calibrate);
 $("btn-export").addEventListener("click", exportFdp);
 new ResizeObserver(() => { if (state.loaded) VIEWS.forEach(placeOverlay); }).observe(svgOf("front"));
