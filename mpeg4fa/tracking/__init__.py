@@ -9,6 +9,7 @@ from __future__ import annotations
 from mpeg4fa.tracking.errors import MissingExtraError, NoFaceError, TrackingError, TrackingWarning
 from mpeg4fa.tracking.landmarks import N_LANDMARKS, LandmarkFinder, Landmarks, find_landmarks
 from mpeg4fa.tracking.points import SEEN_LABELS, feature_point_array, feature_points
+from mpeg4fa.tracking.photo import PhotoFdp, fdp_from_photo, photo_points
 from mpeg4fa.tracking.filters import OneEuroFilter
 from mpeg4fa.tracking.tracker import FaceTracker, TrackedVideo, fap_stream, track_video
 
@@ -16,5 +17,6 @@ __all__ = [
     "TrackingError", "NoFaceError", "MissingExtraError", "TrackingWarning",
     "N_LANDMARKS", "LandmarkFinder", "Landmarks", "find_landmarks",
     "SEEN_LABELS", "feature_point_array", "feature_points",
+    "PhotoFdp", "fdp_from_photo", "photo_points",
     "OneEuroFilter", "FaceTracker", "TrackedVideo", "fap_stream", "track_video",
 ]
