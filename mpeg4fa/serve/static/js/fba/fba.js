@@ -124,12 +124,13 @@ class BitReader {
   }
   /** The start code at the next byte boundary as [code, stuffing bits], or null (see bits.py). */
   peekStartCode() {
-    const candidates = [8 - (this.pos % 8)];
-    if (this.pos % 8 === 0) candidates.unshift(0);
-    for (const skip of candidates) {
+    const rest = 8 - (this.p & 7);
+    for (let skip = rest === 8 ? 0 : rest; skip <= rest; skip += 8) {
       if (!this.available(skip + 32)) continue;
-      const word = this.bitsAt(this.p + skip, 32);
-      if (Math.floor(word / 256) === 1) return [word, skip];
+      const i = (this.p + skip) >> 3;  // a byte boundary: the word is four whole bytes
+      const buf = this.buf;
+      const word = ((buf[i] << 24) | (buf[i + 1] << 16) | (buf[i + 2] << 8) | buf[i + 3]) >>> 0;
+      if (word >>> 8 === 1) return [word, skip];
     }
     return null;
   }
@@ -142,74 +143,129 @@ class BitReader {
 }
 
 // ---- the adaptive arithmetic decoder ----------------------------------------------------------
-// A uniform intra model is a number (its alphabet size); an adaptive model an Int32Array ``cum`` of
-// n + 1 descending cumulative counts (cum[0] = total, cum[n] = 0), all counts starting at 1.
-function adaptiveModel(n) {
-  const cum = new Int32Array(n + 1);
-  for (let j = 0; j <= n; j++) cum[j] = n - j;
-  return cum;
-}
-
-function updateModel(cum, symbol) {
-  const n = cum.length - 1;
-  if (cum[0] === MAX_FREQUENCY) {  // halve every count first
-    let next = cum[n], acc = 0;
-    for (let j = n - 1; j >= 0; j--) {
-      const old = cum[j];
-      acc += (old - next + 1) >> 1;
-      next = old;
-      cum[j] = acc;
+// A uniform intra model is a number (its alphabet size). An adaptive model counts its n symbols (all
+// from 1); arith.py keeps the descending cumulative table cum[j] = count(j) + ... + count(n-1) and adds
+// 1 to cum[0..s] when symbol s is seen, which is count(s) += 1. Here the counts sit in a Fenwick tree
+// over the symbols in reverse order (prefix m = cum[n - m]), so finding a symbol and counting it take
+// O(log n) where the table took O(n): P models of wide ranges have thousands of symbols.
+class AdaptiveModel {
+  constructor(n) {
+    this.n = n;
+    // counts and their sums never pass 16383 (the halving), so 16 bits hold them: half the memory of
+    // 66 models of up to 3,721 symbols, which is what the decoder's time goes on (cache misses)
+    this.freq = new Int16Array(n).fill(1);
+    this.top = 1;
+    while (this.top * 2 <= n) this.top *= 2;
+    // sums past n read as "too much", so the search needs no bounds test
+    this.tree = new Int16Array(2 * this.top).fill(0x7fff, n + 1);
+    this.total = n;
+    this.build();
+  }
+  build() {
+    const { n, freq, tree } = this;
+    tree.fill(0, 0, n + 1);
+    for (let x = 1; x <= n; x++) {
+      tree[x] += freq[n - x];  // reversed position x - 1 holds symbol n - x
+      const parent = x + (x & -x);
+      if (parent <= n) tree[parent] += tree[x];
     }
   }
-  for (let j = 0; j <= symbol; j++) cum[j] += 1;
+  /** Count ``symbol``; halve every count first when the total reached 16383 (as arith.py). */
+  update(symbol) {
+    const { n, freq, tree } = this;
+    if (this.total === MAX_FREQUENCY) {
+      let total = 0;
+      for (let j = 0; j < n; j++) { freq[j] = (freq[j] + 1) >> 1; total += freq[j]; }
+      this.total = total;
+      this.build();
+    }
+    freq[symbol] += 1;
+    this.total += 1;
+    for (let x = n - symbol; x <= n; x += x & -x) tree[x] += 1;
+  }
+  copy() {
+    const m = Object.create(AdaptiveModel.prototype);
+    Object.assign(m, this, { freq: this.freq.slice(), tree: this.tree.slice() });
+    return m;
+  }
 }
 
 /** One arithmetic-coded segment: one symbol per model, written into ``out``. */
 function decodeSegment(r, models, adapt, out) {
   const buf = r.buf, nbits = r.nbytes * 8;
-  let p = r.p, zerorun = 0;
-  const nextBit = () => {
+  let p = r.p, zerorun = 0, code = 0, bit = 0;
+  // one bit, the stuffed '1' after 22 zeros dropped (inlined twice below: V8 runs it ~20% faster so)
+  const fault = () => {
+    if (p >= nbits) {
+      if (!r.final) { r.wanted = r.baseBits + p + 1; throw NEED_MORE; }
+      throw new FbaError(SEGMENT_ENDS, r.baseBits + p);
+    }
+    throw new FbaError(STUFFING_EXPECTED, r.baseBits + p - 1);
+  };
+  for (let i = 0; i < 16; i++) {
     for (;;) {
-      if (p >= nbits) {
-        if (!r.final) { r.wanted = r.baseBits + p + 1; throw NEED_MORE; }
-        throw new FbaError(SEGMENT_ENDS, r.baseBits + p);
-      }
-      const bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
+      if (p >= nbits) fault();
+      bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
       p++;
       if (zerorun === MAX_ZERO_RUN) {
-        if (!bit) throw new FbaError(STUFFING_EXPECTED, r.baseBits + p - 1);
+        if (!bit) fault();
         zerorun = 0;
-        continue;  // the stuffed '1' carries no information
+        continue;
       }
       zerorun = bit === 0 ? zerorun + 1 : 0;
-      return bit;
+      break;
     }
-  };
-  let code = 0;
-  for (let i = 0; i < 16; i++) code = (code << 1) | nextBit();
+    code = (code << 1) | bit;
+  }
   let low = 0, high = TOP;
-  for (let m = 0; m < models.length; m++) {
-    const model = models[m];
+  const nm = models.length;
+  for (let m = 0; m < nm; m++) {
     const length = high - low + 1;
     let total, cumHi, cumLo, symbol;
-    if (typeof model === "number") {
-      total = model;
+    if (!adapt) {
+      total = models[m];
       const target = Math.floor(((code - low + 1) * total - 1) / length);
       symbol = total - target - 1;
       cumHi = target + 1;
       cumLo = target;
     } else {
-      total = model[0];
+      const model = models[m];
+      total = model.total;
       const target = Math.floor(((code - low + 1) * total - 1) / length);
-      let i = 1;
-      while (model[i] > target) i++;
-      cumHi = model[i - 1];
-      cumLo = model[i];
-      symbol = i - 1;
+      // the largest m whose first m reversed counts sum to <= target: cum[i] <= target < cum[i - 1], i = n - m
+      const tree = model.tree, n = model.n;
+      let pos = 0, rem = target;
+      for (let step = model.top; step > 0; step >>= 1) {
+        const t = tree[pos + step];
+        if (t <= rem) { pos += step; rem -= t; }
+      }
+      symbol = n - 1 - pos;
+      cumLo = target - rem;
+      cumHi = cumLo + model.freq[symbol];
     }
     high = low - 1 + Math.floor((length * cumHi) / total);
     low = low + Math.floor((length * cumLo) / total);
-    for (;;) {
+    // Renormalise in one step where no stuffed bit can be among the bits read: while low and high
+    // share their top bit the interval lies in one half (n doublings, the bits they share), then
+    // each doubling of the middle half (low '01..', high '10..') is a doubling modulo 2**16 with
+    // the top bit flipped (k of them, the run of '1' in low over '0' in high that follows).
+    const n = Math.clz32(low ^ high) - 16;
+    const low2 = (low << n) & TOP, high2 = ((high << n) | ((1 << n) - 1)) & TOP;
+    const k = Math.clz32((((low2 & ~high2) << 1) & TOP) ^ TOP) - 16;
+    const bits = n + k;
+    const i = p >> 3;
+    if (bits === 0) {
+      // the interval is wide: nothing to read
+    } else if (zerorun + bits <= MAX_ZERO_RUN && p + bits <= nbits && i + 2 < r.nbytes) {
+      const word = (buf[i] << 16) | (buf[i + 1] << 8) | buf[i + 2];
+      const w = (word >> (24 - (p & 7) - bits)) & ((1 << bits) - 1);
+      const flip = k ? Q2 : 0;
+      low = ((low2 << k) & TOP) ^ flip;
+      high = (((high2 << k) | ((1 << k) - 1)) & TOP) ^ flip;
+      code = (((code << bits) | w) & TOP) ^ flip;
+      zerorun = w ? 31 - Math.clz32(w & -w) : zerorun + bits;
+      p += bits;
+    } else for (;;) {  // bit by bit, as arith.py
       if (high < Q2) {
         // nothing
       } else if (low >= Q2) {
@@ -219,9 +275,21 @@ function decodeSegment(r, models, adapt, out) {
       } else break;
       low <<= 1;
       high = (high << 1) | 1;
-      code = (code << 1) | nextBit();
+      for (;;) {
+        if (p >= nbits) fault();
+        bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
+        p++;
+        if (zerorun === MAX_ZERO_RUN) {
+          if (!bit) fault();
+          zerorun = 0;
+          continue;
+        }
+        zerorun = bit === 0 ? zerorun + 1 : 0;
+        break;
+      }
+      code = (code << 1) | bit;
     }
-    if (adapt && typeof model !== "number") updateModel(model, symbol);
+    if (adapt) models[m].update(symbol);
     out[m] = symbol;
   }
   r.p = p - REWIND_BITS;
@@ -289,16 +357,17 @@ class ValueCoder {
     this.psize = idx.map((i, k) => this.ranges[2][i] - this.pmin[k] + 1);
     this.intraModels = this.isize.slice();
     this.pModels = null;
-    this.symbols = new Int32Array(idx.length);
+    this.symbols = new Int32Array(idx.length);  // reused by every segment until the next intra header
+    this.values = new Float64Array(idx.length);
   }
   models(intra) {
     if (intra) return this.intraModels;
-    if (this.pModels === null) this.pModels = this.psize.map((s) => adaptiveModel(s));
+    if (this.pModels === null) this.pModels = this.psize.map((s) => new AdaptiveModel(s));
     return this.pModels;
   }
   /** Values (numbers, in coding order) from the symbols of one segment. */
   decode(symbols, intra) {
-    const n = this.idx.length, values = new Float64Array(n), lo = intra ? this.imin : this.pmin;
+    const n = this.idx.length, values = this.values, lo = intra ? this.imin : this.pmin;
     for (let k = 0; k < n; k++) {
       const level = symbols[k] + lo[k];
       let v = this.qstep[k] === 0 ? level : level * this.qstep[k];
@@ -311,8 +380,8 @@ class ValueCoder {
   snapshot() {
     return { ranges: this.ranges.map((a) => a.slice()), prev: this.prev.slice(), defaultsApplied: this.defaultsApplied,
       idx: this.idx, qstep: this.qstep, imin: this.imin, isize: this.isize, pmin: this.pmin, psize: this.psize,
-      intraModels: this.intraModels, symbols: this.symbols,
-      pModels: this.pModels && this.pModels.map((m) => m.slice()) };
+      intraModels: this.intraModels, symbols: this.symbols, values: this.values,
+      pModels: this.pModels && this.pModels.map((m) => m.copy()) };
   }
   restore(s) { Object.assign(this, s); }
 }
@@ -335,6 +404,7 @@ class FieldCoder {
     this.names = this.fields.map((f) => `FAP ${fap} ${f.field}`);
     this.pModels = null;
     this.symbols = new Int32Array(n);
+    this.values = new Float64Array(n);
   }
   startIntra(q) {
     if (q) {
@@ -362,7 +432,7 @@ class FieldCoder {
   snapshot() {
     return { iMax: this.iMax.slice(), pMax: this.pMax.slice(), pmin: this.pmin.slice(), prev: this.prev.slice(),
       qstep: this.qstep, isize: this.isize, psize: this.psize, intraModels: this.intraModels,
-      pModels: this.pModels && this.pModels.map((m) => m.slice()) };
+      pModels: this.pModels && this.pModels.map((m) => m.copy()) };
   }
   restore(s) { Object.assign(this, s); }
 }
@@ -482,6 +552,8 @@ function partIntraHeader(r, part) {
 }
 
 // ---- the decoder (decoder.py) -----------------------------------------------------------------
+const VISEME_BITS = ["viseme_def"];
+const EXPRESSION_BITS = ["init_face", "expression_def"];
 const ZERO_BAP_MASK = new Uint8Array(N_BAPS);
 const ZERO_BAP_VALUES = new Int32Array(N_BAPS);
 
@@ -514,6 +586,14 @@ class Decoder {
     this.objectStartCode = null;  // set once the object start code is read
     this.k = 0;
     this.done = false;
+  }
+
+  /** A frame's face arrays (values, viseme, expression, mask) as views of one slab shared by 256 frames:
+   * a typed array's own buffer costs V8 far more than a view. */
+  frameInts() {
+    const size = N_FAPS + 10 + Math.ceil(N_FAPS / 4);
+    if (this.slab === undefined || this.slabUsed === 256) { this.slab = new Int32Array(size * 256); this.slabUsed = 0; }
+    return this.slab.subarray(size * this.slabUsed, size * ++this.slabUsed);
   }
 
   objectStart() {
@@ -549,10 +629,8 @@ class Decoder {
   }
 
   segment(coder, intra) {
-    const models = coder.models(intra);
-    const symbols = new Int32Array(models.length);
-    decodeSegment(this.r, models, !intra, symbols);
-    return coder.decode(symbols, intra);
+    decodeSegment(this.r, coder.models(intra), !intra, coder.symbols);
+    return coder.decode(coder.symbols, intra);  // coder.values: read before the next segment of this coder
   }
 
   plane(k, planeCode) {
@@ -569,9 +647,11 @@ class Decoder {
       if (fr.fps <= 0) throw new FbaError("frame rate 0 in the intra header", pos);
       this.fps = fr.fps;
     }
+    const ints = this.frameInts();
     const frame = {
-      index: k, timestamp: 0.0, objectMask: mask, fapMask: new Uint8Array(N_FAPS), fapValues: new Int32Array(N_FAPS),
-      viseme: new Int32Array(4), expression: new Int32Array(6), bapMask: ZERO_BAP_MASK, bapValues: ZERO_BAP_VALUES,
+      index: k, timestamp: 0.0, objectMask: mask, fapMask: new Uint8Array(ints.buffer, ints.byteOffset + (N_FAPS + 10) * 4, N_FAPS),
+      fapValues: ints.subarray(0, N_FAPS), viseme: ints.subarray(N_FAPS, N_FAPS + 4),
+      expression: ints.subarray(N_FAPS + 4, N_FAPS + 10), bapMask: ZERO_BAP_MASK, bapValues: ZERO_BAP_VALUES,
       skip, startCode: planeCode, bits: 0, params,
     };
     if (mask & FACE_BIT) this.faceData(frame, isIntra);
@@ -593,20 +673,23 @@ class Decoder {
       throw new FbaError("a predicted plane carries face data but no intra plane has set up the face", r.pos);
     }
     const mask = this.face.mask;
-    const high = [[0, this.viseme, frame.viseme, ["viseme_def"]],
-      [1, this.expression, frame.expression, ["init_face", "expression_def"]]];
-    for (const [fap, coder, out, rawBits] of high) {
-      if (!mask[fap]) continue;
-      const pos = r.pos;
-      const values = this.segment(coder, intra);
-      coder.checkSelects(values, pos, frame.index);
-      for (let j = 0; j < values.length; j++) out[j] = values[j];
-      rawBits.forEach((name, j) => { out[values.length + j] = r.read(1, name); });
-    }
+    if (mask[0]) this.highLevel(this.viseme, frame.viseme, VISEME_BITS, frame.index, intra);
+    if (mask[1]) this.highLevel(this.expression, frame.expression, EXPRESSION_BITS, frame.index, intra);
     const values = this.segment(this.faps, intra);
     const idx = this.faps.idx;
     for (let k = 0; k < idx.length; k++) frame.fapValues[idx[k]] = values[k];
     frame.fapMask.set(mask);
+  }
+
+  /** FAP 1 or FAP 2: its arithmetic-coded fields, then its one-bit flags. */
+  highLevel(coder, out, rawBits, index, intra) {
+    const r = this.r;
+    const pos = r.pos;
+    const values = this.segment(coder, intra);
+    coder.checkSelects(values, pos, index);
+    const n = values.length;
+    for (let j = 0; j < n; j++) out[j] = values[j];
+    for (let j = 0; j < rawBits.length; j++) out[n + j] = r.read(1, rawBits[j]);
   }
 
   bodyData(frame, intra) {

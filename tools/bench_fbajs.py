@@ -1,0 +1,136 @@
+#!/usr/bin/env python
+"""Benchmark: fba.js in Node against the compiled Python decoder, on the same streams in one run.
+
+A script run on demand, not a test::
+
+    .venv/bin/python tools/bench_fbajs.py [--vectors DIR] [--repeat R] [--json OUT]
+
+Streams: the real ``headmotion_long.fba`` (2253 frames, FAP 1, FAP 2 and all groups on every frame;
+skipped with a note when ``--vectors`` is absent) and the 60 s full-mask stream of
+``tools/bench_codec.py`` (FAP 1, FAP 2 and 66 low-level FAPs on every frame, tight ranges; its
+generator is imported, not copied). Each is decoded R times by ``mpeg4fa.fba.decode(backend=
+"compiled")`` in this process (CPU time, as for Node; after a warm-up call, so numba's compile is not counted) and by
+``decode()`` of fba.js in one Node process (best of R; the first call, with V8's warm-up, is shown
+too), in ``--rounds`` interleaved rounds, keeping the best of each. Both decoders must give the same frames (checked). Target (issue 31): Node at least as fast
+as the compiled path (ratio >= 1). Prints a table and writes JSON (``bench_fbajs.json`` unless
+``--json``).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tools"))
+
+import numpy as np  # noqa: E402
+
+from bench_codec import FPS, INTRA_SECONDS, synthetic_stream  # noqa: E402
+from mpeg4fa.fba import EncodeOptions, decode, encode  # noqa: E402
+
+NODE_BENCH = REPO / "tools" / "bench_fbajs.mjs"
+DUMP = REPO / "tests" / "js" / "dump.mjs"
+
+
+def best_time(fn, repeat: int):
+    """(best CPU time of this process in seconds, result of the last call): CPU time, like the Node half,
+    so that a busy neighbour on a shared machine does not count."""
+    best, result = float("inf"), None
+    for _ in range(max(1, repeat)):
+        t0 = time.process_time()
+        result = fn()
+        best = min(best, time.process_time() - t0)
+    return best, result
+
+
+def node_times(node: str, paths: list[Path], repeat: int) -> dict[str, dict]:
+    run = subprocess.run([node, str(NODE_BENCH), str(repeat), *map(str, paths)], capture_output=True, text=True,
+                         check=True)
+    return {d["path"]: d for d in map(json.loads, run.stdout.splitlines())}
+
+
+def same_frames(node: str, path: Path, stream) -> bool:
+    """fba.js's frames equal the Python decoder's (values, masks, times)."""
+    doc = json.loads(subprocess.run([node, str(DUMP), str(path)], capture_output=True, text=True,
+                                    check=True).stdout)
+    frames = doc["frames"]
+    return (doc["error"] is None and len(frames) == len(stream)
+            and np.array_equal([f["values"] for f in frames], stream.fap_values)
+            and np.array_equal([f["mask"] for f in frames], stream.fap_mask.astype(int))
+            and np.array_equal([f["t"] for f in frames], stream.timestamps))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--vectors", type=Path, default=REPO.parent / "shared" / "vectors" / "fba")
+    parser.add_argument("--repeat", type=int, default=15)
+    parser.add_argument("--rounds", type=int, default=3,
+                        help="rounds of Node then Python (the best of all is kept: a shared machine is noisy)")
+    parser.add_argument("--frames", type=int, default=int(60 * FPS), help="frames of the full-mask stream")
+    parser.add_argument("--json", type=Path, default=Path("bench_fbajs.json"))
+    args = parser.parse_args(argv)
+    node = shutil.which("node")
+    if node is None:
+        print("node is not installed: nothing to compare", file=sys.stderr)
+        return 1
+    version = subprocess.run([node, "--version"], capture_output=True, text=True).stdout.strip()
+    with tempfile.TemporaryDirectory(prefix="bench_fbajs_") as tmp:
+        cases = []
+        head = args.vectors / "headmotion_long.fba"
+        if head.is_file():
+            cases.append(("headmotion_long.fba (real)", head))
+        else:
+            print(f"note: {head} is absent; only the synthetic stream is measured")
+        full = Path(tmp) / "full_mask.fba"
+        options = EncodeOptions(fap_quant=1, intra_period=int(round(INTRA_SECONDS * FPS)), optimize=True)
+        full.write_bytes(encode(synthetic_stream(args.frames), options))
+        cases.append((f"full mask, 66 FAPs + FAP 1/2, {args.frames / FPS:g} s", full))
+        decode(full, backend="compiled")  # numba's compile, not counted
+        best: dict[str, dict] = {}
+        py_best: dict[str, float] = {}
+        streams = {}
+        for _ in range(args.rounds):  # interleaved, so that a busy spell on the machine hits both
+            for key, j in node_times(node, [p for _, p in cases], args.repeat).items():
+                old = best.get(key)
+                best[key] = j if old is None else {k: min(old[k], j[k]) if k.endswith("_s") else j[k] for k in j}
+            for _, path in cases:
+                data = path.read_bytes()
+                t, streams[path] = best_time(lambda: decode(data, backend="compiled"), args.repeat)
+                py_best[str(path)] = min(py_best.get(str(path), float("inf")), t)
+        rows = []
+        for name, path in cases:
+            data = path.read_bytes()
+            py_s, stream, j = py_best[str(path)], streams[path], best[str(path)]
+            if not same_frames(node, path, stream):
+                print(f"{name}: fba.js decodes differently from the Python decoder", file=sys.stderr)
+                return 1
+            rows.append({"stream": name, "frames": len(stream), "bytes": len(data),
+                         "python_compiled_fps": len(stream) / py_s, "node_fps": len(stream) / j["best_s"],
+                         "node_first_call_fps": len(stream) / j["first_s"],
+                         "node_shown_fps": len(stream) / j["shown_best_s"],
+                         "ratio_node_over_python": py_s / j["best_s"]})
+    head_line = f"{'stream':36} {'frames':>7} {'Python compiled f/s':>20} {'Node f/s':>10} {'Node 1st call':>14} {'ratio':>6}"
+    print(f"fba.js (Node {version}) vs mpeg4fa.fba compiled, best of {args.rounds} x {args.repeat} ({platform.processor() or platform.machine()})")
+    print(head_line)
+    print("-" * len(head_line))
+    for r in rows:
+        print(f"{r['stream']:36} {r['frames']:>7} {r['python_compiled_fps']:>20,.0f} {r['node_fps']:>10,.0f} "
+              f"{r['node_first_call_fps']:>14,.0f} {r['ratio_node_over_python']:>5.2f}x "
+              f"{'PASS' if r['ratio_node_over_python'] >= 1 else 'FAIL'}")
+    print("(ratio: Node frames/s over the compiled path's; target >= 1. shown.js resolves "
+          + ", ".join(f"{r['node_shown_fps']:,.0f}" for r in rows) + " frames/s on top.)")
+    args.json.write_text(json.dumps({"node": version, "repeat": args.repeat, "rounds": args.rounds, "rows": rows}, indent=2))
+    print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
