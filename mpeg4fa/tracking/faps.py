@@ -33,6 +33,8 @@ LABELS: tuple[str, ...] = SEEN_LABELS
 INDEX = {label: i for i, label in enumerate(LABELS)}
 
 JAW = 3
+JAW_POINTS = ("2.1", "2.10", "2.11", "2.12")
+"""The chin's points: each drops by its share of the jaw's opening, so together they read it steadier than 2.1."""
 LIDS = (19, 20, 21, 22)
 GAZE_YAW = {23: "3.5", 24: "3.6"}
 GAZE_PITCH = {25: "3.5", 26: "3.6"}
@@ -159,8 +161,11 @@ def fap_values(local: np.ndarray, neutral: Neutral, angles: np.ndarray, geometry
     local = np.asarray(local, dtype=np.float64)
     n = local.shape[0]
     d = np.einsum("kl,nlc->nkc", _ANCHOR, local - neutral.points[None])
-    jaw_drop = d[:, INDEX["2.1"], 1].copy()
-    d[:, :, 1] -= geometry.jaw_carry[None, :] * jaw_drop[:, None]
+    carry = geometry.jaw_carry.copy()
+    carry[INDEX["2.1"]] = 1.0  # 2.1 is the jaw's own point
+    chin = [INDEX[label] for label in JAW_POINTS if label in INDEX and carry[INDEX[label]] > 0.5]
+    jaw_drop = np.mean(d[:, chin, 1] / carry[chin], axis=1)  # 2.1's drop, read off the whole chin
+    d[:, :, 1] -= carry[None, :] * jaw_drop[:, None]
     d[:, INDEX["2.1"], 1] = jaw_drop  # the jaw's own point is the jaw
     unit = np.array([neutral.fapu.unit(u) for u in _UNITS])
     out = np.zeros((n, N_FAPS))
