@@ -96,10 +96,10 @@ def encode_video(args: argparse.Namespace, given_text: bool) -> int:
             from ..fdp import save_fdp
             save_fdp(fdp, fdp_out)
             written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points, from frame {summary.neutral.first})")
-    frames = len(stream)
-    print(f"{args.video}: {frames} frames at {summary.fps:g} fps ({frames / summary.fps:.2f} s), "
-          f"{len(data) * 8 / max(frames, 1):.1f} bits/frame ({len(data) * 8 / max(frames / summary.fps, 1e-9) / 1000:.2f}"
-          f" kbit/s)", file=sys.stderr)
+    frames, seconds = len(stream), len(stream) / summary.fps
+    print(f"{args.video}: {frames} frames at {summary.fps:g} fps ({seconds:.2f} s), "
+          f"{len(data) * 8 / max(frames, 1):.1f} bits/frame ({len(data) * 8 / max(seconds, 1e-9) / 1000:.2f} kbit/s)",
+          file=sys.stderr)
     print("wrote " + ", ".join(written), file=sys.stderr)
     return 0
 

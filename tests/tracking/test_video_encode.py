@@ -1,7 +1,6 @@
 """``mpeg4fa encode --video``: a rendered face video with sound -> stream + WAV (+ FDP); bad videos are one line."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
