@@ -13,6 +13,16 @@ timeout = real(0.1, 3600.0, what="timeout")
 """Seconds a decoder may take on one vector."""
 
 
+def jobs(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if not 1 <= n <= 64:
+        raise argparse.ArgumentTypeError("give 1 to 64 jobs")
+    return n
+
+
 def _groups(text: str) -> list[str]:
     groups = [g.strip() for g in text.split(",") if g.strip()]
     if not groups:
@@ -44,6 +54,8 @@ def register(commands: Commands) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     p.add_argument("--timeout", type=timeout, default=None, metavar="S",
                    help="seconds per vector before it counts as a timeout (default 20)")
+    p.add_argument("--jobs", "-j", type=jobs, default=1, metavar="N",
+                   help="vectors decoded at once by an external decoder (default 1; the in-process one runs one at a time)")
     p.set_defaults(run=run_conform)
 
 
@@ -64,7 +76,7 @@ def run_conform(args: argparse.Namespace) -> int:
         decoder = in_process()
     bar = ProgressBar("conform", unit="vectors")
     try:
-        suite = run_suite(manifest, decoder, only=args.only, progress=bar,
+        suite = run_suite(manifest, decoder, only=args.only, progress=bar, jobs=args.jobs if args.decoder else 1,
                           timeout=args.timeout if args.timeout is not None else DEFAULT_TIMEOUT)
     finally:
         bar.close()

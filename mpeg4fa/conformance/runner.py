@@ -161,15 +161,34 @@ def run_vector(manifest: Manifest, vector: Vector, decoder: Decoder, timeout: fl
 
 
 def run_suite(manifest: Manifest, decoder: Decoder, *, name: str = "", only: Iterable[str] | None = None,
-              timeout: float = DEFAULT_TIMEOUT, progress: Progress | None = None) -> SuiteResult:
-    """Every selected vector through ``decoder``; ``progress(done, total)`` after each."""
+              timeout: float = DEFAULT_TIMEOUT, progress: Progress | None = None, jobs: int = 1) -> SuiteResult:
+    """Every selected vector through ``decoder``; ``progress(done, total)`` after each. ``jobs`` > 1 runs that
+    many vectors at once in threads (for an external decoder: each is its own process); results keep the
+    manifest's order."""
     vectors = select(manifest, only)
     started = time.perf_counter()
-    results = []
-    for i, vector in enumerate(vectors):
-        results.append(run_vector(manifest, vector, decoder, timeout))
-        if progress is not None:
-            progress(i + 1, len(vectors))
+    if jobs <= 1 or len(vectors) <= 1:
+        results = []
+        for i, vector in enumerate(vectors):
+            results.append(run_vector(manifest, vector, decoder, timeout))
+            if progress is not None:
+                progress(i + 1, len(vectors))
+    else:
+        from concurrent.futures import ThreadPoolExecutor, as_completed
+
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            futures = {pool.submit(run_vector, manifest, vector, decoder, timeout): i for i, vector in enumerate(vectors)}
+            done: dict[int, VectorResult] = {}
+            try:
+                for future in as_completed(futures):
+                    done[futures[future]] = future.result()
+                    if progress is not None:
+                        progress(len(done), len(vectors))
+            except BaseException:
+                for future in futures:
+                    future.cancel()
+                raise
+        results = [done[i] for i in range(len(vectors))]
     return SuiteResult(name or getattr(decoder, "name", "decoder"), str(manifest.root), results,
                        time.perf_counter() - started)
 
