@@ -17,6 +17,7 @@ and is counted; a video where no frame shows a face is a :class:`~.errors.NoFace
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -289,11 +290,15 @@ def track_video(path, *, fps: float | None = None, neutral: int | float | None =
         if not (np.isfinite(neutral) and neutral >= 0):
             raise TrackingError(f"neutral time {neutral!r} s is not a time >= 0", info.path)
         neutral = int(round(neutral * rate))
-    total = max(info.frames, 1)
+    source = info.fps if info.fps and info.fps > 0 else rate
+    total = max(int(round(info.frames * rate / source)), 1)
     with FaceTracker(rate, neutral=neutral, face=face, smooth=smooth, where=info.path) as tracker:
-        for k, rgb in enumerate(read_frames(path, rate)):
-            tracker.push(rgb)
+        for k, rgb in enumerate(read_frames(path, max(rate, source))):
+            # another rate than the video's: each frame is pushed for every output frame whose time it covers
+            # (repeated when the rate is higher, left out when lower), so the stream keeps the video's timing
+            while tracker.frames < math.ceil((k + 1) * rate / source - 1e-9):
+                tracker.push(rgb)
             if progress is not None:
-                progress(k + 1, max(total, k + 1))
+                progress(tracker.frames, max(total, tracker.frames))
         summary = tracker.finish()
         return TrackedVideo(tracker.stream(), summary, info)

@@ -56,10 +56,14 @@ def test_video_gives_a_stream_its_sound_and_an_fdp(videos, tmp_path, capsys):
     tracked = stream.fap_values[:, 2].astype(float)
     assert np.corrcoef(tracked, jaw)[0, 1] > 0.9  # the jaw opens when it did
     assert (tmp_path / "talk.wav").stat().st_size > 40000 and (tmp_path / "me.fdp").stat().st_size > 0
-    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "mute.fba", "--neutral", "0.2s")
+    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "mute.fba", "--neutral", "0.4s",
+                    "--fps", "12.5")
     assert code == 0, err
     assert err.count("no sound track") == 1 and "frame 5, as given" in err
     assert not (tmp_path / "mute.wav").exists()
+    half = decode(tmp_path / "mute.fba")  # every other frame: the video's timing kept at another rate
+    assert len(half) == len(jaw) // 2 and half.fps == pytest.approx(12.5)
+    assert np.corrcoef(half.fap_values[:, 2], jaw[::2])[0, 1] > 0.9
 
 
 @pytest.mark.parametrize("kind", ["blank", "text", "missing"])
