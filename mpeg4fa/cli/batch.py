@@ -46,6 +46,9 @@ def register(commands: Commands) -> None:
 
 
 def run_batch_command(args: argparse.Namespace) -> int:
+    from ..extras import require
+
+    require("batch", "dask", "distributed")
     from ..batch import load_manifest, run_batch
     from ..batch.run import SUMMARY_NAME
 

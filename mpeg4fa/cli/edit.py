@@ -28,6 +28,9 @@ def register(commands: Commands) -> None:
 
 
 def run_edit(args: argparse.Namespace) -> int:
+    from ..extras import require
+
+    require("web", "fastapi", "uvicorn", "python_multipart")
     from ..web.app import HOST, create_app
     from .local_server import run_until_stopped
 

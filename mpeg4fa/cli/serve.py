@@ -41,6 +41,9 @@ def register(commands: Commands) -> None:
 
 
 def run_serve(args: argparse.Namespace) -> int:
+    from ..extras import require
+
+    require("web", "fastapi", "uvicorn", "websockets")
     from ..serve.app import HOST, create_app
     from .local_server import run_until_stopped
     from .model import face_from_args

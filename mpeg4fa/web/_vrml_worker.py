@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mpeg4fa.extras import install_line
 from mpeg4fa.web.edits import EditError
 
 _VTK_LINE = re.compile(r"(?:Error near line|Error at line) (\d+):\s*(.*)")
@@ -39,7 +40,7 @@ def read_shapes(path: Path, filename: str) -> list[tuple[str, np.ndarray, np.nda
         from vtkmodules.vtkIOImport import vtkVRMLImporter  # VTK takes ~0.3 s to import: only when a .wrl comes
     except ImportError as exc:
         raise EditError(f"VTK, which reads VRML here, does not load: {exc}", where=filename,
-                        hint="reinstall mpeg4fa (it pins vtk), or convert the file to OBJ or GLB") from None
+                        hint=f"{install_line('vrml')}, or convert the file to OBJ or GLB") from None
 
     importer = vtkVRMLImporter()
     importer.SetFileName(str(path))

@@ -1,6 +1,6 @@
 """VRML 97 meshes (``.wrl``) read by VTK's vtkVRMLImporter: one triangle mesh per Shape, Transforms applied.
 
-trimesh has no VRML reader, so VTK (pinned in pyproject.toml) parses the file; every Shape whose geometry
+trimesh has no VRML reader, so VTK (the ``vrml`` extra of pyproject.toml) parses the file; every Shape whose geometry
 is an IndexedFaceSet becomes one part (named after the Shape's DEF name when it has one, a USE of it
 ``NAME_2``...), its points moved by the Transforms above it and its polygons split into triangles by
 vtkTriangleFilter. VTK reads nothing but the file itself (no Inline, no texture images, no Script:
@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mpeg4fa.extras import absent
 from mpeg4fa.web.edits import EditError
 
 HEADER = b"#VRML V2.0"
@@ -32,6 +33,9 @@ def read_vrml(data: bytes, filename: str) -> list[tuple[str, np.ndarray, np.ndar
     if not data.lstrip(b"\xef\xbb\xbf").startswith(HEADER):
         raise EditError("not a VRML 97 file: it must begin with '#VRML V2.0 utf8'", where=f"{filename}:1",
                         hint="VRML 1.0 is not read; export VRML 97 (VRML 2.0)")
+    missing = absent("vrml", "vtkmodules")
+    if missing is not None:
+        raise EditError(missing.message, where=filename, hint=f"{missing.hint}; or convert the file to OBJ or GLB")
     with tempfile.TemporaryDirectory(prefix="mpeg4fa-vrml-") as tmp:
         path, out = Path(tmp) / "upload.wrl", Path(tmp) / "shapes.npz"  # vtkVRMLImporter reads files only
         path.write_bytes(data)

@@ -71,7 +71,10 @@ def use_compiled(backend: str = "auto", size: int | None = None) -> bool:
 
         raise FbaError(f"the compiled codec cannot run here: {why_not()}",
                        hint="install numba (pip install numba), or use backend='python'")
-    return available()
+    if available():
+        announce_compiling()
+        return True
+    return False
 
 
 def jit(fn):
@@ -80,3 +83,49 @@ def jit(fn):
     if numba is None:  # pragma: no cover
         return fn
     return numba.njit(cache=True, nogil=True)(fn)
+
+
+def cached() -> bool:
+    """Whether numba's disk cache holds machine code for every kernel (False: a first call compiles, ~10-20 s).
+
+    Reads numba's cache index through its internals; where they have moved, says True (nothing is
+    announced rather than something wrong)."""
+    if _load() is None:
+        return True
+    from . import kernels
+
+    try:
+        dispatchers = [v for v in vars(kernels).values() if hasattr(v, "_cache") and hasattr(v, "py_func")]
+        return all(d._cache._cache_file._load_index() for d in dispatchers)
+    except Exception:  # pragma: no cover - another numba's internals
+        return True
+
+
+def announce_compiling() -> None:
+    """Tell the user (:func:`mpeg4fa.notices.note`) that the kernels compile now, when they are not cached:
+    the first command after an install or an upgrade would otherwise sit silent for 10-20 s."""
+    global _announced
+    if _announced:
+        return
+    _announced = True
+    from ...notices import note
+
+    if available() and not cached():
+        note("compiling the codec's numba kernels (first run only; they are cached on disk)...")
+
+
+_announced = False
+
+
+def warm_up() -> None:
+    """Compile the kernels that encoding and decoding run (or load them from the disk cache): what
+    ``tools/dev.sh`` runs after installing, so that no command waits for it."""
+    from ..decoding import decode
+    from ..encoder import EncodeOptions, encode
+    from ..samples import demo_stream
+
+    if not available():
+        return
+    stream = demo_stream()
+    for options in (EncodeOptions(fap_quant=1), EncodeOptions(optimize=True, fap_quant=3)):
+        decode(encode(stream, options, backend="compiled"), backend="compiled")

@@ -115,7 +115,11 @@ def choose_method(method: str, text: str, lang: str) -> str:
             raise AlignError("pocketsphinx aligns words of letters only (no digits or other scripts)",
                              where="pocketsphinx", hint="spell numbers out, or use the dtw aligner")
         return method
-    return "dtw" if method == "dtw" or not english or _dictionary_words(text) is None else "pocketsphinx"
+    if method == "dtw" or not english or _dictionary_words(text) is None:
+        return "dtw"
+    from mpeg4fa.extras import absent
+
+    return "dtw" if absent("align", "pocketsphinx") else "pocketsphinx"  # DTW where the align extra is not installed
 
 
 def _word_phonemes(ref: Utterance) -> list[list[str] | None]:

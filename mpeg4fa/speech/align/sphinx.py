@@ -79,11 +79,11 @@ class Word:
 
 @lru_cache(maxsize=1)
 def shared_decoder():
-    try:
-        from pocketsphinx import Decoder
-    except ImportError as exc:  # a runtime dependency: only a broken install gets here
-        raise AlignError(f"pocketsphinx is not installed ({exc})", where="pocketsphinx",
-                         hint="pip install pocketsphinx==5.1.1") from None
+    from mpeg4fa.extras import require
+
+    require("align", "pocketsphinx")  # the 'align' extra; without it, auto aligns with DTW (core.choose_method)
+    from pocketsphinx import Decoder
+
     # bestpath off: its lattice rescoring can give the phone pass a path it cannot align
     return Decoder(samprate=RATE, bestpath=False, loglevel="FATAL")
 
@@ -106,6 +106,9 @@ def pcm16k(x: np.ndarray, rate: int, seed: int = 0) -> bytes:
 def free_decoder():
     """A second decoder on the same model, searching a phone loop (the bundled phone trigram LM,
     ``allphone``): the best the model can say of the audio when it need not say the transcript."""
+    from mpeg4fa.extras import require
+
+    require("align", "pocketsphinx")
     from pocketsphinx import Decoder, get_model_path
 
     phone_lm = Path(get_model_path()) / "en-us" / "en-us-phone.lm.bin"
