@@ -9,7 +9,11 @@ line and a file, nothing Python-specific (``conformance/README.md`` shows wrappe
 
     {"timestamps": [n seconds], "shown": [[68 floats] per frame],
      "sent": {"mask": [[68 0/1]], "values": [[68 int]], "viseme": [[4 int]], "expression": [[6 int]]},  # optional
-     "feature_points": {"labels": ["2.1", ...], "positions": [[[x, y, z], ...] per frame]}}          # optional
+     "feature_points": {"labels": ["2.1", ...], "positions": [[[x, y, z], ...] per frame]},         # optional
+     "timestamp_resolution": 0.001}     # optional: seconds per tick of the decoder's clock (0 < r <= 1)
+
+A decoder whose clock counts whole milliseconds declares ``timestamp_resolution`` 0.001 and its time
+stamps are compared within 1 ms instead of 0.5 ms (never wider than 1 ms, whatever it declares).
 
 CSV: a header ``t,FAP1,...,FAP68`` then one row per frame of shown values. Exit status 0: decoded;
 1: rejected the stream (stderr may say ``bit N``: where the fault was found); anything else, or a
