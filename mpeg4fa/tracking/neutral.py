@@ -52,8 +52,9 @@ def _aligned(points: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
 def _median_of(points: np.ndarray, first: int, last: int) -> np.ndarray:
     window = points[first:last + 1]
+    window = window[np.isfinite(window).all(axis=(1, 2))]  # the caller's window holds at least one face
     reference = window[len(window) // 2]
-    return np.nanmedian(_aligned(window, reference), axis=0)
+    return np.median(_aligned(window, reference), axis=0)
 
 
 def given_neutral(points: np.ndarray, frame: int) -> NeutralChoice:
@@ -72,15 +73,19 @@ def calmest_neutral(points: np.ndarray, fps: float) -> NeutralChoice | None:
     reference = points[seen[0]]
     aligned = _aligned(points[:n], reference)
     eyes = float(np.linalg.norm(reference[INDEX["3.5"]] - reference[INDEX["3.6"]])) or 1.0
+    valid = np.isfinite(aligned).all(axis=(1, 2))  # frames with a face (lost ones cost infinity)
     step = np.full(n, np.inf)
-    step[1:] = np.sqrt(np.nanmean(((aligned[1:] - aligned[:-1]) ** 2).sum(axis=2), axis=1)) / eyes
-    step[0] = step[1] if n > 1 else 0.0
-    step = np.where(np.isfinite(step), step, np.inf)
+    if n > 1:
+        moved = np.sqrt(((aligned[1:] - aligned[:-1]) ** 2).sum(axis=2).mean(axis=1)) / eyes
+        step[1:] = np.where(valid[1:] & valid[:-1], moved, np.inf)
+        step[0] = step[1] if valid[0] else np.inf
+    elif valid[0]:
+        step[0] = 0.0
     gap = np.abs(aligned[:, INDEX["2.2"], 1] - aligned[:, INDEX["2.3"], 1]) / eyes
-    lids = np.abs(aligned[:, INDEX["3.1"], 1] - aligned[:, INDEX["3.3"], 1]) / eyes
-    lids += np.abs(aligned[:, INDEX["3.2"], 1] - aligned[:, INDEX["3.4"], 1]) / eyes
-    gap = np.where(np.isfinite(gap), gap - np.nanmin(gap), np.inf)
-    shut = np.where(np.isfinite(lids), np.nanmax(lids) - lids, np.inf)  # 0 for the widest-open eyes
+    lids = (np.abs(aligned[:, INDEX["3.1"], 1] - aligned[:, INDEX["3.3"], 1])
+            + np.abs(aligned[:, INDEX["3.2"], 1] - aligned[:, INDEX["3.4"], 1])) / eyes
+    gap = np.where(valid, gap - gap[valid].min(), np.inf)
+    shut = np.where(valid, lids[valid].max() - lids, np.inf)  # 0 for the widest-open eyes
     cost = step + 0.5 * gap + 0.25 * shut
     width = max(1, min(n, int(round(WINDOW_SECONDS * fps))))
     sums = np.convolve(cost, np.ones(width), mode="valid") / width

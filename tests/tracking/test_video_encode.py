@@ -26,7 +26,11 @@ def videos(tmp_path_factory):
     tone = Audio((0.2 * np.sin(2 * np.pi * 220 * np.arange(32000) / 16000)).astype(np.float32)[:, None], 16000)
     with Renderer(face, width=256, height=256, samples=0) as renderer:
         frames = [renderer.render(face.deform({3: float(j)})).copy() for j in jaw]
-    paths = {"sound": folder / "talk.mp4", "mute": folder / "mute.mp4", "blank": folder / "blank.mp4"}
+    paths = {"sound": folder / "talk.mp4", "mute": folder / "mute.mp4", "blank": folder / "blank.mp4",
+             "gap": folder / "gap.mp4"}
+    with Mp4Writer(paths["gap"], 256, 256, FPS) as out:  # the face gone for frames 30-34
+        for k, image in enumerate(frames):
+            out.write(np.full_like(image, 40) if 30 <= k < 35 else image)
     for name, audio in (("sound", tone), ("mute", None)):
         with Mp4Writer(paths[name], 256, 256, FPS, audio) as out:
             for image in frames:
@@ -35,6 +39,11 @@ def videos(tmp_path_factory):
         for _ in range(10):
             out.write(np.full((64, 64, 3), 90, np.uint8))
     return paths, jaw
+
+
+def frames_of(stream) -> np.ndarray:
+    """(n, 68) values of every frame, skipped (repeated) frames expanded."""
+    return np.repeat(stream.fap_values, stream.skip + 1, axis=0)
 
 
 def run(capsys, *argv) -> tuple[int, str]:
@@ -52,8 +61,8 @@ def test_video_gives_a_stream_its_sound_and_an_fdp(videos, tmp_path, capsys):
     assert code == 0, err
     assert "neutral face: frame" in err and "calmest" in err
     stream = decode(out)
-    assert len(stream) == len(jaw) and stream.fps == pytest.approx(FPS)
-    tracked = stream.fap_values[:, 2].astype(float)
+    tracked = frames_of(stream)[:, 2].astype(float)
+    assert len(tracked) == len(jaw) and stream.fps == pytest.approx(FPS)
     assert np.corrcoef(tracked, jaw)[0, 1] > 0.9  # the jaw opens when it did
     assert (tmp_path / "talk.wav").stat().st_size > 40000 and (tmp_path / "me.fdp").stat().st_size > 0
     code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "mute.fba", "--neutral", "0.4s",
@@ -62,8 +71,9 @@ def test_video_gives_a_stream_its_sound_and_an_fdp(videos, tmp_path, capsys):
     assert err.count("no sound track") == 1 and "frame 5, as given" in err
     assert not (tmp_path / "mute.wav").exists()
     half = decode(tmp_path / "mute.fba")  # every other frame: the video's timing kept at another rate
-    assert len(half) == len(jaw) // 2 and half.fps == pytest.approx(12.5)
-    assert np.corrcoef(half.fap_values[:, 2], jaw[::2])[0, 1] > 0.9
+    values = frames_of(half)[:, 2]
+    assert len(values) == len(jaw) // 2 and half.fps == pytest.approx(12.5)
+    assert np.corrcoef(values, jaw[::2])[0, 1] > 0.9
 
 
 @pytest.mark.parametrize("kind", ["blank", "text", "missing"])
@@ -95,3 +105,13 @@ def test_video_refuses_what_has_no_place_beside_it(videos, tmp_path, capsys):
     assert code == 2 and "neither a frame number nor a time" in err
     code, err = run(capsys, "encode", "--video", paths["mute"], "-o", paths["mute"])
     assert code == 2 and "overwritten" in err
+
+
+def test_frames_without_the_face_hold_and_are_counted_in_one_warning(videos, tmp_path, capsys):
+    paths, jaw = videos
+    code, err = run(capsys, "encode", "--video", paths["gap"], "-o", tmp_path / "gap.fba")
+    assert code == 0, err
+    warned = [line for line in err.splitlines() if "warning" in line]
+    assert len(warned) == 1 and "lost in 5 of 50 frames" in warned[0], err
+    values = frames_of(decode(tmp_path / "gap.fba"))[:, 2]
+    assert len(values) == 50 and (values[30:35] == values[29]).all()  # held
