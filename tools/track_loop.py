@@ -130,7 +130,7 @@ def render_video(stream, target: Path, size: int, face, texture) -> float:
 
 def track_video(path: Path, fps: float | None = None):
     """Track a video file: (values (n, 68), summary)."""
-    from mpeg4fa.tracking.tracker import FaceTracker
+    from mpeg4fa.tracking.tracker import FaceTracker, sendable
     from mpeg4fa.tracking.video import probe_video, read_frames
 
     info = probe_video(path)
@@ -138,7 +138,7 @@ def track_video(path: Path, fps: float | None = None):
         for rgb in read_frames(path):
             tracker.push(rgb)
         summary = tracker.finish()
-        return tracker.values(), summary
+        return sendable(tracker.values()), summary  # what the stream sends (no negative jaw)
 
 
 def blink_peaks(lids: np.ndarray, threshold: float) -> np.ndarray:

@@ -208,7 +208,7 @@ class FaceTracker:
         return self._last
 
     def _row_int(self, k: int) -> np.ndarray:
-        return np.rint(self._rows[k]).astype(np.int32)
+        return np.rint(sendable(self._rows[k][None])[0]).astype(np.int32)
 
     # -- output ---------------------------------------------------------------------------------
     def finish(self) -> TrackSummary:
@@ -234,14 +234,19 @@ CARRIED_LEVELS = 30 * RANGE_DELTA
 ``fap_quant`` carries it (a tracker's outlier must not make the stream unencodable)."""
 
 
+def sendable(values: np.ndarray) -> np.ndarray:
+    """``(n, 68)`` values held within what a face shows and a stream carries (see :func:`fap_stream`); NaN as 0."""
+    values = np.nan_to_num(np.asarray(values, dtype=np.float64).reshape(-1, N_FAPS))
+    values, _ = clamp(values)
+    bound = CARRIED_LEVELS * QUANT_STEP
+    return np.clip(values, -bound, bound)
+
+
 def fap_stream(values: np.ndarray, fps: float) -> FapStream:
     """A FapStream sending :data:`.faps.SENT` in every frame from ``(n, 68)`` float values, rounded and held
     within what a face shows (:func:`mpeg4fa.decoded.limits.clamp`: no negative jaw) and a stream carries."""
     n = len(values)
-    values = np.nan_to_num(np.asarray(values, dtype=np.float64).reshape(n, N_FAPS))
-    values, _ = clamp(values)
-    bound = CARRIED_LEVELS * QUANT_STEP
-    values = np.clip(values, -bound, bound)
+    values = sendable(values)
     stream = FapStream.empty(0)
     sent = np.array(fap_rules.SENT) - 1
     mask = np.zeros((n, N_FAPS), dtype=bool)
