@@ -31,6 +31,9 @@ def main(argv: list[str] | None = None) -> int:
     size = sum(p.stat().st_size for p in manifest.root.rglob("*") if p.is_file())
     print(f"{len(manifest.vectors)} vectors ({', '.join(f'{g} {n}' for g, n in groups.items())}), "
           f"{len(manifest.faces)} faces, {size / 1e6:.2f} MB in {manifest.root}, {time.perf_counter() - start:.1f} s")
+    rules = Counter(rule for v in manifest.vectors for rule in v.check_rules.values())
+    print("vector rules (spec/conformance_rules.csv; the runner adds the unsent-FAP and time-code rules): "
+          + ", ".join(f"{rule} {n}" for rule, n in sorted(rules.items())))
     return 0
 
 
