@@ -45,6 +45,7 @@ from mpeg4fa.spec import FAPS, N_FAPS
 JAW_WEIGHT_FLOOR = 0.03  # jaw weights below this are noise of the face unit: dropped
 NECK_FADE_MM = 30.0  # the head rotation fades out over this height above the neck cut (576 mm), below the jaw
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
+TONGUE_REACH_MM = 30.0  # a tongue point carries the tongue around it this far (its tip the front third)
 WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
 LID_CLEAR_MM = 6.0  # brow, cheek and nose weights fade to 0 over this surface distance before a lid margin
 CORNERS = (("2.4", "8.3"), ("2.5", "8.4"))  # (inner, outer) lip corner, left then right
@@ -102,7 +103,8 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     columns.append(skin_weights(mesh, anchors, driven))
     tongue_fps = [i for i in range(len(labels)) if _in(fp_vertex[i], tongue)]
     if tongue_fps:  # a head without a tongue (or without its points) has no tongue weights
-        columns.append(part_weights(mesh, tongue, tongue_fps, driven, extra_controls=_tongue_root(rest, tongue)))
+        columns.append(_mirror_symmetric(mesh, tongue, part_weights(
+            mesh, tongue, tongue_fps, driven, extra_controls=_tongue_root(rest, tongue), reach=_tongue_reach(mesh, tongue))))
     else:
         columns.append(sp.csr_matrix((mesh.n_vertices, len(labels))))
     weights = (columns[0] + columns[1]).tocsr()
@@ -219,6 +221,33 @@ def part_weights(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],
 
 def _part_name(mesh: HeadMesh, part: slice) -> str:
     return next(p for p, (a, b) in mesh.part_ranges.items() if a == part.start and b == part.stop)
+
+
+def _mirror_symmetric(mesh: HeadMesh, part: slice, weights: sp.csr_matrix) -> sp.csr_matrix:
+    """A part's weights averaged with their mirror image (edge rings counted on a triangulation that
+    is not quite mirror symmetric give each side its own weights; the tongue's are rings wide)."""
+    rows = np.arange(part.start, part.stop)
+    mirror = np.asarray(mesh.mirror)
+    if not np.all((mirror[rows] >= part.start) & (mirror[rows] < part.stop)):
+        return weights  # a part without its own mirror image: as it is
+    column_at = {}
+    for j, v in enumerate(mesh.fp_vertex):
+        column_at.setdefault(int(v), j)
+    mirror_col = np.array([column_at.get(int(mirror[v]), j) for j, v in enumerate(mesh.fp_vertex)])
+    dense = weights[rows].toarray()
+    both = 0.5 * (dense + weights[mirror[rows]].toarray()[:, mirror_col])
+    out = sp.lil_matrix(weights.shape)
+    out[rows] = both
+    return out.tocsr()
+
+
+def _tongue_reach(mesh: HeadMesh, tongue: slice) -> np.ndarray:
+    """Edge rings per feature point that span :data:`TONGUE_REACH_MM` of the tongue (a tip moved
+    alone, one ring wide, stuck out of the mouth as a spike between the teeth)."""
+    tris = mesh.triangles["tongue"]
+    edges = np.linalg.norm(mesh.vertices[tris[:, [1, 2, 0]]] - mesh.vertices[tris], axis=2)
+    rings = max(int(np.ceil(TONGUE_REACH_MM / max(float(np.median(edges)), 1e-9))), 1)
+    return np.maximum(np.asarray(mesh.fp_reach), rings)
 
 
 def _tongue_root(rest: np.ndarray, tongue: slice) -> np.ndarray:

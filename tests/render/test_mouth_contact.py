@@ -95,3 +95,80 @@ def test_the_check_sees_a_folded_corner(mouth):
     if folded is not None:
         assert dark_outside_corners(mouth, folded) > 0
     assert pose_in_head_frame  # the rule lives in the layer every deformer shares
+
+
+def _marked(mouth, pose) -> dict[str, np.ndarray]:
+    img = mouth.render(pose).astype(int)
+    return {name: np.abs(img - c).max(axis=2) < 40 for name, c in
+            (("teeth", (0, 0, 255)), ("tongue", (0, 255, 0)), ("cavity", (255, 0, 0)), ("back", (255, 0, 255)))}
+
+
+def _px(mouth, pose, labels) -> np.ndarray:
+    idx = [mouth.face.mesh.fp_index(label) for label in labels]
+    return mouth.camera.project(pose.feature_points[idx], mouth.width, mouth.height)[:, :2]
+
+
+@pytest.mark.parametrize("set_name,name", [("mpeg4", "PP"), ("zh", "bpm")])
+def test_bilabials_seal_the_lips_at_every_column(mouth, set_name, name):
+    """PP/B/M: nothing of the mouth's inside shows between the inner corners, at any column."""
+    pose = mouth.face.deform(np.asarray(VISEME_PROFILES[set_name][name], float))
+    masks = _marked(mouth, pose)
+    (lx, _), (rx, _) = _px(mouth, pose, ("2.4", "2.5"))
+    inside = masks["teeth"] | masks["tongue"] | masks["cavity"] | masks["back"]
+    cols = inside[:, int(np.ceil(min(lx, rx))):int(max(lx, rx)) + 1].any(axis=0)
+    assert not cols.any(), f"{cols.sum()} of {len(cols)} columns show the inside: {np.flatnonzero(cols)}"
+
+
+def test_ff_lower_lip_under_the_upper_incisors(mouth):
+    """FF: the lower lip's inner edge (2.3) touches the upper incisors' biting edge (9.10) from in front
+    and below, and the incisors show above it."""
+    face = mouth.face
+    pose = face.deform(np.asarray(VISEME_PROFILES["mpeg4"]["FF"], float))
+    fp = dict(zip(face.mesh.fp_labels, pose.feature_points))
+    lip, edge = fp["2.3"], fp["9.10"]
+    assert np.linalg.norm(lip - edge) <= 1.8, (lip, edge)
+    assert lip[2] >= edge[2] and lip[1] <= edge[1] + 1.5, "the lip is under the teeth's edge, not behind or above it"
+    masks = _marked(mouth, pose)
+    (cx, top), (_, bottom) = _px(mouth, pose, ("2.2", "2.3"))
+    band = masks["teeth"][int(top) - 2:int(bottom) + 3, int(cx) - 3:int(cx) + 4]
+    mm = abs(_px(mouth, pose, ("8.3",))[0, 0] - _px(mouth, pose, ("8.4",))[0, 0]) / abs(fp["8.3"][0] - fp["8.4"][0])
+    assert band.sum(axis=0).min() >= 1.5 * mm, "upper incisors visible above the lower lip"
+
+
+def test_th_tongue_between_the_teeth_seen_from_the_front(mouth):
+    face = mouth.face
+    pose = face.deform(np.asarray(VISEME_PROFILES["mpeg4"]["TH"], float))
+    fp = dict(zip(face.mesh.fp_labels, pose.feature_points))
+    tip = fp["6.1"]
+    assert fp["9.11"][1] < tip[1] < fp["9.10"][1], "the tip between the lower and upper biting edges"
+    assert tip[2] >= fp["9.10"][2] + 2.0, "and out past the upper incisors"
+    assert _marked(mouth, pose)["tongue"].sum() >= 40, "the tongue shows from the front"
+
+
+@pytest.mark.parametrize("name", ["DD", "nn"])
+def test_t_d_l_tongue_tip_up_at_the_ridge(mouth, name):
+    """T/D and L: the tongue tip raised above the upper biting edge, behind the upper teeth (the ridge)."""
+    face = mouth.face
+    fp = dict(zip(face.mesh.fp_labels, face.deform(np.asarray(VISEME_PROFILES["mpeg4"][name], float)).feature_points))
+    tip, edge = fp["6.1"], fp["9.10"]
+    assert tip[1] >= edge[1] + 3.0, f"tip {tip[1] - edge[1]:.1f} mm above the upper biting edge"
+    assert edge[2] - 9.0 <= tip[2] <= edge[2] - 3.0, f"tip {edge[2] - tip[2]:.1f} mm behind the incisors' edge"
+
+
+@pytest.mark.parametrize("name", ["AA", "oh"])
+def test_teeth_at_three_quarter_without_stripes(mouth, name):
+    """Seen from the side the molars' bulge and gap shading read as stripes (15 % of the visible teeth
+    pixels 12 grey levels off their row's 9-pixel mean, 9 % with the front teeth's gaps alone)."""
+    from scipy.ndimage import binary_erosion, uniform_filter1d
+
+    face = mouth.face
+    pose = face.deform(np.asarray(VISEME_PROFILES["mpeg4"][name], float))
+    pts = np.array([face.mesh.fp(label) for label in ("8.1", "8.2", "8.3", "8.4", "2.1")])
+    camera = frame_points(pts, 300, 300, margin=0.3, view="three-quarter")
+    with Renderer(face, width=300, height=300, camera=camera, samples=4) as lit, \
+            Renderer(face, width=300, height=300, camera=camera, lighting=False, materials=MARKED) as flat:
+        grey = lit.render(pose).astype(float).mean(axis=2)
+        teeth = binary_erosion(np.abs(flat.render(pose).astype(int) - (0, 0, 255)).max(axis=2) < 40, iterations=2)
+    ripple = np.abs(grey - uniform_filter1d(grey, 9, axis=1))[teeth]
+    assert teeth.sum() > 500
+    assert (ripple > 12).mean() <= 0.12

@@ -127,9 +127,11 @@ void main() {
             base = base_colour[3];
             // each tooth bulges: tilt the normal across the tooth; the thin band's normals turn
             // down at the biting edge, so lean them toward the viewer (a tooth's labial face)
+            // (front teeth only: seen from the side, the molars' bulges and gaps read as stripes)
+            float back = smoothstep(2.0, 4.0, abs(v_detail.x));
             if (dot(n, to_eye) < 0.0) n = -n;
-            n = normalize(n + 0.7 * to_eye + cross(vec3(0.0, 1.0, 0.0), n) * (1.8 * f - 0.9));
-            if (lighting) shade = mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap));   // the gap between teeth
+            n = normalize(n + 0.7 * to_eye + cross(vec3(0.0, 1.0, 0.0), n) * (1.8 * f - 0.9) * (1.0 - back));
+            if (lighting) shade = mix(mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap)), 0.9, back);  // the gaps
             // teeth further back along the arch sit deeper in the mouth, in its shadow
             shade *= mix(1.0, BACK_TEETH_SHADE, smoothstep(2.0, 5.0, abs(v_detail.x)));
         }
