@@ -56,6 +56,9 @@ _BY_VECTOR: tuple[tuple[str, dict[str, str]], ...] = (
     ("informative/viseme*", {"value": "high-level-fields"}),
     ("informative/expression*", {"value": "high-level-fields"}),
     ("informative/high-low-mix", {"value": "high-level-fields"}),
+    ("informative/unsent-hold", {}),  # the sent values and times are required; the unsent ones the runner
+    ("informative/interpolate-*", {}),  # splits off under their informative rules
+    ("informative/hold-left-right", {}),
 )
 
 
