@@ -122,7 +122,9 @@ def _as_text(info: dict) -> str:
     lines = []
     for key, value in info.items():
         if isinstance(value, dict):
-            value = ", ".join(f"{k} {v}" for k, v in value.items())
+            value = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in value.items())
+        elif key == "intra_frames":  # a count, then where: "1 (frame 0)", not a bare "0" that reads as none
+            value = f"{len(value)} (frame{'s' * (len(value) != 1)} {_ranges(value)})" if value else "0"
         elif key in _NUMBER_LISTS:
             value = _ranges(value)
         elif isinstance(value, list):

@@ -47,7 +47,10 @@ def register(commands: Commands) -> None:
     speech_options(p)
     p.add_argument("--fps", type=options.fps, default=25.0, help="frame rate, 0 < fps < 256 (default 25)")
     p.add_argument("--level", choices=LEVELS, default="low",
-                   help="FAPs to send: high (FAP 1/2), low (3-68, the exact curves; default) or both")
+                   help="FAPs in the stream it renders: low (FAPs 3-68, the timeline's exact curves with idle "
+                        "motion; default here: say renders the stream itself, so its ~4x bit rate costs nothing), "
+                        "high (FAP 1 visemes and FAP 2 expressions, each decoder animating them its own way: "
+                        "encode's default, for streams sent elsewhere) or both")
     p.add_argument("--size", type=options.size, default=(512, 512), metavar="W[xH]",
                    help="image size, 16 to 8192 (default 512; even for MP4)")
     p.add_argument("--aa", type=options.samples, default=4, metavar="N",
@@ -131,7 +134,8 @@ def text_encoding_options(p: argparse.ArgumentParser) -> None:
     added.append(g.add_argument(
         "--level", choices=LEVELS, default="high",
         help="FAPs to send: high (FAP 1 visemes + FAP 2 expressions; Chinese visemes and other expressions as "
-             "low-level FAPs; default), low (FAPs 3-68) or both"))
+             "low-level FAPs; default: ~4x fewer bits than low, for a stream sent to other decoders), low (FAPs "
+             "3-68, the timeline's exact curves with idle motion: say's default, as it renders them itself) or both"))
     g = p.add_argument_group("text input: the speaker's face (FDP)")
     added += [
         g.add_argument("--fdp-out", type=Path, metavar="FDP",
@@ -368,7 +372,7 @@ def _stream_encoded(args: argparse.Namespace, text: str, name: str, fps: float, 
     print(f"{name}: {spoken.engine} speech {spoken.seconds:.2f} s, {frames} frames, "
           f"{spoken.bytes * 8 / max(frames, 1):.1f} bits/frame "
           f"({spoken.bytes * 8 / max(frames / fps, 1e-9) / 1000:.2f} kbit/s, {args.level}-level), "
-          f"{spoken.speed:.0f} x real time", file=sys.stderr)
+          f"made in {spoken.wall:.2f} s for {spoken.seconds:.2f} s of speech", file=sys.stderr)
     print("wrote " + ", ".join(written), file=sys.stderr)
     return 0
 
@@ -385,8 +389,8 @@ def _encode_recording(args: argparse.Namespace) -> int:
     aligned, name = _aligned(args, inputs, outputs)
     fps = args.fps if args.fps is not None else 25.0
     encoded = encode_utterance(aligned.utterance, fps=fps, level=args.level, idle=args.idle)
-    print(f"{args.speech}: {name} aligned by {aligned.method} ({aligned.seconds:.2f} s, "
-          f"{aligned.seconds / max(encoded.speech.duration, 1e-9):.2f} x real time)", file=sys.stderr)
+    print(f"{args.speech}: {name} aligned by {aligned.method} in {aligned.seconds:.2f} s for "
+          f"{encoded.speech.duration:.2f} s of audio", file=sys.stderr)
     return _write_encoded(args, encoded, str(args.speech), fps, fdp)
 
 
@@ -497,10 +501,17 @@ def run_say(args: argparse.Namespace) -> int:
                    keep=args.keep, name=name, progress=progress, lenient=args.lenient, face=face, texture=texture)
     result = said.result
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s), "
-          f"{len(said.data) * 8 / max(len(said.stream), 1):.0f} bits/frame of FAPs ({args.level}-level); "
+          f"{len(said.data) * 8 / max(len(said.stream), 1):.0f} bits/frame of FAPs ({_level_said(args.level)}); "
           f"rendered in {result.seconds:.1f} s" + (f"; kept {', '.join(map(str, said.kept.values()))}"
                                                    if said.kept else ""))
     return 0
+
+
+def _level_said(level: str) -> str:
+    """The level in say's last line, with why when it is say's own default (encode's is high)."""
+    if level == "low":
+        return "low-level: the exact curves, say's default; --level high sends ~4x fewer bits, as encode does"
+    return f"{level}-level"
 
 
 def _say_recording(args: argparse.Namespace) -> int:
@@ -523,6 +534,6 @@ def _say_recording(args: argparse.Namespace) -> int:
     result, data, stream, kept = said.result, said.data, said.stream, said.kept
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s) of {args.speech} "
           f"({name} aligned by {aligned.method}), {len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs "
-          f"({args.level}-level); rendered in {result.seconds:.1f} s"
+          f"({_level_said(args.level)}); rendered in {result.seconds:.1f} s"
           + (f"; kept {', '.join(map(str, kept.values()))}" if kept else ""))
     return 0
