@@ -3,6 +3,10 @@
 
 Run on demand (not a test):
     .venv/bin/python tools/bench_render.py [--stream S.fba --audio S.wav] [--size 512] [--json out.json]
+    .venv/bin/python tools/bench_render.py --against OLD_CHECKOUT [--rounds 3]
+``--against`` times the per-frame stages of this checkout and of another one (e.g. ``git archive
+HEAD~5 mpeg4fa spec | tar -x -C /tmp/old``) in turns, in child processes, and prints their ratio:
+on a shared machine two separate runs differ by more than a change does.
 Without --stream it plays the longest English vector in ../shared/vectors (or the codec's demo
 stream when that folder is absent). Targets (issue 4): decode + deform + render + readback at
 512x512 >= 25 frames/s on the 2-core CPU machine (Mesa llvmpipe); MP4 export >= 1x real time.
@@ -24,6 +28,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+if "--root" in sys.argv:  # a child timing another checkout's package (see --against)
+    ROOT = Path(sys.argv[sys.argv.index("--root") + 1]).resolve()
 sys.path.insert(0, str(ROOT))
 
 from mpeg4fa.face import FaceModel  # noqa: E402
@@ -75,6 +81,34 @@ def per_frame(face, renderer, data: bytes, repeat: int) -> dict:
     return best
 
 
+def compare(args) -> int:
+    """Per-frame stages of this checkout and of ``--against`` in turns; the best of each, and their ratio."""
+    import subprocess
+
+    best: dict[str, dict[str, dict]] = {"this": {}, "against": {}}
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(args.rounds):
+            for who, root in (("this", Path(__file__).resolve().parents[1]), ("against", args.against)):
+                out = Path(tmp) / f"{who}{k}.json"
+                cmd = [sys.executable, __file__, "--root", str(root), "--per-frame-only", "--size", str(args.size),
+                       "--repeat", "1", "--json", str(out)] + (["--stream", str(args.stream)] if args.stream else [])
+                subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+                for key, t in json.loads(out.read_text()).items():
+                    if key.startswith("per_frame"):
+                        old = best[who].get(key)
+                        best[who][key] = t if old is None or t["total"] < old["total"] else old
+    print(f"{'per frame (ms, best of ' + str(args.rounds) + ')':32s} {'this':>8s} {'against':>8s} {'ratio':>7s}")
+    result = {}
+    for key in best["this"]:
+        for stage in ("deform", "render+readback", "total"):
+            a, b = best["this"][key][stage] * 1e3, best["against"][key][stage] * 1e3
+            print(f"{key + ' ' + stage:32s} {a:8.2f} {b:8.2f} {a / b:7.3f}")
+            result[f"{key} {stage}"] = {"this_ms": a, "against_ms": b, "ratio": a / b}
+    args.json.write_text(json.dumps({"against": str(args.against), "rounds": args.rounds, **result}, indent=1))
+    print(f"wrote {args.json}")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--stream", type=Path, help="a .fba stream (default: the longest en vector)")
@@ -82,7 +116,13 @@ def main() -> int:
     ap.add_argument("--size", type=int, default=512, help="square image size (default 512)")
     ap.add_argument("--repeat", type=int, default=3, help="repeats of the per-frame timing (best is kept)")
     ap.add_argument("--json", type=Path, default=Path("bench_render.json"))
+    ap.add_argument("--against", type=Path, help="another checkout (its mpeg4fa/ and spec/): time both, print the ratio")
+    ap.add_argument("--rounds", type=int, default=3, help="turns of each checkout with --against (best is kept)")
+    ap.add_argument("--per-frame-only", action="store_true", help="skip the MP4/PNG exports")
+    ap.add_argument("--root", type=Path, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.against:
+        return compare(args)
 
     result: dict = {"machine": {"python": platform.python_version(), "cpus": os.cpu_count()}}
     t = time.perf_counter()
@@ -106,6 +146,9 @@ def main() -> int:
         result[f"per_frame {key}"] = {**timing, "renderer_setup_s": setup}
         rows.append((key, timing))
 
+    if args.per_frame_only:
+        args.json.write_text(json.dumps(result, indent=1, default=float))
+        return 0
     exports = {}
     with tempfile.TemporaryDirectory() as tmp:
         stream = decode(data)

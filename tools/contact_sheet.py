@@ -6,8 +6,12 @@ notice first. Writes PNGs under out/contact/ (not committed) for looking at.
     .venv/bin/python tools/contact_sheet.py [--deformer NAME (see --help)] [--size 256] [--out out/contact]
                                             [--crop face|mouth|eyes] [--only visemes|chinese|expressions|extras]
     .venv/bin/python tools/contact_sheet.py --compare [--view front|three-quarter] ...
+    .venv/bin/python tools/contact_sheet.py --docs [--size 160] [--out docs/pictures]
 
 ``--compare`` puts every registered deformer side by side: one row per deformer, the looks in columns.
+``--docs`` writes the sheets of the docs (JPEG): every group, front and three-quarter, on the generic
+head and on the head calibrated to a photo (scikit-image's astronaut through ``mpeg4fa fdp``'s
+:func:`mpeg4fa.tracking.photo.fdp_from_photo`, wearing the photo), plus the deformer comparisons.
 """
 from __future__ import annotations
 
@@ -66,7 +70,8 @@ def poses(face: FaceModel, only: str | None) -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def sheet(face: FaceModel, looks, size: int, crop: str, views=("front", "three-quarter"), cols: int = 8) -> Image.Image:
+def sheet(face: FaceModel, looks, size: int, crop: str, views=("front", "three-quarter"), cols: int = 8,
+          texture: np.ndarray | None = None) -> Image.Image:
     tiles = []
     points = face.mesh.feature_points()
     if CROPS[crop]:
@@ -74,7 +79,7 @@ def sheet(face: FaceModel, looks, size: int, crop: str, views=("front", "three-q
     renderers = []
     for view in views:
         camera = frame_points(points, size, size, view=view)
-        renderers.append(Renderer(face, width=size, height=size, samples=4, camera=camera))
+        renderers.append(Renderer(face, width=size, height=size, samples=4, camera=camera, texture=texture))
     try:
         for label, values in looks:
             v = np.asarray(values, float).copy()
@@ -107,6 +112,36 @@ def compare_sheet(names, looks, size: int, crop: str, view: str) -> Image.Image:
     return board
 
 
+GROUP_CROP = {"visemes": "mouth", "chinese": "mouth", "expressions": "face", "extras": "face"}
+
+
+def photo_head():
+    """The generic head calibrated to the astronaut's photo, and the texture it wears."""
+    from skimage import data
+
+    from mpeg4fa.tracking.photo import fdp_from_photo, textured_head
+
+    return textured_head(fdp_from_photo(data.astronaut(), where="astronaut"))
+
+
+def docs(out: Path, size: int) -> list[Path]:
+    """Every sheet of the docs, as JPEG under ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    generic = FaceModel.default()
+    photo, texture = photo_head()
+    for head, face, tex in (("generic", generic, None), ("photo", photo, texture)):
+        for group, crop in GROUP_CROP.items():
+            board = sheet(face, poses(face, group), size, crop, texture=tex)
+            written.append(out / f"looks-{group}-{head}.jpg")
+            board.save(written[-1], quality=85)
+    for group, crop in (("visemes", "mouth"), ("expressions", "face")):
+        board = compare_sheet(FaceModel.DEFORMERS, poses(generic, group), size, crop, "front")
+        written.append(out / f"deformers-{group}-front-{crop}.jpg")
+        board.save(written[-1], quality=85)
+    return written
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--deformer", default="fap", choices=FaceModel.DEFORMERS)
@@ -116,7 +151,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("out/contact"))
     parser.add_argument("--compare", action="store_true", help="every deformer side by side (one row each)")
     parser.add_argument("--view", default="front", choices=["front", "three-quarter"], help="view for --compare")
+    parser.add_argument("--docs", action="store_true", help="write the docs' sheets (JPEG) into --out "
+                        "(default docs/pictures)")
     args = parser.parse_args(argv)
+    if args.docs:
+        out = args.out if args.out != Path("out/contact") else Path("docs/pictures")
+        for path in docs(out, args.size):
+            print(path)
+        return 0
     if args.compare:
         args.out.mkdir(parents=True, exist_ok=True)
         for group in [args.only] if args.only else ["visemes", "expressions"]:
