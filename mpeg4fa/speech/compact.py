@@ -29,7 +29,7 @@ a coded frame :data:`FRAME_BITS` more, a frame equal to the one before :data:`RE
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,46 +84,105 @@ def _rebuilt(value: int, step: int) -> int:
     return _REBUILT[step][value]
 
 
-def _cheapest(n: int, start: State, options: Callable[[int, State], Iterable[State]],
+_SYMBOLS: dict[tuple[tuple[int, ...], int], list[list[int]]] = {}
+
+
+def _symbols(model: _Model) -> list[list[int]]:
+    """``table[a][b]``: the symbol coding a move from ``b`` to ``a`` (0..63 each) under ``model``, the
+    quantiser's rebuilding applied to both ends (one lookup in the search's inner loop; a coarse step
+    may rebuild 63 a little past it, a change then priced as the largest the model holds). Made once
+    per model: text is coded chunk by chunk, each chunk a search of its own."""
+    key = (tuple(model.symbol), model.qstep)
+    if key not in _SYMBOLS:
+        _SYMBOLS[key] = _symbol_table(model)
+    return _SYMBOLS[key]
+
+
+def _symbol_table(model: _Model) -> list[list[int]]:
+    values = range(FULL_INTENSITY + 1)
+    rebuilt = [_rebuilt(v, model.qstep) if model.qstep else v for v in values]
+    last = len(model.symbol) - 1
+    return [[model.symbol[min(max(rebuilt[a] - rebuilt[b] + FULL_INTENSITY, 0), last)] for b in values]
+            for a in values]
+
+
+def _cheapest(keys: Sequence[Hashable], start: State, options: Callable[[Hashable, State], list[State]],
               models: Sequence[_Model]) -> list[State]:
     """The sequence of states (one per frame) of least cost under adaptive ``models``; ties keep the first option.
 
+    ``options(keys[k], prev)``: the states frame ``k`` may take after ``prev`` (asked once per distinct pair).
     Hypotheses that reach the same state merge (the cheaper one's models are kept), as in a Viterbi
     search, and only the :data:`BEAM` cheapest states go on to the next frame.
+
+    Why it is fast (linear in frames, a few microseconds per hypothesis): a candidate is priced from its
+    parent's counts as they are, and only the survivors of a frame get counts of their own (copied, one added
+    per coded symbol); and a move costs at least :data:`FRAME_BITS`, so a move into a state that is already
+    held, and may stay as it is for :data:`REPEAT_BITS`, is not priced when that stay is cheaper than the
+    move could be (its place among the candidates is kept, so ties and order are as if it were priced).
     """
-    counts = tuple(np.ones(m.size) for m in models)
-    frames: list[dict[State, tuple[float, State | None]]] = []
-    # a hypothesis: its cost, its models' counts, and how many changes it coded (each adds 1 to every model's
-    # counts, so a model's total is its size plus that: exactly what summing the counts gives, without the sum)
-    current: dict[State, tuple[float, tuple[np.ndarray, ...], int]] = {start: (0.0, counts, 0)}
-    for k in range(n):
-        nxt: dict[State, tuple[float, State, tuple[np.ndarray, ...], int]] = {}
+    tables = [_symbols(m) for m in models]
+    sizes = [m.size for m in models]
+    choices: dict[Hashable, dict[State, list[State]]] = {}  # options(key, prev), by key, then by prev
+    stays: dict[Hashable, dict[State, bool]] = {}  # whether a state is among its own options, by key
+    parents: list[dict[State, State]] = []  # per frame: each kept state's parent
+    # a hypothesis: its cost, its models' counts (lists of ints: counts start at one, one added per symbol),
+    # and how many changes it coded (each adds 1 to every model's counts, so a model's total is its size plus
+    # that: exactly what summing the counts gives, without the sum)
+    current: dict[State, tuple[float, tuple[list[int], ...], int]] = {start: (0.0, tuple([1] * s for s in sizes), 0)}
+    log2, never = math.log2, math.inf
+    for key in keys:
+        known = choices.get(key)
+        if known is None:
+            known, stays[key] = choices.setdefault(key, {}), {}
+        stay_known = stays[key]
+        # a candidate: its cost, its parent state, the parent's counts, its change count, the symbols it codes
+        nxt: dict[State, tuple[float, State, tuple[list[int], ...], int, list[int] | None]] = {}
         for prev, (cost, held, changes) in current.items():
-            for cand in options(k, prev):
-                grown, coded = held, changes
+            cands = known.get(prev)
+            if cands is None:
+                cands = known[prev] = list(options(key, prev))
+            floor = cost + FRAME_BITS
+            for cand in cands:
                 if cand == prev:
-                    step = REPEAT_BITS
+                    total, symbols, coded = cost + REPEAT_BITS, None, changes
                 else:
-                    step, grown, coded = FRAME_BITS, [], changes + 1
-                    for m, c, a, b in zip(models, held, cand, prev):
-                        if m.qstep:
-                            a, b = _rebuilt(a, m.qstep), _rebuilt(b, m.qstep)
-                        symbol = m.symbol[a - b + FULL_INTENSITY]
-                        step -= math.log2(c[symbol] / (m.size + changes))
-                        c = c.copy()
-                        c[symbol] += 1.0
-                        grown.append(c)
-                total = cost + step
+                    there = current.get(cand)
+                    if there is not None and floor > there[0] + REPEAT_BITS:
+                        stay = stay_known.get(cand)
+                        if stay is None:
+                            own = known.get(cand)
+                            if own is None:
+                                own = known[cand] = list(options(key, cand))
+                            stay = stay_known[cand] = cand in own
+                        if stay:  # the stay wins: keep the candidate's place, never its price
+                            if cand not in nxt:
+                                nxt[cand] = (never, prev, held, changes, None)
+                            continue
+                    step, symbols, coded = FRAME_BITS, [], changes + 1
+                    for table, size, c, a, b in zip(tables, sizes, held, cand, prev):
+                        symbol = table[a][b]
+                        step -= log2(c[symbol] / (size + changes))
+                        symbols.append(symbol)
+                    total = cost + step
                 if cand not in nxt or total < nxt[cand][0]:
-                    nxt[cand] = (total, prev, tuple(grown), coded)
+                    nxt[cand] = (total, prev, held, coded, symbols)
         if len(nxt) > BEAM:
             nxt = dict(sorted(nxt.items(), key=lambda item: item[1][0])[:BEAM])
-        frames.append({state: (total, prev) for state, (total, prev, _, _) in nxt.items()})
-        current = {state: (total, grown, coded) for state, (total, _, grown, coded) in nxt.items()}
+        parents.append({state: prev for state, (_, prev, _, _, _) in nxt.items()})
+        current = {}
+        for state, (total, _, held, coded, symbols) in nxt.items():
+            if symbols is not None:
+                grown = []
+                for c, symbol in zip(held, symbols):
+                    c = c.copy()
+                    c[symbol] += 1
+                    grown.append(c)
+                held = tuple(grown)
+            current[state] = (total, held, coded)
     state = min(current, key=lambda s: current[s][0])
     path = [state]
-    for k in range(n - 1, 0, -1):
-        state = frames[k][state][1]
+    for k in range(len(keys) - 1, 0, -1):
+        state = parents[k][state]
         path.append(state)
     return path[::-1]
 
@@ -139,17 +198,17 @@ def compact_visemes(viseme: np.ndarray, fap_quant: int = 3) -> np.ndarray:
     n = len(rows)
     if n == 0:
         return rows.copy()
-    s1, s2, blend = (rows[:, j].astype(np.int64) for j in range(3))
     full = FULL_INTENSITY
 
-    def options(k: int, prev: State) -> list[State]:
-        a, b, w = int(s1[k]), int(s2[k]), int(blend[k])
+    def options(row: State, prev: State) -> list[State]:
+        a, b, w = row
         if a == b or w >= full or w <= 0:
             x = b if (w <= 0 and a != b) else a
             return [(x, prev[1], full), (prev[0], x, 0), (x, x, prev[2])]
         return [(a, b, w), (b, a, full - w)]
 
-    path = _cheapest(n, (0, 0, 0), options, field_models(1, fap_quant))
+    keys = [tuple(row) for row in rows[:, :3].astype(np.int64).tolist()]
+    path = _cheapest(keys, (0, 0, 0), options, field_models(1, fap_quant))
     out = rows.copy()
     out[:, :3] = np.array(path, dtype=out.dtype)
     return out
@@ -166,14 +225,13 @@ def compact_expressions(expression: np.ndarray, fap_quant: int = 3) -> np.ndarra
     n = len(rows)
     if n == 0:
         return rows.copy()
-    fields = rows[:, :4].astype(np.int64)
 
     def empty(prev_slot: tuple[int, int]) -> list[tuple[int, int]]:
         s, i = prev_slot
         return [prev_slot] if s == 0 or i == 0 else [(s, 0), (0, i)]
 
-    def options(k: int, prev: State) -> list[State]:
-        shown = [(int(fields[k, 0]), int(fields[k, 1])), (int(fields[k, 2]), int(fields[k, 3]))]
+    def options(row: State, prev: State) -> list[State]:
+        shown = [row[:2], row[2:]]
         shown = [slot for slot in shown if slot[0] != 0 and slot[1] != 0]
         slots = ((prev[0], prev[1]), (prev[2], prev[3]))
         out: list[State] = []
@@ -189,7 +247,8 @@ def compact_expressions(expression: np.ndarray, fap_quant: int = 3) -> np.ndarra
             out.extend(a + b for a in empty(slots[0]) for b in empty(slots[1]))
         return out
 
-    path = _cheapest(n, (0, 0, 0, 0), options, field_models(2, fap_quant))
+    keys = [tuple(row) for row in rows[:, :4].astype(np.int64).tolist()]
+    path = _cheapest(keys, (0, 0, 0, 0), options, field_models(2, fap_quant))
     out = rows.copy()
     out[:, :4] = np.array(path, dtype=out.dtype)
     return out
