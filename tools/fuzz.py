@@ -48,7 +48,8 @@ the exception chain, under an address-space cap ``--memory-gib`` above the start
 than ``--peak-mib`` during the case) or *mismatch* (a round trip changed the values, or a layer refused
 what the layer before it made). Also counted: rejections whose error names no place, and warnings that
 are not an ``MpegFaWarning``. A watchdog thread ends the process with exit status 3 (keeping the input
-and printing its replay command) if a case is stuck where the timer signal cannot reach. Case ``i`` of
+and printing its replay command) if a case is stuck where the timer signal cannot reach. ``--clock cpu`` counts
+the process's own CPU seconds instead of the wall clock's, for a machine shared with other work. Case ``i`` of
 a target is drawn from its own generator seeded by ``--seed``, the target and ``i``, so a run is
 reproducible. In one process the targets run one after the other, each with ``--per-target`` cases or
 an equal share of what is left of ``--cases`` and ``--seconds``. The summary (JSON, and printed) has a
@@ -125,20 +126,32 @@ def _on_alarm(signum, frame):
     raise _Hang()
 
 
-class Guard:
-    """Per-case time limit (a SIGALRM timer; the stages of a case share it) and per-case peak memory
-    (VmHWM, reset before each case)."""
+CLOCKS = ("wall", "cpu")
+"""What a case's time limit counts: wall-clock seconds (the issue's measure, on a machine of one's own) or the
+process's CPU seconds (its own work, C code included, whatever else the machine runs: for a shared machine)."""
 
-    def __init__(self, case_seconds: float) -> None:
-        self.case_seconds = case_seconds
+
+class Guard:
+    """Per-case time limit (a timer signal; the stages of a case share it) and per-case peak memory
+    (VmHWM, reset before each case). ``clock`` "wall": SIGALRM on the wall clock; "cpu": SIGPROF on the
+    process's CPU time, so a case is judged by its own work when other processes load the machine."""
+
+    def __init__(self, case_seconds: float, clock: str = "wall") -> None:
+        if clock not in CLOCKS:
+            raise ValueError(f"clock {clock!r}: one of {', '.join(CLOCKS)}")
+        self.case_seconds, self.clock = case_seconds, clock
         self.stage = ""
-        self._previous = signal.signal(signal.SIGALRM, _on_alarm)
+        cpu = clock == "cpu"
+        self._signal = signal.SIGPROF if cpu else signal.SIGALRM
+        self._timer = signal.ITIMER_PROF if cpu else signal.ITIMER_REAL
+        self.now: Callable[[], float] = time.process_time if cpu else time.monotonic
+        self._previous = signal.signal(self._signal, _on_alarm)
         self.peak_ok = _reset_peak()
 
     def close(self) -> None:
-        """Give the SIGALRM handler back (the tests run campaigns inside pytest)."""
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, self._previous)
+        """Give the signal handler back (the tests run campaigns inside pytest)."""
+        signal.setitimer(self._timer, 0)
+        signal.signal(self._signal, self._previous)
 
     def limit_for(self, size: int, target: str = "fba") -> float:
         """A case's time limit: ``case_seconds``, plus 40 us a byte for the codec targets (:data:`SCALED`)."""
@@ -146,11 +159,11 @@ class Guard:
 
     def run(self, stage: str, limit: float, call: Callable[[], object]) -> object:
         self.stage = stage
-        signal.setitimer(signal.ITIMER_REAL, max(limit, 1e-3))
+        signal.setitimer(self._timer, max(limit, 1e-3))
         try:
             return call()
         finally:
-            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.setitimer(self._timer, 0)
 
 
 def _reset_peak() -> bool:
@@ -208,7 +221,7 @@ class Case:
     deadline: float = 0.0
 
     def __post_init__(self) -> None:
-        self.deadline = time.monotonic() + self.limit
+        self.deadline = self.guard.now() + self.limit
 
     def file(self, suffix: str) -> Path:
         path = self.tmp / f"case{suffix}"
@@ -218,7 +231,7 @@ class Case:
     def stage(self, name: str, call: Callable[[], object]) -> object:
         """Run one stage within what is left of the case's time."""
         try:
-            return self.guard.run(name, self.deadline - time.monotonic(), call)
+            return self.guard.run(name, self.deadline - self.guard.now(), call)
         except BaseException as exc:
             self.fault = (name, exc)  # the stage an exception came from, even if later stages ran
             raise
@@ -418,6 +431,8 @@ class Tally:
     """Largest growth of resident memory during one case (MiB)."""
     rss_mib: float = 0.0
     """Largest resident memory of the process during a case (MiB): the fuzzer's own imports included."""
+    slowest_wall: float = 0.0
+    """Longest case on the wall clock (s): ``slowest`` is on the guard's clock, which may be CPU time."""
 
 
 class Campaign:
@@ -432,7 +447,8 @@ class Campaign:
         self.warnings: dict[str, str] = {}
         self.reasons: dict[str, int] = {}
         self.current: tuple[str, int, bytes, float] | None = None
-        self.case_started = 0.0
+        self.case_started = 0.0  # wall clock (the watchdog's)
+        self.case_clock = 0.0  # the guard's clock
 
     def case_rng(self, target: str, index: int) -> random.Random:
         return random.Random((self.seed * 64 + TARGETS.index(target)) * (1 << 40) + index)
@@ -446,7 +462,8 @@ class Campaign:
         tally = self.tallies.setdefault(target, Tally())
         limit = self.guard.limit_for(len(data), target)
         case = Case(data, rng, self.guard, self.tmp, limit)
-        self.current, self.case_started = (target, index, data, limit), time.monotonic()
+        self.current, self.case_started, self.case_clock = (target, index, data, limit), time.monotonic(), \
+            self.guard.now()
         if self.guard.peak_ok:
             _reset_peak()  # VmHWM := VmRSS now, so the growth below is this case's own
         before = _status_bytes("VmRSS")
@@ -467,11 +484,12 @@ class Campaign:
                 outcome, exc = "crash", e
             except Exception as e:  # noqa: BLE001 - anything else escaping is what we are looking for
                 outcome, exc = "crash", e
-        elapsed = time.monotonic() - self.case_started
+        elapsed, wall = self.guard.now() - self.case_clock, time.monotonic() - self.case_started
         self.current = None
         stage = case.stage_of(exc)
         tally.cases += 1
         tally.seconds += elapsed
+        tally.slowest_wall = max(tally.slowest_wall, wall)
         if elapsed > tally.slowest:
             tally.slowest, tally.slowest_case = elapsed, f"case {index}: {origin} ({len(data)} bytes, {outcome})"
         for w in caught:
@@ -516,7 +534,8 @@ class Campaign:
                 elapsed: float, stage: str, message: str = "") -> None:
         if exc is not None and kind == "hang":
             limit = self.guard.limit_for(len(data), target)
-            frame, etype, message = _last_frame(exc), "hang", f"the case ran past {limit:.1f} s (in stage {stage})"
+            frame, etype = _last_frame(exc), "hang"
+            message = f"the case ran past {limit:.1f} s{' of CPU' if self.guard.clock == 'cpu' else ''} (in stage {stage})"
         elif exc is not None:
             frame, etype, message = _last_frame(exc), type(exc).__name__, str(exc)[:300]
         else:
@@ -542,20 +561,23 @@ class Campaign:
 
 
 def _watchdog(campaign: Campaign, report: Callable[[str], None]) -> None:
-    """End the run when a case is stuck where SIGALRM cannot reach (C code): keep the reproducer. The limit is
-    three times the case's own (at least 30 s); exit status 3 tells a coordinator (``--jobs``) what happened."""
+    """End the run when a case is stuck where the timer signal cannot reach (C code): keep the reproducer. The
+    limit is three times the case's own (at least 30 s) on the guard's clock; with the CPU clock also twenty
+    times on the wall clock (a case blocked without working); exit status 3 tells a coordinator (``--jobs``)."""
+    guard = campaign.guard
     while True:
         time.sleep(0.5)
         current = campaign.current
         if current is None:
             continue
         target, index, data, limit = current
-        stuck = time.monotonic() - campaign.case_started
-        if stuck > max(30.0, 3 * limit):
+        wall = time.monotonic() - campaign.case_started
+        stuck = guard.now() - campaign.case_clock if guard.clock == "cpu" else wall
+        if campaign.current is current and (stuck > max(30.0, 3 * limit) or wall > max(200.0, 20 * limit)):
             path = campaign.out / "crashes" / f"{target}-stuck-{index}.bin"
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_bytes(data)
-            report(f"STUCK: case {index} of {target} stuck in stage {campaign.guard.stage} for {stuck:.0f} s "
+            report(f"STUCK: case {index} of {target} stuck in stage {guard.stage} for {stuck:.0f} s ({guard.clock}) "
                    f"(not interruptible); input saved to {path}; replay: "
                    f"{campaign.replay_command(target, index)}")
             os._exit(3)
@@ -569,6 +591,7 @@ def _summary(campaign: Campaign, args: argparse.Namespace, elapsed: float, seeds
     summary = {
         "seed": args.seed, "seconds": round(elapsed, 1), "case_seconds": args.case_seconds,
         "memory_cap_bytes": memory_cap, "peak_limit_mib": args.peak_mib, "jobs": 1, "first": args.first,
+        "clock": args.clock,
         "vectors": str(args.vectors) if args.vectors and args.vectors.is_dir() else None,
         "seeds": {t: [s.name for s in seeds[t]] for t in campaign.tallies},
         "targets": {t: vars(campaign.tallies[t]) for t in TARGETS if t in campaign.tallies},
@@ -647,6 +670,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--no-vectors", action="store_true", help="only the seeds made here")
     p.add_argument("--case-seconds", type=float, default=10.0,
                    help="time limit of a case (default 10, the issue's; plus 40 us a byte for the codec targets)")
+    p.add_argument("--clock", choices=CLOCKS, default="wall",
+                   help="what --case-seconds counts: wall (default) or cpu, the process's own CPU time (a machine "
+                   "shared with other work, where the wall clock measures the neighbours)")
     p.add_argument("--memory-gib", type=float, default=2.0, help="address space allowed above the start")
     p.add_argument("--peak-mib", type=int, default=256, help="a case whose peak RSS grows more than this is reported")
     p.add_argument("--replay", type=Path, default=None, help="run one input file through --target and show the outcome")
@@ -674,7 +700,7 @@ def main(argv: list[str] | None = None) -> int:
         return fuzz_parallel.run(args, Path(__file__).resolve(), say)
     logging.getLogger("trimesh").setLevel(logging.CRITICAL)  # a damaged mesh is our finding, not a log line
     tmp = Path(tempfile.mkdtemp(prefix="mpeg4fa-fuzz-", dir="/dev/shm" if os.path.isdir("/dev/shm") else None))
-    guard = Guard(args.case_seconds)
+    guard = Guard(args.case_seconds, args.clock)
     try:
         if args.replay is not None:
             return _replay(args, guard, tmp)

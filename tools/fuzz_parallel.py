@@ -18,11 +18,12 @@ from pathlib import Path
 from typing import Callable
 
 SUMS = ("cases", "ok", "rejected", "crashes", "hangs", "memory", "peak", "mismatches", "unlocated", "seconds")
-MAXES = ("peak_mib", "rss_mib")
+MAXES = ("peak_mib", "rss_mib", "slowest_wall")
 COLUMNS = ("target", "cases", "ok", "rejected", "crash", "hang", "memory", "peak>lim", "mismatch", "unlocated",
-           "peak MiB", "rss MiB", "cases/s", "slowest s")
+           "peak MiB", "rss MiB", "cases/s", "slowest s", "wall s")
 """The summary table: per target, the outcomes, the largest growth of memory in one case (peak MiB) and of
-the process's resident memory (rss MiB), and cases per second of one process."""
+the process's resident memory (rss MiB), cases per second of one process, and the slowest case on the run's
+clock (``--clock``: wall or CPU seconds) and on the wall clock."""
 
 
 def table_rows(summary: dict) -> list[dict]:
@@ -32,7 +33,8 @@ def table_rows(summary: dict) -> list[dict]:
         rows.append(dict(zip(COLUMNS, (target, t["cases"], t["ok"], t["rejected"], t["crashes"], t["hangs"],
                                        t["memory"], t["peak"], t["mismatches"], t["unlocated"],
                                        round(t["peak_mib"], 1), round(t.get("rss_mib", 0.0), 1),
-                                       round(t["cases"] / max(t["seconds"], 1e-9), 1), round(t["slowest"], 2)))))
+                                       round(t["cases"] / max(t["seconds"], 1e-9), 1), round(t["slowest"], 2),
+                                       round(t.get("slowest_wall", t["slowest"]), 2)))))
         for name in SUMS:
             total[name] += t[name]
         for name in MAXES:
@@ -40,7 +42,7 @@ def table_rows(summary: dict) -> list[dict]:
     rows.append(dict(zip(COLUMNS, ("total", total["cases"], total["ok"], total["rejected"], total["crashes"],
                                    total["hangs"], total["memory"], total["peak"], total["mismatches"],
                                    total["unlocated"], round(total["peak_mib"], 1), round(total["rss_mib"], 1),
-                                   round(total["cases"] / max(summary["seconds"], 1e-9), 1), ""))))
+                                   round(total["cases"] / max(summary["seconds"], 1e-9), 1), "", ""))))
     return rows
 
 
@@ -126,7 +128,7 @@ def _worker_argv(args: argparse.Namespace, tool: Path, target: str, first: int, 
     argv = [sys.executable, str(tool), "--target", target, "--first", str(first), "--per-target", str(count),
             "--seconds", f"{seconds:.1f}", "--seed", str(args.seed), "--json", str(part), "--out", str(args.out),
             "--case-seconds", str(args.case_seconds), "--memory-gib", str(args.memory_gib),
-            "--peak-mib", str(args.peak_mib), "--quiet"]
+            "--peak-mib", str(args.peak_mib), "--clock", getattr(args, "clock", "wall"), "--quiet"]
     return argv + (["--no-vectors"] if args.vectors is None else ["--vectors", str(args.vectors)])
 
 
@@ -184,7 +186,8 @@ def run(args: argparse.Namespace, tool: Path, say: Callable[[str], None]) -> int
     elapsed = time.monotonic() - start
     summary = merge(parts)
     summary.update({"seed": args.seed, "seconds": round(elapsed, 1), "jobs": args.jobs, "chunk": args.chunk,
-                    "case_seconds": args.case_seconds, "peak_limit_mib": args.peak_mib,
+                    "case_seconds": args.case_seconds, "clock": getattr(args, "clock", "wall"),
+                    "peak_limit_mib": args.peak_mib,
                     "memory_gib": args.memory_gib, "worker_failures": failures, "interrupted": interrupted,
                     "not_run": [{"target": t, "first": f, "count": c} for t, f, c in tasks],
                     "python": sys.version.split()[0]})

@@ -103,6 +103,33 @@ def test_a_slow_stage_is_a_hang(campaign, monkeypatch):
     assert campaign.tallies["markup"].hangs == 1
 
 
+def test_the_cpu_clock_counts_work_not_waiting(tmp_path, monkeypatch):
+    """``--clock cpu``: a case that waits (the machine busy elsewhere) is not a hang; one that works past its
+    limit is, and the table keeps the wall clock's slowest beside the CPU clock's."""
+    guard = fuzz.Guard(0.3, "cpu")
+    run = fuzz.Campaign(0, tmp_path / "out", guard, 1 << 30, tmp_path)
+
+    def spin():
+        end = time.process_time() + 5
+        while time.process_time() < end:
+            pass
+    try:
+        _runner(monkeypatch, "markup", lambda case: case.stage("parse", lambda: time.sleep(0.6)))
+        assert run.run_input("markup", 0, b"x", None, "test") == "ok"
+        _runner(monkeypatch, "markup", lambda case: case.stage("parse", spin))
+        start = time.process_time()
+        assert run.run_input("markup", 1, b"y", None, "test") == "hang"
+        assert time.process_time() - start < 2
+    finally:
+        guard.close()
+    tally = run.tallies["markup"]
+    assert tally.hangs == 1 and tally.slowest < 1.5 and tally.slowest_wall >= 0.6
+    (finding,) = run.findings.values()
+    assert "of CPU" in finding.message and finding.first_case == 1
+    with pytest.raises(ValueError):
+        fuzz.Guard(1.0, "sundial")
+
+
 def test_memory_errors_are_blow_ups_even_when_wrapped(campaign, monkeypatch):
     def wrapped(case):
         try:
