@@ -192,10 +192,12 @@ def read_wav(path: str | os.PathLike, *, max_seconds: float = MAX_SECONDS) -> tu
 
 def _mono_int16(raw: bytes, info: WavInfo) -> np.ndarray:
     if info.format == "float":
-        x = np.frombuffer(raw, "<f4" if info.bits == 32 else "<f8").astype(np.float64)
         # full scale is +-1: NaN is silence, beyond (inf, 1e308) is clipped here, before the channels are
-        # summed (1e308 + 1e308 overflows, inf - inf is NaN: numpy warnings, then a NaN cast to int16)
-        x = np.clip(np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=-1.0), -1.0, 1.0)
+        # summed (1e308 + 1e308 overflows, inf - inf is NaN: numpy warnings, then a NaN cast to int16). A
+        # signalling NaN (float32 0x7f800001) raises "invalid" in the cast to float64: it is read as any NaN
+        with np.errstate(invalid="ignore"):
+            x = np.frombuffer(raw, "<f4" if info.bits == 32 else "<f8").astype(np.float64)
+            x = np.clip(np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=-1.0), -1.0, 1.0)
     elif info.bits == 8:
         x = (np.frombuffer(raw, np.uint8).astype(np.float64) - 128.0) / 128.0
     elif info.bits == 16:
