@@ -86,17 +86,20 @@ def jit(fn):
 
 
 def cached() -> bool:
-    """Whether numba's disk cache holds machine code for every kernel (False: a first call compiles, ~10-20 s).
+    """Whether numba's disk cache holds machine code for the kernels (False: the first call compiles, ~10-20 s).
 
-    Reads numba's cache index through its internals; where they have moved, says True (nothing is
-    announced rather than something wrong)."""
+    All kernels live in one file, so an install or an upgrade leaves none cached: one cached kernel means
+    the big compile is done (a command that then runs kernels no earlier one ran, such as the first long
+    decode after a few encodes, still compiles those few, for a second or two, and :func:`warm_up` compiles
+    them all). Reads numba's cache index through its internals; where they have moved, says True (nothing
+    is announced rather than something wrong)."""
     if _load() is None:
         return True
     from . import kernels
 
     try:
         dispatchers = [v for v in vars(kernels).values() if hasattr(v, "_cache") and hasattr(v, "py_func")]
-        return all(d._cache._cache_file._load_index() for d in dispatchers)
+        return any(d._cache._cache_file._load_index() for d in dispatchers)
     except Exception:  # pragma: no cover - another numba's internals
         return True
 
