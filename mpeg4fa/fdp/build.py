@@ -227,8 +227,12 @@ def _side_scale(front: Mapping[str, np.ndarray], side: Mapping[str, np.ndarray],
     """Front pixels per side pixel: the ratio of the heights the shared labels span on the two photos."""
     shared = [label for label in front if label in side]
     if len(shared) < 2:
-        raise FdpValueError(f"{len(shared)} label(s) annotated on both photos; at least 2 are needed to match their "
-                            "scales (annotate e.g. the nose tip 9.3 and the chin 2.1 on both)", ())
+        def some(labels) -> str:
+            labels = list(labels)
+            return ", ".join(labels[:6]) + (f" and {len(labels) - 6} more" if len(labels) > 6 else "") or "none"
+        raise FdpValueError(f"{len(shared)} label(s) annotated on both photos ({some(shared)}; front: {some(front)}; "
+                            f"{view}: {some(side)}); at least 2 are needed to match their scales (annotate e.g. "
+                            "the nose tip 9.3 and the chin 2.1 on both)", (view,))
     extents = []
     for name, points in (("front", front), (view, side)):
         xy = np.array(list(points.values()))
