@@ -161,7 +161,10 @@ def full_width(doc: dict[str, Any], where: str = "expected file") -> dict[str, A
         out = {key: value for key, value in doc.items() if key != "columns"}
 
         def widen(rows, dtype) -> np.ndarray:
-            part = np.asarray(rows, dtype=dtype)
+            try:
+                part = np.asarray(rows, dtype=dtype)
+            except ValueError:
+                raise ValueError("rows of unequal lengths: a row per frame, a value per listed columns") from None
             if part.shape != (n, len(cols)):
                 raise ValueError(f"rows of shape {part.shape}, expected ({n}, {len(cols)}): a row per frame, a value per listed columns")
             full = np.zeros((n, N_FAPS), dtype=dtype)
