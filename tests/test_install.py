@@ -122,3 +122,14 @@ def test_dev_sh_installs_the_locks():
     assert "--require-hashes -r \"$lock\"" in script and "--no-deps -e ." in script
     assert extras.MEDIAPIPE in script
     subprocess.run(["bash", "-n", str(ROOT / "tools" / "dev.sh")], check=True)
+
+
+def test_without_the_align_extra_auto_aligns_english_with_dtw(monkeypatch):
+    from mpeg4fa.speech.align import choose_method
+    from mpeg4fa.speech.align.sphinx import shared_decoder
+
+    assert choose_method("auto", "Hello there", "en") == "pocketsphinx" or extras.absent("align", "pocketsphinx")
+    monkeypatch.setattr(extras, "_installed", lambda module: module != "pocketsphinx")
+    assert choose_method("auto", "Hello there", "en") == "dtw"
+    with pytest.raises(MissingExtra, match=r"'align' extra .*pip install 'mpeg4fa\[align\]'"):
+        shared_decoder.__wrapped__()
