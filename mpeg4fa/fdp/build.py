@@ -25,7 +25,8 @@ import numpy as np
 
 from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.fdp.json_form import _decode, _Doc, _kind, _parse
-from mpeg4fa.fdp.model import LABEL_INDEX, Fdp, FdpMesh, FdpValueError, TextureImage
+from mpeg4fa.fdp.model import (LABEL_INDEX, MAX_COORDINATE, Fdp, FdpMesh, FdpValueError, TextureImage,
+                               first_unbounded)
 from mpeg4fa.spec import FEATURE_POINT_MIRROR, FEATURE_POINTS
 
 SIDE_VIEWS = ("left", "right")
@@ -92,13 +93,15 @@ def _check_label(label: Any, part: str) -> None:
 
 
 def _point(value: Any, n: int, what: str, forms: str, where: tuple[Any, ...]) -> np.ndarray:
-    """A finite (n,) float array, or an FdpValueError naming ``what``."""
+    """A finite (n,) float array within +-:data:`~mpeg4fa.fdp.model.MAX_COORDINATE`, or an FdpValueError naming
+    ``what`` (a photo point at 1e308 overflowed the depth check's mean: a numpy warning, fuzz points:29937@0)."""
     try:
         p = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
         p = np.empty(0)
-    if p.shape != (n,) or not np.isfinite(p).all():
-        raise FdpValueError(f"{what} must be {forms} (finite numbers), got {value!r}", where)
+    if p.shape != (n,) or first_unbounded(p) is not None:
+        raise FdpValueError(f"{what} must be {forms} (finite numbers within +-{MAX_COORDINATE:g}), got {value!r}",
+                            where)
     return p
 
 
