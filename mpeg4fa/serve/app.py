@@ -10,7 +10,9 @@ first sentence is made, and a slow or stalled client costs the server one senten
 
 HTTP routes: ``/`` (the player page), ``/static`` (its script), ``/vendor/three`` (three.js as
 vendored for the editor, served from there), ``/head.glb`` (the head with its ARKit morph targets,
-:func:`mpeg4fa.export.gltf.build_glb`, built once on first request), ``/api/info``. Unknown routes
+:func:`mpeg4fa.export.gltf.build_glb`, built once on first request), ``/api/info``; ``/player`` (the
+FBA player, ``static/fbaplayer.html``: streams decoded in the browser by fba.js) with its head
+``/static/fap-head.glb`` and key ``/static/fap-head.json`` (:mod:`.fap_head`, built once). Unknown routes
 answer ``{"error", "where"}`` with 404. Only the server's own page and loopback clients get in
 (:class:`mpeg4fa.guard.LocalOnly`): a foreign ``Host`` or ``Origin``, or a WebSocket handshake without
 ``Origin``, is answered 403 before anything runs.
@@ -26,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fastapi import FastAPI, Request, WebSocket
-from fastapi.responses import HTMLResponse, JSONResponse, Response
+from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
@@ -61,6 +63,16 @@ class Settings:
     connections: int = 0
     _glb: bytes | None = None
     _glb_lock: threading.Lock = field(default_factory=threading.Lock)
+    _fap_head: tuple[bytes, dict] | None = None
+
+    def fap_head(self) -> tuple[bytes, dict]:
+        """The FBA player's head (one morph target per FAP, :mod:`.fap_head`) and its key, built once."""
+        from mpeg4fa.serve.fap_head import fap_head
+
+        with self._glb_lock:
+            if self._fap_head is None:
+                self._fap_head = fap_head(self.face)
+            return self._fap_head
 
     def head_glb(self) -> bytes:
         """The head as GLB (morph targets named as ``units``), built once."""
@@ -133,6 +145,19 @@ def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak"
     @app.get("/api/info")
     def info():
         return hello(settings)
+
+    @app.get("/player")
+    def fba_player():
+        """The FBA player page (fba.js decodes in the browser); relative URLs resolve under /static/."""
+        return RedirectResponse("/static/fbaplayer.html")
+
+    @app.get("/static/fap-head.glb")
+    def fap_head_glb():
+        return Response(settings.fap_head()[0], media_type="model/gltf-binary")
+
+    @app.get("/static/fap-head.json")
+    def fap_head_key():
+        return JSONResponse(settings.fap_head()[1])
 
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
     app.mount("/vendor/three", StaticFiles(directory=THREE), name="three")

@@ -1,0 +1,327 @@
+// The FBA player page: decodes a .fba in the browser (fba.js), plays it on the head with its .wav.
+//
+// The head is fap-head.glb (mpeg4fa/serve/fap_head.py): two morph targets per FAP, the face
+// engine's poses at two known values, weighed to follow the FAP's motion to second order; head
+// pitch, yaw and roll (FAPs 48-50) turn the whole head about feature point 7.1. The clock is the audio element's when the
+// stream has speech, else the wall clock; each frame is shown from its presentation time on.
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { FbaError, StreamDecoder, summary } from "./fba/fba.js";
+import { Shown } from "./fba/shown.js";
+
+const $ = (id) => document.getElementById(id);
+const view = $("view"), info = $("info"), message = $("message"), audio = $("audio");
+const playButton = $("play"), scrub = $("scrub"), timeText = $("time");
+const CHUNK = 64 * 1024;  // bytes handed to the decoder at a time (frames come out as they complete)
+
+// ---- the scene ---------------------------------------------------------------------------------
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio);
+view.prepend(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x2b2f36);
+const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 10);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2.0));
+const sun = new THREE.DirectionalLight(0xffffff, 1.5);
+sun.position.set(0.5, 1.5, 2);
+scene.add(sun);
+const controls = new OrbitControls(camera, renderer.domElement);
+
+const head = { key: null, pivot: new THREE.Group(), meshes: [], fps: [] };
+scene.add(head.pivot);
+
+function resize() {
+  const w = view.clientWidth, h = view.clientHeight;
+  renderer.setSize(w, h, false);
+  camera.aspect = w / Math.max(h, 1);
+  camera.updateProjectionMatrix();
+}
+window.addEventListener("resize", resize);
+
+async function loadHead() {
+  const key = await (await fetch("fap-head.json")).json();
+  const gltf = await new GLTFLoader().loadAsync("fap-head.glb");
+  const pivot = new THREE.Vector3(...key.pivot);
+  head.pivot.position.copy(pivot);
+  gltf.scene.position.copy(pivot).negate();
+  head.pivot.add(gltf.scene);
+  gltf.scene.traverse((o) => { if (o.isMesh && o.morphTargetInfluences) head.meshes.push(o); });
+  head.key = key;
+  head.weights = new Array(key.targets.length).fill(0);
+  head.partner = key.targets.map((fap, k) => key.targets.findIndex((f, j) => j !== k && f === fap && fap !== null));
+  // each feature point is a vertex of the mesh: find it by its rest position, once
+  const v = new THREE.Vector3();
+  head.fps = key.feature_points.rest.map((p) => {
+    let best = null, bestD = Infinity;
+    for (const mesh of head.meshes) {
+      const pos = mesh.geometry.attributes.position;
+      for (let i = 0; i < pos.count; i++) {
+        v.fromBufferAttribute(pos, i);
+        const d = (v.x - p[0]) ** 2 + (v.y - p[1]) ** 2 + (v.z - p[2]) ** 2;
+        if (d < bestD) { bestD = d; best = [mesh, i]; }
+      }
+    }
+    return bestD < 1e-8 ? best : null;  // within 0.1 mm: a point on a part the GLB leaves out has none
+  });
+  const fp = (label) => key.feature_points.rest[key.feature_points.labels.indexOf(label)];
+  const chin = fp("2.1"), top = fp("11.1") || fp("4.1");
+  const centre = new THREE.Vector3(0, (chin[1] + top[1]) / 2, chin[2]);
+  camera.position.set(centre.x, centre.y, centre.z + 0.75);
+  controls.target.copy(centre);
+  controls.update();
+  resize();
+}
+
+// ---- the stream --------------------------------------------------------------------------------
+const state = { name: "", bytes: 0, frames: [], shown: [], error: null, done: false, clock0: null, paused: true,
+  offset: 0, audio: false, shownK: -1, decodeMs: 0 };
+
+function setMessage(text) {
+  message.textContent = text;
+  message.classList.toggle("shown", !!text);
+}
+
+function duration() {
+  const f = state.frames;
+  if (!f.length) return 0;
+  const last = f[f.length - 1];
+  return last.timestamp - f[0].timestamp + (last.skip + 1) / streamFps();
+}
+
+function streamFps() {
+  for (const f of state.frames) if (f.params && f.params.frameRate) return f.params.frameRate.fps;
+  return 30;
+}
+
+function describe() {
+  const f = state.frames;
+  if (!f.length) { info.textContent = state.error ? `${state.name}: no frame decoded` : "decoding…"; return; }
+  const s = summary({ frames: f, fps: streamFps() }, state.bytes);
+  const first = f.find((x) => x.params && x.params.face);
+  const face = first ? first.params.face : null;
+  const osc = state.decoder.objectStartCode;
+  info.textContent = [
+    `${state.name}  ${(state.bytes / 1024).toFixed(1)} KiB${state.done ? "" : " (receiving)"}`,
+    `object start code 0x${osc.toString(16).toUpperCase().padStart(8, "0")}  ${s.face ? "face" : ""}${s.face && s.body ? " + " : ""}${s.body ? "body" : ""}`,
+    `${s.frames} frames (${s.intra} intra)  ${s.fps.toFixed(3)} fps  ${s.duration.toFixed(3)} s`,
+    face ? `fap_quant ${face.quant}  mask types ${face.maskTypes.join("")}` : "no face header",
+    `${s.bitsPerFrame.toFixed(1)} bits/frame  ${s.kbps.toFixed(2)} kbit/s`,
+    `audio: ${state.audio ? "yes" : "none"}  decoded in ${state.decodeMs.toFixed(1)} ms`,
+  ].join("\n");
+}
+
+function reset(name) {
+  audio.pause();
+  if (audio.src && audio.src.startsWith("blob:")) URL.revokeObjectURL(audio.src);
+  audio.removeAttribute("src");
+  audio.load();
+  Object.assign(state, { name, bytes: 0, frames: [], shown: [], error: null, done: false, clock0: null, paused: true,
+    offset: 0, audio: false, shownK: -1, decodeMs: 0, resolver: new Shown(), decoder: new StreamDecoder() });
+  setMessage("");
+  playButton.disabled = true;
+  scrub.disabled = true;
+}
+
+/** Feed bytes to the decoder; a fault stops decoding and says where, keeping the frames before it. */
+function feed(chunk, last) {
+  if (state.error) return;
+  const t0 = performance.now();
+  let frames = [];
+  try {
+    frames = last ? state.decoder.end() : state.decoder.push(chunk);
+  } catch (e) {
+    if (!(e instanceof FbaError)) throw e;
+    frames = e.partial ? e.partial.frames : [];
+    state.error = e;
+  }
+  state.bytes += chunk ? chunk.length : 0;
+  for (const f of frames) { state.frames.push(f); state.shown.push(state.resolver.push(f)); }
+  state.decodeMs += performance.now() - t0;
+  if (last || state.error) state.done = true;
+  if (state.error) {
+    const kept = state.frames.length;
+    setMessage(`${state.name}: ${state.error.toString()}` +
+      (kept ? ` — playing the ${kept} frame${kept === 1 ? "" : "s"} before it` : ""));
+  }
+  if (state.frames.length) { playButton.disabled = false; scrub.disabled = false; }
+  scrub.max = String(duration());
+  describe();
+}
+
+async function openFiles(list) {
+  const files = Array.from(list);
+  // the .fba, else the first file that is not a .wav: the decoder says what it is if it is no stream
+  const stream = files.find((f) => /\.fba$/i.test(f.name)) || files.find((f) => !/\.wav$/i.test(f.name));
+  if (!stream) { setMessage("only audio given: choose a .fba stream (and its .wav)"); return; }
+  reset(stream.name);
+  const base = stream.name.replace(/\.[^.]*$/, "").toLowerCase();
+  const wav = files.find((f) => /\.wav$/i.test(f.name) && f.name.replace(/\.[^.]*$/, "").toLowerCase() === base)
+    || files.find((f) => /\.wav$/i.test(f.name));
+  if (wav) { audio.src = URL.createObjectURL(wav); state.audio = true; }
+  const bytes = new Uint8Array(await stream.arrayBuffer());
+  for (let i = 0; i < bytes.length && !state.error; i += CHUNK) feed(bytes.subarray(i, i + CHUNK), false);
+  feed(null, true);
+}
+
+async function openUrl(url) {
+  const name = decodeURIComponent(new URL(url, location.href).pathname.split("/").pop() || url);
+  reset(name);
+  let response;
+  try {
+    response = await fetch(url);
+  } catch (e) {
+    setMessage(`${name}: cannot fetch it (${e.message})`);
+    return;
+  }
+  if (!response.ok) { setMessage(`${name}: the server answered ${response.status} ${response.statusText}`); return; }
+  const wavUrl = new URL(url, location.href);
+  wavUrl.pathname = wavUrl.pathname.replace(/\.[^./]*$/, ".wav");
+  fetch(wavUrl, { method: "HEAD" }).then((r) => {
+    if (r.ok && state.name === name) { audio.src = wavUrl.href; state.audio = true; describe(); }
+  }).catch(() => {});
+  const reader = response.body.getReader();
+  for (;;) {
+    const { done, value } = await reader.read();
+    if (done) break;
+    feed(value, false);
+    if (state.error) { reader.cancel(); return; }
+  }
+  feed(null, true);
+}
+
+// ---- playback ----------------------------------------------------------------------------------
+function now() {
+  if (state.audio && audio.src && !Number.isNaN(audio.duration)) return audio.currentTime;
+  if (state.paused || state.clock0 === null) return state.offset;
+  return state.offset + (performance.now() - state.clock0) / 1000;
+}
+
+function seek(t) {
+  t = Math.max(0, Math.min(t, duration()));
+  state.offset = t;
+  state.clock0 = state.paused ? null : performance.now();
+  if (state.audio && audio.src) audio.currentTime = t;
+  showAt(t);
+}
+
+function play() {
+  if (!state.frames.length) return;
+  if (now() >= duration()) seek(0);
+  state.paused = false;
+  state.clock0 = performance.now();
+  if (state.audio && audio.src) audio.play().catch(() => {});
+  playButton.textContent = "Pause";
+}
+
+function pause() {
+  state.offset = now();
+  state.paused = true;
+  state.clock0 = null;
+  audio.pause();
+  playButton.textContent = "Play";
+}
+
+/** The frame shown at media time ``t`` (seconds from the first frame): the last one presented by then. */
+function frameAt(t) {
+  const f = state.frames;
+  if (!f.length) return -1;
+  const target = f[0].timestamp + t + 1e-9;
+  let lo = 0, hi = f.length - 1;
+  while (lo < hi) {
+    const mid = (lo + hi + 1) >> 1;
+    if (f[mid].timestamp <= target) lo = mid; else hi = mid - 1;
+  }
+  return lo;
+}
+
+/** Pose the head with one row of 68 shown values. */
+function pose(values) {
+  const key = head.key;
+  if (!key) return;
+  // a FAP's two targets, made at v1 and v2, weighed so that w1 v1 + w2 v2 = v and w1 v1^2 + w2 v2^2 = v^2
+  const weights = head.weights;
+  for (let k = 0; k < key.targets.length; k++) {
+    const fap = key.targets[k];
+    if (fap === null) { weights[k] = 0; continue; }
+    const v = values[fap - 1], v1 = key.at[k], v2 = key.at[head.partner[k]];
+    weights[k] = (v * v2 * v2 - v * v * v2) / (v1 * v2 * v2 - v2 * v1 * v1);
+  }
+  for (const mesh of head.meshes) mesh.morphTargetInfluences.splice(0, weights.length, ...weights);
+  const [p, y, r] = key.rotation.map((fap) => values[fap - 1] * key.angle_unit);
+  head.pivot.rotation.set(p, y, r, "YXZ");  // roll, then pitch, then yaw (mpeg4fa.face.motion.head_rotation)
+}
+
+function showFrame(k) {
+  if (k < 0 || k === state.shownK) return;
+  state.shownK = k;
+  pose(state.shown[k]);
+}
+
+function showAt(t) {
+  showFrame(frameAt(t));
+  timeText.textContent = `${t.toFixed(3)} / ${duration().toFixed(3)} s  frame ${Math.max(state.shownK, 0)}`;
+  if (document.activeElement !== scrub) scrub.value = String(t);
+}
+
+function loop() {
+  requestAnimationFrame(loop);
+  if (state.frames.length) {
+    let t = now();
+    if (!state.paused && t >= duration() && (!state.audio || audio.ended || !audio.src)) { pause(); t = duration(); }
+    showAt(Math.min(t, duration()));
+    state.tick = { t, k: state.shownK, at: performance.now() };  // what this picture shows, and when
+  }
+  controls.update();
+  renderer.render(scene, camera);
+}
+
+/** Feature points of the posed head in millimetres (world), by label: what the tests compare. */
+function featurePoints() {
+  const v = new THREE.Vector3();
+  head.pivot.updateMatrixWorld(true);
+  return { labels: head.key.feature_points.labels, positions: head.fps.map((at) => {
+    if (at === null) return null;
+    const [mesh, i] = at;
+    mesh.getVertexPosition(i, v);
+    mesh.localToWorld(v);
+    return [v.x * 1000, v.y * 1000, v.z * 1000];
+  }) };
+}
+
+// ---- wiring ------------------------------------------------------------------------------------
+playButton.addEventListener("click", () => (state.paused ? play() : pause()));
+scrub.addEventListener("input", () => seek(Number(scrub.value)));
+$("files").addEventListener("change", (e) => openFiles(e.target.files));
+$("open").addEventListener("click", () => { const url = $("url").value.trim(); if (url) openUrl(url); });
+window.addEventListener("keydown", (e) => {
+  if (e.target.tagName === "INPUT" && e.target.type !== "range") return;
+  if (e.code === "Space") { e.preventDefault(); playButton.click(); }
+  if (e.code === "ArrowLeft") seek(now() - 1 / streamFps());
+  if (e.code === "ArrowRight") seek(now() + 1 / streamFps());
+});
+for (const type of ["dragenter", "dragover"]) {
+  window.addEventListener(type, (e) => { e.preventDefault(); document.body.classList.add("dragging"); });
+}
+window.addEventListener("dragleave", (e) => { if (e.target === document.body || e.clientX <= 0) document.body.classList.remove("dragging"); });
+window.addEventListener("drop", (e) => {
+  e.preventDefault();
+  document.body.classList.remove("dragging");
+  if (e.dataTransfer.files.length) openFiles(e.dataTransfer.files);
+});
+
+window.fbaPlayer = {
+  ready: false, state, openFiles, openUrl, seek, play, pause, frameAt, featurePoints,
+  /** Show frame ``k`` now (paused), for tests and frame stepping. */
+  showFrame(k) { pause(); seek(state.frames[k].timestamp - state.frames[0].timestamp); showFrame(k); renderer.render(scene, camera); },
+  now,
+};
+
+loadHead().then(() => {
+  const url = new URLSearchParams(location.search).get("url");
+  window.fbaPlayer.ready = true;
+  document.body.dataset.ready = "1";
+  if (url) { $("url").value = url; openUrl(url); }
+}, (e) => setMessage(`the head did not load: ${e.message}`));
+resize();
+loop();

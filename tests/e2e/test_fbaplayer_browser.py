@@ -1,0 +1,186 @@
+"""The FBA player page in a real browser: a stream decoded by fba.js, played on the per-FAP head.
+
+`mpeg4fa serve`'s ``/player`` page runs in Debian's chromium (Playwright, WebGL through SwiftShader).
+A stream made here (jaw, lip corners, head yaw; with a WAV) and, when ``../shared`` is present, a real
+visage|SDK speech stream are opened through the file input, as a user does. Checked: the frames the
+page decoded, the header it shows, its feature points at named frames against the Python face
+(``mpeg4fa.face``) for the same frame, mouth open and closed screenshots (``test-artifacts/fbaplayer/``),
+playing in sync with the audio, and bad input (a truncated stream plays the frames before the fault and
+says where; a JPEG is refused by name).
+"""
+from __future__ import annotations
+
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from e2e.browser import ARGS, CHROMIUM, require_browser
+
+ARTEFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "fbaplayer"
+SHARED = Path(__file__).resolve().parents[3] / "shared" / "vectors" / "fba" / "en"
+BACKGROUND = (0x2B, 0x2F, 0x36)
+LIP_POINTS = {"2.2", "2.3", "2.4", "2.5", "2.6", "2.7", "2.8", "2.9", "8.1", "8.2", "8.3", "8.4", "8.5", "8.6", "8.7",
+              "8.8", "8.9", "8.10"}
+"""Where the per-FAP sum departs from the face engine: its lip points pinned to their own FAPs when the inner
+and outer lip FAPs act together (the limit stated in the README)."""
+
+sync_api = require_browser()
+ARGS = ARGS + ["--autoplay-policy=no-user-gesture-required"]
+
+from PIL import Image  # noqa: E402
+
+from mpeg4fa.decoded import resolve  # noqa: E402
+from mpeg4fa.fba import EncodeOptions, FapStream, decode, encode  # noqa: E402
+from mpeg4fa.serve.app import create_app  # noqa: E402
+from mpeg4fa.wav import write_pcm16  # noqa: E402
+from serve.live_server import face_for_tests, running  # noqa: E402
+
+
+def made_stream(folder: Path) -> tuple[Path, Path]:
+    """3 s at 25 fps: the jaw opens and closes twice, lip corners stretch, the head turns; a 440 Hz WAV."""
+    n = 75
+    s = FapStream.empty(n)
+    s.source_fps = 25.0
+    s.timestamps[:] = np.arange(n) / 25.0
+    t = np.arange(n) / 25.0
+    s.fap_mask[:, [2, 5, 6, 48]] = True
+    s.fap_values[:, 2] = np.rint(np.clip(np.sin(2 * np.pi * t / 1.5), 0, None) * 600).astype(np.int32)
+    s.fap_values[:, 5] = s.fap_values[:, 6] = np.rint(80 * np.sin(2 * np.pi * t / 3)).astype(np.int32)
+    s.fap_values[:, 48] = np.rint(15000 * np.sin(2 * np.pi * t / 3)).astype(np.int32)
+    fba = folder / "made.fba"
+    fba.write_bytes(encode(s, EncodeOptions(fap_quant=1)))
+    rate = 16000
+    pcm = (0.2 * 32767 * np.sin(2 * np.pi * 440 * np.arange(3 * rate) / rate)).astype(np.int16)
+    write_pcm16(folder / "made.wav", pcm, rate)
+    return fba, folder / "made.wav"
+
+
+@pytest.fixture(scope="module")
+def face():
+    return face_for_tests()
+
+
+@pytest.fixture(scope="module")
+def page(face):
+    if ARTEFACTS.exists():
+        shutil.rmtree(ARTEFACTS)
+    ARTEFACTS.mkdir(parents=True)
+    with running(create_app(face)) as base, sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        pg = browser.new_page(viewport={"width": 900, "height": 700})
+        errors: list[str] = []
+        pg.on("pageerror", lambda e: errors.append(str(e)))
+        pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        pg.goto(base + "/player")
+        pg.wait_for_function("window.fbaPlayer && window.fbaPlayer.ready", timeout=120_000)
+        pg.errors = errors
+        yield pg
+        browser.close()
+
+
+def open_files(page, *paths: Path) -> None:
+    page.set_input_files("#files", [str(p) for p in paths])
+    page.wait_for_function("window.fbaPlayer.state.done", timeout=30_000)
+
+
+def points_at(page, k: int) -> tuple[list[str], list]:
+    page.evaluate(f"window.fbaPlayer.showFrame({k})")
+    fp = page.evaluate("window.fbaPlayer.featurePoints()")
+    return fp["labels"], fp["positions"]
+
+
+def compare_points(page, face, stream_path: Path, frames: dict[str, int]) -> dict[str, tuple[float, float]]:
+    """(worst error off the lips, worst error, their labels) in mm at each named frame."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        values = resolve(decode(stream_path))
+    out = {}
+    for name, k in frames.items():
+        labels, got = points_at(page, k)
+        want = face.pose_values(values[k]).feature_points
+        on_mesh = [i for i, q in enumerate(got) if q is not None]
+        assert len(on_mesh) >= 80, "feature points missing from the page's head"
+        err = np.linalg.norm(np.array([got[i] for i in on_mesh]) - want[on_mesh], axis=1)
+        off_lips = [(e, labels[i]) for i, e in zip(on_mesh, err) if labels[i] not in LIP_POINTS]
+        worst_off = max(off_lips)
+        out[name] = (float(worst_off[0]), float(err.max()), worst_off[1], labels[on_mesh[int(np.argmax(err))]])
+    return out
+
+
+def test_made_stream_plays_with_the_python_face(page, face, tmp_path):
+    fba, wav = made_stream(tmp_path)
+    open_files(page, fba, wav)
+    state = page.evaluate("({n: window.fbaPlayer.state.frames.length, error: String(window.fbaPlayer.state.error)})")
+    assert state == {"n": 75, "error": "null"}
+    info = page.inner_text("#info")
+    assert "made.fba" in info and "75 frames" in info and "kbit/s" in info and "audio: yes" in info
+    values = decode(fba).fap_values
+    frames = {"rest": 0, "jaw open": int(np.argmax(values[:, 2])), "head turned": int(np.argmax(values[:, 48]))}
+    errors = compare_points(page, face, fba, frames)
+    print(errors)
+    for name, (off_lips, worst, *_) in errors.items():
+        assert off_lips < 0.5, f"{name}: a feature point off the lips is {off_lips:.3f} mm from the Python face's"
+        assert worst < 8.0, f"{name}: {worst:.2f} mm"
+    # mouth closed and open, looked at: the open mouth darkens the mouth region
+    page.evaluate("window.fbaPlayer.showFrame(0)")
+    closed = ARTEFACTS / "made-mouth-closed.png"
+    page.screenshot(path=str(closed))
+    page.evaluate(f"window.fbaPlayer.showFrame({frames['jaw open']})")
+    opened = ARTEFACTS / "made-mouth-open.png"
+    page.screenshot(path=str(opened))
+    a, b = (np.asarray(Image.open(p).convert("L"), dtype=float) for p in (closed, opened))
+    assert np.abs(a - b).mean() > 0.2, "the open-jaw frame looks like the rest frame"
+    assert not page.errors, page.errors
+
+
+def test_audio_and_picture_in_sync(page, tmp_path):
+    """Played from the start: the frame shown is the one whose time the audio clock reads (within a frame)."""
+    fba, wav = made_stream(tmp_path)
+    open_files(page, fba, wav)
+    page.evaluate("window.fbaPlayer.play()")
+    page.wait_for_timeout(1500)
+    got = page.evaluate("window.fbaPlayer.state.tick")  # the last picture drawn: its clock and frame
+    audio = page.evaluate("document.getElementById('audio').currentTime")
+    page.evaluate("window.fbaPlayer.pause()")
+    assert audio > 0.5 and got["t"] > 0.3, "the audio did not play"
+    assert 0 <= got["t"] - got["k"] / 25.0 < 1 / 25.0, got  # the frame presented at the audio's time
+
+
+def test_real_speech_stream(page, face):
+    if not SHARED.is_dir():
+        pytest.skip(f"{SHARED} is absent: the visage|SDK streams are not on this machine")
+    fba = SHARED / "car-unlock.FBA"
+    open_files(page, fba, fba.with_suffix(".wav"))
+    values = resolve(decode(fba))
+    frames = {"rest": 0, "jaw open": int(np.argmax(values[:, 2])), "middle": len(values) // 2}
+    errors = compare_points(page, face, fba, frames)
+    for name, (off_lips, worst, *_) in errors.items():
+        assert off_lips < 0.5, (name, off_lips)
+        assert worst < 8.0, (name, worst)
+    page.evaluate(f"window.fbaPlayer.showFrame({frames['jaw open']})")
+    page.screenshot(path=str(ARTEFACTS / "car-unlock-open.png"))
+    print(errors)
+
+
+def test_truncated_stream_plays_what_came_before(page, tmp_path):
+    fba, wav = made_stream(tmp_path)
+    cut = tmp_path / "cut.fba"
+    cut.write_bytes(fba.read_bytes()[:-40])
+    open_files(page, cut)
+    message = page.inner_text("#message")
+    n = page.evaluate("window.fbaPlayer.state.frames.length")
+    assert message.startswith("cut.fba: ") and " at bit " in message and f"playing the {n} frames" in message, message
+    assert 0 < n < 75
+    assert not page.is_disabled("#play")
+
+
+def test_not_fba_refused_by_name(page, tmp_path):
+    photo = tmp_path / "photo.jpg"
+    photo.write_bytes(b"\xff\xd8\xff\xe0" + bytes(100))
+    open_files(page, photo)
+    message = page.inner_text("#message")
+    assert message.startswith("photo.jpg: not an FBA stream") and "a JPEG image" in message, message
+    assert page.evaluate("window.fbaPlayer.state.frames.length") == 0
