@@ -30,7 +30,9 @@ The method is the seed paper's section 5, in five steps:
    its mirror point (x -> -x: the head is symmetric). A texel only one photo sees
    takes that photo's colour; with no side photo, ``k = 1`` wherever the front
    sees the texel.
-5. **Fill**: texels no photo sees (back of the head in front-only mode, inside
+5. **Fill**: a texel no photo sees whose mirror image (x -> -x) one saw takes that
+   colour (a turned face's far cheek wears its near one, :data:`MIRROR_TOLERANCE`);
+   the rest (back of the head in front-only mode, inside
    the nostrils, behind the eyeballs) get the mean colour of the covered skin
    near them in 3D (a Gaussian-weighted mean over a few centimetres), drawn toward
    the overall mean of the covered skin where little covered skin is near.
@@ -410,6 +412,43 @@ def _fill_unseen(points: np.ndarray, colours: np.ndarray, seen: np.ndarray) -> n
     return out
 
 
+MIRROR_TOLERANCE = 0.01
+"""How far (a share of the head's size) an unseen texel's mirror image may lie from the nearest seen texel
+and still take its colour: the head is symmetric, not exactly so once calibrated."""
+
+MIRROR_MARGIN = 0.03
+"""Seen texels nearer than this (a share of the head's size) to an unseen one are not copied to the other side."""
+
+
+def _mirror_unseen(points: np.ndarray, colours: np.ndarray, seen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(colours, mirrored): unseen texels whose mirror image (x -> -x) a photo saw take that colour.
+
+    One front photo of a turned face sees one cheek well and the other barely; the far side then
+    wears the near side's skin rather than a blur of the seen skin around it.
+    """
+    mirrored = np.zeros(len(points), bool)
+    unseen = np.flatnonzero(~seen)
+    if not len(unseen) or not seen.any():
+        return colours, mirrored
+    from scipy.spatial import cKDTree
+
+    size = float(np.ptp(points, axis=0).max())
+    tolerance = MIRROR_TOLERANCE * size
+    # sources: seen texels away from the edge of what was seen (the edge is seen at a grazing angle, often
+    # with the photo's background or hair in it; copied, it would draw a line on the other side)
+    edge, _ = cKDTree(points[unseen]).query(points[seen], distance_upper_bound=MIRROR_MARGIN * size)
+    source = np.flatnonzero(seen)[~np.isfinite(edge)]
+    if not len(source):
+        return colours, mirrored
+    distance, index = cKDTree(points[source]).query(points[unseen] * [-1.0, 1.0, 1.0],
+                                                     distance_upper_bound=tolerance)
+    hit = np.isfinite(distance)
+    out = colours.copy()
+    out[unseen[hit]] = colours[source[index[hit]]]
+    mirrored[unseen[hit]] = True
+    return out, mirrored
+
+
 def bake_texture(mesh: HeadMesh, front: PhotoView, side: PhotoView | None = None, *,
                  size: int = 1024) -> BakedTexture:
     """Texture the skin of ``mesh`` (its neutral vertices) from a front photo and an optional side photo."""
@@ -463,12 +502,14 @@ def assemble(raster: UVRaster, colours: np.ndarray, seen: np.ndarray, k: np.ndar
              alignments: dict[str, Alignment] | None = None) -> BakedTexture:
     """Per-skin-texel colours (unseen ones filled here) spread over the whole UV image.
 
-    Off-skin texels repeat their nearest skin texel, across seams and island
+    Unseen texels take their mirror image's colour where a photo saw it, else a fill from the seen
+    skin near them. Off-skin texels repeat their nearest skin texel, across seams and island
     borders, so mip-maps and bilinear lookups never see a background colour.
     """
     size = raster.size
     skin_idx, points, _ = skin_texels(raster)
-    colours = _fill_unseen(points, colours, seen)
+    colours, mirrored = _mirror_unseen(points, colours, seen)
+    colours = _fill_unseen(points, colours, seen | mirrored)
     per_texel = np.zeros((size * size, 3), np.float32)
     per_texel[skin_idx] = colours
     image = np.clip(np.rint(per_texel[raster.nearest.reshape(-1)]), 0, 255).astype(np.uint8)

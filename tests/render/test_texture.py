@@ -249,3 +249,20 @@ def test_astronaut_photo_on_the_generic_head(generic_face):
         image = renderer.render(generic_face.neutral())
     centre = image[40:90, 44:84].reshape(-1, 3).astype(float).mean(axis=0)
     assert centre[0] > centre[2] + 20      # a warm face, not the background's blue-grey
+
+
+def test_unseen_texels_take_their_mirror_images_colour():
+    """A turned face's far cheek wears its near one (x -> -x), but not the near side's grazing edge."""
+    from mpeg4fa.render.texture import MIRROR_MARGIN, _mirror_unseen
+    x, y = np.meshgrid(np.linspace(-100, 100, 201), np.linspace(-100, 100, 201))
+    points = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    seen = points[:, 0] > 0                                   # the photo saw the face's left (+x) only
+    colours = np.zeros((len(points), 3), np.float32)
+    colours[seen] = np.c_[points[seen, 0], points[seen, 1] + 100, np.full(seen.sum(), 50.0)]
+    out, mirrored = _mirror_unseen(points, colours, seen)
+    margin = MIRROR_MARGIN * 200
+    far = points[:, 0] < -margin - 1
+    assert mirrored[far].all() and not mirrored[seen].any()
+    assert np.allclose(out[far, 0], -points[far, 0]) and np.allclose(out[far, 1], points[far, 1] + 100)
+    assert not mirrored[(points[:, 0] <= 0) & (points[:, 0] > -margin + 1)].any()   # the edge is not copied
+    assert np.array_equal(out[seen], colours[seen])
