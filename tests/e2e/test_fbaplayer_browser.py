@@ -184,3 +184,31 @@ def test_not_fba_refused_by_name(page, tmp_path):
     message = page.inner_text("#message")
     assert message.startswith("photo.jpg: not an FBA stream") and "a JPEG image" in message, message
     assert page.evaluate("window.fbaPlayer.state.frames.length") == 0
+
+
+def test_static_page_plays_from_a_folder(page, face, tmp_path):
+    """tools/fbaplayer_static.py's single file, opened as file:// (no server), decodes and poses the head."""
+    import importlib.util
+
+    from mpeg4fa.serve.fap_head import fap_head
+
+    spec = importlib.util.spec_from_file_location("fbaplayer_static", Path(__file__).resolve().parents[2]
+                                                  / "tools" / "fbaplayer_static.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    html = tmp_path / "fbaplayer.html"
+    html.write_text(tool.page(*fap_head(face)), encoding="utf-8")
+    fba, wav = made_stream(tmp_path)
+    pg = page.context.browser.new_page(viewport={"width": 900, "height": 700})  # the module's browser
+    errors: list[str] = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        pg.goto(html.as_uri())
+        pg.wait_for_function("window.fbaPlayer && window.fbaPlayer.ready", timeout=120_000)
+        open_files(pg, fba, wav)
+        assert pg.evaluate("window.fbaPlayer.state.frames.length") == 75
+        errs = compare_points(pg, face, fba, {"jaw open": int(np.argmax(decode(fba).fap_values[:, 2]))})
+        assert errs["jaw open"][0] < 0.5, errs
+    finally:
+        pg.close()
+    assert not errors, errors

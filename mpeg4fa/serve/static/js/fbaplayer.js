@@ -40,8 +40,10 @@ function resize() {
 window.addEventListener("resize", resize);
 
 async function loadHead() {
-  const key = await (await fetch("fap-head.json")).json();
-  const gltf = await new GLTFLoader().loadAsync("fap-head.glb");
+  // a page made to open from a folder (tools/fbaplayer_static.py) carries its head; else it is fetched
+  const embedded = window.FBA_PLAYER_HEAD;
+  const key = embedded ? embedded.key : await (await fetch("fap-head.json")).json();
+  const gltf = await new GLTFLoader().loadAsync(embedded ? embedded.glb : "fap-head.glb");
   const pivot = new THREE.Vector3(...key.pivot);
   head.pivot.position.copy(pivot);
   gltf.scene.position.copy(pivot).negate();
