@@ -15,7 +15,7 @@ import pytest
 from e2e.browser import editor_page, fresh_folder, require_browser
 
 require_browser()
-pytest.importorskip("mediapipe", reason="the photo extra (mediapipe) is not installed: tools/dev.sh installs it")
+pytest.importorskip("mediapipe", reason="the track extra (mediapipe) is not installed: tools/dev.sh test installs it")
 skdata = pytest.importorskip("skimage.data", reason="scikit-image (test extra) gives the test photo")
 
 from PIL import Image  # noqa: E402

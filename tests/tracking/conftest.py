@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-mp = pytest.importorskip("mediapipe", reason="the photo extra (mediapipe) is not installed: tools/dev.sh installs it")
+mp = pytest.importorskip("mediapipe", reason="the track extra (mediapipe) is not installed: tools/dev.sh test installs it")
 skdata = pytest.importorskip("skimage.data", reason="scikit-image (test extra) gives the test photos")
 
 

@@ -6,7 +6,7 @@ import io
 import numpy as np
 import pytest
 
-pytest.importorskip("mediapipe", reason="the photo extra (mediapipe) is not installed: tools/dev.sh installs it")
+pytest.importorskip("mediapipe", reason="the track extra (mediapipe) is not installed: tools/dev.sh test installs it")
 skdata = pytest.importorskip("skimage.data", reason="scikit-image (test extra) gives the test photo")
 
 from PIL import Image  # noqa: E402
