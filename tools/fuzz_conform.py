@@ -37,7 +37,22 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import fuzz  # noqa: E402  (the guards)
+import importlib.util  # noqa: E402
+
+
+def _load_guards():
+    """tools/fuzz.py (the guards) by path, as ``fuzz_tool``: the name ``fuzz`` belongs to the tests' package
+    of that name, and the two must not replace each other whichever is imported first."""
+    if "fuzz_tool" in sys.modules:
+        return sys.modules["fuzz_tool"]
+    spec = importlib.util.spec_from_file_location("fuzz_tool", Path(__file__).resolve().parent / "fuzz.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["fuzz_tool"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+fuzz = _load_guards()
 import fuzz_inputs as fi  # noqa: E402  (the mutators)
 import fuzz_seeds  # noqa: E402  (a decoder's answer and its expected file)
 
