@@ -92,32 +92,14 @@ def textured_head(size: int = 512):
     from mpeg4fa.face import FaceModel
     from mpeg4fa.render.texture import PhotoView, bake_texture
     from mpeg4fa.tracking import feature_points, find_landmarks
+    from mpeg4fa.tracking.segment import close_openings
 
     photo = data.astronaut()
     found = find_landmarks(photo, "astronaut")
     points = {k: (float(v[0]), float(v[1])) for k, v in feature_points(found).items()}
-    photo = _without_openings(photo, found.points)
+    photo = close_openings(photo, found.points)  # her eyes and teeth would show on closed lids and lips
     face = FaceModel.default()
     return face, bake_texture(face.mesh, PhotoView(photo, points, "front"), size=size).image
-
-
-EYE_RINGS = ((33, 7, 163, 144, 145, 153, 154, 155, 133, 173, 157, 158, 159, 160, 161, 246),
-             (263, 249, 390, 373, 374, 380, 381, 382, 362, 398, 384, 385, 386, 387, 388, 466))
-MOUTH_RING = (78, 95, 88, 178, 87, 14, 317, 402, 318, 324, 308, 415, 310, 311, 312, 13, 82, 81, 80, 191)
-"""Face Mesh rings of the eye openings and the inner lips (the photo's eyes and teeth are not skin)."""
-
-
-def _without_openings(photo: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
-    """The photo with its eye openings and open mouth painted over from the skin around them: baked onto the
-    head, the photo's own eyes would show on closed lids and her teeth on closed lips (the head has eyes
-    and teeth of its own)."""
-    import cv2
-
-    mask = np.zeros(photo.shape[:2], np.uint8)
-    for ring in (*EYE_RINGS, MOUTH_RING):
-        cv2.fillPoly(mask, [np.rint(landmarks[list(ring), :2]).astype(np.int32)], 255)
-    mask = cv2.dilate(mask, np.ones((5, 5), np.uint8))
-    return cv2.inpaint(np.ascontiguousarray(photo), mask, 7, cv2.INPAINT_TELEA)
 
 
 def render_video(stream, target: Path, size: int, face, texture) -> float:

@@ -29,6 +29,14 @@ MAX_FACES = 4
 MIN_SIDE = 32
 """Smallest image side the model is given: below it there is no face to find."""
 
+OPENING_RINGS = {
+    "eye_right": (33, 7, 163, 144, 145, 153, 154, 155, 133, 173, 157, 158, 159, 160, 161, 246),
+    "eye_left": (263, 249, 390, 373, 374, 380, 381, 382, 362, 398, 384, 385, 386, 387, 388, 466),
+    "mouth": (78, 95, 88, 178, 87, 14, 317, 402, 318, 324, 308, 415, 310, 311, 312, 13, 82, 81, 80, 191),
+}
+"""The model's landmark rings around the openings of the face: each eye's lid margin and the inner lips
+(Face Mesh topology; the face's own left is the image's right)."""
+
 
 @dataclass(frozen=True)
 class Landmarks:

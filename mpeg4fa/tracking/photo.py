@@ -25,7 +25,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from mpeg4fa.fdp.build import fdp_from_front, texture_from_file
+from mpeg4fa.fdp.build import fdp_from_front
 from mpeg4fa.fdp.model import LABEL_INDEX as _LABEL_ORDER, Fdp, TextureImage
 from mpeg4fa.tracking.landmarks import Landmarks, find_landmarks
 from mpeg4fa.tracking.points import feature_points
@@ -102,7 +102,26 @@ def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | N
         photo3[label] = np.array([x, -y, z])
     order = sorted(photo3, key=_LABEL_ORDER.__getitem__)
     points = {label: scale * (rot @ photo3[label]) + shift for label in order}
+    _lips_in_contact(points, head, set(given or ()))
     return {label: pixels[label] for label in order}, points, float(1.0 / scale)
+
+
+INNER_LIP_PAIRS = (("2.2", "2.3"), ("2.6", "2.8"), ("2.7", "2.9"))
+"""Upper and lower inner lip points that meet in the neutral face."""
+
+
+def _lips_in_contact(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]) -> None:
+    """An FDP describes the neutral face, whose lips are in contact (the facts file's neutral face
+    definition, item 7, [S]); a photo of a smile or of speech has them apart, and a head calibrated to
+    that gap shows its own teeth through it at rest. Each pair of inner lip points found (not given)
+    further apart than the head's own pair closes about its midpoint to the head's gap (the lips' contact
+    as the head models it; the points stay distinct). The texture coordinates stay on the photo's lips."""
+    for upper, lower in INNER_LIP_PAIRS:
+        if upper in points and lower in points and upper in head and lower in head and not {upper, lower} & given:
+            gap = max(float(head[upper][1] - head[lower][1]), 0.0)
+            if points[upper][1] - points[lower][1] > gap:   # apart (y up)
+                middle = (points[upper][1] + points[lower][1]) / 2.0
+                points[upper][1], points[lower][1] = middle + gap / 2.0, middle - gap / 2.0
 
 
 def _generic_points() -> dict[str, np.ndarray]:
@@ -144,18 +163,19 @@ def _head_mask(person: np.ndarray, pixels: Mapping[str, np.ndarray]) -> np.ndarr
 
 
 def _texture(photo: PhotoSource, image: np.ndarray, name: str, extend: bool,
-             pixels: Mapping[str, np.ndarray]) -> TextureImage:
+             pixels: Mapping[str, np.ndarray], landmarks: np.ndarray) -> TextureImage:
     """The photo as the FDP's texture: with ``extend``, its background painted with the person's nearest
-    colours (:func:`.segment.extend_person`), as a JPEG (quality 92) when it came as one, else a PNG;
-    without, the file's own bytes when it is a PNG or JPEG."""
+    colours (:func:`.segment.extend_person`); always with its eye openings and open mouth painted over
+    (:func:`.segment.close_openings`: the receiver's head has eyes and teeth of its own); as a JPEG
+    (quality 92) when it came as one, else a PNG."""
+    from mpeg4fa.tracking.segment import close_openings, extend_person, person_mask
+
     stem = Path(name).stem if name else "photo"
     head = b"" if isinstance(photo, np.ndarray) else Path(photo).read_bytes()[:16]
     jpeg = head.startswith(b"\xff\xd8\xff")
-    if not extend and (jpeg or head.startswith(b"\x89PNG\r\n\x1a\n")):
-        return texture_from_file(photo)
     if extend:
-        from mpeg4fa.tracking.segment import extend_person, person_mask
         image = extend_person(image, _head_mask(person_mask(image, name), pixels))
+    image = close_openings(image, landmarks)
     from PIL import Image
     buffer = io.BytesIO()
     if jpeg:
@@ -189,7 +209,7 @@ def fdp_from_photo(photo: PhotoSource, *, side: PhotoSource | None = None,
         points3, view, used = _merge_side(points3, side_marks, side_label)
         side_info = (side_label, view, used)
     height, width = image.shape[:2]
-    tex = _texture(photo, image, label, extend_background, pixels) if texture else None
+    tex = _texture(photo, image, label, extend_background, pixels, landmarks.points) if texture else None
     stem = name if name is not None else Path(label).stem
     fdp = fdp_from_front(points3, pixels, front_size=(width, height), texture=tex, name=stem)
     return PhotoFdp(fdp=fdp, image=image, landmarks=landmarks, pixels=pixels, points=points3, scale=mm_per_pixel,

@@ -12,10 +12,10 @@ import warnings
 import numpy as np
 from scipy import ndimage
 
-from mpeg4fa.tracking.landmarks import _quiet_native_stderr, check_rgb
+from mpeg4fa.tracking.landmarks import OPENING_RINGS, _quiet_native_stderr, check_rgb
 from mpeg4fa.tracking.errors import MissingExtraError
 
-__all__ = ["person_mask", "extend_person"]
+__all__ = ["person_mask", "extend_person", "close_openings"]
 
 MIN_PERSON = 0.01
 """Smallest share of the photo the person may cover; below it the mask is not trusted."""
@@ -50,3 +50,20 @@ def extend_person(rgb: np.ndarray, mask: np.ndarray, *, inset: int = 2) -> np.nd
         return rgb
     _, (rows, cols) = ndimage.distance_transform_edt(~person, return_indices=True)
     return rgb[rows, cols]
+
+
+def close_openings(rgb: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
+    """The photo with its eye openings and open mouth painted over from the skin around them.
+
+    A photo sent as a face's texture is worn by a head with eyes, teeth and a mouth of its own: left
+    in, the photo's eyes would show on closed lids and a smile's teeth on closed lips (a band like
+    braces). ``landmarks``: the (478, 3) or (478, 2) pixels of :class:`~.landmarks.Landmarks`.
+    """
+    import cv2
+
+    image = np.ascontiguousarray(check_rgb(rgb))
+    mask = np.zeros(image.shape[:2], np.uint8)
+    for ring in OPENING_RINGS.values():
+        cv2.fillPoly(mask, [np.rint(np.asarray(landmarks)[list(ring), :2]).astype(np.int32)], 255)
+    mask = cv2.dilate(mask, np.ones((5, 5), np.uint8))
+    return cv2.inpaint(image, mask, 7, cv2.INPAINT_TELEA)
