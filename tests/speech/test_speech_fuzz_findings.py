@@ -233,3 +233,20 @@ def test_the_engine_refuses_a_run_it_cannot_speak_whole():
 
     with pytest.raises(TTSError, match="500 characters without a space at character 7"):
         EspeakEngine().synthesize("Hello " + ".a" * 250)
+
+
+def test_emoji_joiners_never_reach_espeak_whose_gaelic_voice_crashes_on_them():
+    """Fuzz finding (text:88775@0, a worker killed by SIGSEGV): espeak-ng 1.52's Scottish Gaelic voice
+    corrupts memory on '#' + VS16 + keycap + 'ý' + a flag. The joiners of emoji sequences become spaces
+    before espeak-ng sees the text (offsets kept). In a child process: the old code killed the process."""
+    import subprocess
+    import sys
+
+    from mpeg4fa.speech.tts.espeak import _without_emoji_joiners
+
+    text = "#\ufe0f\u20e3\u00fd\U0001F1EB\U0001F1F7"
+    assert _without_emoji_joiners(text) == "#  \u00fd  " and len(_without_emoji_joiners("a\u200db")) == 3
+    code = ("from mpeg4fa.speech.tts.espeak import EspeakEngine; "
+            f"EspeakEngine().synthesize({text!r}, voice='gd', ipa=True); print('spoke')")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and "spoke" in done.stdout, (done.returncode, done.stderr[-300:])

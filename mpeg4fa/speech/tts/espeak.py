@@ -243,6 +243,22 @@ def _languages(ptr: int | None) -> tuple[str, ...]:
     return tuple(out)
 
 
+_EMOJI_JOINERS = re.compile("[\u200d\u20e3\ufe0e\ufe0f\U0001f1e6-\U0001f1ff\U0001f3fb-\U0001f3ff\U000e0020-\U000e007f]")
+"""The parts that join emoji into sequences: zero-width joiner, the keycap, variation selectors, regional
+indicators (flags), skin tones and tag characters (subdivision flags)."""
+
+
+def _without_emoji_joiners(text: str) -> str:
+    """``text`` with every emoji-joining code point a space (one character for one: offsets stay).
+
+    espeak-ng 1.52 corrupts memory on some such sequences: the Scottish Gaelic voice (``gd``) on
+    ``#`` + U+FE0F + U+20E3 + ``ý`` + a flag (two regional indicators) dies with SIGSEGV (found by the
+    fuzz campaign, ``text:88775@0``). The emoji themselves stay (a voice may name them); what joins them
+    into keycaps, flags and families is not speech.
+    """
+    return _EMOJI_JOINERS.sub(" ", text)
+
+
 def _c_string(name: str) -> bytes | None:
     """``name`` as the C library takes it (UTF-8, no NUL), or None: a voice so named cannot exist (a lone
     surrogate, from a command-line byte that is not UTF-8, has no UTF-8 at all)."""
@@ -491,6 +507,7 @@ class EspeakEngine:
             if not name:
                 raise TTSError("a mark has an empty name", where=WHERE, hint="name every mark")
 
+        text = _without_emoji_joiners(text)
         flags = espeakCHARS_UTF8 | espeakENDPAUSE
         if marks:
             source, back, mark_names = _ssml_with_marks(text, marks)
