@@ -9,22 +9,26 @@ MARKER = "<!-- mpeg4fa:commands -->"
 
 
 def commands_markdown() -> str:
-    """Every command's ``--help``, in the order ``mpeg4fa --help`` lists them, one section each."""
-    os.environ["COLUMNS"] = "100"  # argparse wraps to this width
+    """Every command's ``--help``, in the order ``mpeg4fa --help`` lists them, one section each; a command
+    with its own subcommands (``model install``...) gets a section per subcommand."""
+    os.environ["COLUMNS"] = "88"  # argparse wraps to this width: the code blocks need no scrolling
     from mpeg4fa.cli import build_parser
 
-    parser = build_parser()
-    parts = ["## mpeg4fa\n", "```text\n" + parser.format_help().rstrip() + "\n```\n"]
-    seen: set[int] = set()
+    parts: list[str] = []
+    _sections(build_parser(), "mpeg4fa", parts, set())
+    return "\n".join(parts)
+
+
+def _sections(parser: argparse.ArgumentParser, name: str, parts: list[str], seen: set[int]) -> None:
+    level = "#" * min(2 + name.count(" ") // 2, 4)
+    parts.append(f"{level} {name}\n")
+    parts.append("```text\n" + parser.format_help().rstrip() + "\n```\n")
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():
-                if id(sub) in seen:
-                    continue  # an alias of a command already listed
-                seen.add(id(sub))
-                parts.append(f"## mpeg4fa {name}\n")
-                parts.append("```text\n" + sub.format_help().rstrip() + "\n```\n")
-    return "\n".join(parts)
+            for word, sub in action.choices.items():
+                if id(sub) not in seen:  # an alias of a command already listed is skipped
+                    seen.add(id(sub))
+                    _sections(sub, f"{name} {word}", parts, seen)
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
