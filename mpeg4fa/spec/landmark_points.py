@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,9 +19,19 @@ from mpeg4fa.spec._load import check, data_dir, split_list
 
 __all__ = ["LandmarkSource", "LANDMARK_POINTS", "LANDMARK_SOURCES", "N_MODEL_LANDMARKS"]
 
-N_MODEL_LANDMARKS = 478
-"""Landmarks of the model the table is written for (MediaPipe Face Mesh with irises)."""
 _NAME = "landmark_points.csv"
+
+
+def _model_landmarks() -> int:
+    """How many landmarks the table's model gives, as its first comment line says ("... N landmarks ...")."""
+    first = (data_dir() / _NAME).read_text(encoding="utf-8").split("\n", 1)[0]
+    found = re.search(r"(\d+) landmarks", first)
+    check(first.startswith("#") and found is not None, f"{_NAME}:1: the first comment must say 'N landmarks'")
+    return int(found.group(1))
+
+
+N_MODEL_LANDMARKS = _model_landmarks()
+"""Landmarks of the model the table is written for (MediaPipe Face Mesh with irises: 478)."""
 _COLUMNS = ["fp", "source", "landmarks", "weights", "notes"]
 _SOURCES = ("landmark", "mean", "not seen")
 

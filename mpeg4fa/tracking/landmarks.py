@@ -20,9 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mpeg4fa.spec.landmark_points import N_MODEL_LANDMARKS
 from mpeg4fa.tracking.errors import MissingExtraError, NoFaceError, TrackingError, TrackingWarning
 
-N_LANDMARKS = 478
+N_LANDMARKS = N_MODEL_LANDMARKS
 """Landmarks per face: Face Mesh's 468 and the two irises' 5 each (``refine_landmarks``)."""
 MAX_FACES = 4
 """Faces the model looks for in one image; the largest is used."""

@@ -163,6 +163,8 @@ ABSURD = {
     "/api/calibrate": [{"json": {"front": {k: [1e308 * (i % 2), -1e308] for i, k in enumerate(("9.3", "2.1", "11.1"))},
                                  "side": {k: [1e307, 1e308] for k in ("9.3", "2.1", "11.1")}}}],
     "/api/export": [{"json": {"name": "x" * 100_000}}],
+    "/api/photos/find": [{"json": {"view": "x" * 100_000}}, {"json": {"view": "front", "extra": HUGE}},
+                         {"content": b'{"view": ' + b"[" * 100_000, "headers": {"content-type": "application/json"}}],
 }
 
 

@@ -1,4 +1,6 @@
-"""Make tests/speech/data/golden_text_frames.npz from the pre-streaming encoder (run once, before the change)."""
+"""Make tests/speech/data/golden_text_frames.npz: made first from the pre-streaming encoder; remade when the
+spec/ profiles change (issue 29 retuned them: the streaming encoder with the old profiles was first checked to
+give the old golden to the bit)."""
 import hashlib, json, numpy as np
 from mpeg4fa.speech.encoder import encode_text
 from mpeg4fa.fba import encode
