@@ -66,14 +66,18 @@ def read_audio(path: str | os.PathLike, *, max_seconds: float = MAX_AUDIO_SECOND
             limit, total = int(max_seconds * rate), 0
             resampler = av.AudioResampler(format="flt", layout=stream.layout.name if stream.layout else None,
                                           rate=rate)
-            for frame in container.decode(stream):
-                for out in resampler.resample(frame):
+            try:
+                for frame in container.decode(stream):
+                    for out in resampler.resample(frame):
+                        chunks.append(out.to_ndarray().reshape(-1, len(out.layout.channels)))
+                        total += len(chunks[-1])
+                    if total > limit:
+                        raise _too_long(path, total / rate, max_seconds)
+                for out in resampler.resample(None):
                     chunks.append(out.to_ndarray().reshape(-1, len(out.layout.channels)))
-                    total += len(chunks[-1])
-                if total > limit:
-                    raise _too_long(path, total / rate, max_seconds)
-            for out in resampler.resample(None):
-                chunks.append(out.to_ndarray().reshape(-1, len(out.layout.channels)))
+            except (av.FFmpegError, ValueError) as exc:  # opened as audio, then broken: damage, not the wrong type
+                raise RenderError(f"the sound is damaged or cut short after {total / rate:.2f} s ({exc})",
+                                  where=str(path), hint="export or copy the file again") from None
     except RenderError:
         raise
     except (av.FFmpegError, ValueError, OSError) as exc:
