@@ -91,6 +91,7 @@ def photo_face(args: argparse.Namespace, method: str = "dffd"):
     """``--photo`` of play, snapshot and say: (the generic head calibrated to the face found in the photo,
     with the command's skull and deformer; the skin texture a receiver bakes from that FDP, or None
     when ``--texture`` or ``--no-fdp-texture`` says otherwise)."""
+    from ..face.assemble import assemble_face
     from ..render.fdp_texture import bake_fdp_texture
     from ..tracking.photo import fdp_from_photo
     from .errors import UsageError
@@ -99,15 +100,12 @@ def photo_face(args: argparse.Namespace, method: str = "dffd"):
         if getattr(args, option, None) is not None:
             name = "--" + option.replace("_", "-")
             raise UsageError(f"--photo and {name} both describe the face", hint="give one of them")
-    made = fdp_from_photo(args.photo)
-    face = made.calibrated(getattr(args, "method", method))
-    if getattr(args, "skull", "triangles") == "nurbs":
-        face = face.with_nurbs_skull()
     deformer, blocks = getattr(args, "deformer", None), getattr(args, "blocks", None)
     if blocks is not None and deformer != "blocks":
         raise UsageError(f"--blocks goes with --deformer blocks, not {deformer}")
-    if deformer is not None:
-        face = face.with_deformer(deformer, **({"regions": tuple(blocks)} if blocks is not None else {}))
+    made = fdp_from_photo(args.photo)
+    face = assemble_face(fdp=made.fdp, method=getattr(args, "method", method),
+                         skull=getattr(args, "skull", "triangles"), deformer=deformer, blocks=blocks)
     texture = None
     if getattr(args, "texture", None) is None and not getattr(args, "no_fdp_texture", False):
         texture = bake_fdp_texture(face.mesh, made.fdp, source=str(args.photo)).baked.image

@@ -9,10 +9,13 @@ own FaceDefTables stay when the default deformer is asked for.
 from __future__ import annotations
 
 import os
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.model import FaceModel
+
+if TYPE_CHECKING:
+    from mpeg4fa.fdp import Fdp
 
 PathLike = str | os.PathLike
 
@@ -36,10 +39,11 @@ def mesh_face(mesh_path: PathLike, points_path: PathLike) -> FaceModel:
         raise FaceError(exc.message, where=f"{mesh_path} + {points_path}", hint=exc.hint) from None
 
 
-def assemble_face(*, fdp: PathLike | None = None, method: str = "dffd", skull: str = "triangles",
+def assemble_face(*, fdp: PathLike | Fdp | None = None, method: str = "dffd", skull: str = "triangles",
                   face_mesh: PathLike | None = None, face_points: PathLike | None = None,
                   deformer: str | None = None, blocks: Sequence[str] | None = None) -> FaceModel:
-    """The face to play: ``face_mesh`` + ``face_points`` or the generic head, calibrated to ``fdp``, with
+    """The face to play: ``face_mesh`` + ``face_points`` or the generic head, calibrated to ``fdp`` (a file or
+    an :class:`~mpeg4fa.fdp.Fdp`), with
     ``skull`` ("triangles" or "nurbs") and ``deformer`` (None keeps the face's own; ``blocks`` only with
     the blocks deformer)."""
     if (face_mesh is None) != (face_points is None):
@@ -52,8 +56,8 @@ def assemble_face(*, fdp: PathLike | None = None, method: str = "dffd", skull: s
     face = own or FaceModel.default()
     if fdp is not None:
         from mpeg4fa.face.sent import played_face
-        from mpeg4fa.fdp import load_fdp
-        sent = load_fdp(fdp)
+        from mpeg4fa.fdp import Fdp, load_fdp
+        sent = fdp if isinstance(fdp, Fdp) else load_fdp(fdp)
         face = face.calibrate(sent, method=method) if own else played_face(sent, method=method)
     if skull == "nurbs":
         face = face.with_nurbs_skull()
