@@ -1,0 +1,128 @@
+"""Phone recognition without words: pocketsphinx's phone loop (``allphone``, the bundled en-us
+acoustic model and phone trigram) names the phones it hears, with times; each phone's ARPAbet name is
+read as IPA (``spec/arpabet_ipa.csv``) and mapped to a viseme by its articulatory features
+(:mod:`mpeg4fa.speech.ipa`, the map the text path uses for every language but English and Mandarin).
+
+The acoustic model is English, but the shapes of the mouth follow the sounds, not the words: a /p/ or
+/m/ in Spanish or Arabic is heard as P or M, an open vowel as AA, whatever the language.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from mpeg4fa.spec._load import read_table
+from mpeg4fa.speech.align.recording import HOP, Recording
+from mpeg4fa.speech.tts.base import Event
+from mpeg4fa.speech.utterance import Timing
+from mpeg4fa.speech.visemes import PAUSE
+
+SILENCE = "SIL"
+"""pocketsphinx's silence phone; its fillers (``+NSN+``, ``+SPN+``, ``+BREATH+``...) are no speech either."""
+BEAM = {"beam": 1e-40, "pbeam": 1e-40}
+"""Search beams of the phone loop: measured (tools/bench_lipsync_audio.py) as fast as the default
+1e-48 at the same phones."""
+PHONE_INSERTION = 0.05
+"""Phone insertion probability of the loop (pocketsphinx's ``-pip``): fewer, longer phones than its
+default 1.0, which splits a vowel into two of its neighbours."""
+
+
+@dataclass(frozen=True)
+class Phone:
+    """One recognised phone: its ARPAbet name (``SIL`` for silence), start and end in seconds."""
+
+    name: str
+    start: float
+    end: float
+
+    @property
+    def speech(self) -> bool:
+        """Whether it is a phone (not silence or a filler such as ``+NSN+``)."""
+        return self.name != SILENCE and not self.name.startswith("+")
+
+
+@lru_cache(maxsize=1)
+def arpabet_ipa() -> dict[str, str]:
+    """ARPAbet phone -> IPA (``spec/arpabet_ipa.csv``)."""
+    return {r["arpabet"]: r["ipa"] for r in read_table("arpabet_ipa.csv", "arpabet,ipa,example")}
+
+
+@lru_cache(maxsize=1)
+def phone_decoder():
+    """pocketsphinx searching the bundled phone trigram (no words), tuned by :data:`BEAM` and
+    :data:`PHONE_INSERTION`."""
+    from pathlib import Path
+
+    from mpeg4fa.extras import require
+
+    require("align", "pocketsphinx")
+    from pocketsphinx import Decoder, get_model_path
+
+    from mpeg4fa.speech.align.sphinx import RATE
+
+    phone_lm = Path(get_model_path()) / "en-us" / "en-us-phone.lm.bin"
+    return Decoder(samprate=RATE, allphone=str(phone_lm), bestpath=False, loglevel="FATAL", pip=PHONE_INSERTION,
+                   **BEAM)
+
+
+def decode_pcm(decoder, pcm: bytes) -> list:
+    """One utterance through ``decoder``: its segments (empty where it finds no path)."""
+    decoder.start_utt()
+    decoder.process_raw(pcm, full_utt=True)
+    decoder.end_utt()
+    return list(decoder.seg()) if decoder.hyp() is not None else []
+
+
+def recognize_phones(recording: Recording, *, offset: float = 0.0) -> list[Phone]:
+    """The phones pocketsphinx's phone loop hears in ``recording`` (any rate: resampled to 16 kHz), each
+    with its time in seconds (plus ``offset``), silences included as ``SIL``."""
+    from mpeg4fa.speech.align.sphinx import OFFSET, pcm16k
+
+    if len(recording.samples) == 0:
+        return []
+    segments = decode_pcm(phone_decoder(), pcm16k(recording.floats(), recording.rate))
+    out = []
+    end_of_audio = recording.duration
+    for s in segments:
+        start = max(0.0, s.start_frame * HOP + OFFSET)
+        end = min(end_of_audio, (s.end_frame + 1) * HOP + OFFSET)
+        if end > start:
+            out.append(Phone(s.word, offset + start, offset + end))
+    return out
+
+
+def active_share(start: float, end: float, active: np.ndarray, offset: float = 0.0) -> float:
+    """Share of the 10 ms frames of [start, end) that :func:`~.voice.voice_activity` calls speech."""
+    a = int(np.floor((start - offset) / HOP))
+    b = max(a + 1, int(np.ceil((end - offset) / HOP)))
+    part = active[max(a, 0):max(min(b, len(active)), 0)]
+    return float(part.mean()) if len(part) else 0.0
+
+
+def phone_events(phones: list[Phone], active: np.ndarray | None = None, offset: float = 0.0) -> list[Event]:
+    """Phones as IPA phoneme events; silence, fillers and phones mostly outside voice activity
+    (``active``, frames from ``offset``) become pauses (an empty name)."""
+    table = arpabet_ipa()
+    out = []
+    for p in phones:
+        name = table.get(p.name, "") if p.speech else ""
+        if name and active is not None and active_share(p.start, p.end, active, offset) < 0.5:
+            name = ""
+        out.append(Event("phoneme", p.start, p.end, name))
+    return out
+
+
+def phone_timings(events: list[Event], where: str = "pocketsphinx") -> list[Timing]:
+    """IPA phoneme events -> timed visemes through the IPA feature map (diphthongs and affricates split
+    as on the text path); pauses kept as ``none``."""
+    from mpeg4fa.speech.ipa import ipa_visemes
+
+    return [Timing(label, viseme, start, end) for label, viseme, start, end in ipa_visemes(events, where=where)
+            if end > start]
+
+
+def pause_count(timings: list[Timing]) -> int:
+    """How many timings show no mouth shape (a pause)."""
+    return sum(t.viseme == PAUSE for t in timings)
