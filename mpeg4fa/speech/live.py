@@ -1,0 +1,325 @@
+"""Live lip sync: audio chunks in, FAP frames out, a fixed latency behind the audio.
+
+Why a module of its own: the offline paths know the whole recording (or the text) before the first
+frame; a microphone gives 20 ms at a time and the face must follow it while it speaks. This one
+listens with pocketsphinx's phone loop (``allphone``, the model :func:`~.align.sphinx.free_decoder`
+uses, bundled in the wheel), maps the phones to the MPEG-4 visemes through the maps the text path
+has (espeak-ng's English table, by :data:`~.align.sphinx.ESPEAK_ARPABET`), and moves the mouth by
+the timeline's own rules (:mod:`.timeline`'s moves, :mod:`.frames`' merging and rounding), so a
+live face moves as an encoded one does.
+
+How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
+
+- Windows: every :data:`HOP` s (80 ms) a window of the last :data:`WINDOW` s (320 ms) of audio ends,
+  decoded as one utterance (the phone loop gives no timed phones before an utterance ends). Four
+  decoders, staggered by a hop, each hear every sample as it comes (``process_raw`` per chunk), so
+  the work is spread evenly over the chunks (no chunk pays for a whole window). The phones a window
+  finds up to :data:`SETTLE` s (40 ms) before its end are *committed*: from the previous commit to
+  there, the face's phones are that window's, and never change again; the 240 ms before its newest
+  hop give them their left context.
+- A committed phone becomes a viseme span (silence and fillers: a gap, the mouth at rest). The move into
+  a span is made when the span starts, its lag as for a phone of full length; the span grows as it is
+  heard; when silence follows, the move back to rest is made at once, as into a long silence.
+- A move into a shape starts up to :data:`~.timeline.LEAD` (100 ms) before the phone, so a frame is
+  final once the commits reach ``LEAD`` past it. Frame ``k`` (time ``k / fps``) is emitted when the
+  audio fed reaches ``k / fps + latency``: exactly, whatever the chunk size, with
+  ``latency = HOP + SETTLE + LEAD`` (220 ms) by default. The first movement of the mouth therefore
+  shows about ``latency - LEAD`` after the speech starts (the anticipation hides the rest).
+- Voice: a 10 ms frame is voiced when pocketsphinx's voice activity detector (:class:`pocketsphinx.Vad`)
+  hears speech in it and its spectrum is not flat (:func:`flatness`, white noise). A phone over
+  unvoiced frames is silence whatever the loop calls it, so silence and noise keep the mouth at rest;
+  voice the loop still calls silence (the first window or two of speech) takes :data:`VOICE_VISEME`.
+  Music is heard as voice (measured: the mouth moves to it); no gate here tells them apart.
+
+Frames are ``(n, 68)`` low-level FAPs, rounded (column ``i`` is FAP ``i + 1``), as
+:class:`~.frames.FrameBlock` carries them: :meth:`LiveLipSync.feed` returns those that became due
+(possibly none), :meth:`LiveLipSync.flush` the rest, to the end of the audio fed. They can go to
+the bitstream frame by frame (:class:`mpeg4fa.fba.stream.FapStream` / the streaming encoder) or be
+shown at once.
+"""
+from __future__ import annotations
+
+import math
+from collections import Counter
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from mpeg4fa.speech.align.sphinx import ESPEAK_ARPABET, OFFSET, RATE
+from mpeg4fa.speech.frames import FrameMaker
+from mpeg4fa.speech.timeline import LAG, LAG_SHARE, LEAD, VisemeSpan, _checked_spans
+
+HOP = 0.08
+"""Seconds of audio between two decodings."""
+WINDOW = 0.32
+"""Seconds of audio each decoding reads (its newest :data:`HOP` and the context before)."""
+SETTLE = 0.04
+"""The newest part of a window (s) whose phones are not committed: a phone cut by the window's end."""
+LATENCY = HOP + SETTLE + LEAD
+"""The default latency (s): frame ``k`` comes out when the audio fed reaches ``k / fps`` plus this."""
+VAD_MODE = 3
+"""pocketsphinx's voice activity detector's aggressiveness (0-3); 3 hears least noise as voice."""
+VAD_FRAME = 0.01
+"""The detector's frame (s)."""
+FLAT = 0.3
+"""Spectral flatness (0..1) from which a 10 ms frame is noise, not a voice: white noise has about 0.56
+(a periodogram's geometric over arithmetic mean, e^-0.577), voiced speech below 0.1."""
+VOICE_VISEME = "E"
+"""The shape of a voice the phone loop has not made out yet (it calls the start of speech silence for a
+window or two): the neutral vowel's, as espeak-ng's schwa ``@`` has it."""
+_HOP_10MS = 0.01
+_SILENT = frozenset({"SIL", "+NSN+", "+SPN+", "+BREATH+", "+COUGH+", "+UM+", "+NOISE+", "+SMACK+", "+UH+"})
+
+
+@lru_cache(maxsize=1)
+def arpabet_visemes() -> dict[str, str]:
+    """ARPAbet phone -> MPEG-4 viseme, from the espeak-ng English table: each phone takes the viseme
+    most of the espeak-ng phonemes written with it alone have (ties: the first in
+    :data:`~.align.sphinx.ESPEAK_ARPABET`), so recognised phones move the mouth as spoken text does."""
+    from mpeg4fa.speech.visemes import english_viseme
+
+    votes: dict[str, Counter] = {}
+    for mnemonic, phones in ESPEAK_ARPABET.items():
+        if " " in phones:
+            continue
+        votes.setdefault(phones, Counter())[english_viseme(mnemonic)] += 1
+    return {phone: counts.most_common(1)[0][0] for phone, counts in votes.items()}
+
+
+def _decoder():
+    """A phone-loop decoder of its own (one per stream: decoders are not shared across threads)."""
+    from mpeg4fa.extras import require
+
+    require("align", "pocketsphinx")
+    from pocketsphinx import Decoder, get_model_path
+
+    phone_lm = Path(get_model_path()) / "en-us" / "en-us-phone.lm.bin"
+    return Decoder(samprate=RATE, allphone=str(phone_lm), bestpath=False, loglevel="FATAL")
+
+
+class LiveLipSync:
+    """Audio chunks in (mono PCM: int16 samples, or bytes of s16le), FAP frames out, ``latency`` s late.
+
+    ``rate``: the audio's sample rate (anything; it is resampled to the model's 16 kHz as it comes,
+    :class:`Resampler`);
+    ``fps``: frames per second; ``idle``: blinks and head motion as the encoder's ``--idle`` gives them;
+    ``latency``: at least :data:`LATENCY` (more only delays the frames, it buys nothing).
+    """
+
+    def __init__(self, rate: int = RATE, fps: float = 25.0, *, latency: float = LATENCY, idle: bool = False,
+                 seed: int = 0) -> None:
+        if isinstance(rate, bool) or not isinstance(rate, (int, np.integer)) or not 4000 <= rate <= 192000:
+            raise ValueError(f"rate {rate!r} must be an integer number of Hz in 4000..192000")
+        if not (isinstance(latency, (int, float)) and math.isfinite(latency) and latency >= LATENCY - 1e-9):
+            raise ValueError(f"latency {latency!r} must be at least {LATENCY:.2f} s (hop, settle and lead)")
+        self.rate, self.latency = int(rate), float(latency)
+        from mpeg4fa.speech.encoder import closure_hold
+
+        self.maker = FrameMaker(fps, idle=idle, seed=seed, closure_hold=closure_hold(float(fps)), fields=False)
+        self.fps = self.maker.fps
+        from pocketsphinx import Vad
+
+        self.vad = Vad(VAD_MODE, RATE, VAD_FRAME)
+        self.resampler = Resampler(self.rate, RATE)
+        self.hop = int(round(HOP * RATE))
+        self.decoders = [_decoder() for _ in range(int(round(WINDOW / HOP)))]
+        for d in self.decoders:  # all windows before the K-th start at the first sample
+            d.start_utt()
+        self.fed = 0  # 16 kHz samples fed in all
+        self.committed = 0.0  # s: phones before this are final
+        self.open: list | None = None  # [viseme, start, end] of the span being spoken
+        self.voiced = np.zeros(0, bool)  # per 10 ms from voiced_from: the detector's verdicts
+        self.voiced_from = 0
+        self.vad_tail = np.zeros(0, np.int16)  # 16 kHz samples not yet a whole detector frame
+        self.spans = 0  # spans begun (for tests and the benchmark)
+        self.rng = np.random.default_rng(seed)
+
+    # ---- input -------------------------------------------------------------------------------
+    def feed(self, chunk: bytes | np.ndarray) -> np.ndarray:
+        """Take the next audio and return the frames that became due, (n, 68) (n may be 0)."""
+        samples = self.resampler(_samples(chunk))
+        pos = 0
+        while pos < len(samples):
+            boundary = (self.fed // self.hop + 1) * self.hop  # the next window's end, in 16 kHz samples
+            piece = samples[pos:pos + boundary - self.fed]
+            self._hear(piece)
+            pos += len(piece)
+            if self.fed == boundary:
+                self._window_done(boundary // self.hop)
+        return self._emit(self.fed / RATE - self.latency)
+
+    def flush(self) -> np.ndarray:
+        """The end of the audio: decode what is left, close the last span and return every frame up to
+        the end of the audio fed (the last ones at once, without waiting ``latency``)."""
+        if self.fed % self.hop or not self.fed:
+            self._window_done(self.fed // self.hop + 1, final=True)
+        self._close(self.fed / RATE)
+        return self.maker.finish(max(self.fed / RATE, 1 / self.fps)).values
+
+    @property
+    def frames_out(self) -> int:
+        """Frames emitted so far."""
+        return self.maker.next
+
+    # ---- recognition -------------------------------------------------------------------------
+    def _hear(self, piece: np.ndarray) -> None:
+        """16 kHz samples to every decoder (each is inside its window's utterance) and the voice detector."""
+        if not len(piece):
+            return
+        y = np.clip(np.rint(piece.astype(np.float64) + self.rng.standard_normal(len(piece))), -32768, 32767)
+        data = y.astype("<i2").tobytes()  # one LSB of noise: digital silence has no log energy
+        for d in self.decoders:
+            d.process_raw(data, full_utt=False)
+        self._listen(y.astype(np.int16))
+        self.fed += len(piece)
+
+    def _window_done(self, i: int, final: bool = False) -> None:
+        """Window ``i`` (samples ``(i - K) * hop .. i * hop``, K decoders) ended: its decoder's phones are
+        committed up to ``SETTLE`` before its end, and it starts window ``i + K``."""
+        k = len(self.decoders)
+        d = self.decoders[i % k]
+        d.end_utt()
+        t0 = max(0, i - k) * self.hop / RATE
+        phones = []
+        for seg in d.seg() or ():
+            a = t0 + seg.start_frame * _HOP_10MS + (OFFSET if seg.start_frame else 0.0)
+            b = t0 + (seg.end_frame + 1) * _HOP_10MS + OFFSET
+            phones.append((seg.word, a, b))
+        end = self.fed / RATE
+        self._commit(phones, end if final else end - SETTLE)
+        if not final:
+            d.start_utt()
+
+    def _listen(self, y: np.ndarray) -> None:
+        """The voice detector's verdict on each whole 10 ms of the 16 kHz samples heard (the newest kept)."""
+        n = int(round(VAD_FRAME * RATE))
+        buf = np.concatenate([self.vad_tail, y])
+        frames = len(buf) // n
+        verdicts = np.fromiter((self.vad.is_speech(buf[k * n:(k + 1) * n].tobytes()) for k in range(frames)),
+                               bool, frames)
+        if frames:
+            verdicts &= flatness(buf[:frames * n].reshape(frames, n)) < FLAT
+        self.vad_tail = buf[frames * n:]
+        self.voiced = np.concatenate([self.voiced, verdicts])
+        drop = max(0, len(self.voiced) - int(round(2 * WINDOW / VAD_FRAME)))
+        if drop:
+            self.voiced, self.voiced_from = self.voiced[drop:], self.voiced_from + drop
+
+    def _is_voiced(self, a: float, b: float) -> bool:
+        """Whether the detector heard a voice in most of ``[a, b)``."""
+        i = max(0, int(round(a / VAD_FRAME)) - self.voiced_from)
+        j = max(i + 1, int(round(b / VAD_FRAME)) - self.voiced_from)
+        part = self.voiced[i:j]
+        return bool(len(part)) and part.mean() >= 0.5
+
+    def _commit(self, phones: list[tuple[str, float, float]], upto: float) -> None:
+        """The phones of ``[committed, upto)`` become the face's: spans begun, grown or closed."""
+        table = arpabet_visemes()
+        lo = self.committed
+        for word, a, b in phones:
+            a, b = max(a, lo), min(b, upto)
+            if b - a <= 1e-6:
+                continue
+            voiced = self._is_voiced(a, b)
+            viseme = (VOICE_VISEME if voiced else None) if word in _SILENT or word not in table \
+                else table[word] if voiced else None
+            self._phase(viseme, a, b)
+        self.committed = max(lo, upto)
+        if self.open is not None:
+            self._grow(self.committed)
+
+    def _phase(self, viseme: str | None, a: float, b: float) -> None:
+        if self.open is not None and viseme == self.open[0] and abs(self.open[2] - a) < 1e-6:
+            self._grow(b)
+            return
+        self._close(a)
+        if viseme is None:
+            return
+        self.open = [viseme, a, b]
+        self.spans += 1
+        # the move in takes its lag as from a phone of full length (LAG); its real end follows as it grows
+        (phase,) = _checked_spans([VisemeSpan(viseme, a, max(b, a + LAG / LAG_SHARE))])
+        self.maker.segments += self.maker.moves.add(phase)
+        self._grow(b)
+
+    def _grow(self, end: float) -> None:
+        """The span being spoken lasts to ``end`` so far (the moves' last phase follows it)."""
+        self.open[2] = max(self.open[2], end)
+        last = self.maker.moves.last
+        self.maker.moves.last = (last[0], self.open[2], last[2], last[3])
+
+    def _close(self, at: float) -> None:
+        """The span being spoken ends at ``at``: the move back to rest is known now (the silence after it
+        counts as long; a phone soon after starts from where that move has the mouth)."""
+        if self.open is not None:
+            self._grow(at)
+            self.open = None
+            self.maker.segments += self.maker.moves.finish()
+
+    # ---- output ------------------------------------------------------------------------------
+    def _emit(self, until: float) -> np.ndarray:
+        """Frames with times up to ``until`` (s), which the commits must reach ``LEAD`` past."""
+        stop = math.floor(round(until * self.fps, 9)) + 1 if until >= 0 else 0
+        if stop <= self.maker.next:
+            return np.zeros((0, 68))
+        assert (stop - 1) / self.fps <= self.committed - LEAD + 1e-9, "a frame went out before its moves were known"
+        return self.maker._frames(stop).values
+
+
+def flatness(frames: np.ndarray) -> np.ndarray:
+    """Spectral flatness of each row of 16 kHz samples over 250-6000 Hz (Hann window): near 0 for a
+    voice's harmonics, about 0.56 for white noise."""
+    n = frames.shape[1]
+    size = 1 << (n - 1).bit_length()
+    power = np.abs(np.fft.rfft(frames * np.hanning(n), size, axis=1)) ** 2 + 1e-3
+    band = power[:, int(250 * size / RATE):int(6000 * size / RATE)]
+    return np.exp(np.log(band).mean(axis=1)) / band.mean(axis=1)
+
+
+class Resampler:
+    """Streaming resampling to the model's rate: a low-pass (8th-order Butterworth at 0.9 x the lower
+    Nyquist frequency, its state carried from chunk to chunk) and linear interpolation whose position runs on
+    across chunks, so cutting the audio anywhere gives the same samples."""
+
+    def __init__(self, rate: int, target: int) -> None:
+        self.rate, self.target, self.step = rate, target, rate / target
+        self.pos = 0.0  # the next output sample's position in input samples, from the first kept one
+        self.last = np.zeros(0)  # the input sample before the current chunk (for interpolation)
+        if rate != target:
+            from scipy.signal import butter, sosfilt_zi
+
+            self.sos = butter(8, 0.9 * min(rate, target) / rate, output="sos")
+            self.zi = sosfilt_zi(self.sos) * 0.0
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        if self.rate == self.target:
+            return x
+        from scipy.signal import sosfilt
+
+        y, self.zi = sosfilt(self.sos, x.astype(np.float64), zi=self.zi)
+        buf = np.concatenate([self.last, y])
+        n = max(0, math.floor((len(buf) - 1 - self.pos) / self.step) + 1) if len(buf) else 0
+        at = self.pos + self.step * np.arange(n)
+        out = np.interp(at, np.arange(len(buf)), buf) if n else np.zeros(0)
+        self.pos = self.pos + self.step * n - (len(buf) - 1)
+        self.last = buf[-1:]
+        return np.clip(np.rint(out), -32768, 32767).astype(np.int16)
+
+
+def _samples(chunk: bytes | np.ndarray) -> np.ndarray:
+    if isinstance(chunk, (bytes, bytearray, memoryview)):
+        data = bytes(chunk)
+        if len(data) % 2:
+            raise ValueError(f"a chunk of s16le PCM has an even number of bytes, not {len(data)}")
+        return np.frombuffer(data, "<i2").astype(np.int16)
+    x = np.asarray(chunk)
+    if x.ndim != 1:
+        raise ValueError(f"a chunk is mono samples (n,), not shape {x.shape}")
+    if x.dtype == np.int16:
+        return x
+    if np.issubdtype(x.dtype, np.floating):
+        if not np.isfinite(x).all():
+            raise ValueError("a chunk holds NaN or infinite samples")
+        return np.clip(np.rint(x * 32768.0), -32768, 32767).astype(np.int16)
+    raise ValueError(f"a chunk is int16 or float samples, not {x.dtype}")

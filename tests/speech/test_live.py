@@ -1,0 +1,186 @@
+"""Live lip sync (mpeg4fa.speech.live): frames come out a fixed latency after the audio they describe, the
+mouth moves while espeak-ng speaks and rests in the silences and in noise. Timing is counted in samples
+and frames, never by the wall clock (tools/bench_live.py measures the real-time behaviour)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pocketsphinx", reason="live lip sync needs pocketsphinx (the 'align' extra)")
+
+from mpeg4fa.spec import FAP_BY_NAME  # noqa: E402
+from mpeg4fa.speech.align.recording import frame_levels, resample  # noqa: E402
+from mpeg4fa.speech.live import LATENCY, LiveLipSync, Resampler, arpabet_visemes  # noqa: E402
+
+RATE = 16000
+FPS = 25.0
+LIPS = [FAP_BY_NAME[n].number - 1 for n in (
+    "open_jaw", "lower_t_midlip", "raise_b_midlip", "stretch_l_cornerlip", "stretch_r_cornerlip",
+    "lower_t_lip_lm", "lower_t_lip_rm", "raise_b_lip_lm", "raise_b_lip_rm", "push_b_lip", "push_t_lip")]
+SENTENCES = ("Hello there, how are you?", "Maybe Bob will bring a map.")
+PAUSE = 1.2
+
+
+@pytest.fixture(scope="module")
+def clip() -> tuple[np.ndarray, list[tuple[float, float]]]:
+    """Two espeak-ng sentences with PAUSE s of silence before, between and after, at 16 kHz int16, and the
+    spans (s) where the audio is louder than -45 dBFS (the speech, measured, not espeak-ng's events)."""
+    from mpeg4fa.speech.encoder import make_engine
+
+    engine = make_engine("espeak")
+    parts = [np.zeros(int(PAUSE * RATE))]
+    for text in SENTENCES:
+        speech = engine.synthesize(text)
+        parts += [resample(speech.samples / 32768.0, speech.rate, RATE), np.zeros(int(PAUSE * RATE))]
+    x = np.concatenate(parts)
+    loud = frame_levels(x, RATE) > -45
+    edges = np.flatnonzero(np.diff(np.r_[0, loud.astype(int), 0]))
+    spans = [(a * 0.01, b * 0.01) for a, b in zip(edges[::2], edges[1::2])]
+    merged = [list(spans[0])]
+    for a, b in spans[1:]:  # gaps inside a sentence (stops) are speech
+        if a - merged[-1][1] < 0.3:
+            merged[-1][1] = b
+        else:
+            merged.append([a, b])
+    return np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16), [tuple(s) for s in merged]
+
+
+@pytest.fixture(scope="module")
+def fed(clip):
+    """The clip fed in 20 ms chunks."""
+    return run(clip[0], 320)
+
+
+def run(pcm: np.ndarray, chunk: int, rate: int = RATE, **kwargs) -> tuple[list[tuple[int, np.ndarray]], np.ndarray]:
+    """Feed ``pcm`` ``chunk`` samples at a time: (samples fed, frames out) per feed, and flush()'s frames."""
+    live = LiveLipSync(rate, FPS, **kwargs)
+    out = []
+    for i in range(0, len(pcm), chunk):
+        part = pcm[i:i + chunk]
+        out.append((min(i + chunk, len(pcm)), live.feed(part if i % 2 else part.astype("<i2").tobytes())))
+    return out, live.flush()
+
+
+def moving(frames: np.ndarray) -> np.ndarray:
+    return np.abs(frames[:, LIPS]).max(axis=1) > 0
+
+
+def test_every_frame_comes_out_exactly_latency_after_its_audio(clip, fed):
+    pcm, _ = clip
+    for chunk in (320, 137, 16000):  # 20 ms, an odd size, 1 s
+        out, tail = fed if chunk == 320 else run(pcm, chunk)
+        total = 0
+        for fed, frames in out:
+            total += len(frames)
+            due = math.floor(round((fed / RATE - LATENCY) * FPS, 9)) + 1 if fed / RATE >= LATENCY else 0
+            assert total == due, f"chunk {chunk}: after {fed} samples {total} frames, {due} due"
+        assert total + len(tail) == math.ceil(len(pcm) / RATE * FPS)
+
+
+def test_the_frames_do_not_depend_on_how_the_audio_is_cut(clip, fed):
+    pcm, _ = clip
+    a = np.concatenate([f for _, f in fed[0]] + [fed[1]])
+    b_out, b_tail = run(pcm, 4999)
+    b = np.concatenate([f for _, f in b_out] + [b_tail])
+    assert a.shape == b.shape and np.array_equal(a, b)
+
+
+def test_the_mouth_moves_within_200_ms_of_the_speech_and_rests_in_its_silences(clip, fed):
+    pcm, speech = clip
+    out, tail = fed
+    frames = np.concatenate([f for _, f in out] + [tail])
+    move = moving(frames)
+    t = np.arange(len(frames)) / FPS
+    for start, end in speech:
+        # the feed after which a frame showing the mouth moving for this sentence first came out
+        emitted, first_fed = 0, None
+        for fed, f in out:
+            k = np.flatnonzero(moving(f) & (np.arange(emitted, emitted + len(f)) / FPS > start - 0.3))
+            emitted += len(f)
+            if len(k):
+                first_fed = fed
+                break
+        assert first_fed is not None
+        delay = first_fed / RATE - start
+        print(f"speech at {start:.2f} s: the mouth moved {delay * 1000:.0f} ms later")
+        assert delay <= 0.200, f"the mouth first moved {delay * 1000:.0f} ms after the speech at {start:.2f} s"
+        inside = (t >= start + 0.1) & (t < end - 0.1)
+        assert move[inside].mean() >= 0.6, f"the mouth moved in {move[inside].mean():.0%} of {start:.2f}-{end:.2f}"
+    edges = [0.0] + [x for s in speech for x in s] + [len(pcm) / RATE]
+    for a, b in zip(edges[::2], edges[1::2]):  # the silences, away from the speech's moves
+        quiet = (t >= a + 0.25) & (t < b - 0.25)
+        assert quiet.any() and not move[quiet].any(), f"the mouth moved in the silence {a:.2f}-{b:.2f} s"
+
+
+def test_closures_shut_the_lips(fed):
+    out, tail = fed
+    frames = np.concatenate([f for _, f in out] + [tail])
+    from mpeg4fa.spec import VISEME_PROFILES
+
+    pp = VISEME_PROFILES["mpeg4"]["PP"]
+    col = int(np.argmax(np.abs(pp)))
+    assert (np.sign(frames[:, col]) == np.sign(pp[col])).any() and \
+        (np.abs(frames[:, col]) >= 0.8 * abs(pp[col])).any(), "'Maybe Bob ... map' never shut the lips"
+
+
+@pytest.mark.parametrize("kind", ["silence", "noise"])
+def test_silence_and_noise_keep_the_mouth_at_rest(kind):
+    n = 5 * RATE
+    x = np.zeros(n)
+    if kind == "noise":  # white noise at -30 dBFS
+        x = np.random.default_rng(3).standard_normal(n)
+        x *= 10 ** (-30 / 20) / np.sqrt(np.mean(x ** 2))
+    pcm = np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16)
+    out, tail = run(pcm, 320)
+    frames = np.concatenate([f for _, f in out] + [tail])
+    assert len(frames) == 5 * FPS
+    assert (~moving(frames)).mean() >= 0.95 if kind == "noise" else not moving(frames).any()
+
+
+def test_other_sample_rates_are_resampled_as_they_come(clip):
+    pcm, speech = clip
+    up = np.clip(np.rint(resample(pcm / 32768.0, RATE, 48000) * 32767), -32768, 32767).astype(np.int16)
+    out, tail = run(up, 960, rate=48000)
+    frames = np.concatenate([f for _, f in out] + [tail])
+    assert len(frames) == math.ceil(len(up) / 48000 * FPS)
+    t = np.arange(len(frames)) / FPS
+    start, end = speech[0]
+    assert moving(frames)[(t >= start + 0.1) & (t < end - 0.1)].mean() >= 0.6
+    assert not moving(frames)[t < speech[0][0] - 0.25].any()
+    # the resampler cut anywhere gives the same samples
+    x = np.random.default_rng(0).integers(-2000, 2000, 4800).astype(np.int16)
+    r1, r2 = Resampler(48000, RATE), Resampler(48000, RATE)
+    whole = r1(x)
+    parts = np.concatenate([r2(x[i:i + 333]) for i in range(0, len(x), 333)])
+    assert len(whole) == 1600 and np.array_equal(whole, parts)
+
+
+def test_every_phone_of_the_model_has_a_viseme():
+    from pocketsphinx import Decoder, get_model_path  # noqa: F401
+
+    from mpeg4fa.spec import VISEME_PROFILES
+
+    table = arpabet_visemes()
+    assert set(table.values()) <= set(VISEME_PROFILES["mpeg4"])
+    phones = {"AA", "AE", "AH", "AO", "AW", "AY", "B", "CH", "D", "DH", "EH", "ER", "EY", "F", "G", "HH", "IH",
+              "IY", "JH", "K", "L", "M", "N", "NG", "OW", "OY", "P", "R", "S", "SH", "T", "TH", "UH", "UW", "V",
+              "W", "Y", "Z", "ZH"}  # the en-us model's 39 phones
+    assert phones <= set(table)
+    assert table["P"] == table["B"] == table["M"] == "PP" and table["F"] == "FF"
+
+
+@pytest.mark.parametrize("bad, why", [(b"\x00\x01\x02", "even number"), (np.zeros((2, 2), np.int16), "mono"),
+                                      (np.array([np.nan]), "NaN"), (np.zeros(3, np.int32), "int16 or float")])
+def test_bad_chunks_are_refused_saying_why(bad, why):
+    live = LiveLipSync()
+    with pytest.raises(ValueError, match=why):
+        live.feed(bad)
+
+
+def test_bad_settings_are_refused():
+    with pytest.raises(ValueError, match="latency"):
+        LiveLipSync(latency=0.05)
+    with pytest.raises(ValueError, match="rate"):
+        LiveLipSync(rate=100)
