@@ -115,3 +115,19 @@ def test_frames_without_the_face_hold_and_are_counted_in_one_warning(videos, tmp
     assert len(warned) == 1 and "lost in 5 of 50 frames" in warned[0], err
     values = frames_of(decode(tmp_path / "gap.fba"))[:, 2]
     assert len(values) == 50 and (values[30:35] == values[29]).all()  # held
+
+
+def test_a_faceless_video_prints_only_our_line_even_from_native_code(videos, tmp_path):
+    """The model's native threads (TF Lite, absl) write straight to descriptor 2, past ``capsys``: a separate
+    process, whose whole stderr is read, must still show one line (ours)."""
+    import subprocess
+    import sys
+
+    paths, _ = videos
+    for _ in range(2):  # the native logging is asynchronous: twice, to give a late line its chance
+        done = subprocess.run([sys.executable, "-m", "mpeg4fa.cli", "encode", "--video", str(paths["blank"]),
+                               "-o", str(tmp_path / "x.fba")], capture_output=True, text=True, timeout=120)
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 1 and len(lines) == 1, done.stderr
+        assert lines[0].startswith("mpeg4fa encode: error:") and "no face found" in lines[0], done.stderr
+        assert not (tmp_path / "x.fba").exists()
