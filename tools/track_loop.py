@@ -1,7 +1,7 @@
 """Closed loop of the video tracker (issue 27 item 3): a known FAP stream played on a head textured from a real
 photo, rendered to MP4, tracked back, and compared per FAP group.
 
-    .venv/bin/python tools/track_loop.py [--seconds 12] [--size 384] [--fps 25] [--out out/track_loop]
+    .venv/bin/python tools/track_loop.py [--seconds 12] [--size 384] [--fps 25] [--out out/track_loop] [--still-head]
 
 The stream sent: English speech with expression tags (the low-level visemes and expressions of
 ``encode_text``, engine ``estimate``: no audio needed), blinks every 1.1-1.7 s, eye gaze, and head turns
@@ -13,6 +13,13 @@ Per group: correlation of tracked with sent, RMS error as a share of the range t
 the thresholds of the issue (correlation >= 0.9, RMS <= 15 %); blinks: sent blink peaks found in the
 tracked lids within a frame (>= 95 %). Writes OUT/track_loop.json, OUT/track_loop.png (sent vs tracked, per
 group), the video OUT/loop.mp4 and OUT/loop.fba (the tracked stream); prints a table.
+
+Two more rows say where a shortfall comes from. ``engine``: the tracker's FAP rules
+(:func:`mpeg4fa.tracking.faps.fap_values`) on the head's own feature points as the face engine poses them
+(no picture, no landmark model, no head turn): what is lost there is the rules' fault. ``gain``: per FAP,
+the least-squares slope of tracked on sent (1 when the tracked motion has the sent size; the landmark
+model's under-reading of a rendered face shows here). ``--still-head`` sends the same stream without the
+head turns, so comparing the two runs separates what the turns cost from what the landmarks cost.
 """
 from __future__ import annotations
 
@@ -43,8 +50,9 @@ BLINK_PEAK = 1000  # FAP 19/20 at a blink's peak: the upper lid at the lower one
 BLINK_SHAPE = (0.35, 0.85, 1.0, 0.7, 0.3)
 
 
-def sent_values(seconds: float, fps: float, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 68) FAP values to send and the frames of the blink peaks."""
+def sent_values(seconds: float, fps: float, seed: int = 1, *,
+                still_head: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 68) FAP values to send and the frames of the blink peaks (``still_head``: no head turns)."""
     from mpeg4fa.speech.encoder import encode_text
 
     n = int(round(seconds * fps))
@@ -66,6 +74,8 @@ def sent_values(seconds: float, fps: float, seed: int = 1) -> tuple[np.ndarray, 
     values[:, 47] = np.radians(12) / 1e-5 * np.sin(2 * np.pi * 0.17 * t + 0.5) * ramp  # head pitch
     values[:, 48] = np.radians(30) / 1e-5 * np.sin(2 * np.pi * 0.11 * t) * ramp        # head yaw
     values[:, 49] = np.radians(10) / 1e-5 * np.sin(2 * np.pi * 0.21 * t + 2.0) * ramp  # head roll
+    if still_head:
+        values[:, 47:50] = 0.0
     return values, np.array(blinks)
 
 
@@ -121,6 +131,36 @@ def track_video(path: Path, fps: float | None = None):
             tracker.push(rgb)
         summary = tracker.finish()
         return sendable(tracker.values()), summary  # what the stream sends (no negative jaw)
+
+
+def engine_values(shown: np.ndarray, face=None) -> np.ndarray:
+    """The tracker's FAP rules on the head's own feature points, posed by the face engine from ``shown`` with the
+    head held still (head rotation copied from what was sent): the rules' share of any error, without picture
+    or landmark model."""
+    from mpeg4fa.face import FaceModel
+    from mpeg4fa.tracking import faps as rules
+
+    face = face if face is not None else FaceModel.default()
+    labels = list(face.mesh.fp_labels)
+    index = [labels.index(label) for label in rules.LABELS]
+    held = np.array(shown, dtype=np.float64)
+    held[:, 47:50] = 0.0
+    points = np.stack([face.pose_values(row).feature_points[index] for row in held])
+    neutral = rules.Neutral.from_points(face.neutral().feature_points[index])
+    out = rules.fap_values(points, neutral, np.zeros((len(points), 3)), rules.receiver(face))
+    out[:, 47:50] = shown[:, 47:50]
+    return out
+
+
+def gains(sent: np.ndarray, tracked: np.ndarray) -> dict[str, float]:
+    """Per FAP of the compared groups: the least-squares slope of tracked on sent (1: the sent size)."""
+    out = {}
+    for faps in GROUPS.values():
+        for fap in faps:
+            a, b = sent[:, fap - 1], tracked[:, fap - 1]
+            if float(np.dot(a, a)) > 0:
+                out[str(fap)] = round(float(np.dot(a, b) / np.dot(a, a)), 3)
+    return out
 
 
 def blink_peaks(lids: np.ndarray, threshold: float) -> np.ndarray:
@@ -188,15 +228,17 @@ def plot(sent: np.ndarray, tracked: np.ndarray, fps: float, target: Path) -> Non
     plt.close(fig)
 
 
-def run(seconds: float, size: int, fps: float, out: Path, *, texture_size: int = 512) -> dict:
+def run(seconds: float, size: int, fps: float, out: Path, *, texture_size: int = 512,
+        still_head: bool = False) -> dict:
     """The whole loop; the report (also written as OUT/track_loop.json with the plot beside it)."""
     from mpeg4fa.fba import encode
     from mpeg4fa.tracking.tracker import fap_stream
 
     out.mkdir(parents=True, exist_ok=True)
-    values, blinks = sent_values(seconds, fps)
+    values, blinks = sent_values(seconds, fps, still_head=still_head)
     stream, shown = sent_stream(values, fps)
     face, texture = textured_head(texture_size)
+    engine = compare(shown, engine_values(shown, face), blinks)
     video = out / "loop.mp4"
     render_s = render_video(stream, video, size, face, texture)
     started = time.perf_counter()
@@ -205,6 +247,9 @@ def run(seconds: float, size: int, fps: float, out: Path, *, texture_size: int =
     n = min(len(shown), len(tracked))
     (out / "loop.fba").write_bytes(encode(fap_stream(tracked, fps)))
     report = compare(shown[:n], tracked[:n], blinks[blinks < n])
+    report.update(still_head=still_head, gain=gains(shown[:n], tracked[:n]),
+                  engine={name: {k: g[k] for k in ("correlation", "rms_share", "pass")}
+                          for name, g in engine["groups"].items()})
     report.update(seconds=seconds, size=size, fps=fps, frames=n, lost=summary.lost,
                   neutral=[summary.neutral.first, summary.neutral.last], render_s=round(render_s, 2),
                   track_s=round(track_s, 2), track_fps=round(n / track_s, 1))
@@ -214,12 +259,16 @@ def run(seconds: float, size: int, fps: float, out: Path, *, texture_size: int =
 
 
 def table(report: dict) -> str:
-    lines = [f"{'group':28} {'corr':>6} {'rms':>8} {'range':>8} {'rms/range':>9}  pass"]
+    lines = [f"{'group':28} {'corr':>6} {'rms':>8} {'range':>8} {'rms/range':>9}  pass   gain    engine corr, rms"]
     for key in ("groups", "reported"):
         for name, g in report[key].items():
             share = f"{100 * g['rms_share']:.1f} %" if g["rms_share"] is not None else "-"
+            gain = [report.get("gain", {}).get(str(f)) for f in g["faps"]]
+            gain = "/".join(f"{x:.2f}" for x in gain[:2] if x is not None) if any(x is not None for x in gain) else ""
+            engine = report.get("engine", {}).get(name)
+            engine = (f"{engine['correlation']:.3f}, {100 * (engine['rms_share'] or 0):.1f} %" if engine else "")
             lines.append(f"{name:28} {g['correlation']:6.3f} {g['rms']:8.1f} {g['range']:8.1f} {share:>9}  "
-                         f"{'yes' if g.get('pass') else ('no' if 'pass' in g else '')}")
+                         f"{'yes' if g.get('pass') else ('no' if 'pass' in g else ''):4} {gain:>9}  {engine}")
     b = report["blinks"]
     lines.append(f"blinks: {b['found_within_a_frame']}/{b['sent']} within a frame ({100 * b['share']:.0f} %), "
                  f"{b['extra_peaks']} extra; lost frames {report['lost']}; neutral frames {report['neutral']}")
@@ -234,8 +283,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--size", type=int, default=384)
     parser.add_argument("--fps", type=float, default=25.0)
     parser.add_argument("--out", type=Path, default=Path("out/track_loop"))
+    parser.add_argument("--still-head", action="store_true", help="send no head turns (what the turns cost)")
     args = parser.parse_args(argv)
-    report = run(args.seconds, args.size, args.fps, args.out)
+    report = run(args.seconds, args.size, args.fps, args.out, still_head=args.still_head)
     print(table(report))
     print(f"wrote {args.out / 'track_loop.json'}, {args.out / 'track_loop.png'}")
     return 0 if report["pass"] else 1

@@ -1,5 +1,11 @@
 """Closed loop (issue 27 item 3), short: a known FAP stream on the generic head wearing the astronaut, rendered to
-MP4, tracked back, compared per group with the issue's thresholds (tools/track_loop.py has the long run)."""
+MP4, tracked back, compared per group with the issue's thresholds (tools/track_loop.py has the long run).
+
+Where the shortfall lies (tools/track_loop.py, 12 s at 384 pixels): the tracker's FAP rules on the head's own
+feature points give back what was sent (correlation >= 0.97 in every group, asserted here); the landmark model
+reads the rendered face's motion at 0.4-0.75 of its size (the report's ``gain``), and head turns of up to 30
+degrees bend its landmarks in ways no rigid fit takes out (lip corners 0.94 -> 0.40, brows 0.86 -> 0.38
+correlation with the head still vs turning)."""
 from __future__ import annotations
 
 import importlib.util
@@ -11,6 +17,9 @@ TOOL = Path(__file__).resolve().parents[2] / "tools" / "track_loop.py"
 NOT_MET = {  # what the tracker does not reach yet while the head turns (see the report of tools/track_loop.py)
     "jaw (3)", "lip corners (12/13)", "outer lip corners (53/54)", "inner lips (4/5)", "brows (31-36)",
     "lids (19/20)"}
+ENGINE_CORRELATION, ENGINE_RMS_SHARE = 0.97, 0.03
+"""The FAP rules on the face engine's own feature points: all but exact (measured: correlation 1.000 and RMS
+<= 0.8 % in every group but the inner lips, 0.975 and 2.0 % on this short loop, 0.984 and 1.7 % on 12 s)."""
 
 
 def _tool():
@@ -27,12 +36,23 @@ def loop(tmp_path_factory):
 
 
 @pytest.mark.parametrize("group", list(_tool().GROUPS))
+def test_fap_rules_give_back_what_the_head_shows(loop, group):
+    """No picture, no landmark model: the rules (point, direction, FAPU, jaw carry) on the engine's posed points."""
+    _, report = loop
+    entry = report["engine"][group]
+    assert entry["correlation"] >= ENGINE_CORRELATION, entry
+    assert entry["rms_share"] <= ENGINE_RMS_SHARE, entry
+
+
+@pytest.mark.parametrize("group", list(_tool().GROUPS))
 def test_group_follows_what_was_sent(loop, group):
     tool, report = loop
     entry = report["groups"][group]
     if group in NOT_MET and not entry["pass"]:
-        pytest.xfail(f"{group}: correlation {entry['correlation']}, RMS {entry['rms_share']} of the range "
-                     f"(head turns leak into the local displacements)")
+        gain = "/".join(str(report["gain"].get(str(f))) for f in entry["faps"][:2])
+        pytest.xfail(f"{group}: correlation {entry['correlation']}, RMS {entry['rms_share']} of the range, "
+                     f"gain {gain} (the landmark model under-reads the rendered face, and head turns bend its "
+                     f"landmarks; 12 s run: see the module docstring)")
     assert entry["correlation"] >= tool.MIN_CORRELATION, entry
     assert entry["rms_share"] <= tool.MAX_RMS_SHARE, entry
 
@@ -41,6 +61,7 @@ def test_blinks_are_found_within_a_frame(loop):
     tool, report = loop
     assert report["lost"] == 0
     blinks = report["blinks"]
-    if blinks["share"] < tool.MIN_BLINKS:  # tracked lids peak at 0.6-0.8 of what was sent: some stay below half
-        pytest.xfail(f"blinks: {blinks['found_within_a_frame']} of {blinks['sent']} found within a frame")
+    if blinks["share"] < tool.MIN_BLINKS:  # tracked lids peak at 0.5-0.8 of what was sent: some stay below half
+        pytest.xfail(f"blinks: {blinks['found_within_a_frame']} of {blinks['sent']} found within a frame "
+                     f"(lid gain {report['gain'].get('19')}/{report['gain'].get('20')}; 8 of 8 with the head still)")
     assert blinks["extra_peaks"] <= 1, blinks
