@@ -21,9 +21,10 @@ def register(commands: Commands) -> None:
         "serve", help="speak tagged text live to a browser or any WebSocket client (127.0.0.1 only)",
         description="Start the live server on 127.0.0.1 only and open its player page. A client sends tagged "
                     "text over ws://127.0.0.1:PORT/ws; the server speaks it sentence by sentence and streams "
-                    "each sentence's FBA stream, its frames with their times and ARKit weights, and the audio, "
-                    "never more than --window seconds ahead of what the client reports it has played. The "
-                    "page (http://127.0.0.1:PORT/) plays them on the head as GLB with three.js and WebAudio. "
+                    "each sentence's FBA bitstream and its audio, never more than --window seconds ahead of what "
+                    "the client reports it has played. The page (http://127.0.0.1:PORT/) decodes the stream "
+                    "itself (fba.js) and plays it on the head with three.js and WebAudio; "
+                    "http://127.0.0.1:PORT/player plays .fba files. "
                     "The protocol is documented in mpeg4fa/serve/protocol.py. Only the server's own page and "
                     "clients on this machine get in: a WebSocket client outside a browser sends 'Origin: "
                     "http://127.0.0.1:PORT' (browsers send their page's); another site's Origin, or a Host other "
@@ -56,9 +57,8 @@ def run_serve(args: argparse.Namespace) -> int:
     app = create_app(face_from_args(args), engine=args.engine, window=args.window, stall_timeout=args.stall_timeout,
                      warm=True)
     url = f"http://{HOST}:{args.port}/"
-    units = app.state.live.units
-    print(f"mpeg4fa serve: serving {url} (WebSocket ws://{HOST}:{args.port}/ws; Ctrl-C stops); "
-          + (f"{len(units.names)} ARKit units" if units is not None else "this head has no ARKit units: no weights"))
+    print(f"mpeg4fa serve: serving {url} (WebSocket ws://{HOST}:{args.port}/ws; the .fba player {url}player; "
+          "Ctrl-C stops)")
     if not args.no_browser:
         threading.Timer(1.0, webbrowser.open, (url,)).start()
     run_until_stopped(app, host=HOST, port=args.port, log_level="warning", ws_max_size=1 << 20)

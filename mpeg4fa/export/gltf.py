@@ -156,6 +156,12 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     return out, {"n_parts": len(parts), "n_targets": len(names), "n_frames": len(times), "duration": duration}
 
 
+def part_sources(face: FaceModel) -> dict[str, np.ndarray]:
+    """Per drawn part (a primitive of :func:`build_glb`, named in its ``extras.part``): the mesh vertex of each of
+    its GL vertices, so that a page moving the mesh itself (the FBA player) writes each where it belongs."""
+    return {part.name: part.source for part in _parts(face, build_layout(face.mesh), Materials(), False)}
+
+
 def _keyed_frames(stream: FapStream) -> tuple[np.ndarray, np.ndarray]:
     """Resolved values and presentation times, one per distinct time (the last frame shown at a time wins)."""
     if not len(stream):

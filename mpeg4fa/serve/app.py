@@ -3,16 +3,16 @@
 Per connection two tasks run: one reads the client's messages (``say``, ``buffer``, ``stop``;
 malformed ones get an ``error`` and change nothing), one speaks the current utterance. That one
 is a pipeline of two: a producer makes sentence after sentence in a worker thread
-(:func:`.segments.make_segment`: speech, FBA stream, decoded frames, ARKit weights), at most
-one ready ahead of the one being sent, and the sender passes frames and audio out in media-time
+(:func:`.segments.make_segment`: speech and its FBA stream), at most one ready ahead of the one
+being sent, and the sender passes each sentence's bitstream, then its audio, out in media-time
 order as the client's buffer reports allow (:mod:`.flow`). So the first frame goes out once the
 first sentence is made, and a slow or stalled client costs the server one sentence of memory.
+The page decodes the bitstream itself (fba.js) and poses its head as the FBA player does.
 
-HTTP routes: ``/`` (the player page), ``/static`` (its script), ``/vendor/three`` (three.js as
-vendored for the editor, served from there), ``/head.glb`` (the head with its ARKit morph targets,
-:func:`mpeg4fa.export.gltf.build_glb`, built once on first request), ``/api/info``; ``/player`` (the
-FBA player, ``static/fbaplayer.html``: streams decoded in the browser by fba.js) with its head
-``/static/fap-head.glb`` and key ``/static/fap-head.json`` (:mod:`.fap_head`, built once). Unknown routes
+HTTP routes: ``/`` (the live page), ``/static`` (its scripts), ``/vendor/three`` (three.js as
+vendored for the editor, served from there), ``/api/info``; ``/player`` (the FBA player,
+``static/fbaplayer.html``: streams decoded in the browser by fba.js); both pages pose the head
+``/static/fap-head.glb`` with its rig ``/static/fap-head.json`` (:mod:`.fap_head`, built once). Unknown routes
 answer ``{"error", "where"}`` with 404. Only the server's own page and loopback clients get in
 (:class:`mpeg4fa.guard.LocalOnly`): a foreign ``Host`` or ``Origin``, or a WebSocket handshake without
 ``Origin``, is answered 403 before anything runs.
@@ -36,6 +36,7 @@ from mpeg4fa.errors import MpegFaError
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.guard import LocalOnly
 from mpeg4fa.serve import protocol
+from mpeg4fa.serve.microphone import Microphone, is_microphone
 from mpeg4fa.serve.flow import STALL_TIMEOUT, WINDOW, Flow, Stalled
 from mpeg4fa.serve.protocol import AUDIO_KIND, FBA_KIND, Buffer, ProtocolError, Say, Stop, error_message, pack
 from mpeg4fa.serve.segments import Segment, chunks, make_segment
@@ -53,7 +54,6 @@ BODY_LIMIT = 65536  # bytes of an HTTP request body (no route takes one)
 @dataclass
 class Settings:
     engine: object
-    units: object | None  # ArkitUnits of the face, or None for a head without face units
     face: FaceModel
     fps: float = 25.0
     window: float = WINDOW
@@ -61,12 +61,11 @@ class Settings:
     stall_timeout: float = STALL_TIMEOUT
     utterances: deque = field(default_factory=lambda: deque(maxlen=RECORDS))  # the latest finished utterances
     connections: int = 0
-    _glb: bytes | None = None
     _glb_lock: threading.Lock = field(default_factory=threading.Lock)
     _fap_head: tuple[bytes, dict] | None = None
 
     def fap_head(self) -> tuple[bytes, dict]:
-        """The FBA player's head (one morph target per FAP, :mod:`.fap_head`) and its key, built once."""
+        """The pages' head (:mod:`.fap_head`: the GLB and the rig that poses it from FAPs), built once."""
         from mpeg4fa.serve.fap_head import fap_head
 
         with self._glb_lock:
@@ -74,41 +73,12 @@ class Settings:
                 self._fap_head = fap_head(self.face)
             return self._fap_head
 
-    def head_glb(self) -> bytes:
-        """The head as GLB (morph targets named as ``units``), built once."""
-        with self._glb_lock:
-            if self._glb is None:
-                self._glb = head_glb(self.face, self.units is not None)
-            return self._glb
-
-
-def head_glb(face: FaceModel, morph: bool) -> bytes:
-    """The head at rest as GLB: with its ARKit morph targets when it has face units, else plain."""
-    from mpeg4fa.export.gltf import build_glb
-    from mpeg4fa.fba.stream import FapStream
-
-    rest = FapStream.empty(2)  # a neutral still: the page drives the weights itself
-    rest.source_fps = 25.0
-    rest.timestamps[:] = (0.0, 0.04)
-    return build_glb(rest, face, animation="morph" if morph else "vertex", name="head")[0]
-
-
-def face_units(face: FaceModel):
-    """The face's ARKit units (the GLB's morph targets), or None when the head has none."""
-    from mpeg4fa.export.arkit_units import NoFaceUnitsError, arkit_units
-
-    try:
-        return arkit_units(face)
-    except NoFaceUnitsError:
-        return None
-
 
 def warm_up(settings: Settings) -> None:
     """Load the speech engine and compile the codec once, so the first ``say`` is not the slow one."""
     from mpeg4fa.serve.sentences import Sentence
 
-    make_segment(Sentence(0, "Hello.", "Hello.", 0), 0.0, engine=settings.engine, units=settings.units,
-                 fps=settings.fps)
+    make_segment(Sentence(0, "Hello.", "Hello.", 0), 0.0, engine=settings.engine, fps=settings.fps)
 
 
 def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak", fps: float = 25.0,
@@ -121,8 +91,7 @@ def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak"
     if not (window > 0 and chunk > 0 and stall_timeout > 0 and fps > 0):
         raise ValueError("window, chunk, stall_timeout and fps must be > 0")
     face = face if face is not None else FaceModel.default()
-    settings = Settings(engine=make_engine(engine) if isinstance(engine, str) else engine, units=face_units(face),
-                        face=face, fps=float(fps), window=float(window), chunk=float(chunk),
+    settings = Settings(engine=make_engine(engine) if isinstance(engine, str) else engine, face=face, fps=float(fps), window=float(window), chunk=float(chunk),
                         stall_timeout=float(stall_timeout))
     if warm:
         warm_up(settings)
@@ -137,10 +106,6 @@ def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak"
     @app.get("/", response_class=HTMLResponse)
     def index():
         return (STATIC / "player.html").read_text(encoding="utf-8")
-
-    @app.get("/head.glb")
-    def glb():
-        return Response(settings.head_glb(), media_type="model/gltf-binary")
 
     @app.get("/api/info")
     def info():
@@ -177,7 +142,6 @@ def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak"
 def hello(settings: Settings) -> dict:
     return {"type": "hello", "protocol": protocol.PROTOCOL, "fps": settings.fps, "window": settings.window,
             "chunk": settings.chunk, "stall_timeout": settings.stall_timeout,
-            "units": list(settings.units.names) if settings.units is not None else [],
             "engine": getattr(settings.engine, "name", type(settings.engine).__name__)}
 
 
@@ -194,6 +158,7 @@ class Connection:
         self.task: asyncio.Task | None = None
         self.send_lock = asyncio.Lock()
         self.closed = False
+        self.microphone: Microphone | None = None  # live lip sync of the page's microphone (:mod:`.microphone`)
 
     async def send(self, message: dict | bytes) -> None:
         if self.closed:
@@ -221,8 +186,15 @@ class Connection:
         finally:
             self.closed = True
             await self.cancel()
+            if self.microphone is not None:
+                await self.microphone.close()
 
     async def handle(self, text: str | None, data: bytes | None) -> None:
+        if is_microphone(data):
+            if self.microphone is None:
+                self.microphone = Microphone(self.send, self.settings.units, self.settings.fps)
+            await self.microphone.take(data)
+            return
         try:
             message = protocol.parse_client(text, data)
         except ProtocolError as exc:
@@ -310,7 +282,7 @@ class Connection:
         start = 0.0
         try:
             for sentence in sentences:
-                segment = await asyncio.to_thread(make_segment, sentence, start, engine=s.engine, units=s.units,
+                segment = await asyncio.to_thread(make_segment, sentence, start, engine=s.engine,
                                                   lang=say.lang, voice=say.voice, rate=say.rate, fps=s.fps)
                 start = segment.end
                 await out.put(segment)
@@ -326,15 +298,10 @@ class Connection:
                          "duration": segment.duration, "frames": len(segment.times), "text": segment.text,
                          "rate": segment.rate, "bytes": len(segment.fba)})
         await self.send(pack(FBA_KIND, segment.start, segment.fba))
-        for t, kind, payload in chunks(segment, self.settings.chunk):
+        if record["first_frame_after"] is None:
+            record["first_frame_after"] = time.monotonic() - received_at
+        record["frames"] += len(segment.times)
+        for t, samples in chunks(segment, self.settings.chunk):
             await self.flow.wait_for(t)
-            if kind == "frames":
-                times, weights = payload
-                await self.send({"type": "frames", "segment": segment.index, "times": times.tolist(),
-                                 "weights": weights.tolist()})
-                if record["first_frame_after"] is None:
-                    record["first_frame_after"] = time.monotonic() - received_at
-                record["frames"] += len(times)
-            else:
-                await self.send(pack(AUDIO_KIND, t, payload.tobytes()))
+            await self.send(pack(AUDIO_KIND, t, samples.tobytes()))
         record["duration"] = segment.end

@@ -1,6 +1,7 @@
 """A Python client of the live protocol that plays what it receives on a clock, at any speed.
 
-It does what the browser page does, without the pictures: it keeps what has come, plays it on a
+It does what the browser page does, without the pictures: it keeps what has come (each sentence's
+FBA bitstream decoded by :func:`mpeg4fa.fba.decode`, as the page decodes it with fba.js), plays it on a
 clock that starts ``prebuffer`` seconds (media) after the first frame and runs ``speed`` times real
 time, reports its buffer every ``report_every`` seconds of real time, and counts *underruns*:
 frames or audio that arrive after their media time has already been played. ``speed > 1`` plays
@@ -18,21 +19,24 @@ from urllib.parse import urlsplit
 
 import numpy as np
 
+from mpeg4fa.fba import decode
 from mpeg4fa.serve.protocol import AUDIO_KIND, FBA_KIND, unpack
 
 
 @dataclass
 class Played:
     hello: dict
-    first_frame_after: float | None = None  # s of real time from sending say to the first frames message
+    first_frame_after: float | None = None  # s of real time from sending say to the first FBA message
     frames: int = 0
-    times: list[float] = field(default_factory=list)
-    weights: list[list[float]] = field(default_factory=list)
+    times: list[float] = field(default_factory=list)  # media times of the decoded frames
+    values: list[np.ndarray] = field(default_factory=list)  # per segment: its decoded (frames, 68) FAP values
     segments: list[dict] = field(default_factory=list)  # segment messages, each with its "fba" bytes added
+    face_bytes: int = 0  # bytes of the binary FBA messages (head included): the face data received
     audio: list[tuple[float, bytes]] = field(default_factory=list)
     underruns: int = 0  # items that came after the playhead had passed their time
     max_lateness: float = 0.0  # s of media by which the latest of them was late
-    max_ahead: float = 0.0  # s of media the client held beyond its playhead, at most
+    max_ahead: float = 0.0  # s of audio the client held beyond its playhead, at most (the window paces it)
+    max_face_ahead: float = 0.0  # s of face frames held beyond the playhead, at most (a sentence's go out whole)
     min_margin: float = float("inf")  # s of media by which an item came before its time, at least (< 0: late)
     errors: list[dict] = field(default_factory=list)
     done: dict | None = None
@@ -70,7 +74,7 @@ def play(url: str, text: str, *, speed: float = 1.0, prebuffer: float = 0.3, rep
         def playhead(now: float) -> float:
             return 0.0 if play_start is None else max(0.0, (now - play_start) * speed)
 
-        def arrived(t: float, end: float, now: float) -> None:
+        def arrived(t: float, end: float, now: float, face: bool = False) -> None:
             nonlocal received
             head = playhead(now)
             if play_start is not None and now >= play_start:
@@ -79,7 +83,10 @@ def play(url: str, text: str, *, speed: float = 1.0, prebuffer: float = 0.3, rep
                 result.underruns += 1
                 result.max_lateness = max(result.max_lateness, head - t)
             received = max(received, end)
-            result.max_ahead = max(result.max_ahead, received - head)
+            if face:
+                result.max_face_ahead = max(result.max_face_ahead, end - head)
+            else:
+                result.max_ahead = max(result.max_ahead, end - head)
 
         while result.done is None:
             now = time.monotonic()
@@ -97,10 +104,22 @@ def play(url: str, text: str, *, speed: float = 1.0, prebuffer: float = 0.3, rep
             now = time.monotonic()
             if isinstance(message, bytes):
                 kind, t, payload = unpack(message)
-                if kind == FBA_KIND and pending_segment is not None:
-                    pending_segment["fba"] = payload
-                    result.segments.append(pending_segment)
-                    pending_segment = None
+                if kind == FBA_KIND:
+                    result.face_bytes += len(message)
+                    stream = decode(payload)
+                    if result.first_frame_after is None:
+                        result.first_frame_after = now - t_say
+                        play_start = now + prebuffer / speed
+                    times = (t + np.asarray(stream.timestamps, np.float64)).tolist()
+                    if times:
+                        arrived(times[0], times[-1] + 1.0 / result.hello["fps"], now, face=True)
+                    result.times += times
+                    result.values.append(stream.fap_values.copy())
+                    result.frames += len(times)
+                    if pending_segment is not None:
+                        pending_segment["fba"] = payload
+                        result.segments.append(pending_segment)
+                        pending_segment = None
                 elif kind == AUDIO_KIND:
                     rate = result.segments[-1]["rate"]
                     arrived(t, t + len(payload) / 2 / rate, now)
@@ -110,16 +129,6 @@ def play(url: str, text: str, *, speed: float = 1.0, prebuffer: float = 0.3, rep
             kind = data.get("type")
             if kind == "segment":
                 pending_segment = data
-            elif kind == "frames":
-                if result.first_frame_after is None:
-                    result.first_frame_after = now - t_say
-                    play_start = now + prebuffer / speed
-                times = data["times"]
-                period = 1.0 / result.hello["fps"]
-                arrived(times[0], times[-1] + period, now)
-                result.times += times
-                result.weights += data["weights"]
-                result.frames += len(times)
             elif kind == "error":
                 result.errors.append(data)
                 if data.get("where") not in ("busy",):

@@ -1,14 +1,15 @@
-"""The head for the browser's FBA player: morph targets per FAP, so the page applies decoded FAPs itself.
+"""The head the browser pages pose from FAPs themselves: a GLB at rest plus the face engine's rig as data.
 
-The page (``static/fbaplayer.html``) decodes the stream with fba.js and needs a head it can pose from
-FAP values alone. This is the representation chosen (issue 31): the GLB of
-:func:`mpeg4fa.export.gltf.build_glb` in its ``vertex`` form, fed a still with two frames per FAP, so
-that each FAP has two targets, the face engine's poses at two values minus the rest pose
-(:func:`samples`), and the page weighs them to follow each FAP's motion to second order and sums
-over the FAPs. Head pitch, yaw and roll (FAPs 48-50) are not targets but a rotation of the whole
-head about feature point 7.1, as the face engine turns it. A FAP alone is exact at its two values
-and close between; FAPs acting together add, where the face engine pins each feature point to its
-own FAP (the inner and outer lip corners): the browser test measures it and the README states it.
+The pages (``static/fbaplayer.html``, the live ``static/player.html``) decode FBA with fba.js and
+must show what the Python face shows for the same frame. Per-FAP morph targets summed cannot: the
+feature-point deformer (:mod:`mpeg4fa.face.deformers.feature_points`) is linear only in part. It
+moves the feature points by a linear map of the FAPs (``rig.translate``), then keeps each inner lip
+corner inside its outer one (a rule, not a sum), spreads the points' motion to the skin by a linear
+map (``rig.weights``), and turns lids, tongue, jaw, eyes and head by rotations that act on the
+moved vertices. So the head ships with that rig as data (:func:`rig_data`), and ``static/js/facerig.js``
+runs the same steps in the page (float64, all vertices, a few milliseconds a frame): every vertex is
+where the Python face puts it, to rounding. Numbers of the standard come in already applied (FAPU x
+direction in ``translate``, directions of the jaw and eye FAPs, the angle unit), never retyped.
 """
 from __future__ import annotations
 
@@ -16,74 +17,96 @@ import json
 
 import numpy as np
 
+from mpeg4fa.face import motion
+from mpeg4fa.face.deformers import feature_points
 from mpeg4fa.face.model import FaceModel
-from mpeg4fa.spec import ANGLE_UNIT, FAPS
+from mpeg4fa.face.rig import CORNER_MARGIN_MM
+from mpeg4fa.spec import ANGLE_UNIT
 
-HEAD_ROTATION = (48, 49, 50)
-"""head_pitch, head_yaw, head_roll: a rotation of the whole head, not targets."""
-TRANSLATION_UNIT = 200.0
-"""FAPU of the pose each translational target is made from (a wide mouth movement)."""
-ROTATION_UNIT = 10000.0
-"""AU of the pose each rotational target (the eyeballs, the tongue roll) is made from: 0.1 rad."""
-PIVOT = "7.1"
-"""The feature point the head turns about (the top of the spine)."""
+RIG_VERSION = 1
+"""Bumped when the layout of :func:`rig_data` changes (``static/js/facerig.js`` checks it)."""
 
 
-def unit(fap: int) -> float:
-    """The value target ``fap`` is made at: 200 FAPU, or 10000 AU (0.1 rad) for a rotation."""
-    return ROTATION_UNIT if FAPS[fap - 1].fapu == "AU" else TRANSLATION_UNIT
+def _ints(a) -> list[int]:
+    return np.asarray(a, dtype=np.int64).ravel().tolist()
 
 
-def samples(fap: int) -> tuple[float, float]:
-    """The two values FAP ``fap``'s targets are made at: +-unit, or unit and twice it for a FAP the face
-    shows only one way (negative values clamp to 0: ``unidirectional`` in spec/faps.csv)."""
-    u = unit(fap)
-    return (u, 2 * u) if FAPS[fap - 1].unidirectional else (u, -u)
+def _floats(a) -> list[float]:
+    return np.asarray(a, dtype=np.float64).ravel().tolist()
 
 
-def fap_head(face: FaceModel) -> tuple[bytes, dict]:
-    """The GLB and its key: ``{"targets": [FAP of each morph target or null], "at": [value it was made at],
-    "angle_unit": rad per AU, "rotation": [48, 49, 50], "pivot": [x, y, z] in metres,
-    "feature_points": {"labels": [...], "rest": [[x, y, z] metres]}}``.
+def rig_data(face: FaceModel) -> dict:
+    """The feature-point deformer's rig of ``face`` as JSON-ready data (millimetres, vertex indices of
+    the face's mesh): what ``facerig.js`` needs to pose every vertex as :func:`~mpeg4fa.face.deformers.
+    feature_points.deform` does."""
+    rig = face.rig
+    fapu = rig.fapu
+    t_rows, t_faps = np.nonzero(rig.translate)
+    w = rig.weights_moving.tocsr()
+    jaw = {kind: fap for fap, kind in motion.JAW.items()}
+    head = {kind: fap for fap, kind in motion.HEAD.items()}
+    jaw_rows, jaw_w = rig.jaw_rows
+    fade_rows, fade_w = rig.head_fade
+    eyes = []
+    for eye, joint in (("eye_l", "l-eye"), ("eye_r", "r-eye")):
+        faps = {kind: f for f, (e, kind) in motion.EYE_ROTATION.items() if e == eye}
+        thrust = next(f for f, e in motion.EYE_THRUST.items() if e == eye)
+        part = rig.parts[eye]
+        eyes.append({"part": [part.start, part.stop], "joint": int(rig.joints[joint]), "yaw": faps["yaw"],
+                     "pitch": faps["pitch"], "thrust": thrust, "thrust_dir": _floats(motion.direction(thrust))})
+    roll_first = next(iter(rig.roll_rows)) if rig.roll_rows else None
+    return {
+        "version": RIG_VERSION, "n_vertices": int(len(rig.rest)), "rest": _floats(rig.rest),
+        "fp_vertex": _ints(rig.fp_vertex), "angle_unit": float(ANGLE_UNIT),
+        "translate": {"rows": _ints(t_rows), "faps": _ints(t_faps + 1), "values": _floats(rig.translate[t_rows, t_faps])},
+        "corners": [[int(a), int(b)] for a, b in rig.corners], "corner_margin": float(CORNER_MARGIN_MM),
+        "moving": _ints(rig.moving), "weights": {"indptr": _ints(w.indptr), "indices": _ints(w.indices),
+                                                  "data": _floats(w.data)},
+        "irisd": float(fapu.unit("IRISD")),
+        "lids": [{"fap": int(fap), "rows": _ints(s.rows), "ratios": _floats(s.ratios), "joint": int(s.joint),
+                  "point": int(s.point), "down": float(-motion.direction(fap)[1])} for fap, s in rig.lids.items()],
+        "roll": {"fap": motion.TONGUE_ROLL, "axis_fp": None if roll_first is None else int(roll_first),
+                 "parts": [{"rows": _ints(r), "weights": _floats(wt), "side": float(side)}
+                           for r, wt, side in rig.roll_rows.values()]},
+        "jaw": {"open": jaw["open"], "thrust": jaw["thrust"], "shift": jaw["shift"],
+                "pivot": int(rig.joints["mouth"]), "chin_fp": int(rig.chin_fp), "mns": float(fapu.unit("MNS")),
+                "mw": float(fapu.unit("MW")), "thrust_dir": _floats(motion.direction(jaw["thrust"])),
+                "shift_dir": _floats(motion.direction(jaw["shift"])), "rows": _ints(jaw_rows), "weights": _floats(jaw_w)},
+        "eyes": eyes, "es": float(fapu.unit("ES")),
+        "head": {"pitch": head["pitch"], "yaw": head["yaw"], "roll": head["roll"], "fp": int(rig.head_fp),
+                 "neck": "turn" if hasattr(feature_points, "partial_rotations") else "blend",
+                 "fade_rows": _ints(fade_rows), "fade_weights": _floats(fade_w)},
+    }
 
-    Each FAP has two targets, its poses at the two :func:`samples`, so that the page can follow a
-    curved motion (the jaw's arc, a lid over the eyeball) to second order: a value ``v`` weighs them
-    so that ``w1 * v1 + w2 * v2 = v`` and ``w1 * v1**2 + w2 * v2**2 = v**2``.
-    """
-    import pygltflib as gl
 
-    from mpeg4fa.export.gltf import MM, build_glb
+def fap_head(face: FaceModel, texture: np.ndarray | None = None) -> tuple[bytes, dict]:
+    """The GLB (the face at rest, every part, with ``texture`` on the skin if given) and its key:
+    ``{"parts": {primitive part: [mesh vertex of each GL vertex]}, "feature_points": {"labels", "rest"
+    (metres)}, "rig": rig_data(face), "deformer": the face's deformer}``.
+
+    The rig is the feature-point deformer's whatever ``face.deformer`` says: the pages pose with it."""
+    from mpeg4fa.export.gltf import MM, build_glb, part_sources
     from mpeg4fa.fba.stream import FapStream
 
-    made = [(f, v) for f in range(3, len(FAPS) + 1) if f not in HEAD_ROTATION for v in samples(f)]
-    still = FapStream.empty(len(made) + 1)
+    still = FapStream.empty(1)
     still.source_fps = 25.0
-    still.timestamps[:] = np.arange(len(made) + 1) / 25.0
-    still.fap_mask[:, 2:] = True  # every low-level FAP sent on every frame: nothing held from the frame before
-    for k, (fap, value) in enumerate(made, start=1):
-        still.fap_values[k, fap - 1] = int(value)
-    data, _ = build_glb(still, face, animation="vertex", name="head")
-    gltf = gl.GLTF2.load_from_bytes(data)
-    names = gltf.meshes[0].extras["targetNames"]  # "frame K": the still's frame K, i.e. made[K - 1]
-    frames = [int(n.split()[1]) for n in names]
+    data, _ = build_glb(still, face, animation="vertex", texture=texture, name="head")
     rest = face.mesh.vertices[np.asarray(face.mesh.fp_vertex)] * MM
-    key = {"targets": [None if k == 0 else made[k - 1][0] for k in frames],
-           "at": [None if k == 0 else made[k - 1][1] for k in frames],
-           "angle_unit": float(ANGLE_UNIT), "rotation": list(HEAD_ROTATION),
-           "pivot": (face.mesh.fp(PIVOT) * MM).tolist(),
-           "feature_points": {"labels": list(face.mesh.fp_labels), "rest": rest.tolist()}}
+    key = {"parts": {name: _ints(src) for name, src in part_sources(face).items()},
+           "feature_points": {"labels": list(face.mesh.fp_labels), "rest": rest.tolist()},
+           "rig": rig_data(face), "deformer": face.deformer}
     return data, key
 
 
-def write_fap_head(face: FaceModel, glb_path, key_path) -> dict:
+def write_fap_head(face: FaceModel, glb_path, key_path, texture: np.ndarray | None = None) -> dict:
     """Write the GLB and its key (JSON) for a static player folder; returns the key."""
     from mpeg4fa.atomic import atomic_outputs
 
-    data, key = fap_head(face)
+    data, key = fap_head(face, texture)
     with atomic_outputs(glb_path, key_path) as (glb_tmp, key_tmp):
         glb_tmp.write_bytes(data)
         key_tmp.write_text(json.dumps(key), encoding="utf-8")
     return key
 
 
-__all__ = ["fap_head", "write_fap_head", "unit", "samples", "HEAD_ROTATION", "PIVOT"]
+__all__ = ["fap_head", "write_fap_head", "rig_data", "RIG_VERSION"]

@@ -19,27 +19,27 @@ the connection stays open):
 
 Server -> client, text:
 
-``hello``      ``{"type": "hello", "protocol": 1, "fps": 25.0, "window": 2.0, "chunk": 0.2, "units": [...],
-               "targets": [...], "engine": "espeak", "stall_timeout": 30.0}`` on connecting. ``units``:
-               the ARKit face units the ``weights`` columns are, in order (a name ``unit[left]`` is
-               the unit cut to the face's left side); ``targets``: for each, the morph target of
-               the served GLB (``/head.glb``) it drives, or null.
+``hello``      ``{"type": "hello", "protocol": 2, "fps": 25.0, "window": 2.0, "chunk": 0.2,
+               "engine": "espeak", "stall_timeout": 30.0}`` on connecting.
 ``started``    ``{"type": "started", "id": ..., "sentences": n}``: the text was read.
 ``segment``    ``{"type": "segment", "id", "index", "start", "duration", "frames", "text", "rate",
                "bytes"}``: sentence ``index`` begins at media time ``start``; the next binary
-               message is its FBA bitstream (``bytes`` long, a complete fba_object: decode it
-               with :func:`mpeg4fa.fba.iter_decode`; its frame timestamps plus ``start`` are media
-               times) and its audio follows in ``audio`` chunks at ``rate`` Hz.
-``frames``     ``{"type": "frames", "segment": i, "times": [t, ...], "weights": [[w, ...], ...]}``:
-               decoded frames (media times, the stream's own; frames the stream folds into a
-               skip are absent: hold the previous one) with the ARKit unit weights (0..1) of what
-               a decoder shows, for a client that does not decode FBA (the page does this).
+               message is its face, the FBA bitstream itself (``bytes`` long, a complete
+               fba_object of ``frames`` frames: decode it with fba.js or
+               :func:`mpeg4fa.fba.iter_decode`; its frame timestamps plus ``start`` are media
+               times; frames a skip folds in are absent: hold the previous one), and its audio
+               follows in ``audio`` chunks at ``rate`` Hz. The page (``static/js/player.js``)
+               decodes each one and poses its head from the FAPs (``static/js/head.js``), as the
+               FBA player does; nothing else describes the face (protocol 1's per-frame ARKit
+               ``frames`` weights, about 40 times the bits, are gone).
 ``done``       ``{"type": "done", "id", "duration", "frames", "stopped"}``: nothing more for it.
 ``error``      ``{"type": "error", "error": one line, "where": the field, tag or step}``.
 
 Server -> client, binary (little-endian): 4 bytes of kind, a float64 media time, the payload:
-``FBA1`` + segment start + the segment's fba_object; ``AUD1`` + the chunk's start + signed
-16-bit mono PCM at the segment's ``rate``. Messages come in media-time order.
+``FBA1`` + the media time of the stream's time 0 + one complete fba_object; ``AUD1`` + the chunk's
+start + signed 16-bit mono PCM at the latest ``segment``'s ``rate``. Messages come in media-time
+order. A page takes every ``FBA1`` message alike, whatever made it (a sentence spoken, or another
+source of face frames on the same socket): decode, add the media time, play at that time.
 
 The handshake must carry ``Origin: http://127.0.0.1:PORT`` (or ``localhost`` / ``[::1]``, the
 server's own port) and a loopback ``Host``; anything else is answered 403 (:mod:`mpeg4fa.guard`).
@@ -63,7 +63,7 @@ from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 from mpeg4fa.jsonio import JsonError, loads
 from mpeg4fa.speech.markup import MAX_TEXT_CHARS
 
-PROTOCOL = 1
+PROTOCOL = 2
 FBA_KIND, AUDIO_KIND = b"FBA1", b"AUD1"
 _HEAD = struct.Struct("<4sd")
 MAX_SAY_CHARS = 20_000

@@ -36,7 +36,7 @@ def test_serve_command_speaks_to_a_client():
     try:
         line = proc.stdout.readline()  # printed once the head and the engine are ready
         assert f"serving http://127.0.0.1:{port}/" in line, (line, proc.stderr.read() if proc.poll() else "")
-        assert "52 ARKit units" in line
+        assert f"http://127.0.0.1:{port}/player" in line
         wait_for_port(port)
         played = play(f"ws://127.0.0.1:{port}/ws", "Hello from the command line.", speed=4.0)
         assert played.done and not played.errors and played.hello["window"] == 1.5

@@ -1,4 +1,4 @@
-"""`mpeg4fa serve`'s FBA player routes: the page, fba.js, and the per-FAP head with its key."""
+"""`mpeg4fa serve`'s FBA player routes: the page, fba.js, and the head with its key (the face engine's rig)."""
 from __future__ import annotations
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from mpeg4fa.serve.app import create_app
-from mpeg4fa.serve.fap_head import HEAD_ROTATION, samples
+from mpeg4fa.serve.fap_head import RIG_VERSION
 from serve.live_server import face_for_tests
 
 
@@ -20,19 +20,26 @@ def test_player_page_and_decoder_are_served(client):
     assert r.status_code in (302, 307) and r.headers["location"] == "/static/fbaplayer.html"
     page = client.get("/static/fbaplayer.html")
     assert page.status_code == 200 and "js/fbaplayer.js" in page.text
-    for path in ("js/fbaplayer.js", "js/fba/fba.js", "js/fba/shown.js", "js/fba/spec.js"):
+    for path in ("js/fbaplayer.js", "js/head.js", "js/facerig.js", "js/fba/fba.js", "js/fba/shown.js", "js/fba/spec.js"):
         assert client.get(f"/static/{path}").status_code == 200, path
 
 
-def test_fap_head_has_two_targets_per_fap(client):
+def test_fap_head_carries_the_rig_of_the_face(client):
+    face = face_for_tests()
     key = client.get("/static/fap-head.json").json()
     glb = client.get("/static/fap-head.glb")
     assert glb.status_code == 200 and glb.content[:4] == b"glTF"
-    targets, at = key["targets"], key["at"]
-    assert targets.count(None) == 1  # the rest pose
-    made = {(f, v) for f, v in zip(targets, at) if f is not None}
-    want = {(f, v) for f in range(3, 69) if f not in HEAD_ROTATION for v in samples(f)}
-    assert made == want and len(made) == len(targets) - 1
-    assert key["rotation"] == [48, 49, 50] and len(key["pivot"]) == 3
+    rig = key["rig"]
+    assert rig["version"] == RIG_VERSION and rig["n_vertices"] == len(face.mesh.vertices)
+    assert np.array_equal(np.reshape(rig["rest"], (-1, 3)), face.mesh.vertices)
+    # every GL vertex of every part is a vertex of the face's mesh, and every drawn part is there
+    sources = np.concatenate([np.asarray(v) for v in key["parts"].values()])
+    assert sources.min() >= 0 and sources.max() < rig["n_vertices"]
+    assert {"skin", "eye_l", "eye_r"} <= set(key["parts"])
+    # the FAP -> feature point map is the rig's, entry for entry (FAPU x direction applied in Python)
+    t = rig["translate"]
+    dense = np.zeros_like(face.rig.translate)
+    dense[t["rows"], np.asarray(t["faps"]) - 1] = t["values"]
+    assert np.array_equal(dense, face.rig.translate)
     rest = np.array(key["feature_points"]["rest"])
     assert rest.shape == (84, 3) and np.isfinite(rest).all()

@@ -60,7 +60,7 @@ def test_every_route_refuses_a_foreign_origin_or_host(server):
     app, base = server
     port = base.rsplit(":", 1)[1]
     routes = requests_of(app)
-    assert ("WS", "/ws") in routes and ("GET", "/head.glb") in routes
+    assert ("WS", "/ws") in routes and ("GET", "/static/fap-head.glb") in routes
     with httpx.Client(base_url=base, timeout=30) as http:
         for kind, path in routes:
             for foreign in FOREIGN:

@@ -1,7 +1,7 @@
 """The live server over loopback: an in-process uvicorn on a free port, clients from ``websockets``.
 
-Speech is real (espeak-ng); the head is the generic one when built (ARKit weights), else the
-procedural head (no units: weights are empty rows, everything else the same). The long test plays
+Speech is real (espeak-ng); the head is the generic one when built, else the procedural head (the
+face goes out as the FBA bitstream either way, so nothing differs). The long test plays
 60 s of speech at real time, so it takes about a minute (mostly waiting on the client's clock).
 """
 from __future__ import annotations
@@ -57,22 +57,17 @@ def test_text_to_frames_latency_and_what_the_frames_are(app, base):
     assert not played.errors and played.done and not played.done["stopped"]
     assert len(played.segments) == 3 and played.underruns == 0
     assert played.first_frame_after is not None and played.done["first_frame_after"] is not None
-    units = app.state.live.units
-    times, weights = [], []
-    for seg in played.segments:  # every segment is a complete stream: decode it as a client would
+    times = []
+    for seg in played.segments:  # every segment is a complete stream: what the client decoded is its frames
         stream = decode(seg["fba"])
-        assert len(stream) == seg["frames"]
+        assert len(stream) == seg["frames"] and len(seg["fba"]) == seg["bytes"]
         times += (seg["start"] + stream.timestamps).tolist()
-        if units is not None:
-            weights += np.round(units.weights(resolve(stream)), 3).tolist()
-    assert played.times == pytest.approx(times, abs=1e-9)
-    if units is not None:  # the page's weights are those of the decoded stream
-        assert np.allclose(played.weights, weights, atol=1e-9)
-        assert len(played.weights[0]) == len(played.hello["units"]) == 52
-        jaw = played.hello["units"].index("jawOpen")
-        assert max(w[jaw] for w in played.weights) > 0.2  # the mouth opens
-    else:
-        assert all(w == [] for w in played.weights)
+    assert played.times == pytest.approx(times, abs=1e-9) and played.frames == played.done["frames"]
+    opened = max(int(resolve(decode(seg["fba"]))[:, 2].max()) for seg in played.segments)
+    assert opened > 100  # the jaw opens (FAP 3, in MNS units)
+    # the face as the bitstream itself: at most 2 kbit/s of speech (issue 31), message heads included
+    face_kbps = played.face_bytes * 8 / played.done["duration"] / 1000
+    assert face_kbps <= 2.0, f"{face_kbps:.2f} kbit/s of face data"
     segs = played.segments
     assert [s["start"] for s in segs[1:]] == pytest.approx([s["start"] + s["duration"] for s in segs[:-1]])
     assert played.audio_seconds == pytest.approx(sum(s["duration"] for s in segs), abs=1e-6)
@@ -88,7 +83,8 @@ def test_sixty_seconds_of_speech_delivered_in_real_time(app, base):
     media = played.done["duration"]
     print(f"\n{media:.1f} s of speech in {played.wall:.1f} s at 1x: {played.frames} frames, "
           f"{played.underruns} underruns (max {played.max_lateness * 1e3:.0f} ms late), "
-          f"at most {played.max_ahead:.2f} s held ahead, {played.reports} reports")
+          f"at most {played.max_ahead:.2f} s of audio ({played.max_face_ahead:.2f} s of face) held ahead, "
+          f"{played.reports} reports, {played.face_bytes * 8 / media:.0f} bit/s of face data")
     assert not played.errors and not played.done["stopped"] and media > 50
     assert played.underruns == 0, f"{played.underruns} items came after their time (worst {played.max_lateness:.3f} s)"
     assert played.max_ahead <= WINDOW + CHUNK + 1e-6  # flow control: never more than the window ahead
@@ -104,7 +100,7 @@ def test_a_client_that_disconnects_mid_speech(app, base):
         ws.send(json.dumps({"type": "say", "text": " ".join(SENTENCES)}))
         while True:
             message = ws.recv(timeout=10)
-            if isinstance(message, str) and json.loads(message)["type"] == "frames":
+            if isinstance(message, bytes) and message[:4] == b"FBA1":
                 break
     wait_until(lambda: len(app.state.live.utterances) > before and app.state.live.connections == 0)
     record = app.state.live.utterances[-1]
@@ -118,14 +114,16 @@ def test_a_client_that_stalls_is_closed_after_the_window(app, base):
     before = len(app.state.live.utterances)
     received = 0.0
     with connect(ws_url(base), origin=base) as ws:
-        hello = json.loads(ws.recv(timeout=10))
+        json.loads(ws.recv(timeout=10))
         ws.send(json.dumps({"type": "say", "text": " ".join(SENTENCES)}))
         started = time.monotonic()
-        error, rate = None, None
+        error, rate, face_starts = None, None, []
         try:
             while error is None:  # reads what comes, never reports its buffer
                 message = ws.recv(timeout=STALL + 10)
                 if isinstance(message, bytes):
+                    if message[:4] == b"FBA1":  # a sentence's face goes out whole, once its start is in the window
+                        face_starts.append(np.frombuffer(message[4:12], "<f8")[0])
                     if message[:4] == b"AUD1":
                         t = np.frombuffer(message[4:12], "<f8")[0]
                         received = max(received, t + (len(message) - 12) / 2 / rate)
@@ -133,8 +131,6 @@ def test_a_client_that_stalls_is_closed_after_the_window(app, base):
                 data = json.loads(message)
                 if data["type"] == "segment":
                     rate = data["rate"]
-                elif data["type"] == "frames":
-                    received = max(received, data["times"][-1] + 1 / hello["fps"])
                 elif data["type"] == "error":
                     error = data
             with pytest.raises(Exception):  # then the server closes the connection
@@ -143,7 +139,8 @@ def test_a_client_that_stalls_is_closed_after_the_window(app, base):
             waited = time.monotonic() - started
     assert error["where"] == "flow" and "stalled" in error["error"]
     assert ws.close_code == 1008
-    assert received <= WINDOW + CHUNK + 1e-6  # one window went out, nothing beyond it
+    assert received <= WINDOW + CHUNK + 1e-6  # one window of audio went out, nothing beyond it
+    assert face_starts and max(face_starts) < WINDOW  # and the sentences that start in it
     assert waited >= STALL
     wait_until(lambda: len(app.state.live.utterances) > before and app.state.live.connections == 0)
     assert app.state.live.utterances[-1]["stalled"]
@@ -204,12 +201,13 @@ def test_http_routes(base):
     with httpx.Client(base_url=base, timeout=60) as http:
         page = http.get("/")
         assert page.status_code == 200 and "/static/js/player.js" in page.text
-        assert "GLTFLoader" in http.get("/static/js/player.js").text
+        assert "./fba/fba.js" in http.get("/static/js/player.js").text  # the page decodes the stream itself
         assert http.get("/vendor/three/three.module.js").status_code == 200
         assert http.get("/vendor/three/addons/loaders/GLTFLoader.js").status_code == 200
-        glb = http.get("/head.glb")
+        glb = http.get("/static/fap-head.glb")
         assert glb.status_code == 200 and glb.content[:4] == b"glTF"
         assert glb.headers["content-type"] == "model/gltf-binary"
+        assert http.get("/head.glb").status_code == 404  # protocol 1's ARKit head: no page uses it
         missing = http.get("/nowhere")
         assert missing.status_code == 404 and missing.json() == {"error": "not found", "where": "/nowhere"}
         info = http.get("/api/info").json()

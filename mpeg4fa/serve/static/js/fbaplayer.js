@@ -1,78 +1,24 @@
 // The FBA player page: decodes a .fba in the browser (fba.js), plays it on the head with its .wav.
 //
-// The head is fap-head.glb (mpeg4fa/serve/fap_head.py): two morph targets per FAP, the face
-// engine's poses at two known values, weighed to follow the FAP's motion to second order; head
-// pitch, yaw and roll (FAPs 48-50) turn the whole head about feature point 7.1. The clock is the audio element's when the
-// stream has speech, else the wall clock; each frame is shown from its presentation time on.
-import * as THREE from "three";
-import { OrbitControls } from "three/addons/controls/OrbitControls.js";
-import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+// The head is fap-head.glb posed by the face engine's own rig (head.js, facerig.js: every vertex where
+// the Python face puts it). The clock is the audio element's when the stream has speech, else the wall
+// clock; each frame is shown from its presentation time on.
 import { FbaError, StreamDecoder, summary } from "./fba/fba.js";
 import { Shown } from "./fba/shown.js";
+import { createView, loadHead } from "./head.js";
 
 const $ = (id) => document.getElementById(id);
 const view = $("view"), info = $("info"), message = $("message"), audio = $("audio");
 const playButton = $("play"), scrub = $("scrub"), timeText = $("time");
 const CHUNK = 64 * 1024;  // bytes handed to the decoder at a time (frames come out as they complete)
 
-// ---- the scene ---------------------------------------------------------------------------------
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
-renderer.setPixelRatio(window.devicePixelRatio);
-view.prepend(renderer.domElement);
-const scene = new THREE.Scene();
-scene.background = new THREE.Color(0x2b2f36);
-const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 10);
-scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2.0));
-const sun = new THREE.DirectionalLight(0xffffff, 1.5);
-sun.position.set(0.5, 1.5, 2);
-scene.add(sun);
-const controls = new OrbitControls(camera, renderer.domElement);
+const scene = createView(view);
+let head = null;
 
-const head = { key: null, pivot: new THREE.Group(), meshes: [], fps: [] };
-scene.add(head.pivot);
-
-function resize() {
-  const w = view.clientWidth, h = view.clientHeight;
-  renderer.setSize(w, h, false);
-  camera.aspect = w / Math.max(h, 1);
-  camera.updateProjectionMatrix();
-}
-window.addEventListener("resize", resize);
-
-async function loadHead() {
+function headSource() {
   // a page made to open from a folder (tools/fbaplayer_static.py) carries its head; else it is fetched
   const embedded = window.FBA_PLAYER_HEAD;
-  const key = embedded ? embedded.key : await (await fetch("fap-head.json")).json();
-  const gltf = await new GLTFLoader().loadAsync(embedded ? embedded.glb : "fap-head.glb");
-  const pivot = new THREE.Vector3(...key.pivot);
-  head.pivot.position.copy(pivot);
-  gltf.scene.position.copy(pivot).negate();
-  head.pivot.add(gltf.scene);
-  gltf.scene.traverse((o) => { if (o.isMesh && o.morphTargetInfluences) head.meshes.push(o); });
-  head.key = key;
-  head.weights = new Array(key.targets.length).fill(0);
-  head.partner = key.targets.map((fap, k) => key.targets.findIndex((f, j) => j !== k && f === fap && fap !== null));
-  // each feature point is a vertex of the mesh: find it by its rest position, once
-  const v = new THREE.Vector3();
-  head.fps = key.feature_points.rest.map((p) => {
-    let best = null, bestD = Infinity;
-    for (const mesh of head.meshes) {
-      const pos = mesh.geometry.attributes.position;
-      for (let i = 0; i < pos.count; i++) {
-        v.fromBufferAttribute(pos, i);
-        const d = (v.x - p[0]) ** 2 + (v.y - p[1]) ** 2 + (v.z - p[2]) ** 2;
-        if (d < bestD) { bestD = d; best = [mesh, i]; }
-      }
-    }
-    return bestD < 1e-8 ? best : null;  // within 0.1 mm: a point on a part the GLB leaves out has none
-  });
-  const fp = (label) => key.feature_points.rest[key.feature_points.labels.indexOf(label)];
-  const chin = fp("2.1"), top = fp("11.1") || fp("4.1");
-  const centre = new THREE.Vector3(0, (chin[1] + top[1]) / 2, chin[2]);
-  camera.position.set(centre.x, centre.y, centre.z + 0.75);
-  controls.target.copy(centre);
-  controls.update();
-  resize();
+  return embedded ? { key: embedded.key, glb: embedded.glb } : { key: "fap-head.json", glb: "fap-head.glb" };
 }
 
 // ---- the stream --------------------------------------------------------------------------------
@@ -237,27 +183,10 @@ function frameAt(t) {
   return lo;
 }
 
-/** Pose the head with one row of 68 shown values. */
-function pose(values) {
-  const key = head.key;
-  if (!key) return;
-  // a FAP's two targets, made at v1 and v2, weighed so that w1 v1 + w2 v2 = v and w1 v1^2 + w2 v2^2 = v^2
-  const weights = head.weights;
-  for (let k = 0; k < key.targets.length; k++) {
-    const fap = key.targets[k];
-    if (fap === null) { weights[k] = 0; continue; }
-    const v = values[fap - 1], v1 = key.at[k], v2 = key.at[head.partner[k]];
-    weights[k] = (v * v2 * v2 - v * v * v2) / (v1 * v2 * v2 - v2 * v1 * v1);
-  }
-  for (const mesh of head.meshes) mesh.morphTargetInfluences.splice(0, weights.length, ...weights);
-  const [p, y, r] = key.rotation.map((fap) => values[fap - 1] * key.angle_unit);
-  head.pivot.rotation.set(p, y, r, "YXZ");  // roll, then pitch, then yaw (mpeg4fa.face.motion.head_rotation)
-}
-
 function showFrame(k) {
   if (k < 0 || k === state.shownK) return;
   state.shownK = k;
-  pose(state.shown[k]);
+  if (head) head.pose(state.shown[k]);
 }
 
 function showAt(t) {
@@ -274,21 +203,7 @@ function loop() {
     showAt(Math.min(t, duration()));
     state.tick = { t, k: state.shownK, at: performance.now() };  // what this picture shows, and when
   }
-  controls.update();
-  renderer.render(scene, camera);
-}
-
-/** Feature points of the posed head in millimetres (world), by label: what the tests compare. */
-function featurePoints() {
-  const v = new THREE.Vector3();
-  head.pivot.updateMatrixWorld(true);
-  return { labels: head.key.feature_points.labels, positions: head.fps.map((at) => {
-    if (at === null) return null;
-    const [mesh, i] = at;
-    mesh.getVertexPosition(i, v);
-    mesh.localToWorld(v);
-    return [v.x * 1000, v.y * 1000, v.z * 1000];
-  }) };
+  scene.render();
 }
 
 // ---- wiring ------------------------------------------------------------------------------------
@@ -313,17 +228,19 @@ window.addEventListener("drop", (e) => {
 });
 
 window.fbaPlayer = {
-  ready: false, state, openFiles, openUrl, seek, play, pause, frameAt, featurePoints,
+  ready: false, state, openFiles, openUrl, seek, play, pause, frameAt,
+  /** Feature points of the drawn head (mm), read back from its vertices. */
+  featurePoints: () => head.featurePoints(),
   /** Show frame ``k`` now (paused), for tests and frame stepping. */
-  showFrame(k) { pause(); seek(state.frames[k].timestamp - state.frames[0].timestamp); showFrame(k); renderer.render(scene, camera); },
+  showFrame(k) { pause(); seek(state.frames[k].timestamp - state.frames[0].timestamp); showFrame(k); scene.render(); },
   now,
 };
 
-loadHead().then(() => {
+loadHead(scene, headSource()).then((h) => {
+  head = h;
   const url = new URLSearchParams(location.search).get("url");
   window.fbaPlayer.ready = true;
   document.body.dataset.ready = "1";
   if (url) { $("url").value = url; openUrl(url); }
 }, (e) => setMessage(`the head did not load: ${e.message}`));
-resize();
 loop();

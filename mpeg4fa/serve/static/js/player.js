@@ -1,12 +1,13 @@
-// The live player: the head (GLB with ARKit-named morph targets) in three.js, moved by the per-frame ARKit
-// weights the server sends (mpeg4fa/serve/protocol.py), the speech through WebAudio. Frames and audio chunks
-// carry media times; both are placed on the AudioContext's clock (media time 0 plays at `base`), so mouth
-// and voice stay together whatever the network does. Buffer reports go back every 100 ms: the server sends
-// no more than its window ahead of our playhead. The page does not decode the FBA bitstream itself (the
-// server's weights are the decoded stream's); it keeps each segment's bytes, counted in the status.
-import * as THREE from "three";
-import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
-import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+// The live player: the server speaks the text and sends each sentence's FBA bitstream and its audio
+// (mpeg4fa/serve/protocol.py); the page decodes the stream itself (fba.js, shown.js) and poses the head
+// with the face engine's rig (head.js), the speech through WebAudio. Frames and audio carry media times;
+// both are placed on the AudioContext's clock (media time 0 plays at `base`), so mouth and voice stay
+// together whatever the network does. Buffer reports go back every 100 ms: the server sends no more than
+// its window ahead of our playhead. Any FBA message is taken alike (a sentence, or another source of face
+// frames on the socket): decoded, shifted by its media time, played at that time.
+import { decode as decodeFba, FbaError } from "./fba/fba.js";
+import { Shown } from "./fba/shown.js";
+import { createView, loadHead } from "./head.js";
 
 const PREBUFFER = 0.3;   // s of media held before playing starts
 const REPORT_MS = 100;
@@ -15,60 +16,27 @@ const AUDIO = "AUD1", FBA = "FBA1";
 const view = document.getElementById("view");
 const statusBox = document.getElementById("status");
 const caption = document.getElementById("caption");
+const message = document.getElementById("message");
 const speakButton = document.getElementById("speak");
 
-const state = {            // read by the browser test (window.player)
-  ready: false, hello: null, units: [], frames: [], audioChunks: 0, fbaBytes: 0, segments: [],
+const state = {            // read by the browser tests (window.player)
+  ready: false, hello: null, frames: [], audioChunks: 0, fbaBytes: 0, fbaMessages: 0, segments: [],
   shown: -1, shownFrames: 0, latencyMs: null, underruns: 0, done: null, errors: [], reports: 0,
-  weightsNow: [], mediaTime: 0, clock: "none", received: 0, maxAhead: 0,
+  valuesNow: new Float64Array(68), mediaTime: 0, clock: "none", received: 0, maxAhead: 0, maxFaceAhead: 0, tick: null,
 };
 window.player = state;
 
-// ---- the scene ----
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
-renderer.setPixelRatio(window.devicePixelRatio || 1);
-renderer.setClearColor(0x2b2f36);
-renderer.outputColorSpace = THREE.SRGBColorSpace;
-view.prepend(renderer.domElement);
-const scene = new THREE.Scene();
-const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 100);
-scene.add(new THREE.HemisphereLight(0xffffff, 0x505050, 1.8));
-const key = new THREE.DirectionalLight(0xffffff, 1.8);
-key.position.set(0.4, 0.6, 1.0);
-camera.add(key);
-scene.add(camera);
-const controls = new OrbitControls(camera, renderer.domElement);
-let targets = [];          // per morphing mesh: {mesh, index: unit -> morph slot or -1}
-
-function resize() {
-  const w = view.clientWidth, h = view.clientHeight;
-  renderer.setSize(w, h, false);
-  camera.aspect = w / Math.max(h, 1);
-  camera.updateProjectionMatrix();
-}
-window.addEventListener("resize", resize);
-
-new GLTFLoader().load("/head.glb", (gltf) => {
-  scene.add(gltf.scene);
-  const box = new THREE.Box3().setFromObject(gltf.scene);
-  const size = box.getSize(new THREE.Vector3()), centre = box.getCenter(new THREE.Vector3());
-  const face = new THREE.Vector3(centre.x, centre.y + 0.1 * size.y, centre.z);  // the face, not the neck
-  camera.position.set(face.x, face.y, face.z + 2.6 * Math.max(size.x, size.y));
-  controls.target.copy(face);
-  controls.update();
-  gltf.scene.traverse((o) => { if (o.isMesh && o.morphTargetDictionary) targets.push({ mesh: o, index: [] }); });
-  mapUnits();
+const scene = createView(view);
+let head = null;
+loadHead(scene, { key: "/static/fap-head.json", glb: "/static/fap-head.glb" }).then((h) => {
+  head = h;
   state.ready = true;
   speakButton.disabled = false;
   setStatus();
-}, undefined, (err) => { state.errors.push({ error: String(err), where: "head.glb" }); setStatus(); });
-
-function mapUnits() {
-  for (const t of targets) t.index = state.units.map((name) => t.mesh.morphTargetDictionary[name] ?? -1);
-}
+}, (err) => { state.errors.push({ error: String(err), where: "head" }); setStatus(); });
 
 // ---- the clock: the AudioContext's when it runs, else the page's ----
-let audio = null, base = null, t0wall = null;
+let audio = null, base = null;
 function now() {
   if (audio && audio.state === "running") return audio.currentTime - (audio.outputLatency || 0);
   return performance.now() / 1000;
@@ -79,7 +47,7 @@ function startClock() {
 }
 
 // ---- the connection ----
-let ws = null, sayAt = 0, nextFbaFor = null, rate = 22050;
+let ws = null, sayAt = 0, rate = 22050;
 function connect() {
   ws = new WebSocket(`ws://${location.host}/ws`);
   ws.binaryType = "arraybuffer";
@@ -89,26 +57,56 @@ function connect() {
 }
 
 function onText(m) {
-  if (m.type === "hello") { state.hello = m; state.units = m.units; mapUnits(); }
-  else if (m.type === "segment") { state.segments.push(m); rate = m.rate; nextFbaFor = m; caption.textContent = m.text; }
-  else if (m.type === "frames") {
-    if (state.latencyMs === null) state.latencyMs = performance.now() - sayAt;
-    startClock();
-    if (m.times[0] < mediaTime()) state.underruns++;
-    for (let i = 0; i < m.times.length; i++) state.frames.push({ t: m.times[i], w: m.weights[i] });
-    received(m.times[m.times.length - 1] + 1 / state.hello.fps);
-  } else if (m.type === "done") { state.done = m; }
-  else if (m.type === "error") { state.errors.push(m); }
+  if (m.type === "hello") state.hello = m;
+  else if (m.type === "segment") { state.segments.push(m); rate = m.rate; caption.textContent = m.text; }
+  else if (m.type === "done") state.done = m;
+  else if (m.type === "error") state.errors.push(m);
   setStatus();
 }
 
+function setMessage(text) {
+  message.textContent = text;
+  message.classList.toggle("shown", !!text);
+}
+
+/** One FBA message: decode it, keep its frames (media times) with the values they show. A fault keeps the
+ * frames before it and says where, once, in the page's message line. */
+function onFace(t, bytes) {
+  state.fbaBytes += bytes.length;
+  state.fbaMessages++;
+  const name = state.segments.length ? `sentence ${state.segments[state.segments.length - 1].index + 1}`
+    : `face data at ${t.toFixed(2)} s`;
+  let frames;
+  try {
+    frames = decodeFba(bytes).frames;
+  } catch (e) {
+    if (!(e instanceof FbaError)) throw e;
+    frames = e.partial ? e.partial.frames : [];
+    const kept = frames.length;
+    const text = `${name}: ${e.toString()}` + (kept ? ` — playing the ${kept} frame${kept === 1 ? "" : "s"} before it` : "");
+    state.errors.push({ error: text, where: "fba" });
+    setMessage(text);
+  }
+  if (!frames.length) return;
+  if (state.latencyMs === null) state.latencyMs = performance.now() - sayAt;
+  startClock();
+  const shown = new Shown();  // each message is a whole fba_object: nothing held from the one before
+  const at = state.frames.length;
+  for (const f of frames) state.frames.push({ t: t + f.timestamp, values: shown.push(f) });
+  if (at && state.frames[at].t < state.frames[at - 1].t) state.frames.sort((a, b) => a.t - b.t);  // out of order
+  if (state.frames[at].t < mediaTime()) state.underruns++;
+  const fps = state.hello ? state.hello.fps : 25;
+  received(state.frames[state.frames.length - 1].t + 1 / fps, true);
+}
+
 function onBinary(buffer) {
-  const head = new DataView(buffer, 0, 12);
-  const kind = String.fromCharCode(head.getUint8(0), head.getUint8(1), head.getUint8(2), head.getUint8(3));
-  const t = head.getFloat64(4, true);
-  if (kind === FBA) { state.fbaBytes += buffer.byteLength - 12; nextFbaFor = null; return; }
+  const head12 = new DataView(buffer, 0, Math.min(12, buffer.byteLength));
+  if (buffer.byteLength < 12) { state.errors.push({ error: `binary message of ${buffer.byteLength} bytes`, where: "message" }); return; }
+  const kind = String.fromCharCode(head12.getUint8(0), head12.getUint8(1), head12.getUint8(2), head12.getUint8(3));
+  const t = head12.getFloat64(4, true);
+  if (kind === FBA) { onFace(t, new Uint8Array(buffer, 12)); setStatus(); return; }
   if (kind !== AUDIO) return;
-  const pcm = new Int16Array(buffer, 12, (buffer.byteLength - 12) >> 1);
+  const pcm = new Int16Array(buffer.slice(12));
   startClock();
   received(t + pcm.length / rate);
   state.audioChunks++;
@@ -123,10 +121,13 @@ function onBinary(buffer) {
   if (when < audio.currentTime) { state.underruns++; source.start(audio.currentTime, audio.currentTime - when); }
   else source.start(when);
 }
+state.onBinary = onBinary;  // the message handler itself, for tests that hand it a damaged stream
 
-function received(end) {
+function received(end, face = false) {
   state.received = Math.max(state.received, end);
-  state.maxAhead = Math.max(state.maxAhead, state.received - Math.max(0, mediaTime()));
+  const ahead = end - Math.max(0, mediaTime());  // a sentence's face comes whole; its audio as the window allows
+  if (face) state.maxFaceAhead = Math.max(state.maxFaceAhead, ahead);
+  else state.maxAhead = Math.max(state.maxAhead, ahead);
 }
 
 setInterval(() => {
@@ -140,8 +141,10 @@ async function speak() {
   if (!audio) audio = new AudioContext();
   if (audio.state !== "running") { try { await audio.resume(); } catch (e) { /* no device: page clock */ } }
   if (!ws) await connect();
-  Object.assign(state, { frames: [], segments: [], audioChunks: 0, fbaBytes: 0, shown: -1, shownFrames: 0,
-                         latencyMs: null, underruns: 0, done: null, received: 0, maxAhead: 0 });
+  Object.assign(state, { frames: [], segments: [], audioChunks: 0, fbaBytes: 0, fbaMessages: 0, shown: -1,
+                         shownFrames: 0, latencyMs: null, underruns: 0, done: null, received: 0, maxAhead: 0,
+                         maxFaceAhead: 0, tick: null, held: false });
+  setMessage("");
   base = null;
   sayAt = performance.now();
   ws.send(JSON.stringify({ type: "say", text: document.getElementById("text").value }));
@@ -151,34 +154,37 @@ document.getElementById("stop").addEventListener("click", () => ws && ws.send(JS
 connect();
 
 // ---- drawing: the latest frame whose time has come ----
-function apply(weights) {
-  state.weightsNow = weights;
-  for (const t of targets) {
-    const influences = t.mesh.morphTargetInfluences;
-    for (let u = 0; u < t.index.length; u++) if (t.index[u] >= 0) influences[t.index[u]] = weights[u];
-  }
+const REST = new Float64Array(68);
+function apply(values) {
+  state.valuesNow = values;
+  if (head) head.pose(values);
 }
 
 function frame() {
   requestAnimationFrame(frame);
   const m = mediaTime();
   state.mediaTime = m;
+  if (state.held) { scene.render(); return; }  // a frame held for a look (window.player.pose)
   let k = state.shown;
   while (k + 1 < state.frames.length && state.frames[k + 1].t <= m) k++;
-  if (k !== state.shown) { state.shown = k; state.shownFrames++; apply(state.frames[k].w); }
-  if (state.done && k === state.frames.length - 1 && m > state.done.duration && state.weightsNow.some((w) => w)) {
-    apply(state.weightsNow.map(() => 0));  // back to rest after the last frame's time
+  if (k !== state.shown) { state.shown = k; state.shownFrames++; apply(state.frames[k].values); }
+  if (state.done && k === state.frames.length - 1 && m > state.done.duration && state.valuesNow !== REST) {
+    apply(REST);  // back to rest after the last frame's time
   }
-  if (renderer.domElement.width !== Math.round(view.clientWidth * renderer.getPixelRatio())) resize();
-  renderer.render(scene, camera);
+  scene.render();
+  state.tick = { t: m, k };  // what this picture shows, and at what media time
 }
-resize();
 frame();
+
+/** Hold frame ``k`` on the head (playing stops moving it until the next Speak): for tests and a look. */
+state.pose = (k) => { state.held = true; apply(state.frames[k].values); scene.render(); };
+/** Feature points of the drawn head (mm), read back from its vertices. */
+state.featurePoints = () => head.featurePoints();
 
 function setStatus() {
   const s = state;
   statusBox.textContent = [
-    s.ready ? `head: ${targets.length} morphing meshes, ${s.units.length} units` : "loading the head…",
+    s.ready ? "head ready" : "loading the head…",
     ws ? "connected" : "not connected",
     `frames ${s.frames.length} (shown ${s.shownFrames}), audio chunks ${s.audioChunks}, FBA ${s.fbaBytes} bytes in ${s.segments.length} segments`,
     `first frame ${s.latencyMs === null ? "-" : s.latencyMs.toFixed(0) + " ms"}, underruns ${s.underruns}, clock ${s.clock}`,
