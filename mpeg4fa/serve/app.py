@@ -192,7 +192,7 @@ class Connection:
     async def handle(self, text: str | None, data: bytes | None) -> None:
         if is_microphone(data):
             if self.microphone is None:
-                self.microphone = Microphone(self.send, self.settings.units, self.settings.fps)
+                self.microphone = Microphone(self.send, self.settings.fps)
             await self.microphone.take(data)
             return
         try:

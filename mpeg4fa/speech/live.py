@@ -14,7 +14,7 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
   decoded as one utterance (the phone loop gives no timed phones before an utterance ends). Four
   decoders, staggered by a hop, each hear every sample as it comes (``process_raw`` per chunk), so
   the work is spread evenly over the chunks (no chunk pays for a whole window). The phones a window
-  finds up to :data:`SETTLE` s (40 ms) before its end are *committed*: from the previous commit to
+  finds up to :data:`SETTLE` s (20 ms) before its end are *committed*: from the previous commit to
   there, the face's phones are that window's, and never change again; the 240 ms before its newest
   hop give them their left context.
 - A committed phone becomes a viseme span (silence and fillers: a gap, the mouth at rest). The move into
@@ -23,7 +23,7 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
 - A move into a shape starts up to :data:`~.timeline.LEAD` (100 ms) before the phone, so a frame is
   final once the commits reach ``LEAD`` past it. Frame ``k`` (time ``k / fps``) is emitted when the
   audio fed reaches ``k / fps + latency``: exactly, whatever the chunk size, with
-  ``latency = HOP + SETTLE + LEAD`` (220 ms) by default. The first movement of the mouth therefore
+  ``latency = HOP + SETTLE + LEAD`` (200 ms) by default. The first movement of the mouth therefore
   shows about ``latency - LEAD`` after the speech starts (the anticipation hides the rest).
 - Voice: a 10 ms frame is voiced when pocketsphinx's voice activity detector (:class:`pocketsphinx.Vad`)
   hears speech in it and its spectrum is not flat (:func:`flatness`, white noise). A phone over
@@ -54,7 +54,7 @@ HOP = 0.08
 """Seconds of audio between two decodings."""
 WINDOW = 0.32
 """Seconds of audio each decoding reads (its newest :data:`HOP` and the context before)."""
-SETTLE = 0.04
+SETTLE = 0.02
 """The newest part of a window (s) whose phones are not committed: a phone cut by the window's end."""
 LATENCY = HOP + SETTLE + LEAD
 """The default latency (s): frame ``k`` comes out when the audio fed reaches ``k / fps`` plus this."""
@@ -323,3 +323,36 @@ def _samples(chunk: bytes | np.ndarray) -> np.ndarray:
             raise ValueError("a chunk holds NaN or infinite samples")
         return np.clip(np.rint(x * 32768.0), -32768, 32767).astype(np.int16)
     raise ValueError(f"a chunk is int16 or float samples, not {x.dtype}")
+
+
+LIVE_CODING = {"fap_quant": 3}
+"""Coding options of the live face: the text path's quantiser (:data:`~.encoder.TEXT_CODING`) without its
+search for the cheapest coding, which costs some 50 ms a message (here 3-4 ms for a frame or two)."""
+
+
+class LiveEncoder:
+    """Frames in as they come out of :class:`LiveLipSync`, FBA bits out: each batch a complete fba_object
+    (an intra frame, low-level FAPs; a FAP once sent is sent in every later batch, so each decodes on its
+    own), its timestamps from 0 (the caller places it at its first frame's time).
+
+    Why whole objects: a player joins the stream at any batch, and a lost or late one costs nothing later.
+    A batch of one or two frames at 25 fps takes some 75 bytes (a stream of the whole session would take
+    a third of that; the latency is what is bought).
+    """
+
+    def __init__(self, fps: float = 25.0) -> None:
+        from mpeg4fa.speech.encoder import StreamBuilder
+
+        self.fps = float(fps)
+        self.builder = StreamBuilder("low", self.fps, fold=False, compact=False)
+
+    def encode(self, frames: np.ndarray) -> bytes:
+        """One fba_object of ``frames`` ((n, 68), n >= 1)."""
+        from mpeg4fa.fba import EncodeOptions, encode
+        from mpeg4fa.speech.frames import FrameBlock
+
+        values = np.asarray(frames, np.float64)
+        if values.ndim != 2 or not len(values):
+            raise ValueError(f"frames are (n >= 1, 68) rows, not shape {values.shape}")
+        stream = self.builder.build(FrameBlock(0, np.arange(len(values)) / self.fps, values, None, None))
+        return encode(stream, EncodeOptions(**LIVE_CODING))

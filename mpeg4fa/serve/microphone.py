@@ -1,0 +1,159 @@
+"""The microphone of ``mpeg4fa serve``: the page's audio in, the face's frames out while the person speaks.
+
+The page (``static/js/mic.js``) captures the microphone with ``getUserMedia``, downsamples it to
+16 kHz in an AudioWorklet (``static/js/mic-worklet.js``) and sends it over ``/ws`` in binary messages
+with the head the server's own binary messages have (:func:`mpeg4fa.serve.protocol.pack`):
+
+``MIC1`` + float64 media time of the chunk's first sample (s from the start of the session) + s16le mono PCM at 16 kHz
+    The first chunk starts a session; an empty one ends it. A session no chunk reaches for
+    :data:`IDLE_END` s ends by itself. A chunk that starts after the audio received so far (the page
+    dropped some) has the gap filled with silence, up to :data:`MAX_GAP` s.
+
+The server runs :class:`mpeg4fa.speech.live.LiveLipSync` on it and answers on the same socket with the
+face as the text path sends it (:mod:`.protocol`): ``FBA1`` binary messages, each a complete fba_object
+(:class:`~mpeg4fa.speech.live.LiveEncoder`) whose media time is the session time of the audio its first
+frame shows; a frame goes out as soon as the audio ``latency`` s after it has come. The page hands
+them to the player's own handler (``window.player.onBinary``), which decodes and plays them like a
+sentence's stream. Text messages:
+
+``{"type": "mic", "state": "started", "latency": 0.2, "rate": 16000, "fps": 25.0}``
+``{"type": "mic", "state": "ended", "frames": n, "seconds": s}``
+
+Guard (as :mod:`mpeg4fa.guard` bounds HTTP bodies and :mod:`.protocol` the JSON messages): a chunk
+holds at most :data:`MAX_CHUNK_SECONDS` of audio and an even number of bytes; a session's audio may
+not run ahead of the wall clock since it began by more than :data:`AHEAD` s (the page sends in real
+time; a client pushing faster would make the server listen faster than anyone speaks). A chunk
+outside these is dropped with an ``error`` (``where``: ``mic``), and the session goes on.
+"""
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+
+import numpy as np
+
+from mpeg4fa.serve.protocol import FBA_KIND, error_message, pack, unpack
+
+MIC_KIND = b"MIC1"
+RATE = 16000
+"""The sample rate the page sends (the recogniser's)."""
+MAX_CHUNK_SECONDS = 0.25
+MAX_CHUNK_BYTES = int(MAX_CHUNK_SECONDS * RATE) * 2
+AHEAD = 1.0
+"""Seconds of audio a session may hold beyond the wall-clock time since its first chunk."""
+MAX_GAP = 1.0
+"""The longest gap between chunks filled with silence; a chunk later than that is dropped."""
+IDLE_END = 2.0
+"""Seconds without a chunk after which a session ends by itself."""
+
+
+def is_microphone(data: bytes | None) -> bool:
+    """Whether a binary client message is microphone audio (the rest go to :func:`.protocol.parse_client`)."""
+    return data is not None and data[:4] == MIC_KIND
+
+
+class Microphone:
+    """One connection's microphone: sessions of :class:`~mpeg4fa.speech.live.LiveLipSync`, one at a time.
+
+    ``send``: the connection's sender (JSON dicts and bytes). Recognition and coding run in a worker thread, chunk by chunk in order (the connection reads its next message
+    only when a chunk is done).
+    """
+
+    def __init__(self, send, fps: float, clock=time.monotonic) -> None:
+        self.send, self.fps, self.clock = send, float(fps), clock
+        self.live = None
+        self.coder = None
+        self.started_at = 0.0
+        self.received = 0  # samples of this session
+        self.frames = 0
+        self.last_chunk = 0.0
+        self.watchdog: asyncio.Task | None = None
+
+    async def take(self, data: bytes) -> None:
+        """One ``MIC1`` message."""
+        try:
+            _, t, payload = unpack(data)
+        except ValueError as exc:
+            await self.send(error_message(str(exc), "mic"))
+            return
+        if len(payload) % 2 or len(payload) > MAX_CHUNK_BYTES:
+            await self.send(error_message(f"a microphone chunk is s16le PCM of at most {MAX_CHUNK_BYTES} bytes "
+                                          f"({MAX_CHUNK_SECONDS:g} s at {RATE} Hz), not {len(payload)}", "mic"))
+            return
+        if not payload:
+            await self.end()
+            return
+        if self.live is None:
+            await self.start()
+        now = self.clock()
+        self.last_chunk = now
+        gap = int(round(t * RATE)) - self.received if np.isfinite(t) else 0
+        if gap > MAX_GAP * RATE or gap < -len(payload) // 2:
+            await self.send(error_message(f"a chunk at {t:.3f} s, the audio so far ends at {self.received / RATE:.3f} s: "
+                                          f"chunks come in order, gaps under {MAX_GAP:g} s", "mic"))
+            return
+        samples = np.frombuffer(payload, "<i2")
+        if gap > 0:
+            samples = np.concatenate([np.zeros(gap, np.int16), samples])
+        elif gap < 0:  # overlaps what came: keep the new part
+            samples = samples[-gap:]
+        if (self.received + len(samples)) / RATE > now - self.started_at + AHEAD:
+            await self.send(error_message(f"microphone audio faster than real time: {self.received / RATE:.2f} s "
+                                          f"in {now - self.started_at:.2f} s (at most {AHEAD:g} s ahead)", "mic"))
+            return
+        self.received += len(samples)
+        await self._out(await asyncio.to_thread(self._feed, self.live, self.coder, samples))
+
+    @staticmethod
+    def _feed(live, coder, samples: np.ndarray | None) -> tuple[int, int, bytes | None]:
+        """In the worker thread: the frames that came due (all the rest when ``samples`` is None), coded:
+        (the first one's number, how many, the fba_object)."""
+        first = live.frames_out
+        frames = live.flush() if samples is None else live.feed(samples)
+        return first, len(frames), coder.encode(frames) if len(frames) else None
+
+    async def start(self) -> None:
+        from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
+
+        self.live = await asyncio.to_thread(LiveLipSync, RATE, self.fps, idle=True)
+        self.coder = LiveEncoder(self.fps)
+        self.started_at = self.last_chunk = self.clock()
+        self.received = self.frames = 0
+        self.watchdog = asyncio.create_task(self._watch())
+        await self.send({"type": "mic", "state": "started", "latency": self.live.latency, "rate": RATE,
+                         "fps": self.fps})
+
+    async def end(self) -> None:
+        """Flush the session's last frames and say it ended (nothing when none runs)."""
+        live, self.live = self.live, None
+        if live is None:
+            return
+        watchdog, self.watchdog = self.watchdog, None
+        if watchdog is not None and watchdog is not asyncio.current_task():
+            watchdog.cancel()
+        await self._out(await asyncio.to_thread(self._feed, live, self.coder, None))
+        await self.send({"type": "mic", "state": "ended", "frames": self.frames, "seconds": self.received / RATE})
+
+    async def close(self) -> None:
+        """The connection is gone: stop the watchdog (no frames to send)."""
+        self.live = None
+        if self.watchdog is not None:
+            self.watchdog.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self.watchdog
+
+    async def _watch(self) -> None:
+        while self.live is not None:
+            left = self.last_chunk + IDLE_END - self.clock()
+            if left <= 0:
+                await self.end()
+                return
+            await asyncio.sleep(left)
+
+    async def _out(self, coded: tuple[int, int, bytes | None]) -> None:
+        first, n, data = coded
+        if data is None:
+            return
+        self.frames = first + n
+        await self.send(pack(FBA_KIND, first / self.fps, data))
