@@ -47,8 +47,11 @@ def load_fdp(path: str | os.PathLike[str], meshes: Mapping[str, ArrayLike] | Non
     so. For the rest of an Xface file (influences, indices) use
     :func:`~mpeg4fa.fdp.xface.read_xface_fdp`.
     """
-    name = str(path)
-    data = read_bytes(path)
+    return fdp_from_data(read_bytes(path), str(path), meshes)
+
+
+def fdp_from_data(data: bytes, name: str, meshes: Mapping[str, ArrayLike] | None = None) -> Fdp:
+    """:func:`load_fdp` of bytes already read (an upload): ``name`` is what its errors say where."""
     kind = sniff_fdp(data)
     if kind == "binary":
         return fdp_from_bytes(data, name)
