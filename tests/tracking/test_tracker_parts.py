@@ -25,6 +25,20 @@ def test_one_euro_smooths_still_noise_and_follows_a_step_within_two_frames():
     assert np.allclose(held(np.array([np.nan, 2.0])), [1.0, 2.0])  # a lost value holds
 
 
+
+@pytest.mark.parametrize("peak", [500.0, 1000.0])  # a blink as tracked (the lids read at 0.5-0.8 of it) and as sent
+def test_a_blink_passes_the_lid_filter_within_a_frame_and_nearly_whole(peak):
+    """Issue 27: blinks found within a frame; the lids' smoothing must not delay or flatten a 5-frame blink."""
+    shape = np.array([0.35, 0.85, 1.0, 0.7, 0.3])  # tools/track_loop.py's blink at 25 fps
+    rng = np.random.default_rng(1)
+    signal = np.zeros((60, 68))
+    signal[30:35, 18] = peak * shape
+    signal[:, 18] += rng.normal(0, 15, 60)  # the landmark model's jitter on a lid, FAPU
+    raw = signal[:, 18]
+    out = filter_all(signal, OneEuroFilter(25, MIN_CUTOFF, BETA, scale=filter_scale()))[:, 18]
+    assert abs(int(np.argmax(out)) - int(np.argmax(raw))) <= 1
+    assert out.max() >= 0.9 * raw.max(), (out.max(), raw.max())
+
 def test_rigid_fit_recovers_scale_rotation_and_the_angles_the_head_uses():
     rng = np.random.default_rng(1)
     neutral = rng.normal(size=(30, 3))
