@@ -20,7 +20,10 @@
   points, cut to edge-ring regions with a raised-cosine falloff.
 * **Jaw**: a weight per vertex read off the CC0 ``jawOpen`` face unit (the fraction
   of a rigid jaw rotation each vertex follows), 1 on the lower teeth and at 2.1.
-* **Head**: 1 on the whole head, fading to 0 down the neck.
+* **Head**: 1 on the whole head, fading to 0 down the neck: a neck vertex turns by a share
+  of the head's rotation that grows smoothly from 0 at the cut to 1 where the neck meets the
+  head (under the chin at the front, the skull's base at the back: :func:`_head_weights`), so
+  a turn twists the neck along its length instead of folding it in one band.
 * **Lids**: sheets of skin turning about the eye centres (:mod:`.lids`).
 * **Eyes, upper teeth**: rigid.
 """
@@ -43,7 +46,11 @@ from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
 JAW_WEIGHT_FLOOR = 0.03  # jaw weights below this are noise of the face unit: dropped
-NECK_FADE_MM = 30.0  # the head rotation fades out over this height above the neck cut (576 mm), below the jaw
+NECK_TOP = ((0.55, 0.30), (-0.25, 0.70))
+"""Where the neck meets the head, front then back, as (depth, height): depth in units of the
+7.1 -> 2.1 depth ahead of 7.1 (0.55: just behind the chin's underside; -0.25: behind the spine),
+height as the share of the height from the neck's cut up to 7.1 (0.30: under the chin; 0.70:
+the skull's base). The head's rotation fades in over the neck below the line through them."""
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
 TONGUE_REACH_MM = 30.0  # a tongue point carries the tongue around it this far (its tip the front third)
 WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
@@ -292,13 +299,20 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
-    """The vertices that turn only partly with the head, and their share: 1 on the head (not
-    listed), fading down the neck to 0 at the cut. Everything not listed turns fully."""
-    y = mesh.vertices[:, 1]
+    """The vertices that turn only partly with the head, and their share of its rotation.
+
+    A neck vertex's share grows from 0 at the cut to 1 at the line where the neck meets the
+    head (:data:`NECK_TOP`, lower at the front than at the back), smoothly (zero slope at both
+    ends). Everything not listed turns fully."""
+    y, z = mesh.vertices[:, 1], mesh.vertices[:, 2]
     skin = mesh.part("skin")
     bottom = y[skin].min()
-    w = 1.0 - smooth_down((y - bottom) / NECK_FADE_MM)
+    centre, chin = mesh.fp("7.1"), mesh.fp("2.1")
+    depth, height = chin[2] - centre[2], centre[1] - bottom
+    (zf, hf), (zb, hb) = ((centre[2] + a * depth, bottom + b * height) for a, b in NECK_TOP)
+    top = hf + (hb - hf) * np.clip((zf - z) / (zf - zb), 0.0, 1.0)
+    w = 1.0 - smooth_down((y - bottom) / (top - bottom))
     w[skin.stop:] = 1.0
+    w[:skin.start] = 1.0
     idx = np.flatnonzero(w < 1.0)
     return idx, w[idx]
-

@@ -3,15 +3,21 @@
 A mesh vertex on a texture seam has several UVs; GL needs one vertex per
 (position, UV) pair. The layout is computed once per mesh, so each frame only
 gathers positions and normals through one index array.
+
+The neck's cut is closed by a cap (:func:`mpeg4fa.face.neck.cap_triangles`: triangles over the
+rim's own vertices), drawn as skin with GL vertices of its own whose normal is the cap's, not
+the rim's: the neck's side keeps its shading to the edge, and from below the head is a closed
+bust, never its inside.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
 
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.neck import cap_triangles
 from mpeg4fa.render.details import brow_coordinates, cavity_weights, nose_coordinates, tooth_coordinates
 from mpeg4fa.render.materials import LIP_OUTLINE, PART_MATERIAL, lip_weights
 
@@ -26,8 +32,10 @@ class SceneLayout:
     detail: np.ndarray     # (N, 2) float32: brow coordinates on the skin, tooth coordinates on the teeth
     nose: np.ndarray       # (N, 2) float32: nose wrinkle window and coordinate on the skin (0 elsewhere)
     indices: np.ndarray    # (T, 3) uint32 GL vertex indices, all drawn parts
-    triangles: np.ndarray  # (T, 3) mesh vertex indices (for normals)
+    triangles: np.ndarray  # (T, 3) mesh vertex indices (for normals; the cap's are not among them)
     incidence: sparse.csr_matrix  # (V, T): sums face normals onto vertices
+    cap: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))  # (K, 3) mesh vertex indices of the neck cap
+    cap_vertices: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # GL vertices of the cap (their normal is the cap's)
 
     @property
     def n_vertices(self) -> int:
@@ -45,11 +53,20 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
         uvs.append(np.asarray(mesh.corner_uvs[part], np.float64))
         mats.append(np.full(len(t), slot))
     tri = np.concatenate(tris)
+    cap = cap_triangles(mesh) if "skin" in mesh.triangles else np.zeros((0, 3), np.int64)
+    if len(cap):  # the rim's corner UVs, from any skin triangle that has the vertex
+        skin_tri = np.asarray(mesh.triangles["skin"], np.int64).reshape(-1)
+        uv_of = dict(zip(skin_tri.tolist(), np.asarray(mesh.corner_uvs["skin"], np.float64).reshape(-1, 2)))
+        uvs.append(np.array([uv_of[int(v)] for v in cap.reshape(-1)]).reshape(len(cap), 3, 2))
+        mats.append(np.full(len(cap), PART_MATERIAL["skin"]))
+    drawn = np.concatenate([tri, cap])
     corner_uv = np.concatenate(uvs).reshape(-1, 2)
     corner_mat = np.repeat(np.concatenate(mats), 3)
-    keys = np.c_[tri.reshape(-1), np.round(corner_uv * 2**20)].astype(np.int64)
+    on_cap = np.r_[np.zeros(tri.size, np.int64), np.ones(cap.size, np.int64)]
+    keys = np.c_[drawn.reshape(-1), np.round(corner_uv * 2**20), on_cap].astype(np.int64)
     unique, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     source = unique[:, 0].astype(np.int64)
+    inverse = inverse.reshape(-1)
     lips = np.zeros(len(source), np.float32)
     skin = corner_mat[first] == PART_MATERIAL["skin"]
     if all(label in mesh.fp_labels for label in LIP_OUTLINE):
@@ -76,6 +93,8 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
         indices=inverse.reshape(-1, 3).astype(np.uint32),
         triangles=tri,
         incidence=incidence_matrix(tri, mesh.n_vertices),
+        cap=cap,
+        cap_vertices=np.flatnonzero(unique[:, -1] == 1),
     )
 
 
@@ -108,4 +127,8 @@ def vertex_data(layout: SceneLayout, vertices: np.ndarray, out: np.ndarray | Non
     normals = vertex_normals(vertices, layout.triangles, layout.incidence)
     out[:, :3] = vertices[layout.source]
     out[:, 3:] = normals[layout.source]
+    if len(layout.cap):  # the cap is flat: one normal, its area-weighted mean
+        p = vertices[layout.cap]
+        n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]).sum(axis=0)
+        out[layout.cap_vertices, 3:] = n / max(float(np.linalg.norm(n)), 1e-12)
     return out

@@ -106,18 +106,39 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[n
     return p, pupils
 
 
+def partial_rotations(rotation: np.ndarray, shares: np.ndarray) -> np.ndarray:
+    """``(n, 3, 3)``: the rotation turned only by each share of its angle, about its own axis
+    (Rodrigues), so a share keeps lengths: a neck vertex turns part way, it is not pulled
+    along the chord (a blend of positions shrinks a twisted neck into a fold)."""
+    c = 0.5 * (np.trace(rotation) - 1.0)
+    angle = float(np.arccos(np.clip(c, -1.0, 1.0)))
+    skew = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0], rotation[1, 0] - rotation[0, 1]])
+    if angle < 1e-12:
+        return np.broadcast_to(np.eye(3), (len(shares), 3, 3)).copy()
+    if np.linalg.norm(skew) > 1e-9:
+        axis = skew / np.linalg.norm(skew)
+    else:  # a half turn: the axis is the column of R + I with the most in it
+        m = rotation + np.eye(3)
+        axis = m[:, int(np.argmax(np.linalg.norm(m, axis=0)))]
+        axis = axis / np.linalg.norm(axis)
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    a = np.asarray(shares, float)[:, None, None] * angle
+    return np.eye(3) + np.sin(a) * k + (1.0 - np.cos(a)) * (k @ k)
+
+
 def apply_head_rotation(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
-    """FAPs 48-50: turn the head (and fade the turn down the neck), in place."""
+    """FAPs 48-50: turn the head, and the neck by its share of the turn (in place)."""
     rest = rig.rest
     head = {kind: fap for fap, kind in motion.HEAD.items()}
     pitch, yaw, roll_h = (v[head[k] - 1] * motion.ANGLE_UNIT_RAD for k in ("pitch", "yaw", "roll"))
     if pitch or yaw or roll_h:
         rows, w = rig.head_fade
         centre = rest[rig.fp_vertex[rig.head_fp]]
-        before = p[rows]
-        # turn everything (one product over the whole array), then blend the neck back by its share
-        p[:] = centre + (p - centre) @ motion.head_rotation(pitch, yaw, roll_h).T
-        p[rows] = before + w[:, None] * (p[rows] - before)
+        rotation = motion.head_rotation(pitch, yaw, roll_h)
+        before = p[rows] - centre
+        # turn everything (one product over the whole array), then the neck by its share
+        p[:] = centre + (p - centre) @ rotation.T
+        p[rows] = centre + np.einsum("nij,nj->ni", partial_rotations(rotation, w), before)
 
 
 def deform(rig: Rig, values: np.ndarray) -> Pose:
