@@ -1,11 +1,33 @@
-"""MkDocs hook: the command reference is generated from the argparse parsers the ``mpeg4fa`` command runs,
-so the page cannot drift from ``--help``. A page holding ``<!-- mpeg4fa:commands -->`` gets every command."""
+"""MkDocs hook: generated parts of pages, so they cannot drift from what they describe.
+
+* A page holding ``<!-- mpeg4fa:commands -->`` gets every command's ``--help``, from the argparse parsers
+  the ``mpeg4fa`` command runs.
+* A page holding ``<!-- mpeg4fa:benchmarks -->`` gets the benchmarks' tables, from the JSON the benchmarks
+  in tools/ write (``tools/docs_benchmarks.py``), and the site gets their plots (``pictures/bench/*.png``,
+  drawn at each build, never committed).
+"""
 from __future__ import annotations
 
 import argparse
+import functools
+import importlib.util
 import os
+import sys
+from pathlib import Path
 
 MARKER = "<!-- mpeg4fa:commands -->"
+ROOT = Path(__file__).resolve().parents[1]
+_PLOTTED: set[str] = set()
+
+
+@functools.lru_cache(maxsize=1)
+def _benchmarks():
+    """tools/docs_benchmarks.py as a module (tools/ is no package)."""
+    spec = importlib.util.spec_from_file_location("docs_benchmarks", ROOT / "tools" / "docs_benchmarks.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up there
+    spec.loader.exec_module(module)
+    return module
 
 
 def commands_markdown() -> str:
@@ -31,7 +53,22 @@ def _sections(parser: argparse.ArgumentParser, name: str, parts: list[str], seen
                     _sections(sub, f"{name} {word}", parts, seen)
 
 
+def on_files(files, config):
+    """Add the benchmark plots to the site as generated files."""
+    from mkdocs.structure.files import File
+
+    bench = _benchmarks()
+    _PLOTTED.clear()
+    for name, png in bench.plots().items():
+        files.append(File.generated(config, f"{bench.PLOT_DIR}/{name}", content=png))
+        _PLOTTED.add(name)
+    return files
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:
     if MARKER in markdown:
         markdown = markdown.replace(MARKER, commands_markdown())
+    bench = _benchmarks()
+    if bench.MARKER in markdown:
+        markdown = markdown.replace(bench.MARKER, bench.page_markdown(set(_PLOTTED)))
     return markdown
