@@ -5,9 +5,10 @@ The page (``static/js/mic.js``) captures the microphone with ``getUserMedia``, d
 with the head the server's own binary messages have (:func:`mpeg4fa.serve.protocol.pack`):
 
 ``MIC1`` + float64 media time of the chunk's first sample (s from the start of the session) + s16le mono PCM at 16 kHz
-    The first chunk starts a session; an empty one ends it. A session no chunk reaches for
-    :data:`IDLE_END` s ends by itself. A chunk that starts after the audio received so far (the page
-    dropped some) has the gap filled with silence, up to :data:`MAX_GAP` s.
+    The first chunk starts a session (its time is the session's origin); an empty one ends it. A
+    session no chunk reaches for :data:`IDLE_END` s ends by itself (the next chunk starts another, from
+    its own time). A chunk that starts after the audio received so far (the page dropped some) has the
+    gap filled with silence, up to :data:`MAX_GAP` s.
 
 The server runs :class:`mpeg4fa.speech.live.LiveLipSync` on it and answers on the same socket with the
 face as the text path sends it (:mod:`.protocol`): ``FBA1`` binary messages, each a complete fba_object
@@ -44,7 +45,7 @@ AHEAD = 1.0
 """Seconds of audio a session may hold beyond the wall-clock time since its first chunk."""
 MAX_GAP = 1.0
 """The longest gap between chunks filled with silence; a chunk later than that is dropped."""
-IDLE_END = 2.0
+IDLE_END = 5.0
 """Seconds without a chunk after which a session ends by itself."""
 
 
@@ -69,6 +70,9 @@ class Microphone:
         self.frames = 0
         self.last_chunk = 0.0
         self.watchdog: asyncio.Task | None = None
+        self.origin = 0.0  # the session's first chunk's media time
+        self.tasks: set[asyncio.Task] = set()  # watchdogs running (the loop holds tasks only weakly)
+        self.busy = asyncio.Lock()  # one LiveLipSync call at a time (a chunk, or the watchdog's end)
 
     async def take(self, data: bytes) -> None:
         """One ``MIC1`` message."""
@@ -85,12 +89,12 @@ class Microphone:
             await self.end()
             return
         if self.live is None:
-            await self.start()
+            await self.start(t if np.isfinite(t) else 0.0)
         now = self.clock()
         self.last_chunk = now
-        gap = int(round(t * RATE)) - self.received if np.isfinite(t) else 0
+        gap = int(round((t - self.origin) * RATE)) - self.received if np.isfinite(t) else 0
         if gap > MAX_GAP * RATE or gap < -len(payload) // 2:
-            await self.send(error_message(f"a chunk at {t:.3f} s, the audio so far ends at {self.received / RATE:.3f} s: "
+            await self.send(error_message(f"a chunk at {t:.3f} s, the audio so far ends at {self.origin + self.received / RATE:.3f} s: "
                                           f"chunks come in order, gaps under {MAX_GAP:g} s", "mic"))
             return
         samples = np.frombuffer(payload, "<i2")
@@ -103,7 +107,9 @@ class Microphone:
                                           f"in {now - self.started_at:.2f} s (at most {AHEAD:g} s ahead)", "mic"))
             return
         self.received += len(samples)
-        await self._out(await asyncio.to_thread(self._feed, self.live, self.coder, samples))
+        async with self.busy:
+            if self.live is not None:
+                await self._out(await asyncio.to_thread(self._feed, self.live, self.coder, samples))
 
     @staticmethod
     def _feed(live, coder, samples: np.ndarray | None) -> tuple[int, int, bytes | None]:
@@ -113,14 +119,17 @@ class Microphone:
         frames = live.flush() if samples is None else live.feed(samples)
         return first, len(frames), coder.encode(frames) if len(frames) else None
 
-    async def start(self) -> None:
+    async def start(self, origin: float) -> None:
         from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
 
+        self.started_at = self.last_chunk = self.clock()  # the first chunk's arrival: the audio's clock
         self.live = await asyncio.to_thread(LiveLipSync, RATE, self.fps, idle=True)
         self.coder = LiveEncoder(self.fps)
-        self.started_at = self.last_chunk = self.clock()
         self.received = self.frames = 0
+        self.origin = origin
         self.watchdog = asyncio.create_task(self._watch())
+        self.tasks.add(self.watchdog)
+        self.watchdog.add_done_callback(self.tasks.discard)
         await self.send({"type": "mic", "state": "started", "latency": self.live.latency, "rate": RATE,
                          "fps": self.fps})
 
@@ -132,16 +141,17 @@ class Microphone:
         watchdog, self.watchdog = self.watchdog, None
         if watchdog is not None and watchdog is not asyncio.current_task():
             watchdog.cancel()
-        await self._out(await asyncio.to_thread(self._feed, live, self.coder, None))
+        async with self.busy:
+            await self._out(await asyncio.to_thread(self._feed, live, self.coder, None))
         await self.send({"type": "mic", "state": "ended", "frames": self.frames, "seconds": self.received / RATE})
 
     async def close(self) -> None:
         """The connection is gone: stop the watchdog (no frames to send)."""
         self.live = None
-        if self.watchdog is not None:
-            self.watchdog.cancel()
+        for task in list(self.tasks):
+            task.cancel()
             with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self.watchdog
+                await task
 
     async def _watch(self) -> None:
         while self.live is not None:
@@ -156,4 +166,4 @@ class Microphone:
         if data is None:
             return
         self.frames = first + n
-        await self.send(pack(FBA_KIND, first / self.fps, data))
+        await self.send(pack(FBA_KIND, self.origin + first / self.fps, data))

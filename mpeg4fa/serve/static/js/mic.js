@@ -1,0 +1,119 @@
+// The microphone button of the live page: the browser's microphone (getUserMedia) -> 16 kHz s16le in 20 ms
+// chunks (mic-worklet.js) -> the server (binary MIC1 messages on a WebSocket of its own, see
+// mpeg4fa/serve/microphone.py), which listens (mpeg4fa.speech.live) and answers with the face as FBA1
+// messages. Those go to the player's own handler (window.player.onBinary): decoded by fba.js and played on
+// the player's clock like a sentence's stream. Their media times are the session's; they are moved onto the
+// player's clock at the first one, MARGIN ahead of it (a little room for the network's jitter), or at 0
+// when the player's clock has not started (it starts then, with its own prebuffer).
+const MIC = "MIC1", FBA = "FBA1";
+const RATE = 16000;
+const MARGIN = 0.08;  // s between a face frame's arrival and its showing, once the clock runs
+
+const state = {  // read by the browser test (window.mic)
+  on: false, starting: false, sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null,
+  errors: [], offset: null, levels: [], contextRate: null,
+};
+window.mic = state;
+
+const button = document.createElement("button");
+button.id = "mic";
+button.type = "button";
+button.dataset.testid = "mic";
+button.title = "Animate the head from your microphone while you speak";
+button.textContent = "Microphone";
+document.querySelector("header").appendChild(button);
+
+let ws = null, context = null, stream = null, node = null;
+
+function header(kind, t, bytes) {
+  const out = new ArrayBuffer(12 + bytes);
+  const view = new DataView(out);
+  for (let i = 0; i < 4; i++) view.setUint8(i, kind.charCodeAt(i));
+  view.setFloat64(4, t, true);
+  return out;
+}
+
+function onMessage(e) {
+  if (typeof e.data === "string") {
+    const m = JSON.parse(e.data);
+    if (m.type === "mic" && m.state === "started") state.started = m;
+    else if (m.type === "mic" && m.state === "ended") { state.ended = m; if (!state.on && ws) { ws.close(); ws = null; } }
+    else if (m.type === "error") state.errors.push(m);
+    return;
+  }
+  const buffer = e.data;
+  if (buffer.byteLength < 12) return;
+  const view = new DataView(buffer);
+  const kind = String.fromCharCode(view.getUint8(0), view.getUint8(1), view.getUint8(2), view.getUint8(3));
+  if (kind !== FBA) return;
+  const player = window.player;
+  const t = view.getFloat64(4, true);
+  if (state.offset === null) {
+    state.offset = Number.isFinite(player.mediaTime) ? player.mediaTime + MARGIN - t : -t;
+    player.done = null;  // a finished sentence's "back to rest" must not hold the face still
+  }
+  view.setFloat64(4, t + state.offset, true);
+  state.faces++;
+  state.faceBytes += buffer.byteLength - 12;
+  player.onBinary(buffer);
+}
+
+async function start() {
+  state.starting = true;
+  Object.assign(state, { sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null, offset: null,
+                         levels: [] });
+  button.disabled = true;
+  try {
+    ws = new WebSocket(`ws://${location.host}/ws`);
+    ws.binaryType = "arraybuffer";
+    ws.onmessage = onMessage;
+    const open = new Promise((resolve, reject) => { ws.onopen = resolve; ws.onerror = () => reject(new Error("no connection")); });
+    stream = await navigator.mediaDevices.getUserMedia({
+      audio: { echoCancellation: false, noiseSuppression: false, autoGainControl: false, channelCount: 1 } });
+    await open;
+    context = new AudioContext();
+    if (context.state !== "running") { try { await context.resume(); } catch (e) { /* runs when it can */ } }
+    state.contextRate = context.sampleRate;
+    await context.audioWorklet.addModule("/static/js/mic-worklet.js");
+    node = new AudioWorkletNode(context, "mic-pcm16k");
+    node.port.onmessage = (e) => send(e.data);
+    const silent = context.createGain();
+    silent.gain.value = 0;  // the worklet runs only when pulled: to the output, at no volume
+    context.createMediaStreamSource(stream).connect(node).connect(silent).connect(context.destination);
+    state.on = true;
+    button.textContent = "Stop microphone";
+    button.classList.add("on");
+  } catch (e) {
+    state.errors.push({ error: String(e && e.message || e), where: "microphone" });
+    stop();
+  } finally {
+    state.starting = false;
+    button.disabled = false;
+  }
+}
+
+function send(pcm) {
+  if (!ws || ws.readyState !== WebSocket.OPEN || !state.on) return;
+  const out = header(MIC, state.sent / RATE, pcm.byteLength);
+  new Int16Array(out, 12).set(pcm);
+  ws.send(out);
+  let sum = 0;
+  for (let i = 0; i < pcm.length; i++) sum += pcm[i] * pcm[i];
+  state.levels.push(10 * Math.log10(sum / pcm.length / (32768 * 32768) + 1e-12));  // dBFS of each chunk
+  state.sent += pcm.length;
+  state.chunks++;
+}
+
+function stop() {
+  const wasOn = state.on;
+  state.on = false;
+  button.textContent = "Microphone";
+  button.classList.remove("on");
+  if (node) { node.port.onmessage = null; node.disconnect(); node = null; }
+  if (stream) { for (const track of stream.getTracks()) track.stop(); stream = null; }
+  if (context) { context.close(); context = null; }
+  if (ws && ws.readyState === WebSocket.OPEN && wasOn) ws.send(header(MIC, state.sent / RATE, 0));  // the end
+  else if (ws) { ws.close(); ws = null; }
+}
+
+button.addEventListener("click", () => { if (state.starting) return; if (state.on) stop(); else start(); });

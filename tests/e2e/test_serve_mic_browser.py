@@ -1,0 +1,127 @@
+"""The live page's microphone in a real browser: Chromium's fake microphone plays an espeak-ng WAV
+(``--use-fake-device-for-media-stream --use-file-for-fake-audio-capture=FILE.wav``, looped), the page
+captures it (getUserMedia, the AudioWorklet's 16 kHz), the server listens (mpeg4fa.speech.live) and sends
+the face back as FBA, which the player decodes and poses. Checked on what the page itself shows: the jaw
+and lip FAPs of the frames it plays (read back from ``window.player``) open while the file speaks and
+rest in its silences, the drawn head's values open during the run, and a screenshot of the open mouth
+(``test-artifacts/serve-mic/``)."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from e2e.browser import ARGS, CHROMIUM, fresh_folder, require_browser
+
+sync_api = require_browser()
+pytest.importorskip("pocketsphinx", reason="the microphone's lip sync needs pocketsphinx (the 'align' extra)")
+
+from mpeg4fa.serve.app import create_app  # noqa: E402
+from mpeg4fa.spec import FAP_BY_NAME  # noqa: E402
+from mpeg4fa.speech.align.recording import resample  # noqa: E402
+from mpeg4fa.wav import write_pcm16  # noqa: E402
+from serve.live_server import face_for_tests, running  # noqa: E402
+
+ARTEFACTS = Path(__file__).resolve().parents[2] / "test-artifacts" / "serve-mic"
+TEXT = "Open wide and say ah. Maybe Bob will bring a map."
+RATE = 48000
+BEFORE, AFTER = 1.5, 2.5
+LIPS = [FAP_BY_NAME[n].number - 1 for n in (
+    "open_jaw", "lower_t_midlip", "raise_b_midlip", "stretch_l_cornerlip", "stretch_r_cornerlip",
+    "lower_t_lip_lm", "lower_t_lip_rm", "raise_b_lip_lm", "raise_b_lip_rm", "push_b_lip", "push_t_lip")]
+JAW = FAP_BY_NAME["open_jaw"].number - 1
+
+
+@pytest.fixture(scope="module")
+def wav(tmp_path_factory) -> tuple[Path, float]:
+    """The file the fake microphone plays: silence, the sentences, silence (16-bit mono, 48 kHz)."""
+    from mpeg4fa.speech.tts.espeak import EspeakEngine
+
+    speech = EspeakEngine().synthesize(TEXT)
+    x = np.concatenate([np.zeros(int(BEFORE * RATE)), resample(speech.samples / 32768.0, speech.rate, RATE),
+                        np.zeros(int(AFTER * RATE))])
+    path = tmp_path_factory.mktemp("mic") / "speech.wav"
+    write_pcm16(path, np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16), RATE)
+    return path, len(x) / RATE
+
+
+def speech_spans(levels: list[float]) -> list[tuple[float, float]]:
+    """Where the audio the page sent is speech: 20 ms chunks above -45 dBFS, gaps under 0.3 s joined."""
+    loud = np.asarray(levels) > -45
+    edges = np.flatnonzero(np.diff(np.r_[0, loud.astype(int), 0]))
+    spans: list[list[float]] = []
+    for a, b in zip(edges[::2] * 0.02, edges[1::2] * 0.02):
+        if spans and a - spans[-1][1] < 0.3:
+            spans[-1][1] = b
+        else:
+            spans.append([a, b])
+    return [(a, b) for a, b in spans]
+
+
+def test_the_mouth_follows_the_microphone(wav):
+    path, loop = wav
+    fresh_folder(ARTEFACTS)
+    args = ARGS + ["--use-fake-device-for-media-stream", "--use-fake-ui-for-media-stream",
+                   f"--use-file-for-fake-audio-capture={path}", "--autoplay-policy=no-user-gesture-required"]
+    app = create_app(face_for_tests())
+    with running(app) as base, sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=args)
+        page = browser.new_page(viewport={"width": 900, "height": 700})
+        errors: list[str] = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        page.goto(base + "/")
+        page.wait_for_function("window.player && window.player.ready && window.mic", timeout=60_000)
+        page.click("#mic")
+        page.wait_for_function("window.mic.on || window.mic.errors.length", timeout=30_000)
+        assert page.evaluate("window.mic.errors") == []
+        # the head as drawn: its jaw FAP sampled while about 1.6 loops of the file play
+        shown, best, shots, open_shot = [], 0.0, 0, ARTEFACTS / "01-mouth-open.png"
+        deadline = time.monotonic() + 60
+        while page.evaluate("window.mic.sent") < 1.6 * loop * 16000:
+            assert time.monotonic() < deadline, "the page did not send the microphone's audio in time"
+            jaw = page.evaluate(f"window.player.valuesNow[{JAW}]")
+            shown.append(jaw)
+            if jaw > max(best * 1.3, 150) and shots < 3:  # a screenshot stalls the page: a few only
+                best, shots = jaw, shots + 1
+                page.screenshot(path=str(open_shot))
+            time.sleep(0.02)
+        page.click("#mic")
+        page.wait_for_function("window.mic.ended !== null", timeout=20_000)
+        page.wait_for_timeout(500)
+        page.screenshot(path=str(ARTEFACTS / "02-after.png"))
+        mic = page.evaluate("({levels: window.mic.levels, offset: window.mic.offset, faces: window.mic.faces, "
+                            "errors: window.mic.errors, ended: window.mic.ended, rate: window.mic.contextRate})")
+        cols = list(LIPS)
+        frames = np.array(page.evaluate(
+            f"window.player.frames.map((f) => [f.t, ...{cols}.map((c) => f.values[c])])"), dtype=np.float64)
+        player_errors = page.evaluate("window.player.errors")
+        browser.close()
+    assert not errors and not player_errors and not mic["errors"], (errors, player_errors, mic["errors"])
+    assert mic["faces"] > 0 and mic["ended"]["frames"] >= len(frames) > 0
+    t = frames[:, 0] - mic["offset"]  # the session time of the audio each frame shows
+    moving = np.abs(frames[:, 1:]).max(axis=1) > 0
+    spans = speech_spans(mic["levels"])
+    sent = len(mic["levels"]) * 0.02
+    print(f"\njaw in the frames: max {frames[:, 1].max():.0f}, p90 {np.percentile(frames[:, 1], 90):.0f}; "
+          f"context {mic['rate']} Hz, {sent:.1f} s sent, {len(frames)} frames, speech at "
+          + ", ".join(f"{a:.2f}-{b:.2f}" for a, b in spans) + f"; jaw shown up to {max(shown):.0f}")
+    assert len(spans) >= 1
+    for a, b in spans:
+        if b > t[-1] - 0.3:
+            continue  # speech the session ended in the middle of
+        inside = (t >= a + 0.1) & (t < b - 0.1)
+        assert inside.sum() >= 10 and moving[inside].mean() >= 0.5, \
+            f"the mouth moved in {moving[inside].mean():.0%} of the speech at {a:.2f}-{b:.2f} s"
+    edges = [0.0] + [x for s in spans for x in s] + [t[-1]]
+    quiet_frames = 0
+    for a, b in zip(edges[::2], edges[1::2]):  # the silences, away from the moves into and out of speech
+        quiet = (t >= a + 0.3) & (t < b - 0.3)
+        quiet_frames += int(quiet.sum())
+        assert not moving[quiet].any(), f"the mouth moved in the silence {a:.2f}-{b:.2f} s"
+    assert quiet_frames >= 25
+    shown = np.asarray(shown)
+    assert shown.max() > 150 and (shown == 0).mean() > 0.2, "the drawn head's jaw did not open and close"
+    assert open_shot.exists()
