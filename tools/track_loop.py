@@ -20,6 +20,7 @@ Two more rows say where a shortfall comes from. ``engine``: the tracker's FAP ru
 the least-squares slope of tracked on sent (1 when the tracked motion has the sent size; the landmark
 model's under-reading of a rendered face shows here). ``--still-head`` sends the same stream without the
 head turns, so comparing the two runs separates what the turns cost from what the landmarks cost.
+``fapu``: the FAPU measured on the tracked neutral over the head's own (as shares of ES0).
 """
 from __future__ import annotations
 
@@ -163,6 +164,17 @@ def gains(sent: np.ndarray, tracked: np.ndarray) -> dict[str, float]:
     return out
 
 
+def fapu_ratios(neutral_points: np.ndarray, face) -> dict[str, float]:
+    """Each FAPU the tracker measured on the neutral face over the head's own, both as a share of ES0 (1: the
+    same proportions; MNS0 above 1 reads every jaw and lip FAP short by as much)."""
+    from mpeg4fa.tracking import faps as rules
+
+    seen = rules.Neutral.from_points(neutral_points[:len(rules.LABELS)]).fapu
+    head = face.fapu
+    return {name: round((getattr(seen, name) / seen.ES0) / (getattr(head, name) / head.ES0), 3)
+            for name in ("IRISD0", "ENS0", "MNS0", "MW0")}
+
+
 def blink_peaks(lids: np.ndarray, threshold: float) -> np.ndarray:
     """Frames where the mean of FAP 19/20 peaks above ``threshold`` (local maxima of each run above it)."""
     above = lids > threshold
@@ -247,6 +259,7 @@ def run(seconds: float, size: int, fps: float, out: Path, *, texture_size: int =
     n = min(len(shown), len(tracked))
     (out / "loop.fba").write_bytes(encode(fap_stream(tracked, fps)))
     report = compare(shown[:n], tracked[:n], blinks[blinks < n])
+    report["fapu"] = fapu_ratios(summary.neutral.points, face)
     report.update(still_head=still_head, gain=gains(shown[:n], tracked[:n]),
                   engine={name: {k: g[k] for k in ("correlation", "rms_share", "pass")}
                           for name, g in engine["groups"].items()})
@@ -272,6 +285,9 @@ def table(report: dict) -> str:
     b = report["blinks"]
     lines.append(f"blinks: {b['found_within_a_frame']}/{b['sent']} within a frame ({100 * b['share']:.0f} %), "
                  f"{b['extra_peaks']} extra; lost frames {report['lost']}; neutral frames {report['neutral']}")
+    if "fapu" in report:
+        lines.append("FAPU measured / the head's (as shares of ES0): "
+                     + ", ".join(f"{k} {v:.2f}" for k, v in report["fapu"].items()))
     lines.append(f"render {report['render_s']} s, track {report['track_s']} s ({report['track_fps']} frames/s); "
                  f"all pass: {report['pass']}")
     return "\n".join(lines)
