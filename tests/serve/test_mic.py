@@ -1,0 +1,130 @@
+"""The serve microphone over loopback (mpeg4fa/serve/microphone.py): MIC1 audio chunks in, FBA1 faces out on
+the same socket, decoded here with the package's decoder; and the guard on the audio messages (size, rate,
+order). The audio is espeak-ng speech sent at real time (the server refuses audio faster than that)."""
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+import pytest
+from websockets.sync.client import connect
+
+pytest.importorskip("pocketsphinx", reason="the microphone's lip sync needs pocketsphinx (the 'align' extra)")
+
+from mpeg4fa.decoded import resolve  # noqa: E402
+from mpeg4fa.fba import decode  # noqa: E402
+from mpeg4fa.serve.app import create_app  # noqa: E402
+from mpeg4fa.serve.microphone import AHEAD, MAX_CHUNK_BYTES, MIC_KIND  # noqa: E402
+from mpeg4fa.serve.protocol import FBA_KIND, pack, unpack  # noqa: E402
+from mpeg4fa.spec import FAP_BY_NAME  # noqa: E402
+from mpeg4fa.speech.align.recording import resample  # noqa: E402
+from serve.live_server import face_for_tests, running  # noqa: E402
+
+RATE, FPS, CHUNK = 16000, 25.0, 320
+JAW = FAP_BY_NAME["open_jaw"].number - 1
+
+
+@pytest.fixture(scope="module")
+def base():
+    with running(create_app(face_for_tests())) as url:
+        yield url
+
+
+def ws_url(base: str) -> str:
+    return base.replace("http://", "ws://") + "/ws"
+
+
+def speech_pcm() -> tuple[np.ndarray, float, float]:
+    """0.8 s of silence, 'Open wide and say ah.', 1.2 s of silence (16 kHz int16), and where the speech is."""
+    from mpeg4fa.speech.tts.espeak import EspeakEngine
+
+    speech = EspeakEngine().synthesize("Open wide and say ah.")
+    x = resample(speech.samples / 32768.0, speech.rate, RATE)
+    pcm = np.concatenate([np.zeros(int(0.8 * RATE)), x, np.zeros(int(1.2 * RATE))])
+    return np.clip(np.rint(pcm * 32767), -32768, 32767).astype(np.int16), 0.8, 0.8 + len(x) / RATE
+
+
+def receive_all(ws, until: str, seconds: float = 20.0) -> tuple[list[dict], list[tuple[float, bytes]]]:
+    texts, faces = [], []
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        try:
+            message = ws.recv(timeout=max(0.01, deadline - time.monotonic()))
+        except TimeoutError:
+            break
+        if isinstance(message, str):
+            texts.append(json.loads(message))
+            if until and texts[-1].get("state") == until:
+                break
+        else:
+            kind, t, payload = unpack(message)
+            assert kind == FBA_KIND
+            faces.append((t, payload))
+    return texts, faces
+
+
+def test_microphone_audio_comes_back_as_a_face_that_speaks(base):
+    pcm, start, end = speech_pcm()
+    with connect(ws_url(base), origin=base, max_size=None) as ws:
+        assert json.loads(ws.recv(timeout=10))["type"] == "hello"
+        t0 = time.monotonic()
+        for k, i in enumerate(range(0, len(pcm), CHUNK)):
+            wait = t0 + k * CHUNK / RATE - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            ws.send(pack(MIC_KIND, i / RATE, pcm[i:i + CHUNK].astype("<i2").tobytes()))
+        ws.send(pack(MIC_KIND, len(pcm) / RATE, b""))
+        texts, faces = receive_all(ws, until="ended")
+    kinds = [m.get("state") or m["type"] for m in texts]
+    assert kinds[0] == "started" and kinds[-1] == "ended" and "error" not in kinds, texts
+    assert texts[0]["latency"] == pytest.approx(0.2) and texts[0]["rate"] == RATE
+    times, values = [], []
+    for t, payload in faces:  # each message a whole stream of its own, placed at its media time
+        stream = decode(payload)
+        times += list(t + np.asarray(stream.timestamps))
+        values.append(resolve(stream))
+    times, values = np.array(times), np.concatenate(values)
+    n = math.ceil(len(pcm) / RATE * FPS)
+    assert texts[-1]["frames"] == n == len(times) and np.allclose(times, np.arange(n) / FPS, atol=1e-6)
+    jaw = values[:, JAW]
+    speaking = (times >= start + 0.1) & (times < end - 0.1)
+    assert (jaw[speaking] > 0).mean() >= 0.5 and jaw.max() >= 300, jaw[speaking]
+    quiet = (times < start - 0.25) | (times > end + 0.3)
+    assert quiet.sum() >= 20 and not jaw[quiet].any()
+
+
+@pytest.mark.parametrize("payload, words", [(b"\x00" * (MAX_CHUNK_BYTES + 2), "at most"), (b"\x00" * 321, "at most")])
+def test_an_oversized_or_odd_chunk_is_refused_and_the_connection_goes_on(base, payload, words):
+    with connect(ws_url(base), origin=base) as ws:
+        json.loads(ws.recv(timeout=10))
+        ws.send(pack(MIC_KIND, 0.0, payload))
+        answer = json.loads(ws.recv(timeout=10))
+        assert answer["type"] == "error" and answer["where"] == "mic" and words in answer["error"]
+        ws.send(b"\x00\x01binary")  # not a microphone message: the protocol's own answer
+        answer = json.loads(ws.recv(timeout=10))
+        assert answer["where"] == "message" and "binary" in answer["error"]
+        ws.send(json.dumps({"type": "say", "text": "Hi."}))
+        assert json.loads(ws.recv(timeout=20))["type"] == "started"
+
+
+def test_audio_faster_than_real_time_and_out_of_order_is_refused(base):
+    """The server never listens to more audio than the wall clock since the session's first chunk allows,
+    plus AHEAD: a client sending 10 s at once gets errors, and the session holds about what time allowed."""
+    chunk = np.zeros(4000, np.int16).tobytes()  # 0.25 s
+    with connect(ws_url(base), origin=base, max_size=None) as ws:
+        json.loads(ws.recv(timeout=10))
+        sent_at = time.monotonic()
+        for k in range(40):  # 10 s of audio at once
+            ws.send(pack(MIC_KIND, k * 0.25, chunk))
+        ws.send(pack(MIC_KIND, 0.0, chunk))  # back to the start
+        ws.send(pack(MIC_KIND, 10.0, b""))
+        texts, _ = receive_all(ws, until="ended")
+        elapsed = time.monotonic() - sent_at
+    errors = [m["error"] for m in texts if m["type"] == "error"]
+    assert all(m["where"] == "mic" for m in texts if m["type"] == "error")
+    assert any("faster than real time" in e for e in errors), errors
+    assert any("chunks come in order" in e for e in errors), errors
+    ended = [m for m in texts if m.get("state") == "ended"]
+    assert ended and ended[0]["seconds"] <= elapsed + AHEAD + 0.25 and ended[0]["seconds"] < 10
