@@ -11,6 +11,9 @@ writes into docs/media/:
   demo-frame40.png   frame 40 of the built-in demo stream (what `mpeg4fa snapshot demo.fba --frame 40` shows)
   feature-points.png the 84 feature points on the neutral head, coloured by group, with the four FAPU
                      distances measured on it drawn as lines
+  layers.png         one spoken frame at each layer: action, FAPs, feature points, mesh, pixels
+  bitstream.png      that sentence's .fba stream as a bit ruler from `mpeg4fa info --trace`
+                     (both by tools/docs_diagrams.py)
 ``--contact-sheets`` also runs tools/contact_sheet.py --docs (the sheets in docs/pictures/, its own job).
 """
 from __future__ import annotations
@@ -35,8 +38,10 @@ SENTENCE = "(joy, 40, 0.5) Hello! I am an MPEG-4 talking head."
 CHINESE = "(joy, 30, 0.5)你好，世界！"
 # FAPU distances drawn on the head as spec/fapu.csv measures them: (name, point a, point b, axis, offset in
 # pixels of the measuring line from point a, across the axis: keeps the labels apart)
-FAPU_LINES = (("ES0", "3.5", "3.6", "x", -40), ("ENS0", "3.5", "9.15", "y", 0),
+FAPU_LINES = (("IRISD0", "3.1", "3.3", "y", 0), ("ES0", "3.5", "3.6", "x", -40), ("ENS0", "3.5", "9.15", "y", 0),
               ("MNS0", "9.15", "2.2", "y", -70), ("MW0", "8.3", "8.4", "x", 45))
+GROUP_NAMES = {2: "lips, jaw", 3: "eyes", 4: "brows", 5: "cheeks", 6: "tongue", 7: "head", 8: "outer lips",
+               9: "nose", 10: "ears", 11: "hairline"}
 GROUP_COLOURS = {2: "#e41a1c", 3: "#377eb8", 4: "#4daf4a", 5: "#984ea3", 6: "#ff7f00", 7: "#a65628",
                  8: "#f781bf", 9: "#ffd92f", 10: "#17becf", 11: "#999999"}
 
@@ -87,6 +92,7 @@ def feature_point_picture(face: FaceModel, out: Path, size: int = 560) -> None:
     xy = draw_renderer.camera.project(pose.feature_points, size, size)[:, :2]
     labels = [p.label for p in FEATURE_POINTS]
     draw = ImageDraw.Draw(image)
+    fapu = face.fapu
     for name, a, b, axis, offset in FAPU_LINES:
         pa, pb = xy[labels.index(a)], xy[labels.index(b)]
         if axis == "x":  # a horizontal distance, drawn at a's height moved by offset
@@ -97,14 +103,32 @@ def feature_point_picture(face: FaceModel, out: Path, size: int = 560) -> None:
         for end in ends:
             draw.ellipse([end[0] - 2, end[1] - 2, end[0] + 2, end[1] + 2], fill="#ffffff")
         mid = np.mean(ends, axis=0)
-        draw.text((mid[0] + 5, mid[1] - 14) if axis == "x" else (mid[0] + 5, mid[1] - 6), name, fill="#ffffff")
+        text = f"{name} {getattr(fapu, name):.1f} mm"
+        if name == "IRISD0":  # a short line across the iris: its label goes up and out, with a leader
+            label = (mid[0] + 34, mid[1] - 62)
+            draw.line([tuple(mid), (label[0], label[1] + 12)], fill="#ffffff", width=1)
+            draw.text(label, text, fill="#ffffff")
+        elif axis == "y" and offset < 0:  # a line left of the face's middle: its label to its left
+            draw.text((mid[0] - 6 - 6 * len(text), mid[1] - 6), text, fill="#ffffff")
+        else:
+            draw.text((mid[0] + 5, mid[1] - 14) if axis == "x" else (mid[0] + 5, mid[1] - 6), text, fill="#ffffff")
     for point, (x, y) in zip(FEATURE_POINTS, xy):
         colour = GROUP_COLOURS.get(point.group, "#000000")
         draw.ellipse([x - 3, y - 3, x + 3, y + 3], fill=colour, outline="#000000")
     for i, (group, colour) in enumerate(sorted(GROUP_COLOURS.items())):
         draw.rectangle([8, 8 + 16 * i, 18, 18 + 16 * i], fill=colour, outline="#000000")
-        draw.text((24, 7 + 16 * i), f"group {group}", fill="#ffffff")
+        draw.text((24, 7 + 16 * i), f"group {group}: {GROUP_NAMES[group]}", fill="#ffffff")
     image.save(out / "feature-points.png", optimize=True)
+
+
+def diagrams(face: FaceModel, out: Path) -> None:
+    """The concepts page's layers and bitstream diagrams (tools/docs_diagrams.py)."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    import docs_diagrams
+
+    said = docs_diagrams.spoken(SENTENCE)
+    docs_diagrams.layers_picture(face, said, out)
+    docs_diagrams.bitstream_picture(said, out)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -115,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     face = FaceModel.default()
-    for job in (feature_point_picture, demo_picture, say_pictures):
+    for job in (feature_point_picture, demo_picture, say_pictures, diagrams):
         job(face, args.out)
         print(f"{job.__name__}: done", file=sys.stderr)
     if args.contact_sheets:
