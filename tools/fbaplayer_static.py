@@ -74,19 +74,28 @@ def page(head_glb: bytes, key: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("-o", "--output", type=Path, required=True)
-    parser.add_argument("--fdp", type=Path, help="calibrate the generic head to this FDP first")
+    parser.add_argument("--fdp", type=Path, help="calibrate the generic head to this FDP first (and wear its texture)")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     from mpeg4fa.atomic import atomic_outputs
+    from mpeg4fa.errors import MpegFaError
     from mpeg4fa.face import FaceModel
     from mpeg4fa.serve.fap_head import fap_head
+    from mpeg4fa.serve.heads import calibrated_head
 
-    face = FaceModel.default()
-    if args.fdp:
-        from mpeg4fa.fdp import load_fdp
-
-        face = face.calibrate(load_fdp(args.fdp))
-    glb, key = fap_head(face)
+    try:
+        if args.fdp:  # as `mpeg4fa play --fdp` shows it: calibrated, wearing the texture the FDP carries
+            glb, key, made = calibrated_head(args.fdp.read_bytes(), str(args.fdp))
+            print(f"head: calibrated to {args.fdp} ({made['points']} points"
+                  + (f", texture {made['texture']})" if made["texture"] else ", no texture)"))
+        else:
+            glb, key = fap_head(FaceModel.default())
+    except OSError as exc:
+        print(f"error: {args.fdp}: {exc.strerror}", file=sys.stderr)
+        return 1
+    except MpegFaError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     text = page(glb, key)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     with atomic_outputs(args.output) as (tmp,):

@@ -12,7 +12,9 @@ The page decodes the bitstream itself (fba.js) and poses its head as the FBA pla
 HTTP routes: ``/`` (the live page), ``/static`` (its scripts), ``/vendor/three`` (three.js as
 vendored for the editor, served from there), ``/api/info``; ``/player`` (the FBA player,
 ``static/fbaplayer.html``: streams decoded in the browser by fba.js); both pages pose the head
-``/static/fap-head.glb`` with its rig ``/static/fap-head.json`` (:mod:`.fap_head`, built once). Unknown routes
+``/static/fap-head.glb`` with its rig ``/static/fap-head.json`` (:mod:`.fap_head`, built once);
+``POST /api/head?name=FILE`` takes an FDP and answers where its calibrated head is (``/api/head/ID.glb``
+and ``.json``, :mod:`.heads`). Unknown routes
 answer ``{"error", "where"}`` with 404. Only the server's own page and loopback clients get in
 (:class:`mpeg4fa.guard.LocalOnly`): a foreign ``Host`` or ``Origin``, or a WebSocket handshake without
 ``Origin``, is answered 403 before anything runs.
@@ -37,6 +39,8 @@ from mpeg4fa.face.model import FaceModel
 from mpeg4fa.guard import LocalOnly
 from mpeg4fa.serve import protocol
 from mpeg4fa.serve.microphone import Microphone, is_microphone
+from mpeg4fa.serve.heads import WORKER as HEAD_WORKER
+from mpeg4fa.serve.heads import Heads
 from mpeg4fa.serve.flow import STALL_TIMEOUT, WINDOW, Flow, Stalled
 from mpeg4fa.serve.protocol import AUDIO_KIND, FBA_KIND, Buffer, ProtocolError, Say, Stop, error_message, pack
 from mpeg4fa.serve.segments import Segment, chunks, make_segment
@@ -48,7 +52,7 @@ THREE = Path(__file__).resolve().parents[1] / "web" / "static" / "vendor" / "thr
 CHUNK = 0.2  # s of frames or audio per message
 RECORDS = 100  # utterance records kept (for tests, benchmarks and a look at a running server)
 CLOSE_POLICY = 1008  # WebSocket close code: policy violation (here: a stalled client)
-BODY_LIMIT = 65536  # bytes of an HTTP request body (no route takes one)
+BODY_LIMIT = 32 << 20  # bytes of an HTTP request body (only POST /api/head takes one: an FDP, photos included)
 
 
 @dataclass
@@ -63,6 +67,7 @@ class Settings:
     connections: int = 0
     _glb_lock: threading.Lock = field(default_factory=threading.Lock)
     _fap_head: tuple[bytes, dict] | None = None
+    heads: Heads = field(default_factory=Heads)
 
     def fap_head(self) -> tuple[bytes, dict]:
         """The pages' head (:mod:`.fap_head`: the GLB and the rig that poses it from FAPs), built once."""
@@ -123,6 +128,31 @@ def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak"
     @app.get("/static/fap-head.json")
     def fap_head_key():
         return JSONResponse(settings.fap_head()[1])
+
+    @app.post("/api/head")
+    async def calibrated_head(request: Request, name: str = "face.fdp"):
+        """An FDP's bytes in; where the head calibrated to it is (its GLB and key), or what is wrong with it."""
+        name = name.replace("/", "_")[:200] or "face.fdp"
+        data = await request.body()
+        try:
+            return await asyncio.get_running_loop().run_in_executor(HEAD_WORKER, settings.heads.add, data, name)
+        except MpegFaError as exc:
+            message = f"{exc.message} ({exc.hint})" if exc.hint else exc.message
+            return JSONResponse({"error": " ".join(message.split()), "where": exc.where or name}, status_code=400)
+
+    @app.get("/api/head/{ident}.glb")
+    def calibrated_glb(ident: str):
+        made = settings.heads.get(ident)
+        if made is None:
+            raise StarletteHTTPException(404, "no such head (made by POST /api/head)")
+        return Response(made[0], media_type="model/gltf-binary")
+
+    @app.get("/api/head/{ident}.json")
+    def calibrated_key(ident: str):
+        made = settings.heads.get(ident)
+        if made is None:
+            raise StarletteHTTPException(404, "no such head (made by POST /api/head)")
+        return JSONResponse(made[1])
 
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
     app.mount("/vendor/three", StaticFiles(directory=THREE), name="three")

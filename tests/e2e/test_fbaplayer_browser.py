@@ -31,6 +31,7 @@ ARGS = ARGS + ["--autoplay-policy=no-user-gesture-required"]
 from PIL import Image  # noqa: E402
 
 from mpeg4fa.decoded import resolve  # noqa: E402
+from mpeg4fa.face import FaceModel  # noqa: E402
 from mpeg4fa.fba import EncodeOptions, FapStream, decode, encode  # noqa: E402
 from mpeg4fa.serve.app import create_app  # noqa: E402
 from mpeg4fa.wav import write_pcm16  # noqa: E402
@@ -205,6 +206,118 @@ def test_static_page_plays_from_a_folder(page, face, tmp_path):
         open_files(pg, fba, wav)
         assert pg.evaluate("window.fbaPlayer.state.frames.length") == 75
         errs = compare_points(pg, face, fba, {"jaw open": int(np.argmax(decode(fba).fap_values[:, 2]))})
+        assert_close(errs)
+    finally:
+        pg.close()
+    assert not errors, errors
+
+
+def sender_fdp(folder: Path, face) -> Path:
+    """A sender's FDP: the generic head's feature points with the face 15 % wider, and a green front texture
+    mapped through the points' front projection (as an FDP made from photos carries one)."""
+    import io
+
+    from mpeg4fa.fdp import Fdp, TextureImage, save_fdp
+
+    labels = [label for label in face.mesh.fp_labels if label != "11.5"]
+    points = {label: face.mesh.fp(label) * np.array([1.15, 1.0, 1.0]) for label in labels}
+    xy = np.array([points[label][:2] for label in labels])
+    lo, hi = xy.min(axis=0) - 5, xy.max(axis=0) + 5
+    # a front photo: the face's left (+x) on the image's right, rows down
+    uv = {label: np.array([hi[0] - points[label][0], hi[1] - points[label][1]]) / (hi - lo) for label in labels}
+    image = np.zeros((128, 128, 3), np.uint8)
+    image[..., 1] = 190
+    image[::16, :, :] = 255  # white lines across: a texture, not a colour
+    png = io.BytesIO()
+    Image.fromarray(image).save(png, format="PNG")
+    path = folder / "sender.fdp"
+    save_fdp(Fdp.from_points(points, texture_coords=uv, textures=(TextureImage("green", "image/png", png.getvalue()),)),
+             path)
+    return path
+
+
+def greenness(path: Path) -> float:
+    img = np.asarray(Image.open(path).convert("RGB"), dtype=float)[250:450, 350:550]  # the cheeks and nose
+    return float((img[..., 1] - img[..., 0]).mean())
+
+
+def test_fdp_dropped_with_the_stream_calibrates_the_head(page, tmp_path):
+    """The sender's FDP beside the .fba: the server calibrates the head to it (with its texture) and the page
+    poses that head; its feature points are the calibrated Python face's."""
+    from mpeg4fa.face import asset
+    from mpeg4fa.face.assemble import assemble_face
+    from mpeg4fa.fdp import load_fdp
+
+    if not asset.is_installed():
+        pytest.skip("the generic head is not built: an FDP calibrates the generic head")
+    generic = FaceModel.default(auto_install=False)
+    fba, wav = made_stream(tmp_path)
+    fdp = sender_fdp(tmp_path, generic)
+    open_files(page, fba, wav)
+    page.evaluate("window.fbaPlayer.showFrame(0)")
+    before = ARTEFACTS / "fdp-before.png"
+    page.screenshot(path=str(before))
+    page.set_input_files("#files", [str(fba), str(wav), str(fdp)])
+    page.wait_for_function("window.fbaPlayer.state.headName === 'sender.fdp'", timeout=120_000)
+    assert "head: sender.fdp (83 points, texture green)" in page.inner_text("#info")
+    calibrated = assemble_face(fdp=load_fdp(fdp))
+    frames = {"rest": 0, "jaw open": int(np.argmax(decode(fba).fap_values[:, 2])), "last": 74}
+    errors = compare_points(page, calibrated, fba, frames)
+    print(errors)
+    assert_close(errors)
+    labels, got = points_at(page, 0)
+    width = abs(got[labels.index("2.4")][0] - got[labels.index("2.5")][0])  # mouth corners, 15 % further apart
+    generic_width = abs(generic.mesh.fp("2.4")[0] - generic.mesh.fp("2.5")[0])
+    assert width > 1.1 * generic_width, (width, generic_width)
+    page.evaluate("window.fbaPlayer.showFrame(0)")
+    after = ARTEFACTS / "fdp-after.png"
+    page.screenshot(path=str(after))
+    assert greenness(after) > greenness(before) + 40, "the skin does not wear the FDP's texture"
+    # a file that is no FDP: one message naming it and what it is; the head stays
+    bad = tmp_path / "bad.fdp"
+    bad.write_bytes(b"\xff\xd8\xff\xe0" + bytes(100))
+    page.set_input_files("#files", [str(bad)])
+    page.wait_for_function("document.getElementById('message').textContent.includes('bad.fdp')", timeout=30_000)
+    message = page.inner_text("#message")
+    assert message.startswith("bad.fdp: ") and "not an FDP file" in message and "JPEG" in message, message
+    assert page.evaluate("window.fbaPlayer.state.headName") == "sender.fdp"
+    refused = [e for e in page.errors if "status of 400" in e]  # chromium logs the refused upload itself
+    assert len(refused) == 1 and page.errors == refused, page.errors
+    page.errors.clear()
+
+
+def test_static_page_with_a_baked_fdp(page, tmp_path):
+    """tools/fbaplayer_static.py --fdp: the calibrated head rides in the page (no server)."""
+    import subprocess
+    import sys
+
+    from mpeg4fa.face import asset
+    from mpeg4fa.face.assemble import assemble_face
+    from mpeg4fa.fdp import load_fdp
+
+    if not asset.is_installed():
+        pytest.skip("the generic head is not built: an FDP calibrates the generic head")
+    tool = [sys.executable, str(Path(__file__).resolve().parents[2] / "tools" / "fbaplayer_static.py")]
+    fdp = sender_fdp(tmp_path, FaceModel.default(auto_install=False))
+    html = tmp_path / "player.html"
+    run = subprocess.run([*tool, "-o", str(html), "--fdp", str(fdp)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0 and "calibrated to" in run.stdout and "texture green" in run.stdout, run.stderr
+    bad = tmp_path / "bad.fdp"
+    bad.write_bytes(b"not an fdp at all")
+    run = subprocess.run([*tool, "-o", str(tmp_path / "no.html"), "--fdp", str(bad)], capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 1 and run.stderr.startswith(f"error: {bad}: ") and "Traceback" not in run.stderr, run.stderr
+    assert not (tmp_path / "no.html").exists()  # nothing half-written
+    fba, wav = made_stream(tmp_path)
+    pg = page.context.browser.new_page(viewport={"width": 900, "height": 700})
+    errors: list[str] = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        pg.goto(html.as_uri())
+        pg.wait_for_function("window.fbaPlayer && window.fbaPlayer.ready", timeout=120_000)
+        open_files(pg, fba, wav)
+        errs = compare_points(pg, assemble_face(fdp=load_fdp(fdp)), fba,
+                              {"jaw open": int(np.argmax(decode(fba).fap_values[:, 2]))})
         assert_close(errs)
     finally:
         pg.close()

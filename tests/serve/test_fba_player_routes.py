@@ -43,3 +43,14 @@ def test_fap_head_carries_the_rig_of_the_face(client):
     assert np.array_equal(dense, face.rig.translate)
     rest = np.array(key["feature_points"]["rest"])
     assert rest.shape == (84, 3) and np.isfinite(rest).all()
+
+
+def test_a_bad_fdp_upload_is_one_located_error(client):
+    r = client.post("/api/head?name=photo.fdp", content=b"\xff\xd8\xff\xe0" + bytes(60))
+    assert r.status_code == 400
+    answer = r.json()
+    assert answer["where"].startswith("photo.fdp") and "not an FDP file" in answer["error"] and "JPEG" in answer["error"]
+    r = client.post("/api/head?name=empty.fdp", content=b"")
+    assert r.status_code == 400 and "empty" in r.json()["error"]
+    assert client.get("/api/head/0123456789abcdef.glb").status_code == 404
+    assert client.get("/api/head/0123456789abcdef.json").json()["error"].startswith("no such head")

@@ -14,6 +14,37 @@ const CHUNK = 64 * 1024;  // bytes handed to the decoder at a time (frames come 
 
 const scene = createView(view);
 let head = null;
+let headInfo = { name: "generic head" };  // or the FDP it is calibrated to
+
+/** Calibrate the head to a sender's FDP (a File or Blob named ``name``): the server does it (POST /api/head)
+ * and answers with the head's GLB and rig; a page opened from a folder has its head baked in instead. */
+async function applyFdp(name, blob) {
+  if (window.FBA_PLAYER_HEAD || location.protocol === "file:") {
+    setMessage(`${name}: this page carries its head; to apply an FDP open the player from mpeg4fa serve, ` +
+      "or bake it in: tools/fbaplayer_static.py --fdp FILE");
+    return;
+  }
+  headInfo = { name: `${name} (calibrating…)` };
+  describe();
+  let answer;
+  try {
+    const response = await fetch(`/api/head?name=${encodeURIComponent(name)}`, { method: "POST", body: blob });
+    answer = await response.json();
+    if (!response.ok) throw new Error(answer.error ? `${answer.where}: ${answer.error}` : `the server answered ${response.status}`);
+  } catch (e) {
+    headInfo = { name: "generic head" };
+    setMessage(e.message.startsWith(name) ? e.message : `${name}: ${e.message}`);
+    describe();
+    return;
+  }
+  const next = await loadHead(scene, { key: answer.key, glb: answer.glb });
+  if (head) head.remove();
+  head = next;
+  headInfo = { name, points: answer.points, texture: answer.texture };
+  state.headName = name;
+  if (state.shownK >= 0) head.pose(state.shown[state.shownK]);
+  describe();
+}
 
 function headSource() {
   // a page made to open from a folder (tools/fbaplayer_static.py) carries its head; else it is fetched
@@ -56,6 +87,7 @@ function describe() {
     face ? `fap_quant ${face.quant}  mask types ${face.maskTypes.join("")}` : "no face header",
     `${s.bitsPerFrame.toFixed(1)} bits/frame  ${s.kbps.toFixed(2)} kbit/s`,
     `audio: ${state.audio ? "yes" : "none"}  decoded in ${state.decodeMs.toFixed(1)} ms`,
+    `head: ${headInfo.name}${headInfo.points ? ` (${headInfo.points} points${headInfo.texture ? `, texture ${headInfo.texture}` : ""})` : ""}`,
   ].join("\n");
 }
 
@@ -99,9 +131,11 @@ function feed(chunk, last) {
 
 async function openFiles(list) {
   const files = Array.from(list);
-  // the .fba, else the first file that is not a .wav: the decoder says what it is if it is no stream
-  const stream = files.find((f) => /\.fba$/i.test(f.name)) || files.find((f) => !/\.wav$/i.test(f.name));
-  if (!stream) { setMessage("only audio given: choose a .fba stream (and its .wav)"); return; }
+  const fdp = files.find((f) => /\.fdp$/i.test(f.name));
+  // the .fba, else the first file that is not a .wav or .fdp: the decoder says what it is if it is no stream
+  const stream = files.find((f) => /\.fba$/i.test(f.name)) || files.find((f) => !/\.(wav|fdp)$/i.test(f.name));
+  if (fdp) applyFdp(fdp.name, fdp);  // calibrating takes a moment: the stream decodes meanwhile
+  if (!stream) { if (!fdp) setMessage("only audio given: choose a .fba stream (and its .wav)"); return; }
   reset(stream.name);
   const base = stream.name.replace(/\.[^.]*$/, "").toLowerCase();
   const wav = files.find((f) => /\.wav$/i.test(f.name) && f.name.replace(/\.[^.]*$/, "").toLowerCase() === base)
@@ -127,6 +161,11 @@ async function openUrl(url) {
   wavUrl.pathname = wavUrl.pathname.replace(/\.[^./]*$/, ".wav");
   fetch(wavUrl, { method: "HEAD" }).then((r) => {
     if (r.ok && state.name === name) { audio.src = wavUrl.href; state.audio = true; describe(); }
+  }).catch(() => {});
+  const fdpUrl = new URL(url, location.href);  // the sender's FDP beside it, if there is one
+  fdpUrl.pathname = fdpUrl.pathname.replace(/\.[^./]*$/, ".fdp");
+  fetch(fdpUrl).then((r) => (r.ok && state.name === name ? r.blob() : null)).then((blob) => {
+    if (blob) applyFdp(decodeURIComponent(fdpUrl.pathname.split("/").pop()), blob);
   }).catch(() => {});
   const reader = response.body.getReader();
   for (;;) {

@@ -87,6 +87,16 @@ export class Head {
     this.pose(this.values);
   }
 
+  /** Take the head out of the view (another replaces it) and free its GPU buffers. */
+  remove() {
+    this.view.scene.remove(this.root);
+    this.root.traverse((o) => {
+      if (!o.isMesh) return;
+      o.geometry.dispose();
+      for (const m of [].concat(o.material)) { if (m.map) m.map.dispose(); m.dispose(); }
+    });
+  }
+
   /** Point the camera at the face: between the chin and the top of the head, in front of it. */
   frame() {
     const { labels, rest } = this.key.feature_points;
