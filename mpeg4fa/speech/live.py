@@ -3,8 +3,8 @@
 Why a module of its own: the offline paths know the whole recording (or the text) before the first
 frame; a microphone gives 20 ms at a time and the face must follow it while it speaks. This one
 listens with pocketsphinx's phone loop (``allphone``, the model :func:`~.align.sphinx.free_decoder`
-uses, bundled in the wheel), maps the phones to the MPEG-4 visemes through the maps the text path
-has (espeak-ng's English table, by :data:`~.align.sphinx.ESPEAK_ARPABET`), and moves the mouth by
+uses, bundled in the wheel), maps the phones to the MPEG-4 visemes as a recording without a transcript
+has them (:mod:`.listen.phones`: IPA, then the text path's feature map), and moves the mouth by
 the timeline's own rules (:mod:`.timeline`'s moves, :mod:`.frames`' merging and rounding), so a
 live face moves as an encoded one does.
 
@@ -17,7 +17,8 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
   finds up to :data:`SETTLE` s (20 ms) before its end are *committed*: from the previous commit to
   there, the face's phones are that window's, and never change again; the 240 ms before its newest
   hop give them their left context.
-- A committed phone becomes a viseme span (silence and fillers: a gap, the mouth at rest). The move into
+- A committed phone becomes a viseme span, or two (a diphthong, an affricate), by the recording path's map
+  (:func:`phone_parts`); silence and fillers are a gap, the mouth at rest. The move into
   a span is made when the span starts, its lag as for a phone of full length; the span grows as it is
   heard; when silence follows, the move back to rest is made at once, as into a long silence.
 - A move into a shape starts up to :data:`~.timeline.LEAD` (100 ms) before the phone, so a frame is
@@ -40,13 +41,12 @@ shown at once.
 from __future__ import annotations
 
 import math
-from collections import Counter
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-from mpeg4fa.speech.align.sphinx import ESPEAK_ARPABET, OFFSET, RATE
+from mpeg4fa.speech.align.sphinx import OFFSET, RATE
 from mpeg4fa.speech.frames import FrameMaker
 from mpeg4fa.speech.timeline import LAG, LAG_SHARE, LEAD, VisemeSpan, _checked_spans
 
@@ -72,19 +72,21 @@ _HOP_10MS = 0.01
 _SILENT = frozenset({"SIL", "+NSN+", "+SPN+", "+BREATH+", "+COUGH+", "+UM+", "+NOISE+", "+SMACK+", "+UH+"})
 
 
-@lru_cache(maxsize=1)
-def arpabet_visemes() -> dict[str, str]:
-    """ARPAbet phone -> MPEG-4 viseme, from the espeak-ng English table: each phone takes the viseme
-    most of the espeak-ng phonemes written with it alone have (ties: the first in
-    :data:`~.align.sphinx.ESPEAK_ARPABET`), so recognised phones move the mouth as spoken text does."""
-    from mpeg4fa.speech.visemes import english_viseme
+@lru_cache(maxsize=None)
+def phone_parts(phone: str) -> tuple[tuple[str, float, float], ...]:
+    """An ARPAbet phone's mouth shapes as (viseme, start, end) shares of its time, by the recording path's
+    map (:func:`mpeg4fa.speech.listen.phones.phone_timings`: the phone's IPA, ``spec/arpabet_ipa.csv``,
+    through the IPA feature map; a diphthong or an affricate in two parts); empty for silence, a filler
+    or a phone the table lacks."""
+    from mpeg4fa.speech.listen.phones import arpabet_ipa, phone_timings
+    from mpeg4fa.speech.tts.base import Event
+    from mpeg4fa.speech.visemes import PAUSE
 
-    votes: dict[str, Counter] = {}
-    for mnemonic, phones in ESPEAK_ARPABET.items():
-        if " " in phones:
-            continue
-        votes.setdefault(phones, Counter())[english_viseme(mnemonic)] += 1
-    return {phone: counts.most_common(1)[0][0] for phone, counts in votes.items()}
+    ipa = arpabet_ipa().get(phone)
+    if phone in _SILENT or not ipa:
+        return ()
+    return tuple((t.viseme, t.start, t.end) for t in phone_timings([Event("phoneme", 0.0, 1.0, ipa)], where="live")
+                 if t.viseme != PAUSE)
 
 
 def _decoder():
@@ -215,16 +217,19 @@ class LiveLipSync:
 
     def _commit(self, phones: list[tuple[str, float, float]], upto: float) -> None:
         """The phones of ``[committed, upto)`` become the face's: spans begun, grown or closed."""
-        table = arpabet_visemes()
         lo = self.committed
-        for word, a, b in phones:
-            a, b = max(a, lo), min(b, upto)
-            if b - a <= 1e-6:
-                continue
-            voiced = self._is_voiced(a, b)
-            viseme = (VOICE_VISEME if voiced else None) if word in _SILENT or word not in table \
-                else table[word] if voiced else None
-            self._phase(viseme, a, b)
+        for word, start, end in phones:
+            parts = phone_parts(word) or ((VOICE_VISEME, 0.0, 1.0),)
+            for viseme, p0, p1 in parts:  # each part over its share of the whole phone, then cut to what is new
+                a = max(start + p0 * (end - start), lo)
+                b = min(start + p1 * (end - start), upto)
+                if b - a <= 1e-6:
+                    continue
+                if not self._is_voiced(a, b):
+                    viseme = None
+                elif not phone_parts(word):  # voice the loop calls silence
+                    viseme = VOICE_VISEME
+                self._phase(viseme, a, b)
         self.committed = max(lo, upto)
         if self.open is not None:
             self._grow(self.committed)
