@@ -11,7 +11,8 @@ louder than -45 dBFS after at least 300 ms quieter), not taken from espeak-ng's 
 
 * **realtime**: chunk ``k`` is handed over at ``t0 + (k + 1) x 20 ms`` on the monotonic clock (when a
   microphone would have delivered it) and no earlier; a chunk whose time has passed goes at once. Per
-  chunk: processing time (wall, ``feed``), and the backlog (how late the hand-over was: it grows if
+  chunk: processing time (wall and the thread's CPU time, ``feed``; on a shared machine the wall time
+  includes waiting for a core: the load average is recorded), and the backlog (how late the hand-over was: it grows if
   the stream falls behind). CPU share: process time over wall time.
 * **fast**: the chunks fed back to back, for the throughput (x real time).
 * **latency**: for each speech onset, the delay from the hand-over of the chunk holding the onset to the
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import tempfile
@@ -92,9 +94,9 @@ def run(pcm: np.ndarray, realtime: bool) -> dict:
     live = LiveLipSync(RATE, FPS)
     step = int(CHUNK * RATE)
     n = -(-len(pcm) // step)
-    proc, late, moved_at = np.zeros(n), np.zeros(n), []  # moved_at: (chunk, first moving frame time) per feed
+    proc, cpu_chunk, late, moved_at = np.zeros(n), np.zeros(n), np.zeros(n), []  # moved_at: (chunk, first moving frame time) per feed
     emitted = 0
-    cpu0, t0 = time.process_time(), time.monotonic()
+    load0, cpu0, t0 = os.getloadavg()[0], time.process_time(), time.monotonic()
     for k in range(n):
         due = t0 + (k + 1) * CHUNK
         if realtime:
@@ -102,9 +104,9 @@ def run(pcm: np.ndarray, realtime: bool) -> dict:
             if wait > 0:
                 time.sleep(wait)
             late[k] = max(0.0, time.monotonic() - due)
-        a = time.monotonic()
+        a, c = time.monotonic(), time.thread_time()
         frames = live.feed(pcm[k * step:(k + 1) * step])
-        proc[k] = time.monotonic() - a
+        proc[k], cpu_chunk[k] = time.monotonic() - a, time.thread_time() - c
         if len(frames):
             move = np.flatnonzero(np.abs(frames[:, LIPS]).max(axis=1) > 0)
             for i in move:
@@ -126,6 +128,9 @@ def run(pcm: np.ndarray, realtime: bool) -> dict:
             "x_realtime": len(pcm) / RATE / wall, "cpu_share": cpu / wall, "cpu_per_audio_s": cpu / (len(pcm) / RATE),
             "chunk_ms": {"mean": 1e3 * proc.mean(), "p99": 1e3 * float(np.percentile(proc, 99)),
                          "max": 1e3 * proc.max(), "over_20ms": int((proc > CHUNK).sum())},
+            "chunk_cpu_ms": {"mean": 1e3 * cpu_chunk.mean(), "p99": 1e3 * float(np.percentile(cpu_chunk, 99)),
+                             "max": 1e3 * cpu_chunk.max(), "over_20ms": int((cpu_chunk > CHUNK).sum())},
+            "load_average": [load0, os.getloadavg()[0]],
             "backlog_ms": {"max": 1e3 * late.max(), "mean_first_third": 1e3 * late[:third].mean(),
                            "mean_last_third": 1e3 * late[-third:].mean()} if realtime else None,
             "onsets": len(onsets(pcm)), "onsets_seen": len(lat_audio),
@@ -154,16 +159,20 @@ def main() -> None:
         pcm = np.clip(np.rint(resample(pcm / 32768.0, rate, RATE) * 32767), -32768, 32767).astype(np.int16)
     results = [run(pcm, realtime) for realtime in ((False, True) if args.mode == "both" else (args.mode == "realtime",))]
     print(f"live lip sync, {len(pcm) / RATE:.0f} s of espeak-ng speech in 20 ms chunks, latency {LATENCY * 1e3:.0f} ms")
-    print(f"{'mode':<9} {'x rt':>6} {'cpu':>5} {'chunk mean/p99/max ms':>22} {'>20ms':>5} "
+    print(f"{'mode':<9} {'x rt':>6} {'cpu':>5} {'chunk wall mean/p99/max ms':>26} {'>20ms':>5} "
+          f"{'chunk cpu mean/p99/max ms':>26} {'>20ms':>5} "
           f"{'backlog max/first/last ms':>26} {'onsets':>7} {'move after onset ms (audio) mean/p95/max':>40} "
           f"{'wall mean/p95/max':>18}")
     for r in results:
         c, b, la, lw = r["chunk_ms"], r["backlog_ms"], r["latency_audio_ms"], r["latency_wall_ms"]
         print(f"{r['mode']:<9} {r['x_realtime']:6.1f} {r['cpu_share']:5.0%} "
-              f"{c['mean']:8.2f}/{c['p99']:5.2f}/{c['max']:6.2f} {c['over_20ms']:5d} "
+              f"{c['mean']:12.2f}/{c['p99']:6.2f}/{c['max']:6.2f} {c['over_20ms']:5d} "
+              f"{r['chunk_cpu_ms']['mean']:12.2f}/{r['chunk_cpu_ms']['p99']:6.2f}/{r['chunk_cpu_ms']['max']:6.2f} "
+              f"{r['chunk_cpu_ms']['over_20ms']:5d} "
               + (f"{b['max']:10.1f}/{b['mean_first_third']:6.2f}/{b['mean_last_third']:6.2f}" if b else f"{'-':>26}")
               + f" {r['onsets_seen']:3d}/{r['onsets']:<3d} {la['mean']:22.0f}/{la['p95']:4.0f}/{la['max']:4.0f}"
-              + (f" {lw['mean']:8.0f}/{lw['p95']:4.0f}/{lw['max']:4.0f}" if lw else f" {'-':>18}"))
+              + (f" {lw['mean']:8.0f}/{lw['p95']:4.0f}/{lw['max']:4.0f}" if lw else f" {'-':>18}")
+              + f"  load {r['load_average'][0]:.1f}-{r['load_average'][1]:.1f}")
     out = {"latency_setting_ms": LATENCY * 1e3, "chunk_ms": CHUNK * 1e3, "fps": FPS, "results": results,
            "machine": {"python": platform.python_version(), "cpus": __import__("os").cpu_count()}}
     args.json.write_text(json.dumps(out, indent=1) + "\n")

@@ -90,14 +90,18 @@ def phone_parts(phone: str) -> tuple[tuple[str, float, float], ...]:
 
 
 def _decoder():
-    """A phone-loop decoder of its own (one per stream: decoders are not shared across threads)."""
+    """A phone-loop decoder of its own (one per window: decoders are not shared across threads), tuned as the
+    recording path's (:func:`mpeg4fa.speech.listen.phones.phone_decoder`: fewer, longer phones)."""
     from mpeg4fa.extras import require
 
     require("align", "pocketsphinx")
     from pocketsphinx import Decoder, get_model_path
 
+    from mpeg4fa.speech.listen.phones import BEAM, PHONE_INSERTION
+
     phone_lm = Path(get_model_path()) / "en-us" / "en-us-phone.lm.bin"
-    return Decoder(samprate=RATE, allphone=str(phone_lm), bestpath=False, loglevel="FATAL")
+    return Decoder(samprate=RATE, allphone=str(phone_lm), bestpath=False, loglevel="FATAL", pip=PHONE_INSERTION,
+                   **BEAM)
 
 
 class LiveLipSync:
