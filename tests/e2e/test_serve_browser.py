@@ -179,7 +179,8 @@ def test_damaged_or_foreign_face_data(page):
     hand_over(page, b"FBA1", 100.0, data[:-30])
     message = page.inner_text("#message")
     n = page.evaluate("window.player.frames.length")
-    assert " at bit " in message and f"playing the {n} frames before it" in message, message
+    assert message.startswith("face data at 100.00 s: ") and " at bit " in message, message
+    assert f"playing the {n} frames before it" in message, message
     assert 0 < n < 50
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

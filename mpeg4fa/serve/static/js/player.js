@@ -48,6 +48,7 @@ function startClock() {
 
 // ---- the connection ----
 let ws = null, sayAt = 0, rate = 22050;
+let announced = null;  // the segment message whose stream comes next (other FBA messages are named by time)
 function connect() {
   ws = new WebSocket(`ws://${location.host}/ws`);
   ws.binaryType = "arraybuffer";
@@ -58,7 +59,7 @@ function connect() {
 
 function onText(m) {
   if (m.type === "hello") state.hello = m;
-  else if (m.type === "segment") { state.segments.push(m); rate = m.rate; caption.textContent = m.text; }
+  else if (m.type === "segment") { state.segments.push(m); announced = m; rate = m.rate; caption.textContent = m.text; }
   else if (m.type === "done") state.done = m;
   else if (m.type === "error") state.errors.push(m);
   setStatus();
@@ -74,8 +75,8 @@ function setMessage(text) {
 function onFace(t, bytes) {
   state.fbaBytes += bytes.length;
   state.fbaMessages++;
-  const name = state.segments.length ? `sentence ${state.segments[state.segments.length - 1].index + 1}`
-    : `face data at ${t.toFixed(2)} s`;
+  const name = announced ? `sentence ${announced.index + 1}` : `face data at ${t.toFixed(2)} s`;
+  announced = null;
   let frames;
   try {
     frames = decodeFba(bytes).frames;
