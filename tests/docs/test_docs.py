@@ -3,8 +3,10 @@ warning), and every shell example in it is either run here, in a temporary folde
 with its reason.
 
 A fenced ``sh`` block in ``docs/`` is preceded by one marker line:
-``<!-- run -->`` (run here), ``<!-- run: needs the generic head -->`` (run when the head is built), or
-``<!-- skip: REASON -->`` (too slow, needs a display, a network, a photo...: the reason says which).
+``<!-- run -->`` (run here), ``<!-- run: needs the generic head -->`` (run when the head is built),
+``<!-- run: from the clone's root -->`` (reads the repository's own files, e.g. ``conformance/``: run in the
+temporary folder with the repository's ``conformance`` and ``spec`` linked into it, so what it writes lands
+there), or ``<!-- skip: REASON -->`` (too slow, needs a display, a network, a photo...: the reason says which).
 """
 from __future__ import annotations
 
@@ -22,7 +24,8 @@ from mpeg4fa.face import asset
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 BLOCK = re.compile(r"^(?P<marker><!--.*?-->\n)?```(?P<lang>sh|bash)\n(?P<body>.*?)^```", re.M | re.S)
-MARKER = re.compile(r"<!-- (run|run: needs the generic head|skip: \S.*) -->\n")
+MARKER = re.compile(r"<!-- (run|run: needs the generic head|run: from the clone's root|skip: \S.*) -->\n")
+LINKED = ("conformance", "spec")
 
 
 def shell_blocks() -> list[tuple[str, str, str]]:
@@ -53,6 +56,9 @@ def test_every_shell_block_says_whether_it_runs(place, marker, body):
 def test_documented_commands_run(place, marker, body, tmp_path):
     if "generic head" in marker and not asset.is_installed():
         pytest.skip("generic head not built: run `mpeg4fa model install` (needs network once)")
+    if "clone's root" in marker:
+        for name in LINKED:
+            (tmp_path / name).symlink_to(ROOT / name, target_is_directory=True)
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
     done = subprocess.run(["bash", "-euo", "pipefail", "-c", body], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=120)
