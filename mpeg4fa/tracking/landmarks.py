@@ -138,9 +138,10 @@ class LandmarkFinder:
                                             max_num_faces=self.max_faces, min_detection_confidence=0.5,
                                             min_tracking_confidence=0.5)
             # its graph starts in threads of its own that log as they come up: one blank image waits for them
+            # (process() returns once the graph is idle). No reset() after it, for video too: a reset starts the
+            # graph again, and its threads then logged after this block had ended (1 run in 3 or 4); a blank
+            # image holds no face, so there is nothing for the video mode to carry into the first real frame
             self._mesh.process(np.zeros((MIN_SIDE * 2, MIN_SIDE * 2, 3), np.uint8))
-            if not self.static:   # a video's tracker must not carry the blank frame into the first real one
-                self._mesh.reset()
         return self
 
     def __exit__(self, *exc) -> None:
