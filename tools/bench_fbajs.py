@@ -12,7 +12,9 @@ generator is imported, not copied). Each is decoded R times by ``mpeg4fa.fba.dec
 "compiled")`` in this process (CPU time, as for Node; after a warm-up call, so numba's compile is not counted) and by
 ``decode()`` of fba.js in one Node process (best of R; the first call, with V8's warm-up, is shown
 too), in ``--rounds`` interleaved rounds, keeping the best of each. Both decoders must give the same frames (checked). Target (issue 31): Node at least as fast
-as the compiled path (ratio >= 1). Prints a table and writes JSON (``bench_fbajs.json`` unless
+as the compiled path (ratio >= 1). Then the head posed from the same decoded frames by ``facerig.js``
+(the pages' pose, :mod:`mpeg4fa.serve.fap_head`) in Node and by the Python face, per frame, with the
+largest vertex difference between them. Prints a table and writes JSON (``bench_fbajs.json`` unless
 ``--json``).
 """
 from __future__ import annotations
@@ -38,6 +40,7 @@ from mpeg4fa.fba import EncodeOptions, decode, encode  # noqa: E402
 
 NODE_BENCH = REPO / "tools" / "bench_fbajs.mjs"
 DUMP = REPO / "tests" / "js" / "dump.mjs"
+POSE = REPO / "tests" / "js" / "pose_rig.mjs"
 
 
 def best_time(fn, repeat: int):
@@ -68,6 +71,31 @@ def same_frames(node: str, path: Path, stream) -> bool:
             and np.array_equal([f["t"] for f in frames], stream.timestamps))
 
 
+def pose_times(node: str, stream, folder: Path, n: int) -> dict:
+    """The head posed from ``n`` decoded frames: facerig.js in Node (the pages' pose) against the Python face
+    (``FaceModel.pose_values``, CPU time), and how far apart their vertices are (checked: the same face)."""
+    import warnings
+
+    from mpeg4fa.decoded import resolve
+    from mpeg4fa.face import FaceModel
+    from mpeg4fa.serve.fap_head import rig_data
+
+    face = FaceModel.default()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        values = resolve(stream)[:n]
+    rig, rows, out = folder / "rig.json", folder / "rows.json", folder / "poses.bin"
+    rig.write_text(json.dumps(rig_data(face)))
+    rows.write_text(json.dumps(values.tolist()))
+    run = subprocess.run([node, str(POSE), str(rig), str(rows), str(out)], capture_output=True, text=True, check=True)
+    node_ms = json.loads(run.stdout)["ms_per_pose"]
+    face.pose_values(values[0])  # set-up (rig) not counted
+    py_s, poses = best_time(lambda: [face.pose_values(v).vertices for v in values], 1)
+    got = np.fromfile(out, "<f8").reshape(len(values), -1, 3)
+    return {"frames": len(values), "vertices": got.shape[1], "node_ms_per_pose": node_ms,
+            "python_ms_per_pose": py_s / len(values) * 1e3, "max_vertex_difference_mm": float(np.abs(got - poses).max())}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--vectors", type=Path, default=REPO.parent / "shared" / "vectors" / "fba")
@@ -76,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="rounds of Node then Python (the best of all is kept: a shared machine is noisy)")
     parser.add_argument("--frames", type=int, default=int(60 * FPS), help="frames of the full-mask stream")
     parser.add_argument("--json", type=Path, default=Path("bench_fbajs.json"))
+    parser.add_argument("--pose-frames", type=int, default=250, help="frames posed by facerig.js and by Python")
     args = parser.parse_args(argv)
     node = shutil.which("node")
     if node is None:
@@ -117,6 +146,7 @@ def main(argv: list[str] | None = None) -> int:
                          "node_first_call_fps": len(stream) / j["first_s"],
                          "node_shown_fps": len(stream) / j["shown_best_s"],
                          "ratio_node_over_python": py_s / j["best_s"]})
+        pose = pose_times(node, streams[full], Path(tmp), args.pose_frames)
     head_line = f"{'stream':36} {'frames':>7} {'Python compiled f/s':>20} {'Node f/s':>10} {'Node 1st call':>14} {'ratio':>6}"
     print(f"fba.js (Node {version}) vs mpeg4fa.fba compiled, best of {args.rounds} x {args.repeat} ({platform.processor() or platform.machine()})")
     print(head_line)
@@ -127,7 +157,11 @@ def main(argv: list[str] | None = None) -> int:
               f"{'PASS' if r['ratio_node_over_python'] >= 1 else 'FAIL'}")
     print("(ratio: Node frames/s over the compiled path's; target >= 1. shown.js resolves "
           + ", ".join(f"{r['node_shown_fps']:,.0f}" for r in rows) + " frames/s on top.)")
-    args.json.write_text(json.dumps({"node": version, "repeat": args.repeat, "rounds": args.rounds, "rows": rows}, indent=2))
+    print(f"\nthe head posed (facerig.js, the player's pose) from {pose['frames']} frames of the full-mask stream, "
+          f"{pose['vertices']} vertices: Node {pose['node_ms_per_pose']:.2f} ms/frame, Python "
+          f"{pose['python_ms_per_pose']:.2f} ms/frame, vertices at most {pose['max_vertex_difference_mm']:.1e} mm apart")
+    args.json.write_text(json.dumps({"node": version, "repeat": args.repeat, "rounds": args.rounds, "rows": rows,
+                                     "pose": pose}, indent=2))
     print(f"wrote {args.json}")
     return 0
 
