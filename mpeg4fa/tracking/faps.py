@@ -35,6 +35,13 @@ INDEX = {label: i for i, label in enumerate(LABELS)}
 JAW = 3
 JAW_POINTS = ("2.1", "2.10", "2.11", "2.12")
 """The chin's points: each drops by its share of the jaw's opening, so together they read it steadier than 2.1."""
+JAW_LIP, JAW_LIP_WEIGHT = "2.3", 0.5
+"""The lower lip's middle, which the jaw carries too, joins the chin's reading of the jaw with this weight (the chin's
+points together weigh 1). Why: the landmark model finds the chin on a soft outline and reads its drop short, the
+lip's edge it finds sharply. In tools/track_loop.py (12 s) the jaw's correlation with what was sent rose from
+0.80 to 0.91 with the head still and from 0.82 to 0.89 while it turns, and the inner lips' error fell from 20 % to
+14 % of their range. The cost, measured on the head's own points: a lower lip dropping on its own (FAP 5 without
+the jaw) is read one third as jaw, so the inner lips there give back 0.97 of what was sent instead of 0.98."""
 LIDS = (19, 20, 21, 22)
 GAZE_YAW = {23: "3.5", 24: "3.6"}
 GAZE_PITCH = {25: "3.5", 26: "3.6"}
@@ -165,6 +172,9 @@ def fap_values(local: np.ndarray, neutral: Neutral, angles: np.ndarray, geometry
     carry[INDEX["2.1"]] = 1.0  # 2.1 is the jaw's own point
     chin = [INDEX[label] for label in JAW_POINTS if label in INDEX and carry[INDEX[label]] > 0.5]
     jaw_drop = np.mean(d[:, chin, 1] / carry[chin], axis=1)  # 2.1's drop, read off the whole chin
+    lip = INDEX[JAW_LIP]
+    if carry[lip] > 0.5:  # and off the lower lip the jaw carries (a head whose jaw leaves its lip: the chin alone)
+        jaw_drop = (jaw_drop + JAW_LIP_WEIGHT * d[:, lip, 1] / carry[lip]) / (1.0 + JAW_LIP_WEIGHT)
     d[:, :, 1] -= carry[None, :] * jaw_drop[:, None]
     d[:, INDEX["2.1"], 1] = jaw_drop  # the jaw's own point is the jaw
     unit = np.array([neutral.fapu.unit(u) for u in _UNITS])

@@ -2,7 +2,7 @@
 MP4, tracked back, compared per group with the issue's thresholds (tools/track_loop.py has the long run).
 
 Where the shortfall lies (tools/track_loop.py, 12 s at 384 pixels): the tracker's FAP rules on the head's own
-feature points give back what was sent (correlation >= 0.97 in every group, asserted here); the landmark model
+feature points give back what was sent (correlation >= 0.95 in every group, asserted here); the landmark model
 reads the rendered face's motion at 0.35-0.75 of its size (the report's ``gain``: the head's deformation falls off
 within millimetres of its feature points, where the landmarks sit), and head turns of up to 30 degrees bend its
 landmarks in ways no rigid fit takes out (when written: lip corners 0.95 -> 0.42, brows 0.67 -> 0.24 correlation
@@ -18,9 +18,10 @@ TOOL = Path(__file__).resolve().parents[2] / "tools" / "track_loop.py"
 NOT_MET = {  # what the tracker does not reach yet while the head turns (see the report of tools/track_loop.py)
     "jaw (3)", "lip corners (12/13)", "outer lip corners (53/54)", "inner lips (4/5)", "brows (31-36)",
     "lids (19/20)"}
-ENGINE_CORRELATION, ENGINE_RMS_SHARE = 0.97, 0.03
-"""The FAP rules on the face engine's own feature points: all but exact (measured: correlation 1.000 and RMS
-<= 0.8 % in every group but the inner lips, 0.975 and 2.0 % on this short loop, 0.984 and 1.7 % on 12 s)."""
+ENGINE_CORRELATION, ENGINE_RMS_SHARE = 0.95, 0.05
+"""The FAP rules on the face engine's own feature points: all but exact. Measured: correlation >= 0.99 and RMS
+<= 2 % in every group but the inner lips, 0.964 and 2.8 % on this short loop (0.97, 3 % on 12 s), where the jaw's
+reading takes a third of a lone lower lip's drop (:data:`mpeg4fa.tracking.faps.JAW_LIP_WEIGHT`)."""
 
 
 def _tool():
