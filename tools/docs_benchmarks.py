@@ -188,7 +188,9 @@ def _flat(row: dict, prefix: str = "", depth: int = 0) -> dict[str, Any]:
     for key, value in row.items():
         if key in SKIP_KEYS:
             continue
-        if isinstance(value, dict) and depth < 2:
+        if isinstance(value, dict) and any(re.search(r"[:/]", str(k)) for k in value):
+            out[f"{prefix}{key}"] = list(value.values())  # keyed by addresses or paths: the values, in order
+        elif isinstance(value, dict) and depth < 2:
             out.update(_flat(value, f"{prefix}{key}.", depth + 1))
         elif _scalar(value):
             out[f"{prefix}{key}"] = value
@@ -401,10 +403,19 @@ def _plot_align(d: dict, fig) -> None:
     ax.set_title("Alignment of a recording to its transcript", loc="left", fontsize=10)
 
 
+def _plot_batch(d: dict, fig) -> None:
+    ax = fig.add_subplot(111)
+    rows = d["rows"]
+    _bars(ax, [f"{r['workers']} worker(s), {r['lp_num_threads']} llvmpipe threads" for r in rows],
+          {"wall": [r["wall_s"] for r in rows], "warm (first job left out)": [r["warm_s"] for r in rows]},
+          f"seconds for {d['streams']} streams of {d['seconds']} s at {d['size']} px")
+    ax.set_title("Batch rendering on a local Dask cluster", loc="left", fontsize=10)
+
+
 PLOTS: dict[str, tuple[Callable[[dict, Any], None], tuple[float, float]]] = {
     "codec": (_plot_codec, (8, 3.2)), "encoder": (_plot_encoder, (7, 3.2)), "face": (_plot_face, (7, 2.6)),
     "calibration": (_plot_calibration, (11, 4.5)), "fbajs": (_plot_fbajs, (8, 2.4)),
-    "photo": (_plot_photo, (8, 3)), "align": (_plot_align, (8, 3.4)),
+    "photo": (_plot_photo, (8, 3)), "align": (_plot_align, (8, 3.4)), "batch": (_plot_batch, (8, 2.4)),
 }
 
 

@@ -5,7 +5,7 @@ with its reason.
 A fenced ``sh`` block in ``docs/`` is preceded by one marker line:
 ``<!-- run -->`` (run here), ``<!-- run: needs the generic head -->`` (run when the head is built),
 ``<!-- run: from the clone's root -->`` (reads the repository's own files, e.g. ``conformance/``: run in the
-temporary folder with the repository's ``conformance`` and ``spec`` linked into it, so what it writes lands
+temporary folder with the repository's ``conformance``, ``spec`` and ``mpeg4fa`` linked into it, so what it writes lands
 there), or ``<!-- skip: REASON -->`` (too slow, needs a display, a network, a photo...: the reason says which).
 """
 from __future__ import annotations
@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 BLOCK = re.compile(r"^(?P<marker><!--.*?-->\n)?```(?P<lang>sh|bash)\n(?P<body>.*?)^```", re.M | re.S)
 MARKER = re.compile(r"<!-- (run|run: needs the generic head|run: from the clone's root|skip: \S.*) -->\n")
-LINKED = ("conformance", "spec")
+LINKED = ("conformance", "spec", "mpeg4fa")
 
 
 def shell_blocks() -> list[tuple[str, str, str]]:
@@ -56,6 +56,8 @@ def test_every_shell_block_says_whether_it_runs(place, marker, body):
 def test_documented_commands_run(place, marker, body, tmp_path):
     if "generic head" in marker and not asset.is_installed():
         pytest.skip("generic head not built: run `mpeg4fa model install` (needs network once)")
+    if re.search(r"^\s*[^#]*\bnode\b", body, re.M) and shutil.which("node") is None:
+        pytest.skip("Node.js is not installed (fba.js runs in it)")
     if "clone's root" in marker:
         for name in LINKED:
             (tmp_path / name).symlink_to(ROOT / name, target_is_directory=True)
