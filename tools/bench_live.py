@@ -15,6 +15,9 @@ louder than -45 dBFS after at least 300 ms quieter), not taken from espeak-ng's 
   includes waiting for a core: the load average is recorded), and the backlog (how late the hand-over was: it grows if
   the stream falls behind). CPU share: process time over wall time.
 * **fast**: the chunks fed back to back, for the throughput (x real time).
+* **quality**: the live track's visemes against the text path's for the same speech (espeak-ng's own
+  phonemes through the English table), and the recording path's (``speech.listen``, phones recognised
+  from the whole file at once) against the same: what deciding in 320 ms windows costs.
 * **latency**: for each speech onset, the delay from the hand-over of the chunk holding the onset to the
   return of the ``feed`` that first gave a frame with the lips or jaw moved (a frame within 300 ms
   before the onset or later). Realtime mode: wall-clock; both modes also give it in audio time (the
@@ -59,24 +62,56 @@ LIPS = [FAP_BY_NAME[n].number - 1 for n in (
     "lower_t_lip_lm", "lower_t_lip_rm", "raise_b_lip_lm", "raise_b_lip_rm", "push_b_lip", "push_t_lip")]
 
 
-def make_wav(path: Path, seconds: float, seed: int = 0) -> None:
-    """espeak-ng sentences with seeded pauses, at least ``seconds`` long, as a 16 kHz WAV."""
+def make_wav(path: Path, seconds: float, seed: int = 0) -> list:
+    """espeak-ng sentences with seeded pauses, at least ``seconds`` long, as a 16 kHz WAV; returns the text
+    path's visemes of it (espeak-ng's phonemes through the English table, as Timings on the WAV's time)."""
     from mpeg4fa.speech.tts.espeak import EspeakEngine
+    from mpeg4fa.speech.utterance import Timing
+    from mpeg4fa.speech.visemes import english_visemes
 
     engine, rng = EspeakEngine(), np.random.default_rng(seed)
     cache: dict = {}
-    parts, total, k = [np.zeros(int(0.8 * RATE))], 0.8, 0
+    parts, total, k, truth = [np.zeros(int(0.8 * RATE))], 0.8, 0, []
     while total < seconds:
         text, (voice, wpm) = SENTENCES[k % len(SENTENCES)], VOICES[(k // len(SENTENCES)) % len(VOICES)]
         if (text, voice, wpm) not in cache:
             speech = engine.synthesize(text, voice=voice, rate=wpm)
-            cache[text, voice, wpm] = resample(speech.samples / 32768.0, speech.rate, RATE)
+            cache[text, voice, wpm] = (resample(speech.samples / 32768.0, speech.rate, RATE),
+                                       english_visemes(list(speech.phonemes())))
+        audio, visemes = cache[text, voice, wpm]
+        truth += [Timing(e.text, v, total + e.start, total + e.end) for v, e in visemes if e.end > e.start]
         pause = np.zeros(int(rng.uniform(0.4, 2.0) * RATE))
-        parts += [cache[text, voice, wpm], pause]
-        total += (len(parts[-2]) + len(pause)) / RATE
+        parts += [audio, pause]
+        total += (len(audio) + len(pause)) / RATE
         k += 1
     x = np.concatenate(parts)[:int(seconds * RATE)]
     write_pcm16(path, np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16), RATE)
+    return [t for t in truth if t.end <= seconds]
+
+
+def quality(pcm: np.ndarray, truth: list) -> dict:
+    """The live track's visemes against the text path's (espeak-ng's own phonemes), beside the recording
+    path's phone recognition of the whole file at once (speech.listen, phonetic): per-frame agreement and
+    closure onsets within 40 ms (speech.listen.compare)."""
+    from mpeg4fa.speech.align.recording import Recording
+    from mpeg4fa.speech.listen import listen
+    from mpeg4fa.speech.listen.compare import agreement, onset_score
+
+    live = LiveLipSync(RATE, FPS, keep_spans=True)
+    step = int(CHUNK * RATE)
+    for k in range(0, len(pcm), step):
+        live.feed(pcm[k:k + step])
+    live.flush()
+    whole = listen(Recording(pcm, RATE, "bench"), recognizer="phonetic").utterance.timings
+    duration = len(pcm) / RATE
+    out = {}
+    for name, timings in (("live", live.timings), ("whole_file", list(whole))):
+        share, frames = agreement(truth, timings, duration)
+        onsets = onset_score(truth, timings)
+        out[name] = {"agreement": share, "frames": frames, "closures": onsets.reference,
+                     "closures_within_40ms": onsets.share, "closure_mean_error_ms": 1e3 * onsets.mean_error,
+                     "extra_closures": onsets.extra}
+    return out
 
 
 def onsets(pcm: np.ndarray) -> list[float]:
@@ -150,10 +185,11 @@ def main() -> None:
     p.add_argument("--wav", type=Path)
     p.add_argument("--json", type=Path, default=ROOT / "tools" / "bench_live.json")
     args = p.parse_args()
+    truth = None
     with tempfile.TemporaryDirectory() as tmp:
         wav = args.wav or Path(tmp) / "live.wav"
         if args.wav is None:
-            make_wav(wav, args.seconds)
+            truth = make_wav(wav, args.seconds)
         pcm, rate = read_wav(wav)
     if rate != RATE:
         pcm = np.clip(np.rint(resample(pcm / 32768.0, rate, RATE) * 32767), -32768, 32767).astype(np.int16)
@@ -173,7 +209,14 @@ def main() -> None:
               + f" {r['onsets_seen']:3d}/{r['onsets']:<3d} {la['mean']:22.0f}/{la['p95']:4.0f}/{la['max']:4.0f}"
               + (f" {lw['mean']:8.0f}/{lw['p95']:4.0f}/{lw['max']:4.0f}" if lw else f" {'-':>18}")
               + f"  load {r['load_average'][0]:.1f}-{r['load_average'][1]:.1f}")
+    scores = quality(pcm, truth) if truth is not None else None
+    if scores:
+        print(f"\n{'visemes vs the text path':<26} {'agree':>6} {'closures <=40ms':>16} {'mean err ms':>12} {'extra':>6}")
+        for name, q in scores.items():
+            print(f"{name:<26} {q['agreement']:6.1%} {q['closures_within_40ms']:16.1%} "
+                  f"{q['closure_mean_error_ms']:12.1f} {q['extra_closures']:6d}   ({q['closures']} closures)")
     out = {"latency_setting_ms": LATENCY * 1e3, "chunk_ms": CHUNK * 1e3, "fps": FPS, "results": results,
+           "quality": scores,
            "machine": {"python": platform.python_version(), "cpus": __import__("os").cpu_count()}}
     args.json.write_text(json.dumps(out, indent=1) + "\n")
     print(f"wrote {args.json}")

@@ -28,7 +28,8 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
   shows about ``latency - LEAD`` after the speech starts (the anticipation hides the rest).
 - Voice: a 10 ms frame is voiced when pocketsphinx's voice activity detector (:class:`pocketsphinx.Vad`)
   hears speech in it and its spectrum is not flat (:func:`flatness`, white noise). A phone over
-  unvoiced frames is silence whatever the loop calls it, so silence and noise keep the mouth at rest;
+  unvoiced frames (more than :data:`REACH` after voice) is silence whatever the loop calls it, so
+  silence and noise keep the mouth at rest;
   voice the loop still calls silence (the first window or two of speech) takes :data:`VOICE_VISEME`.
   Music is heard as voice (measured: the mouth moves to it); no gate here tells them apart.
 
@@ -68,6 +69,9 @@ FLAT = 0.3
 VOICE_VISEME = "E"
 """The shape of a voice the phone loop has not made out yet (it calls the start of speech silence for a
 window or two): the neutral vowel's, as espeak-ng's schwa ``@`` has it."""
+REACH = 0.15
+"""Seconds after voice in which a phone the loop hears stays a phone though unvoiced (as the recording
+path's :data:`~.listen.voice.REACH` widens speech, here on the side already heard only)."""
 _HOP_10MS = 0.01
 _SILENT = frozenset({"SIL", "+NSN+", "+SPN+", "+BREATH+", "+COUGH+", "+UM+", "+NOISE+", "+SMACK+", "+UH+"})
 
@@ -110,11 +114,12 @@ class LiveLipSync:
     ``rate``: the audio's sample rate (anything; it is resampled to the model's 16 kHz as it comes,
     :class:`Resampler`);
     ``fps``: frames per second; ``idle``: blinks and head motion as the encoder's ``--idle`` gives them;
-    ``latency``: at least :data:`LATENCY` (more only delays the frames, it buys nothing).
+    ``latency``: at least :data:`LATENCY` (more only delays the frames, it buys nothing);
+    ``keep_spans``: keep every viseme span (:attr:`timings`, for measuring; a long session's grow).
     """
 
     def __init__(self, rate: int = RATE, fps: float = 25.0, *, latency: float = LATENCY, idle: bool = False,
-                 seed: int = 0) -> None:
+                 seed: int = 0, keep_spans: bool = False) -> None:
         if isinstance(rate, bool) or not isinstance(rate, (int, np.integer)) or not 4000 <= rate <= 192000:
             raise ValueError(f"rate {rate!r} must be an integer number of Hz in 4000..192000")
         if not (isinstance(latency, (int, float)) and math.isfinite(latency) and latency >= LATENCY - 1e-9):
@@ -139,6 +144,7 @@ class LiveLipSync:
         self.voiced_from = 0
         self.vad_tail = np.zeros(0, np.int16)  # 16 kHz samples not yet a whole detector frame
         self.spans = 0  # spans begun (for tests and the benchmark)
+        self.log: list[list] | None = [] if keep_spans else None
         self.rng = np.random.default_rng(seed)
 
     # ---- input -------------------------------------------------------------------------------
@@ -162,6 +168,15 @@ class LiveLipSync:
             self._window_done(self.fed // self.hop + 1, final=True)
         self._close(self.fed / RATE)
         return self.maker.finish(max(self.fed / RATE, 1 / self.fps)).values
+
+    @property
+    def timings(self) -> list:
+        """The viseme spans so far as :class:`~.utterance.Timing` (``keep_spans`` only)."""
+        from mpeg4fa.speech.utterance import Timing
+
+        if self.log is None:
+            raise ValueError("LiveLipSync(keep_spans=True) keeps the spans")
+        return [Timing("", v, a, b) for v, a, b in self.log]
 
     @property
     def frames_out(self) -> int:
@@ -213,10 +228,17 @@ class LiveLipSync:
             self.voiced, self.voiced_from = self.voiced[drop:], self.voiced_from + drop
 
     def _is_voiced(self, a: float, b: float) -> bool:
-        """Whether the detector heard a voice in most of ``[a, b)``."""
-        i = max(0, int(round(a / VAD_FRAME)) - self.voiced_from)
+        """Whether most of ``[a, b)`` is voice, or within :data:`REACH` after voice (the consonants that
+        close a syllable: a stop's silent closure, a final s; the ones before a vowel would need the audio
+        after them, which the latency does not wait for)."""
+        i = int(round(a / VAD_FRAME)) - self.voiced_from
         j = max(i + 1, int(round(b / VAD_FRAME)) - self.voiced_from)
-        part = self.voiced[i:j]
+        reach = int(round(REACH / VAD_FRAME))
+        heard = self.voiced[max(0, i - reach):max(0, j)]
+        if not len(heard):
+            return False
+        near = np.convolve(heard, np.ones(reach + 1), mode="full")[:len(heard)] > 0  # voice within reach before
+        part = near[len(heard) - (j - max(i, 0)):] if j > max(i, 0) else near[-1:]
         return bool(len(part)) and part.mean() >= 0.5
 
     def _commit(self, phones: list[tuple[str, float, float]], upto: float) -> None:
@@ -247,6 +269,8 @@ class LiveLipSync:
             return
         self.open = [viseme, a, b]
         self.spans += 1
+        if self.log is not None:
+            self.log.append(self.open)  # the same list: it grows with the span
         # the move in takes its lag as from a phone of full length (LAG); its real end follows as it grows
         (phase,) = _checked_spans([VisemeSpan(viseme, a, max(b, a + LAG / LAG_SHARE))])
         self.maker.segments += self.maker.moves.add(phase)

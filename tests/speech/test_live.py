@@ -185,3 +185,19 @@ def test_bad_settings_are_refused():
         LiveLipSync(latency=0.05)
     with pytest.raises(ValueError, match="rate"):
         LiveLipSync(rate=100)
+
+
+def test_the_kept_spans_lie_in_the_speech(clip):
+    pcm, speech = clip
+    live = LiveLipSync(keep_spans=True)
+    for i in range(0, len(pcm), 320):
+        live.feed(pcm[i:i + 320])
+    live.flush()
+    spans = live.timings
+    assert len(spans) == live.spans > 0 and all(t.end > t.start for t in spans)
+    for t in spans:
+        assert any(a - 0.05 <= t.start and t.end <= b + 0.2 for a, b in speech), (t, speech)
+    for a, b in speech:
+        assert sum(min(t.end, b) - max(t.start, a) for t in spans if t.end > a and t.start < b) >= 0.5 * (b - a)
+    with pytest.raises(ValueError, match="keep_spans"):
+        LiveLipSync().timings
