@@ -289,6 +289,27 @@ def test_fdp_dropped_with_the_stream_calibrates_the_head(page, tmp_path):
     refused = [e for e in page.errors if "status of 400" in e]  # chromium logs the refused upload itself
     assert len(refused) == 1 and page.errors == refused, page.errors
     page.errors.clear()
+    # by URL: the .fdp beside the .fba is fetched and applied (files served here by intercepting /files/)
+    folder = tmp_path / "served"
+    folder.mkdir()
+    for f in (fba, wav, fdp):
+        (folder / ("talk" + f.suffix)).write_bytes(f.read_bytes())
+
+    def serve_file(route):
+        path = folder / route.request.url.rsplit("/", 1)[1]
+        if path.is_file():
+            route.fulfill(status=200, body=path.read_bytes())
+        else:
+            route.fulfill(status=404, body=b"")
+    page.route("**/files/*", serve_file)
+    try:
+        page.evaluate("window.fbaPlayer.state.headName = null")
+        page.evaluate("window.fbaPlayer.openUrl('/files/talk.fba')")
+        page.wait_for_function("window.fbaPlayer.state.headName === 'talk.fdp'", timeout=120_000)
+        page.wait_for_function("window.fbaPlayer.state.done", timeout=30_000)
+        assert_close(compare_points(page, calibrated, fba, {"jaw open": frames["jaw open"]}))
+    finally:
+        page.unroute("**/files/*")
 
 
 def test_static_page_with_a_baked_fdp(page, tmp_path):
@@ -324,6 +345,9 @@ def test_static_page_with_a_baked_fdp(page, tmp_path):
         errs = compare_points(pg, assemble_face(fdp=load_fdp(fdp)), fba,
                               {"jaw open": int(np.argmax(decode(fba).fap_values[:, 2]))})
         assert_close(errs)
+        pg.set_input_files("#files", [str(fdp)])  # no server to calibrate another: the page says how
+        message = pg.inner_text("#message")
+        assert message.startswith("sender.fdp: this page carries its head") and "--fdp" in message, message
     finally:
         pg.close()
     assert not errors, errors

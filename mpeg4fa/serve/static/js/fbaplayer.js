@@ -178,9 +178,11 @@ async function openUrl(url) {
 }
 
 // ---- playback ----------------------------------------------------------------------------------
+/** The media time shown: where it was paused or sought to; while playing, the audio's clock once it runs
+ * (a .wav served without range requests cannot seek: paused, the picture still shows where it was put). */
 function now() {
-  if (state.audio && audio.src && !Number.isNaN(audio.duration)) return audio.currentTime;
   if (state.paused || state.clock0 === null) return state.offset;
+  if (state.audio && audio.src && !Number.isNaN(audio.duration) && !audio.paused) return audio.currentTime;
   return state.offset + (performance.now() - state.clock0) / 1000;
 }
 
@@ -248,6 +250,8 @@ function loop() {
 // ---- wiring ------------------------------------------------------------------------------------
 playButton.addEventListener("click", () => (state.paused ? play() : pause()));
 scrub.addEventListener("input", () => seek(Number(scrub.value)));
+// audio that arrives after a seek (a URL's .wav loads while the frames play) starts where the picture is
+audio.addEventListener("loadedmetadata", () => { audio.currentTime = state.paused ? state.offset : now(); });
 $("files").addEventListener("change", (e) => openFiles(e.target.files));
 $("open").addEventListener("click", () => { const url = $("url").value.trim(); if (url) openUrl(url); });
 window.addEventListener("keydown", (e) => {
