@@ -106,13 +106,16 @@ def layers_picture(face: FaceModel, said: Spoken, out: Path, size: int = 420) ->
     camera = frame_points(face.mesh.feature_points(), size, size, margin=0.25)
     renderer = Renderer(face, width=size, height=size, samples=4, camera=camera)
     pixels = renderer.render(pose)
-    fig = plt.figure(figsize=(19, 4.8), dpi=100)
-    grid = fig.add_gridspec(1, 6, width_ratios=[0.95, 0.42, 1.05, 1, 1, 1], wspace=0.1)  # [1]: room for the FAP names
+    fig = plt.figure(figsize=(11, 9.6), dpi=100)
+    rows = fig.add_gridspec(2, 1, height_ratios=[1.15, 1], hspace=0.18)
+    top = rows[0].subgridspec(1, 3, width_ratios=[0.9, 0.42, 1.5], wspace=0.05)  # [1]: room for the FAP names
+    bottom = rows[1].subgridspec(1, 3, wspace=0.06)
+    grid = [top[0], top[1], top[2], bottom[0], bottom[1], bottom[2]]
 
     ax = fig.add_subplot(grid[0])
     ax.axis("off")
     ax.set_title("1. action\nwhat the sender says", loc="left", fontsize=11)
-    text = "\n".join([*textwrap.wrap(f'text and tags: "{said.text}"', 27), "",
+    text = "\n".join([*textwrap.wrap(f'text and tags: "{said.text}"', 30), "",
                       f"-> {len(said.stream)} frames, {len(said.bits)} bytes;", f"this is frame {data['frame']}:", "",
                       "FAP 1 viseme:", f"  {data['viseme']}", "FAP 2 expression:", f"  {data['expression']}"])
     ax.text(0, 0.95, text, va="top", fontsize=9, family="monospace", transform=ax.transAxes)
