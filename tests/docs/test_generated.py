@@ -70,7 +70,8 @@ def test_layers_show_one_frame_as_the_face_engine_moves_it(diagrams, said, tmp_p
     assert values[2] > 100
     assert -moved[1] == pytest.approx(values[2] * face.fapu.MNS0 / 1024, rel=1e-6)
     assert drawn["edges"] > 5000
-    assert Image.open(tmp_path / "layers.png").width >= 1200
+    image = Image.open(tmp_path / "layers.png")
+    assert image.width >= 800 and image.height >= 700
 
 
 def test_committed_diagrams_are_current(diagrams, said):
