@@ -72,7 +72,8 @@ BENCHES: tuple[Bench, ...] = (
     Bench("face", "Face engine", "head rig, calibration per method, frames/s of every deformer, memory"),
     Bench("calibration", "Calibration methods", "DFFD, RBF and elastic calibration on the same FDPs",
           small=("--repeat", "1")),
-    Bench("render", "Rendering", "decode + deform + render + readback per frame, MP4/PNG export, memory"),
+    Bench("render", "Rendering", "decode + deform + render + readback per frame, MP4/PNG export, memory",
+          small=("--repeat", "2")),
     Bench("fbajs", "fba.js in Node against the compiled Python decoder", "frames/s of both on the same streams",
           small=("--repeat", "3", "--rounds", "2")),
     Bench("photo", "Photo to FDP", "each step of `mpeg4fa fdp PHOTO` and the whole command", json_flag="--out",
@@ -112,10 +113,12 @@ def run(bench: Bench, extra: tuple[str, ...] | None = None) -> Path:
     """Run ``bench`` (nice -n 5) with its small options or ``extra``, then stamp its JSON with ``_made``."""
     command = bench.command(extra)
     started = dt.datetime.now(dt.timezone.utc)
+    load_before = os.getloadavg()[0]
     subprocess.run(["nice", "-n", "5", sys.executable, *command[1:]], cwd=ROOT, check=True)
     data = json.loads(bench.json_path.read_text(encoding="utf-8"))
     data["_made"] = {"machine": machine(), "date": started.strftime("%Y-%m-%d %H:%M UTC"),
-                     "command": shlex.join(command)}
+                     "command": shlex.join(command),
+                     "load": f"load average {load_before:.1f} before, {os.getloadavg()[0]:.1f} after"}
     bench.json_path.write_text(json.dumps(data, indent=1, default=str) + "\n", encoding="utf-8")
     return bench.json_path
 
@@ -136,7 +139,8 @@ def provenance(bench: Bench, data: dict) -> str:
     """Where, when and how the figures were made: ``_made`` when ``--run`` made them, else what the JSON says."""
     made = data.get("_made")
     if isinstance(made, dict):
-        return f"Made on {made['machine']}, {made['date']}, by `{made['command']}`."
+        load = f" ({made['load']}: other work on the machine slows what it times)" if made.get("load") else ""
+        return f"Made on {made['machine']}, {made['date']}, by `{made['command']}`{load}."
     where = data.get("machine")
     if isinstance(where, dict):
         where = ", ".join(f"{k} {v}" for k, v in where.items() if isinstance(v, (str, int, float)) and v != "")
@@ -412,10 +416,25 @@ def _plot_batch(d: dict, fig) -> None:
     ax.set_title("Batch rendering on a local Dask cluster", loc="left", fontsize=10)
 
 
+def _plot_render(d: dict, fig) -> None:
+    ax = fig.add_subplot(121)
+    sizes = [k for k in d if k.startswith("per_frame")]
+    stages = [k for k in d[sizes[0]] if k not in ("total", "frames") and not k.endswith("_s")]
+    _bars(ax, [k[len("per_frame "):] for k in sizes],
+          {stage: [1000 * d[k][stage] for k in sizes] for stage in stages}, "milliseconds a frame")
+    ax.set_title(f"Playback per frame on {d['gl'].get('GL_RENDERER', 'GL')}", loc="left", fontsize=10)
+    ax = fig.add_subplot(122)
+    _bars(ax, list(d["export"]), {"x real time": [v["speed_x_realtime"] for v in d["export"].values()]},
+          "x real time (1 = as fast as it plays)")
+    ax.axvline(1.0, color="k", lw=0.6)
+    ax.set_title("Export", loc="left", fontsize=10)
+
+
 PLOTS: dict[str, tuple[Callable[[dict, Any], None], tuple[float, float]]] = {
     "codec": (_plot_codec, (8, 3.2)), "encoder": (_plot_encoder, (7, 3.2)), "face": (_plot_face, (7, 2.6)),
     "calibration": (_plot_calibration, (11, 4.5)), "fbajs": (_plot_fbajs, (8, 2.4)),
     "photo": (_plot_photo, (8, 3)), "align": (_plot_align, (8, 3.4)), "batch": (_plot_batch, (8, 2.4)),
+    "render": (_plot_render, (12, 2.8)),
 }
 
 
