@@ -132,7 +132,8 @@ def load(bench: Bench) -> dict | None:
     """The benchmark's JSON, or None when it has not been made (or cannot be read: said on the page)."""
     if not bench.json_path.is_file():
         return None
-    return json.loads(bench.json_path.read_text(encoding="utf-8"))
+    data = json.loads(bench.json_path.read_text(encoding="utf-8"))
+    return data if isinstance(data, dict) else {"rows": data}  # a bare list of rows is one table
 
 
 def provenance(bench: Bench, data: dict) -> str:
@@ -168,7 +169,7 @@ def number(value: Any) -> str:
         return f"{value:,}"
     if isinstance(value, float):
         if value != value:
-            return "nan"
+            return "n/a"
         if value == 0 or abs(value) >= 1000:
             return f"{value:,.0f}"
         if abs(value) < 0.001:
