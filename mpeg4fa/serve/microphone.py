@@ -17,7 +17,7 @@ frame shows; a frame goes out as soon as the audio ``latency`` s after it has co
 them to the player's own handler (``window.player.onBinary``), which decodes and plays them like a
 sentence's stream. Text messages:
 
-``{"type": "mic", "state": "started", "latency": 0.2, "rate": 16000, "fps": 25.0}``
+``{"type": "mic", "state": "started", "latency": 0.18, "rate": 16000, "fps": 25.0}``
 ``{"type": "mic", "state": "ended", "frames": n, "seconds": s}``
 
 Guard (as :mod:`mpeg4fa.guard` bounds HTTP bodies and :mod:`.protocol` the JSON messages): a chunk

@@ -19,6 +19,7 @@ from mpeg4fa.serve.app import create_app  # noqa: E402
 from mpeg4fa.serve.microphone import AHEAD, MAX_CHUNK_BYTES, MIC_KIND  # noqa: E402
 from mpeg4fa.serve.protocol import FBA_KIND, pack, unpack  # noqa: E402
 from mpeg4fa.spec import FAP_BY_NAME  # noqa: E402
+from mpeg4fa.speech.live import LATENCY  # noqa: E402
 from mpeg4fa.speech.align.recording import resample  # noqa: E402
 from serve.live_server import face_for_tests, running  # noqa: E402
 
@@ -79,7 +80,7 @@ def test_microphone_audio_comes_back_as_a_face_that_speaks(base):
         texts, faces = receive_all(ws, until="ended")
     kinds = [m.get("state") or m["type"] for m in texts]
     assert kinds[0] == "started" and kinds[-1] == "ended" and "error" not in kinds, texts
-    assert texts[0]["latency"] == pytest.approx(0.2) and texts[0]["rate"] == RATE
+    assert texts[0]["latency"] == pytest.approx(LATENCY) and texts[0]["rate"] == RATE
     times, values = [], []
     for t, payload in faces:  # each message a whole stream of its own, placed at its media time
         stream = decode(payload)
