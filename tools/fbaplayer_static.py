@@ -8,7 +8,7 @@ facerig.js, fba.js, shown.js, spec.js, three.js and the two addons it uses) goes
 URL under a bare name (their relative imports rewritten to those names), and the head (the
 GLB and rig of :mod:`mpeg4fa.serve.fap_head`, of the generic head or of one calibrated to ``--fdp``) and its
 key ride along in the page. Open the file and drop a .fba with its .wav on it (a URL cannot be
-fetched from a file:// page). About 10 MB.
+fetched from a file:// page). About 4 MB (the generic head, untextured).
 """
 from __future__ import annotations
 
