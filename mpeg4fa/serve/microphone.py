@@ -23,8 +23,9 @@ sentence's stream. Text messages:
 Guard (as :mod:`mpeg4fa.guard` bounds HTTP bodies and :mod:`.protocol` the JSON messages): a chunk
 holds at most :data:`MAX_CHUNK_SECONDS` of audio and an even number of bytes; a session's audio may
 not run ahead of the wall clock since it began by more than :data:`AHEAD` s (the page sends in real
-time; a client pushing faster would make the server listen faster than anyone speaks). A chunk
-outside these is dropped with an ``error`` (``where``: ``mic``), and the session goes on.
+time; a client pushing faster would make the server listen faster than anyone speaks); at most
+:data:`MAX_SESSIONS` sessions run at once in a server. A chunk outside these is dropped with an
+``error`` (``where``: ``mic``), and the session goes on.
 """
 from __future__ import annotations
 
@@ -47,6 +48,8 @@ MAX_GAP = 1.0
 """The longest gap between chunks filled with silence; a chunk later than that is dropped."""
 IDLE_END = 5.0
 """Seconds without a chunk after which a session ends by itself."""
+MAX_SESSIONS = 4
+"""Sessions one server runs at once: each holds four phone decoders, about 115 MiB."""
 
 
 def is_microphone(data: bytes | None) -> bool:
@@ -57,9 +60,11 @@ def is_microphone(data: bytes | None) -> bool:
 class Microphone:
     """One connection's microphone: sessions of :class:`~mpeg4fa.speech.live.LiveLipSync`, one at a time.
 
-    ``send``: the connection's sender (JSON dicts and bytes). Recognition and coding run in a worker thread, chunk by chunk in order (the connection reads its next message
-    only when a chunk is done).
+    ``send``: the connection's sender (JSON dicts and bytes). Recognition and coding run in a worker
+    thread, chunk by chunk in order (the connection reads its next message only when a chunk is done).
     """
+
+    running = 0  # sessions live in this process (one server per process; tests run theirs one at a time)
 
     def __init__(self, send, fps: float, clock=time.monotonic) -> None:
         self.send, self.fps, self.clock = send, float(fps), clock
@@ -89,6 +94,10 @@ class Microphone:
             await self.end()
             return
         if self.live is None:
+            if Microphone.running >= MAX_SESSIONS:
+                await self.send(error_message(f"{MAX_SESSIONS} microphones are live on this server already: "
+                                              "try again when one has stopped", "mic"))
+                return
             await self.start(t if np.isfinite(t) else 0.0)
         now = self.clock()
         self.last_chunk = now
@@ -123,7 +132,12 @@ class Microphone:
         from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
 
         self.started_at = self.last_chunk = self.clock()  # the first chunk's arrival: the audio's clock
-        self.live = await asyncio.to_thread(LiveLipSync, RATE, self.fps, idle=True)
+        Microphone.running += 1
+        try:
+            self.live = await asyncio.to_thread(LiveLipSync, RATE, self.fps, idle=True)
+        except BaseException:
+            Microphone.running -= 1
+            raise
         self.coder = LiveEncoder(self.fps)
         self.received = self.frames = 0
         self.origin = origin
@@ -138,6 +152,7 @@ class Microphone:
         live, self.live = self.live, None
         if live is None:
             return
+        Microphone.running -= 1
         watchdog, self.watchdog = self.watchdog, None
         if watchdog is not None and watchdog is not asyncio.current_task():
             watchdog.cancel()
@@ -147,6 +162,8 @@ class Microphone:
 
     async def close(self) -> None:
         """The connection is gone: stop the watchdog (no frames to send)."""
+        if self.live is not None:
+            Microphone.running -= 1
         self.live = None
         for task in list(self.tasks):
             task.cancel()

@@ -129,3 +129,23 @@ def test_audio_faster_than_real_time_and_out_of_order_is_refused(base):
     assert any("chunks come in order" in e for e in errors), errors
     ended = [m for m in texts if m.get("state") == "ended"]
     assert ended and ended[0]["seconds"] <= elapsed + AHEAD + 0.25 and ended[0]["seconds"] < 10
+
+
+def test_a_server_runs_a_bounded_number_of_microphones(base, monkeypatch):
+    import mpeg4fa.serve.microphone as microphone
+
+    monkeypatch.setattr(microphone, "MAX_SESSIONS", 1)
+    chunk = np.zeros(CHUNK, np.int16).tobytes()
+    with connect(ws_url(base), origin=base) as first, connect(ws_url(base), origin=base) as second:
+        json.loads(first.recv(timeout=10)), json.loads(second.recv(timeout=10))
+        first.send(pack(MIC_KIND, 0.0, chunk))
+        assert json.loads(first.recv(timeout=20))["state"] == "started"
+        second.send(pack(MIC_KIND, 0.0, chunk))
+        answer = json.loads(second.recv(timeout=10))
+        assert answer["type"] == "error" and answer["where"] == "mic" and "already" in answer["error"]
+        first.send(pack(MIC_KIND, 0.02, b""))
+        assert receive_all(first, until="ended")[0][-1]["state"] == "ended"
+        second.send(pack(MIC_KIND, 0.0, chunk))  # one stopped: the other may start
+        assert json.loads(second.recv(timeout=20))["state"] == "started"
+    time.sleep(0.5)  # the closed connections' sessions end
+    assert microphone.Microphone.running == 0
