@@ -54,3 +54,10 @@ def test_a_bad_fdp_upload_is_one_located_error(client):
     assert r.status_code == 400 and "empty" in r.json()["error"]
     assert client.get("/api/head/0123456789abcdef.glb").status_code == 404
     assert client.get("/api/head/0123456789abcdef.json").json()["error"].startswith("no such head")
+
+
+def test_the_key_names_the_faces_own_deformer():
+    """The pages pose with the feature-point deformer; a face served with another one says so (the page shows it)."""
+    face = face_for_tests().with_deformer("muscle")
+    key = TestClient(create_app(face), base_url="http://127.0.0.1").get("/static/fap-head.json").json()
+    assert key["deformer"] == "muscle" and key["rig"]["version"] == RIG_VERSION

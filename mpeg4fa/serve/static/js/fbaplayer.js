@@ -87,7 +87,8 @@ function describe() {
     face ? `fap_quant ${face.quant}  mask types ${face.maskTypes.join("")}` : "no face header",
     `${s.bitsPerFrame.toFixed(1)} bits/frame  ${s.kbps.toFixed(2)} kbit/s`,
     `audio: ${state.audio ? "yes" : "none"}  decoded in ${state.decodeMs.toFixed(1)} ms`,
-    `head: ${headInfo.name}${headInfo.points ? ` (${headInfo.points} points${headInfo.texture ? `, texture ${headInfo.texture}` : ""})` : ""}`,
+    `head: ${headInfo.name}${headInfo.points ? ` (${headInfo.points} points${headInfo.texture ? `, texture ${headInfo.texture}` : ""})` : ""}`
+      + (head && head.deformerNote ? ` — ${head.deformerNote}` : ""),
   ].join("\n");
 }
 

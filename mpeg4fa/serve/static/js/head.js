@@ -87,6 +87,12 @@ export class Head {
     this.pose(this.values);
   }
 
+  /** A note when the face has another deformer than the one facerig.js ports (its pose then differs), else "". */
+  get deformerNote() {
+    const own = this.key.deformer;
+    return own && own !== "fap" ? `posed by the feature-point deformer, not this face's ${own}` : "";
+  }
+
   /** Take the head out of the view (another replaces it) and free its GPU buffers. */
   remove() {
     this.view.scene.remove(this.root);

@@ -185,7 +185,7 @@ state.featurePoints = () => head.featurePoints();
 function setStatus() {
   const s = state;
   statusBox.textContent = [
-    s.ready ? "head ready" : "loading the head…",
+    s.ready ? `head ready${head.deformerNote ? ` (${head.deformerNote})` : ""}` : "loading the head…",
     ws ? "connected" : "not connected",
     `frames ${s.frames.length} (shown ${s.shownFrames}), audio chunks ${s.audioChunks}, FBA ${s.fbaBytes} bytes in ${s.segments.length} segments`,
     `first frame ${s.latencyMs === null ? "-" : s.latencyMs.toFixed(0) + " ms"}, underruns ${s.underruns}, clock ${s.clock}`,
