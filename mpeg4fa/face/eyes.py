@@ -155,3 +155,42 @@ def middle_share(x: np.ndarray, corners_x: tuple[float, float], middle_x: float)
     x1, x2 = corners_x
     x = np.asarray(x, dtype=np.float64)
     return (x - x1) * (x - x2) / ((middle_x - x1) * (middle_x - x2))
+
+
+@dataclass(frozen=True)
+class EyeLooks:
+    """Sizes of the living eye's details (``data/eyes.csv``): cornea, tear film, lashes."""
+
+    cornea_radius: float
+    wet_specular: float
+    wet_shininess: float
+    upper_lash_length: float
+    lower_lash_length: float
+    lash_peak: float
+    lash_lift: float
+    lash_curl: float
+    lower_lash_lift: float
+    lower_lash_curl: float
+    lash_spacing: float
+    lash_width: float
+
+
+_LOOKS: EyeLooks | None = None
+
+
+def eye_looks() -> EyeLooks:
+    """The eye details' sizes, read once from ``data/eyes.csv`` (angles stay in degrees)."""
+    global _LOOKS
+    if _LOOKS is None:
+        import csv
+        from dataclasses import fields
+        from importlib import resources
+
+        with (resources.files("mpeg4fa.face") / "data" / "eyes.csv").open(encoding="utf-8") as f:
+            rows = {r["name"]: float(r["value"]) for r in csv.DictReader(f)}
+        names = [fld.name for fld in fields(EyeLooks)]
+        missing = sorted(set(names) - set(rows))
+        if missing:
+            raise FaceError(f"data/eyes.csv lacks {', '.join(missing)}")
+        _LOOKS = EyeLooks(**{n: rows[n] for n in names})
+    return _LOOKS

@@ -138,3 +138,27 @@ def turn_lid(points: np.ndarray, sheet: LidSheet, rest: np.ndarray, drop: float)
     dz = points[sheet.rows, 2] - centre[2]
     points[sheet.rows, 1] = centre[1] + c * dy - s * dz
     points[sheet.rows, 2] = centre[2] + s * dy + c * dz
+
+
+@dataclass(frozen=True)
+class LidMargin:
+    """One lid's margin on the skin, lateral corner to medial corner (what lashes grow from)."""
+
+    eye: str             # eye part, "eye_l" or "eye_r"
+    side: str            # "upper" or "lower"
+    rows: np.ndarray     # vertex indices in order along the margin
+    joint: int           # vertex index of the eye centre joint
+
+
+def lid_margins(mesh: HeadMesh) -> list[LidMargin]:
+    """The four lid margins of a neutral face (the paths :func:`build_lids` turns), in the order of :data:`LIDS`.
+
+    Kept here, next to the lid sheets, so that anything drawn along a lid's edge (the lashes,
+    :mod:`mpeg4fa.render.lashes`) rides on the same vertices the lid FAPs turn.
+    """
+    graph = edge_graph(mesh.vertices, mesh.triangles["skin"])
+    margins = []
+    for _fap, (eye, joint_name, point, _opposite, lateral, medial, side) in sorted(LIDS.items()):
+        rows = _margin(graph, mesh, lateral, point, medial)
+        margins.append(LidMargin(eye=eye, side=side, rows=np.asarray(rows, np.int64), joint=mesh.joints[joint_name]))
+    return margins

@@ -32,6 +32,7 @@ class Materials:
     sclera: Material = Material((0.93, 0.91, 0.88), 0.45, 60.0)
     iris: tuple[float, float, float] = (0.30, 0.20, 0.11)
     pupil: tuple[float, float, float] = (0.02, 0.02, 0.02)
+    lashes: tuple[float, float, float] = (0.045, 0.032, 0.026)  # the lash cards (render/lashes.py)
     teeth: Material = Material((0.93, 0.90, 0.82), 0.35, 40.0)
     gums: Material = Material((0.72, 0.36, 0.36), 0.2, 25.0)
     tongue: Material = Material((0.72, 0.30, 0.30), 0.25, 30.0)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mpeg4fa.face.eyes import eye_looks
 from mpeg4fa.face.looks import nose_wrinkle, points_of
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.model import FaceModel
@@ -19,6 +20,7 @@ from mpeg4fa.limits import SAMPLES, LimitError
 from mpeg4fa.render.camera import Camera, frame_points
 from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
+from mpeg4fa.render.lashes import build_lashes, lash_vertices
 from mpeg4fa.render.materials import Materials
 from mpeg4fa.render.scene import build_layout, vertex_data
 
@@ -41,7 +43,8 @@ class Renderer:
     def __init__(self, face: FaceModel, *, width: int = 512, height: int = 512, samples: int = 0,
                  camera: Camera | None = None, view: str | tuple[float, float] = "front",
                  materials: Materials | None = None, texture: np.ndarray | None = None,
-                 lighting: bool = True) -> None:
+                 lighting: bool = True, key_light: tuple[float, float, float] | None = None) -> None:
+        """``key_light``: the main light's direction (toward the light, head frame; default upper left front)."""
         if not (1 <= width <= MAX_SIZE and 1 <= height <= MAX_SIZE):
             raise RenderError(f"image size {width}x{height} is out of range", where="renderer",
                               hint=f"width and height from 1 to {MAX_SIZE}")
@@ -49,12 +52,15 @@ class Renderer:
         self.width, self.height = int(width), int(height)
         self.materials = materials or Materials()
         self.lighting = lighting
+        self.key_light = _unit(KEY_LIGHT[0] if key_light is None else key_light)
         self.layout = build_layout(face.mesh)
+        self.lashes = build_lashes(face.mesh)
         self.camera = camera or frame_points(face.mesh.feature_points(), self.width, self.height, view=view)
         self.ctx = gl_context()
         self._setup_gl(samples)
         self.set_texture(texture)
         self._vertex_data = np.empty((self.layout.n_vertices, 6), np.float32)
+        self._lash_data = np.empty((self.lashes.n_vertices, 6), np.float32) if self.lashes else None
         self._pixels = np.empty((self.height, self.width, 3), np.uint8)
         self._neutral_points = face.feature_points()
 
@@ -88,6 +94,17 @@ class Renderer:
                                                    (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints",
                                                     "in_detail", "in_nose")],
                                     index_buffer=self.index, index_element_size=4)
+        self.lash_vao = self.lash_buffers = None
+        if self.lashes is not None:  # a second draw with the same program: the cards along the lid margins
+            lash = self.lashes
+            dynamic = ctx.buffer(reserve=lash.n_vertices * 6 * 4, dynamic=True)
+            static = ctx.buffer(lash.static.tobytes())
+            index = ctx.buffer(lash.indices.tobytes())
+            self.lash_buffers = (dynamic, static, index)
+            self.lash_vao = ctx.vertex_array(
+                self.program, [(dynamic, "3f 3f", "in_position", "in_normal"),
+                               (static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints", "in_detail", "in_nose")],
+                index_buffer=index, index_element_size=4)
 
     def _apply_uniforms(self) -> None:
         """Materials, lights, camera and texture (the program is shared by all renderers)."""
@@ -100,8 +117,13 @@ class Renderer:
         prog["cavity_colour"].value = tuple(m.cavity)
         prog["iris_colour"].value = tuple(m.iris)
         prog["pupil_colour"].value = tuple(m.pupil)
+        prog["lash_colour"].value = tuple(m.lashes)
+        looks = eye_looks()
+        prog["cornea_radius"].value = looks.cornea_radius
+        prog["wet"].value = (looks.wet_specular, looks.wet_shininess)
+        prog["lash_strands"].value = (looks.lash_spacing, looks.lash_width)
         prog["iris_radius"].value = float(self.face.fapu.IRISD0) / 2.0
-        prog["light_direction"].write(np.array([_unit(KEY_LIGHT[0]), _unit(FILL_LIGHT[0])], np.float32).tobytes())
+        prog["light_direction"].write(np.array([self.key_light, _unit(FILL_LIGHT[0])], np.float32).tobytes())
         prog["light_colour"].write(np.array([KEY_LIGHT[1], FILL_LIGHT[1]], np.float32).tobytes())
         prog["ambient"].value = AMBIENT
         camera = self.camera
@@ -137,6 +159,8 @@ class Renderer:
         vertices = pose.vertices
         vertex_data(self.layout, vertices, out=self._vertex_data)
         self.dynamic.write(self._vertex_data)
+        if self.lashes is not None:
+            self.lash_buffers[0].write(lash_vertices(self.lashes, vertices, out=self._lash_data))
         centres, axes, pupils = [], [], []
         for part, joint in _EYES:
             centre = vertices[self.face.mesh.joints[joint]]
@@ -168,6 +192,8 @@ class Renderer:
         if self.texture is not None:
             self.texture.use(0)
         self.vao.render()
+        if self.lash_vao is not None:
+            self.lash_vao.render()
         if self.ms_fbo is not None:
             ctx.copy_framebuffer(self.fbo, self.ms_fbo)
 
@@ -186,7 +212,8 @@ class Renderer:
 
     def release(self) -> None:
         """Free this renderer's GPU objects (the shared context stays)."""
-        for obj in (self.vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture):
+        for obj in (self.vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture,
+                    self.lash_vao, *(self.lash_buffers or ())):
             if obj is not None:
                 obj.release()
 

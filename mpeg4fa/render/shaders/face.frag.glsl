@@ -1,8 +1,11 @@
 #version 330 core
-// Materials: 0 skin (back faces: the inside of the head), 1 left eye, 2 right eye, 3 teeth, 4 tongue;
-// slot 5 is the gums (teeth above their gum line).
+// Materials: 0 skin (back faces: the inside of the head), 1 left eye, 2 right eye, 3 teeth, 4 tongue,
+// 6 lashes (cards along the lid margins, render/lashes.py); slot 5 is the gums (teeth above their gum line).
 // The eyes are drawn procedurally: sclera, then an iris disc of the FAPU's IRISD0 and a pupil
-// whose diameter follows FAPs 29/30, both centred on the eyeball's gaze axis.
+// whose diameter follows FAPs 29/30, both centred on the eyeball's gaze axis. Lit, the iris has
+// fibres, a collarette, furrows and a dark limbal ring in the eye's own frame (they turn with the
+// gaze), and the wet eye mirrors each light: a tight specular on the cornea, a steeper cap than the
+// eyeball (its normal), so the highlight sits on the iris and moves with the light and the view.
 // The skin mixes in the lip and brow colours (untextured only) and the dark of the oral cavity;
 // the teeth get their shape from tooth coordinates: gaps, rounded tips, scalloped gums.
 // Unlit, every part is one flat colour (the tests classify pixels by it): brows, cavity and gums
@@ -19,6 +22,10 @@ uniform vec3 brow_colour;
 uniform vec3 cavity_colour;
 uniform vec3 iris_colour;
 uniform vec3 pupil_colour;
+uniform vec3 lash_colour;
+uniform float cornea_radius;      // mm (face/data/eyes.csv)
+uniform vec2 wet;                 // the tear film's reflection: strength, shininess
+uniform vec2 lash_strands;        // strand spacing and root half width, mm
 
 uniform vec3 eye_centre[2];
 uniform vec3 eye_axis[2];         // unit gaze direction
@@ -50,20 +57,67 @@ const float CROWN_MM = 9.5;       // crown height at the middle of a tooth (gum 
 const float WRINKLE_MM = 4.2;     // spacing of the nose creases
 const float BACK_TEETH_SHADE = 0.3;  // premolars and molars: the light that reaches inside the mouth
 
-vec3 eye_colour(int eye, out int slot) {
+float hash(float x) { return fract(sin(x * 127.1 + 311.7) * 43758.5453); }
+
+// The iris's pattern at (theta, r): r 0 at the pupil's edge .. 1 at the limbus. Brightness about 1.
+vec3 iris_pattern(float theta, float r) {
+    // radial fibres that wave a little as they run out, of two widths
+    float fibres = 0.5 + 0.3 * sin(97.0 * theta + 1.7 * sin(11.0 * theta + 4.0 * r))
+                       + 0.2 * sin(53.0 * theta - 2.3 * r + 1.3 * sin(7.0 * theta));
+    // the collarette: a jagged bright ring about a third of the way out; inside it the pupillary zone
+    float ruff_r = 0.3 + 0.04 * sin(11.0 * theta) + 0.02 * sin(23.0 * theta + 1.0);
+    float ruff = exp(-pow((r - ruff_r) / 0.05, 2.0));
+    float pupillary = 1.0 - smoothstep(ruff_r - 0.03, ruff_r + 0.03, r);
+    // crypts: dark pits just outside the collarette
+    float cell = floor(theta * 2.546);   // 16 around
+    float crypt = step(0.55, hash(cell)) * exp(-pow((r - ruff_r - 0.14 - 0.1 * hash(cell + 5.0)) / 0.06, 2.0))
+                * smoothstep(0.2, 0.0, abs(fract(theta * 2.546) - 0.5) - 0.15);
+    // contraction furrows: faint dark rings in the outer part
+    float furrows = exp(-pow((r - 0.72) / 0.025, 2.0)) + exp(-pow((r - 0.86) / 0.02, 2.0));
+    float b = mix(0.8 + 0.45 * fibres, 0.7 + 0.2 * fibres, pupillary);
+    b *= 1.0 + 0.45 * ruff - 0.45 * crypt - 0.2 * furrows * (0.6 + 0.4 * sin(5.0 * theta));
+    b *= mix(1.0, 0.45, smoothstep(0.82, 1.0, r));    // the dark limbal ring
+    b *= mix(0.55, 1.0, smoothstep(0.0, 0.06, r));    // the pupil's dark rim
+    vec3 warm = mix(vec3(1.0), vec3(1.25, 1.1, 0.8), 0.5 * fibres * (1.0 - pupillary));  // light fibres paler, yellower
+    return b * warm;
+}
+
+vec3 eye_colour(int eye, out int slot, out vec3 wet_normal) {
+    vec3 axis = eye_axis[eye];
     vec3 offset = v_position - eye_centre[eye];
-    float along = dot(offset, eye_axis[eye]);
-    float across = length(offset - along * eye_axis[eye]);
+    float along = dot(offset, axis);
+    vec3 side = offset - along * axis;
+    float across = length(side);
     slot = 2;
-    if (along <= 0.0 || across > iris_radius * 1.08) return base_colour[2];
-    if (across < pupil_radius[eye]) return pupil_colour;
-    if (across > iris_radius) {                     // limbal ring, blended into the sclera
-        float t = (across - iris_radius) / (0.08 * iris_radius);
-        return mix(iris_colour * 0.45, base_colour[2], t);
+    wet_normal = normalize(offset);
+    float limbus = iris_radius * 1.08;
+    if (along > 0.0 && across < limbus) {           // the cornea, blended into the eyeball at the limbus
+        float a = min(across, 0.98 * cornea_radius);
+        vec3 cornea = normalize(side / max(across, 1e-5) * a + axis * sqrt(cornea_radius * cornea_radius - a * a));
+        wet_normal = normalize(mix(cornea, wet_normal, smoothstep(iris_radius * 0.9, limbus, across)));
     }
-    float r = (across - pupil_radius[eye]) / max(iris_radius - pupil_radius[eye], 1e-3);
-    float rays = 0.85 + 0.15 * sin(40.0 * atan(offset.y, offset.x));
-    return iris_colour * mix(1.25, 0.7, r) * rays;
+    if (!lighting) {                                  // unlit: flat colours, for the pixel tests
+        if (along <= 0.0 || across > iris_radius) return base_colour[2];
+        return across < pupil_radius[eye] ? pupil_colour : iris_colour;
+    }
+    float radius = length(offset);
+    if (along <= 0.0 || across > limbus) {
+        // sclera: a little darker toward the corners and under the upper lid's shadow, a little pink far out
+        float far_out = smoothstep(0.35, 0.9, across / radius);
+        vec3 white = mix(base_colour[2], base_colour[2] * vec3(0.97, 0.86, 0.84), far_out);
+        return white * (1.0 - 0.18 * far_out) * (1.0 - 0.22 * smoothstep(0.1, 0.45, offset.y / radius));
+    }
+    if (across < pupil_radius[eye]) return pupil_colour;
+    vec3 e1 = normalize(cross(vec3(0.0, 1.0, 0.0), axis));
+    vec3 e2 = cross(axis, e1);
+    float theta = atan(dot(side, e2), dot(side, e1));
+    float r = clamp((across - pupil_radius[eye]) / max(iris_radius - pupil_radius[eye], 1e-3), 0.0, 1.0);
+    vec3 iris = iris_colour * iris_pattern(theta, r);
+    if (across > iris_radius) {                     // limbal ring, blended into the sclera
+        float t = (across - iris_radius) / (limbus - iris_radius);
+        return mix(iris_colour * 0.4, base_colour[2] * 0.85, t);
+    }
+    return iris;
 }
 
 // How much brow covers this point: (along 0 inner .. 1 outer, height above the brow curve, mm).
@@ -84,6 +138,8 @@ void main() {
     int slot;
     vec3 base;
     float shade = 1.0;
+    vec3 wet_normal = n;
+    float wetness = 0.0;
     if (v_material == 0) {
         if (gl_FrontFacing) {
             slot = 0;
@@ -108,7 +164,20 @@ void main() {
             shade = 0.55;
         }
     } else if (v_material == 1 || v_material == 2) {
-        base = eye_colour(v_material - 1, slot);
+        base = eye_colour(v_material - 1, slot, wet_normal);
+        wetness = 1.0;
+    } else if (v_material == 6) {                       // lashes: strands cut out of the card
+        float s = v_detail.x;                             // mm along the margin
+        float h = v_detail.y;                             // 0 at the root .. 1 at the tip
+        float id = floor(s / lash_strands.x);
+        float lean = 0.25 * (hash(id + 3.0) - 0.5) * h;   // strands cross a little toward their tips
+        float centre = (id + 0.5 + 0.4 * (hash(id) - 0.5)) * lash_strands.x + lean;
+        float reach = 0.7 + 0.3 * hash(id + 11.0);        // uneven lengths
+        float half_width = lash_strands.y * (1.0 - 0.85 * h / reach) * sqrt(v_tints.x);  // short ones thin
+        if (h > reach || abs(s - centre) > half_width) discard;
+        slot = 1;
+        base = lash_colour;
+        if (dot(n, to_eye) < 0.0) n = -n;
     } else if (v_material == 3) {
         float f = fract(v_detail.x);                      // across one tooth, 0 and 1 at the gaps
         float from_gap = (0.5 - abs(f - 0.5)) * TOOTH_MM;  // mm from the nearest gap
@@ -145,12 +214,15 @@ void main() {
     }
     vec3 light = ambient;
     float spec = 0.0;
+    vec3 reflection = vec3(0.0);
     for (int i = 0; i < 2; ++i) {
         float lambert = max(dot(n, light_direction[i]), 0.0);
         light += lambert * light_colour[i];
         vec3 h = normalize(light_direction[i] + to_eye);
         spec += (lambert > 0.0 ? pow(max(dot(n, h), 0.0), shine[slot].y) : 0.0) * shine[slot].x;
+        if (wetness > 0.0 && dot(wet_normal, light_direction[i]) > 0.0)   // the tear film mirrors the light
+            reflection += pow(max(dot(wet_normal, h), 0.0), wet.y) * wet.x * light_colour[i];
     }
-    vec3 rgb = (base * light + vec3(spec)) * shade;
+    vec3 rgb = (base * light + vec3(spec) + reflection) * shade;
     colour = vec4(pow(clamp(rgb, 0.0, 1.0), vec3(1.0 / 1.15)), 1.0);
 }
