@@ -54,7 +54,13 @@ def run_serve(args: argparse.Namespace) -> int:
             probe.bind((HOST, args.port))
         except OSError as exc:
             raise OSError(exc.errno, f"port {args.port} on {HOST}: {exc.strerror}") from None
-    app = create_app(face_from_args(args), engine=args.engine, window=args.window, stall_timeout=args.stall_timeout,
+    face = face_from_args(args)
+    texture = None
+    if args.fdp is not None:  # the page's head wears the texture the FDP carries, as play --fdp shows it
+        from ..serve.heads import fdp_texture
+
+        texture = fdp_texture(face, args.fdp)
+    app = create_app(face, texture=texture, engine=args.engine, window=args.window, stall_timeout=args.stall_timeout,
                      warm=True)
     url = f"http://{HOST}:{args.port}/"
     print(f"mpeg4fa serve: serving {url} (WebSocket ws://{HOST}:{args.port}/ws; the .fba player {url}player; "

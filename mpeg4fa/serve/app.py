@@ -59,6 +59,7 @@ BODY_LIMIT = 32 << 20  # bytes of an HTTP request body (only POST /api/head take
 class Settings:
     engine: object
     face: FaceModel
+    texture: object = None  # the skin's texture image, or None
     fps: float = 25.0
     window: float = WINDOW
     chunk: float = CHUNK
@@ -75,7 +76,7 @@ class Settings:
 
         with self._glb_lock:
             if self._fap_head is None:
-                self._fap_head = fap_head(self.face)
+                self._fap_head = fap_head(self.face, self.texture)
             return self._fap_head
 
 
@@ -88,15 +89,16 @@ def warm_up(settings: Settings) -> None:
 
 def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak", fps: float = 25.0,
                window: float = WINDOW, chunk: float = CHUNK, stall_timeout: float = STALL_TIMEOUT,
-               warm: bool = False) -> FastAPI:
-    """The server's ASGI app. ``face``: the head to serve (default the generic head); ``engine``: a
-    speech engine or its name; ``window``/``chunk``/``stall_timeout`` as in :mod:`.protocol`."""
+               warm: bool = False, texture=None) -> FastAPI:
+    """The server's ASGI app. ``face``: the head to serve (default the generic head), ``texture``: its skin's
+    (an ``(H, W, 3)`` uint8 image, e.g. the FDP's: ``serve --fdp``); ``engine``: a speech engine or its name;
+    ``window``/``chunk``/``stall_timeout`` as in :mod:`.protocol`."""
     from mpeg4fa.speech.encoder import make_engine
 
     if not (window > 0 and chunk > 0 and stall_timeout > 0 and fps > 0):
         raise ValueError("window, chunk, stall_timeout and fps must be > 0")
     face = face if face is not None else FaceModel.default()
-    settings = Settings(engine=make_engine(engine) if isinstance(engine, str) else engine, face=face, fps=float(fps), window=float(window), chunk=float(chunk),
+    settings = Settings(engine=make_engine(engine) if isinstance(engine, str) else engine, face=face, texture=texture, fps=float(fps), window=float(window), chunk=float(chunk),
                         stall_timeout=float(stall_timeout))
     if warm:
         warm_up(settings)

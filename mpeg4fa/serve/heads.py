@@ -38,6 +38,18 @@ def calibrated_head(data: bytes, name: str) -> tuple[bytes, dict, dict]:
     return glb, key, summary
 
 
+def fdp_texture(face, path) -> object:
+    """The texture FDP file ``path`` carries, baked onto ``face`` (None without one), made on :data:`WORKER`
+    (``serve --fdp``: the page's head wears it; later uploads bake on the same thread)."""
+    def bake():
+        from mpeg4fa.fdp import load_fdp
+        from mpeg4fa.render.fdp_texture import fdp_skin_texture
+
+        sent = fdp_skin_texture(face.mesh, load_fdp(path), source=str(path))
+        return None if sent is None else sent.image
+    return WORKER.submit(bake).result()
+
+
 class Heads:
     """The calibrated heads made so far, by id (at most :data:`KEPT`, the oldest dropped first)."""
 

@@ -61,3 +61,16 @@ def test_the_key_names_the_faces_own_deformer():
     face = face_for_tests().with_deformer("muscle")
     key = TestClient(create_app(face), base_url="http://127.0.0.1").get("/static/fap-head.json").json()
     assert key["deformer"] == "muscle" and key["rig"]["version"] == RIG_VERSION
+
+
+def test_a_served_texture_is_in_the_pages_head():
+    """``serve --fdp`` passes the FDP's texture: the head the pages load carries it (a PNG in the GLB)."""
+    import pygltflib
+
+    image = np.zeros((64, 64, 3), np.uint8)
+    image[..., 1] = 200
+    glb = TestClient(create_app(face_for_tests(), texture=image), base_url="http://127.0.0.1").get("/static/fap-head.glb")
+    gltf = pygltflib.GLTF2.load_from_bytes(glb.content)
+    assert len(gltf.images) == 1 and gltf.images[0].mimeType == "image/png"
+    plain = TestClient(create_app(face_for_tests()), base_url="http://127.0.0.1").get("/static/fap-head.glb")
+    assert not pygltflib.GLTF2.load_from_bytes(plain.content).images
