@@ -431,11 +431,21 @@ def _plot_render(d: dict, fig) -> None:
     ax.set_title("Export", loc="left", fontsize=10)
 
 
+def _plot_tracking(d: dict, fig) -> None:
+    ax = fig.add_subplot(111)
+    stages = d["stages_s"]
+    _bars(ax, [*stages, "end to end"], {"ms a frame": [1000 * v / d["frames"] for v in
+                                                      [*stages.values(), d["end_to_end_s"]]]},
+          f"milliseconds a frame ({1000 / d['target_fps']:.0f} ms = the {d['target_fps']:g} frames/s target)")
+    ax.axvline(1000 / d["target_fps"], color="k", lw=0.6)
+    ax.set_title(f"Video tracking, 640x480: {d['end_to_end_fps']:.1f} frames/s end to end", loc="left", fontsize=10)
+
+
 PLOTS: dict[str, tuple[Callable[[dict, Any], None], tuple[float, float]]] = {
     "codec": (_plot_codec, (8, 3.2)), "encoder": (_plot_encoder, (7, 3.2)), "face": (_plot_face, (7, 2.6)),
     "calibration": (_plot_calibration, (11, 4.5)), "fbajs": (_plot_fbajs, (8, 2.4)),
     "photo": (_plot_photo, (8, 3)), "align": (_plot_align, (8, 3.4)), "batch": (_plot_batch, (8, 2.4)),
-    "render": (_plot_render, (12, 2.8)),
+    "render": (_plot_render, (12, 2.8)), "tracking": (_plot_tracking, (8, 2.4)),
 }
 
 

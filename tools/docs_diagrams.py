@@ -40,7 +40,7 @@ from mpeg4fa.face import FaceModel  # noqa: E402
 from mpeg4fa.fba import decode, encode  # noqa: E402
 from mpeg4fa.fba.trace import Element, trace  # noqa: E402
 from mpeg4fa.render import Renderer, frame_points  # noqa: E402
-from mpeg4fa.spec import EXPRESSIONS, FAPS, FEATURE_POINTS, VISEMES  # noqa: E402
+from mpeg4fa.spec import EXPRESSIONS, FAPS, VISEMES  # noqa: E402
 
 SENTENCE = "(joy, 40, 0.5) Hello! I am an MPEG-4 talking head."
 KIND_COLOURS = {"start_code": "#4c72b0", "field": "#dd8452", "marker": "#c7c7c7", "segment": "#55a868",
@@ -140,7 +140,8 @@ def layers_picture(face: FaceModel, said: Spoken, out: Path, size: int = 420) ->
     ax.scatter(*xy1.T, s=9, c="#c00000", label="moved")
     ax.legend(loc="lower right", fontsize=7, framealpha=0.8)
     moved_mm = np.linalg.norm(pose.feature_points - neutral.feature_points, axis=1)
-    ax.set_title(f"3. feature points\n{int((moved_mm > 0.05).sum())} of 84 moved (by value x FAPU)", loc="left", fontsize=11)
+    moved_count = int((moved_mm > 0.05).sum())
+    ax.set_title(f"3. feature points\n{moved_count} of 84 moved (by value x FAPU)", loc="left", fontsize=11)
     _frame_axes(ax, size)
 
     ax = fig.add_subplot(grid[4])
@@ -266,8 +267,10 @@ def bitstream_picture(said: Spoken, out: Path, frames: int = 3, row_bits: int = 
     ax.set_title(f"Frames 0-{frames - 1} as `mpeg4fa info --trace` lists them, {row_bits} bits a row, one block "
                  "per syntax element: start code (blue), header field (orange), marker bit (grey), "
                  "arithmetic-coded segment (green)", loc="left", fontsize=10)
-    figures = {"bytes": len(said.bits), "frames": len(frame_bits), "frame_bits": [frame_bits[f] for f in sorted(frame_bits)]}
-    fig.savefig(out / "bitstream.png", bbox_inches="tight", metadata={**PNG_META, "mpeg4fa-figures": json.dumps(figures)})
+    figures = {"bytes": len(said.bits), "frames": len(frame_bits),
+               "frame_bits": [frame_bits[f] for f in sorted(frame_bits)]}
+    fig.savefig(out / "bitstream.png", bbox_inches="tight",
+                metadata={**PNG_META, "mpeg4fa-figures": json.dumps(figures)})
     plt.close(fig)
     return {"elements": elements, "frame_bits": frame_bits, "intra": intra, "shown_end": end, "runs": runs}
 
