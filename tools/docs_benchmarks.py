@@ -289,6 +289,8 @@ def bench_markdown(bench: Bench, plotted: set[str]) -> str:
     parts = [head, provenance(bench, data) + "\n"]
     if f"{bench.name}.png" in plotted:
         parts.append(f"\n![{bench.title}]({PLOT_DIR}/{bench.name}.png)\n")
+    elif bench.name in PLOT_ERRORS:
+        parts.append(f"\nNo plot: {PLOT_ERRORS[bench.name]}.\n")
     parts.append("\n" + "\n".join(sections(data, f"tools/bench_{bench.name}.json")))
     return "".join(parts)
 
@@ -441,6 +443,9 @@ def _plot_tracking(d: dict, fig) -> None:
     ax.set_title(f"Video tracking, 640x480: {d['end_to_end_fps']:.1f} frames/s end to end", loc="left", fontsize=10)
 
 
+PLOT_ERRORS: dict[str, str] = {}
+"""Why the last :func:`plots` drew no plot for a benchmark whose JSON is there (the page says it)."""
+
 PLOTS: dict[str, tuple[Callable[[dict, Any], None], tuple[float, float]]] = {
     "codec": (_plot_codec, (8, 3.2)), "encoder": (_plot_encoder, (7, 3.2)), "face": (_plot_face, (7, 2.6)),
     "calibration": (_plot_calibration, (11, 4.5)), "fbajs": (_plot_fbajs, (8, 2.4)),
@@ -458,6 +463,7 @@ def plots() -> dict[str, bytes]:
     import matplotlib.pyplot as plt
 
     out: dict[str, bytes] = {}
+    PLOT_ERRORS.clear()
     for bench in BENCHES:
         if bench.name not in PLOTS:
             continue
@@ -476,7 +482,9 @@ def plots() -> dict[str, bytes]:
             fig.savefig(buffer, format="png", metadata={"Software": "mpeg4fa tools/docs_benchmarks.py"})
             out[f"{bench.name}.png"] = buffer.getvalue()
         except (KeyError, TypeError, ValueError, IndexError) as exc:
-            print(f"docs_benchmarks: no plot for {bench.json_path.name}: its JSON lacks {exc!r}", file=sys.stderr)
+            PLOT_ERRORS[bench.name] = (f"`{bench.json_path.name}` is not in the form its plot was written for "
+                                       f"({type(exc).__name__}: {exc})")
+            print(f"docs_benchmarks: no plot for {bench.json_path.name}: {exc!r}", file=sys.stderr)
         finally:
             plt.close(fig)
     return out
