@@ -3,7 +3,9 @@
 Skin and mouth are drawn pure red, the sclera blue, the iris green, the pupil cyan: any pixel
 with little red and some green or blue is eyeball. At the value that brings a lid point to the
 height of the opposite one the eye is covered, front and three-quarter; at half that value half
-of the iris is.
+of the iris is. In every gaze (yaw and pitch at their full I range, and between) and lid state, the
+eyeball shows only inside the lid opening (the margins' outline, 2 px grown: pushing the eyeballs
+forward by FAP 27/28 = 120 puts 1171 pixels outside it), and shut lids hide it all.
 """
 from __future__ import annotations
 
@@ -84,3 +86,53 @@ def test_idle_blinks_shut_the_eyes(eyes):
     peak = blinking[np.argmax(track[blinking, 18])]
     assert _eyeball(r.render(face.pose_values(track[peak]))).sum() == 0
     assert _eyeball(r.render(face.pose_values(track[0]))).sum() > 400
+
+
+# -- every gaze: the eyeball shows only inside the lid opening ---------------------------------------
+
+def _full_range(fap: int) -> float:
+    from mpeg4fa.spec import FAPS
+
+    record = FAPS[fap - 1]
+    return float(record.i_max * record.quant_step)
+
+
+GAZES = ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, -1), (-1, 1))
+"""Gaze as fractions of the full I range of yaw (23/24) and pitch (25/26)."""
+
+
+def _opening(face, camera, vertices: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Pixels inside either eye's lid opening (upper margin out, lower margin back), 2 px grown."""
+    from PIL import Image, ImageDraw
+    from scipy import ndimage
+
+    from mpeg4fa.face.lids import lid_margins
+
+    margins = lid_margins(face.mesh)
+    canvas = Image.new("L", (width, height), 0)
+    draw = ImageDraw.Draw(canvas)
+    for eye in ("eye_l", "eye_r"):
+        upper = next(m for m in margins if m.eye == eye and m.side == "upper").rows
+        lower = next(m for m in margins if m.eye == eye and m.side == "lower").rows
+        loop = np.r_[upper, lower[::-1]]
+        xy = camera.project(vertices[loop], width, height)[:, :2]
+        draw.polygon([tuple(p) for p in xy], fill=1)
+    return ndimage.binary_dilation(np.asarray(canvas, bool), iterations=2)
+
+
+def test_eyeball_only_inside_the_lid_opening_in_every_gaze(eyes):
+    face, r = eyes
+    close = _closing(face, "3.1", "3.3")
+    yaw, pitch = _full_range(23), _full_range(25)
+    lids = {"rest": {}, "half": {19: close / 2, 20: close / 2}, "lower up": {21: close / 2, 22: close / 2},
+            "wide": {19: -close / 4, 20: -close / 4}, "shut": {19: close, 20: close}}
+    for gy, gp in GAZES:
+        gaze = {23: gy * yaw, 24: gy * yaw, 25: gp * pitch, 26: gp * pitch}
+        for name, state in lids.items():
+            pose = face.deform({**gaze, **state})
+            ball = _eyeball(r.render(pose))
+            if name == "shut":
+                assert ball.sum() == 0, ((gy, gp), name, ball.sum())
+                continue
+            outside = ball & ~_opening(face, r.camera, pose.vertices, r.width, r.height)
+            assert outside.sum() == 0, ((gy, gp), name, outside.sum())
