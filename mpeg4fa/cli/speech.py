@@ -31,13 +31,16 @@ def register(commands: Commands) -> None:
                     "readable file, unless --text says it is text. With --speech REC.wav --transcript TEXT the face says a "
                     "recording instead: the transcript is phonemised, aligned to the recording (pocketsphinx for "
                     "English, DTW against espeak-ng's rendering for other languages) and the video plays the "
-                    "recording's audio.",
+                    "recording's audio. With --speech REC.wav alone the speech is recognised from the audio "
+                    "(--recognizer phonetic or words), in any language; silence, noise and music keep the mouth "
+                    "at rest.",
         epilog='examples:\n  mpeg4fa say "(joy, 40, 0.5) Hello there! (sadness, 30, 1) Goodbye." -o hello.mp4\n'
                '  mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o nihao.mp4 --keep\n'
                '  mpeg4fa say "Buenos días, ¿cómo estás?" --lang es -o hola.mp4\n'
                '  mpeg4fa say script.txt -o script.mp4\n'
                '  mpeg4fa say --photo me.jpg "Hello, it is me." -o me.mp4\n'
-               '  mpeg4fa say --speech me.wav --transcript "(joy, 30, 0.5) Hello there!" -o me.mp4',
+               '  mpeg4fa say --speech me.wav --transcript "(joy, 30, 0.5) Hello there!" -o me.mp4\n'
+               '  mpeg4fa say --speech clip.wav -o clip.mp4 --expression joy=30',
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("text", nargs="?", help="the text with optional (expression, intensity 0-63, seconds) tags; a text "
                                            "file, - or @FILE (or --speech REC.wav --transcript TEXT)")
@@ -222,44 +225,115 @@ def _encode_visemes(args: argparse.Namespace) -> int:
 
 
 def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
-    """``--speech``, ``--transcript``, ``--aligner``, ``--no-fit-check``: a recording to animate instead of
-    text to speak."""
+    """``--speech``, ``--transcript``, ``--aligner``, ``--no-fit-check``, and without a transcript
+    ``--recognizer``, ``--expression``, ``--pcm-rate``: a recording to animate instead of text to speak."""
     from ..speech.align import METHODS
+    from ..speech.listen import RECOGNIZERS
+    from ..speech.listen.stream import RAW_FORMAT, RAW_RATE
 
     g = p.add_argument_group("recorded speech: lip sync to a recording",
-                             "the transcript is phonemised by espeak-ng and aligned to the recording; --lang, "
-                             "--voice and --rate then describe espeak-ng's reference rendering")
+                             "with --transcript, the transcript is phonemised by espeak-ng and aligned to the "
+                             "recording (--lang, --voice and --rate then describe espeak-ng's reference rendering); "
+                             "without one, the speech is recognised from the audio alone (--recognizer), silence, "
+                             "breath, noise and music leaving the mouth at rest")
     return [
         g.add_argument("--speech", type=Path, metavar="REC.wav",
-                       help="a recording of the transcript (WAV, any rate and channel count)"),
+                       help="a recording (WAV any rate and channel count, or MP3/FLAC/Ogg/M4A); '-' reads raw PCM "
+                            f"from standard input: {RAW_FORMAT}, at --pcm-rate Hz (default {RAW_RATE})"),
         g.add_argument("--transcript", metavar="TEXT|FILE",
-                       help="what the recording says, with optional expression tags; a text file, - or @FILE"),
+                       help="what the recording says, with optional expression tags; a text file, - or @FILE "
+                            "(optional: without it the speech is recognised)"),
         g.add_argument("--aligner", choices=METHODS, default="auto",
                        help="auto (default: pocketsphinx for English, else dtw), pocketsphinx (English) or dtw "
                             "(any language: warping against espeak-ng's rendering)"),
         g.add_argument("--no-fit-check", dest="fit_check", action="store_false",
                        help="align even when pocketsphinx finds the transcript's words are not what the "
                             "recording says (its acoustic fit below the limit)"),
+        g.add_argument("--recognizer", choices=RECOGNIZERS, default="auto",
+                       help="without --transcript: words (English words heard by pocketsphinx, then aligned as a "
+                            "transcript; written into --timings), phonetic (phones heard, any language, mapped by "
+                            "their IPA features) or auto (default: phonetic, what matched the transcript path "
+                            "best on English too, tools/bench_lipsync_audio.py)"),
+        g.add_argument("--expression", metavar="NAME=INTENSITY", type=_expression,
+                       help="without --transcript: one expression for the whole clip, e.g. joy=30 (intensity 0-63; "
+                            "with a transcript, tags in it say when)"),
+        g.add_argument("--pcm-rate", type=int, default=RAW_RATE, metavar="HZ",
+                       help=f"sample rate of raw PCM read with --speech - (default {RAW_RATE}; --rate is the speech "
+                            "rate of a transcript's reference)"),
     ]
+
+
+def _expression(text: str) -> tuple[str, int]:
+    """``NAME=INTENSITY`` -> (name, intensity), checked against the expressions of the standard."""
+    from ..spec import EXPRESSIONS
+
+    names = [e.name for e in EXPRESSIONS]
+    name, eq, value = text.partition("=")
+    if not eq or name.strip() not in names:
+        raise argparse.ArgumentTypeError(f"{text!r}: give NAME=INTENSITY, NAME one of {', '.join(names)}")
+    try:
+        intensity = int(value)
+    except ValueError:
+        intensity = -1
+    if not 0 <= intensity <= 63:
+        raise argparse.ArgumentTypeError(f"{text!r}: the intensity is a whole number from 0 to 63")
+    return name.strip(), intensity
 
 
 def _recording_args(args: argparse.Namespace, given_text: bool, what: str) -> bool:
     """Whether a recording is to be animated; UsageError for options that clash with one (or lack it)."""
+    listen_flags = [flag for flag, given in (("--recognizer", args.recognizer != "auto"),
+                                             ("--expression", args.expression is not None),
+                                             ("--pcm-rate", args.pcm_rate != 16000)) if given]
     if args.speech is None:
-        if args.transcript is not None or args.aligner != "auto" or not args.fit_check:
+        if args.transcript is not None or args.aligner != "auto" or not args.fit_check or listen_flags:
             flag = ("--transcript" if args.transcript is not None else
-                    "--aligner" if args.aligner != "auto" else "--no-fit-check")
+                    "--aligner" if args.aligner != "auto" else "--no-fit-check" if not args.fit_check else
+                    listen_flags[0])
             raise UsageError(f"{flag} goes with --speech REC.wav", hint="add --speech, or drop " + flag)
         return False
-    if args.transcript is None:
-        raise UsageError("--speech needs the transcript of the recording", hint='add --transcript "TEXT" (or FILE)')
     if given_text:
         raise UsageError(f"--speech animates the recording, so {what} has no place beside it",
                          hint="give the text as --transcript and drop " + what)
     if args.engine != "espeak":
         raise UsageError(f"--engine {args.engine} with --speech: the transcript is phonemised by espeak",
                          hint="drop --engine")
+    if args.transcript is not None:
+        clash = [f for f in listen_flags if f != "--pcm-rate"]
+        if clash:
+            raise UsageError(f"{clash[0]} is for a recording without a transcript",
+                             hint="drop it (with a transcript, its tags give the expressions)")
+    else:
+        clash = [flag for flag, given in (("--aligner", args.aligner != "auto"), ("--no-fit-check", not args.fit_check),
+                                          ("--voice", args.voice is not None), ("--rate", args.rate is not None))
+                 if given]
+        if clash:
+            raise UsageError(f"{clash[0]} goes with --transcript (espeak-ng's reference for the alignment)",
+                             hint=f"add --transcript, or drop {clash[0]}")
+    if args.pcm_rate != 16000 and str(args.speech) != "-":
+        raise UsageError("--pcm-rate is the rate of raw PCM from standard input (--speech -)",
+                         hint="drop --pcm-rate: a WAV file says its own rate")
     return True
+
+
+def _listen_source(args: argparse.Namespace):
+    """The recording to hear: raw PCM from standard input, or the file."""
+    from ..speech.listen.stream import raw_source, wav_source
+
+    if str(args.speech) == "-":
+        return raw_source(sys.stdin.buffer, args.pcm_rate)
+    return wav_source(args.speech)
+
+
+def _heard_line(name: str, heard) -> str:
+    """What was heard, in one line (the words, or that it is silent)."""
+    if heard.silent:
+        return f"{name}: no speech heard (silent, or only noise or music): the mouth stays closed"
+    said = f"{name}: {heard.voiced:.1f} s of speech heard by the {heard.recognizer} recogniser"
+    if heard.recognizer == "words":
+        count = heard.words if isinstance(heard.words, int) else len(heard.words)
+        said += f": {count} words recognised (no transcript), written into --timings when given"
+    return said
 
 
 def _aligned(args: argparse.Namespace, inputs: dict, outputs: dict):
@@ -384,14 +458,62 @@ def _encode_recording(args: argparse.Namespace) -> int:
     inputs = {"--face-mesh": args.face_mesh, "--face-points": args.face_points, "--front": args.front,
               "--front-points": args.front_points, "--side": args.side, "--side-points": args.side_points}
     outputs = {"-o": args.output, "--audio": args.audio, "--timings": args.timings, "--fdp-out": args.fdp_out}
-    refuse_overlaps({**inputs, "--speech": args.speech}, outputs)
+    refuse_overlaps({**inputs, **({"--speech": args.speech} if str(args.speech) != "-" else {})}, outputs)
     fdp = _speaker_fdp(args) if args.fdp_out is not None else None
+    if args.transcript is None:
+        return _encode_listened(args, fdp)
     aligned, name = _aligned(args, inputs, outputs)
     fps = args.fps if args.fps is not None else 25.0
     encoded = encode_utterance(aligned.utterance, fps=fps, level=args.level, idle=args.idle)
     print(f"{args.speech}: {name} aligned by {aligned.method} in {aligned.seconds:.2f} s for "
           f"{encoded.speech.duration:.2f} s of audio", file=sys.stderr)
     return _write_encoded(args, encoded, str(args.speech), fps, fdp)
+
+
+def _encode_listened(args: argparse.Namespace, fdp) -> int:
+    """``mpeg4fa encode --speech REC.wav`` (no transcript): the speech recognised and encoded block by block
+    (:func:`mpeg4fa.speech.listen.stream.stream_listened`: memory of a block, any length), with a progress bar;
+    all files appear once it is done, or none."""
+    from ..fba import EncodeOptions
+    from ..speech.encoder import TEXT_CODING
+    from ..speech.listen.stream import stream_listened
+    from .progress import ProgressBar
+
+    fps = args.fps if args.fps is not None else 25.0
+    source = _listen_source(args)
+    bar = ProgressBar("listening", unit="s of audio")
+    try:
+        with atomic_outputs(args.output, args.audio, args.timings, args.fdp_out) as (out, audio, timings, fdp_out):
+            with contextlib.ExitStack() as files:
+                heard = stream_listened(
+                    source, files.enter_context(open(out, "wb")),
+                    audio=files.enter_context(open(audio, "wb")) if audio is not None else None,
+                    timings=files.enter_context(open(timings, "w", encoding="utf-8")) if timings is not None else None,
+                    recognizer=args.recognizer, lang=args.lang, expression=args.expression, fps=fps,
+                    level=args.level, idle=args.idle, options=coding_options(args, EncodeOptions(**TEXT_CODING)),
+                    progress=bar)
+            if fdp is not None:
+                from ..fdp import save_fdp
+                save_fdp(fdp, fdp_out)
+    finally:
+        bar.close()
+    print(_heard_line(source.name, heard), file=sys.stderr)
+    for note in heard.notes:
+        print(f"{source.name}: {note}", file=sys.stderr)
+    written = [f"{args.output} ({heard.bytes} bytes)"]
+    if args.audio is not None:
+        written.append(f"{args.audio} ({heard.seconds:.2f} s)")
+    if args.timings is not None:
+        written.append(str(args.timings))
+    if fdp is not None:
+        written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points)")
+    frames = heard.frames
+    print(f"{source.name}: recording {heard.seconds:.2f} s, {frames} frames, "
+          f"{heard.bytes * 8 / max(frames, 1):.1f} bits/frame "
+          f"({heard.bytes * 8 / max(frames / fps, 1e-9) / 1000:.2f} kbit/s, {args.level}-level), "
+          f"heard in {heard.wall:.2f} s ({heard.speed:.1f}x real time)", file=sys.stderr)
+    print("wrote " + ", ".join(written), file=sys.stderr)
+    return 0
 
 
 def _write_encoded(args: argparse.Namespace, encoded, name: str, fps: float, fdp) -> int:
@@ -522,10 +644,21 @@ def _say_recording(args: argparse.Namespace) -> int:
 
     kept = kept_paths(args.output) if args.keep else {}
     outputs = {"-o": args.output, **{f"--keep ({what})": path for what, path in kept.items()}}
-    refuse_overlaps({"--speech": args.speech, "--photo": args.photo}, outputs)
+    refuse_overlaps({**({"--speech": args.speech} if str(args.speech) != "-" else {}), "--photo": args.photo}, outputs)
     check_video_size(args.output, args.size)
-    aligned, name = _aligned(args, {}, outputs)
-    encoded = encode_utterance(aligned.utterance, fps=args.fps, level=args.level, idle=args.idle)
+    if args.transcript is None:
+        from ..speech.listen import listen
+        from ..speech.listen.stream import recording_of
+
+        source = _listen_source(args)
+        heard = listen(recording_of(source), recognizer=args.recognizer, lang=args.lang, expression=args.expression)
+        encoded = encode_utterance(heard.utterance, fps=args.fps, level=args.level, idle=args.idle)
+        print(_heard_line(source.name, heard), file=sys.stderr)
+        how = f"{heard.recognizer} recogniser, no transcript"
+    else:
+        aligned, name = _aligned(args, {}, outputs)
+        encoded = encode_utterance(aligned.utterance, fps=args.fps, level=args.level, idle=args.idle)
+        how = f"{name} aligned by {aligned.method}"
     width, height = args.size
     face, texture = _photo_face(args)
     with rendering("say", args.output) as progress:
@@ -533,7 +666,7 @@ def _say_recording(args: argparse.Namespace) -> int:
                            progress=progress, face=face, texture=texture)
     result, data, stream, kept = said.result, said.data, said.stream, said.kept
     print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s) of {args.speech} "
-          f"({name} aligned by {aligned.method}), {len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs "
+          f"({how}), {len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs "
           f"({_level_said(args.level)}); rendered in {result.seconds:.1f} s"
           + (f"; kept {', '.join(map(str, kept.values()))}" if kept else ""))
     return 0

@@ -15,8 +15,8 @@ measures per frame of 10 ms (:data:`HOP`):
   both sides is a held note, not speech.
 
 Speech is then voiced, unsteady, loud-enough frames, widened by :data:`REACH` on either side (the
-unvoiced consonants next to the vowels: s, t, f, h; a consonant cluster before a vowel takes ~150 ms),
-and kept only where at least :data:`MIN_VOICED` seconds of such frames come together (a click or a
+unvoiced consonants next to the vowels: s, t, f, h, and the silent closure of a stop; a consonant
+cluster before a vowel takes ~150 ms), and kept only where at least :data:`MIN_VOICED` seconds of such frames come together (a click or a
 single periodic blip is not a syllable).
 """
 from __future__ import annotations
@@ -128,4 +128,4 @@ def voice_activity(x: np.ndarray, rate: int, hop: float = HOP) -> np.ndarray:
     voiced = loud & (peak >= PERIODIC)
     held = _widen(_steady(pitch, voiced, int(round(STEADY_SECONDS / hop))), int(round(STEADY_SECONDS / hop)))
     voice = _runs_at_least(voiced & ~held, max(1, int(round(MIN_VOICED / hop))))
-    return _widen(voice, int(round(REACH / hop))) & loud
+    return _widen(voice, int(round(REACH / hop)))  # quiet frames inside: a stop's closure is silent

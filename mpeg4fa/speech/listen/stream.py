@@ -1,0 +1,257 @@
+"""A recording of any length (a WAV file, other audio, or raw PCM from a pipe) -> an FBA stream, block by
+block, with the memory of a block.
+
+The audio is read in blocks of about :data:`BLOCK_SECONDS`, each cut at the quietest 10 ms of its last
+:data:`CUT_SECONDS` (between words, not inside one); each block is heard on its own (:func:`.core.listen`)
+and goes through the encoder's passes on the recording's clock: phones (stops from their closures) ->
+frames (:class:`~mpeg4fa.speech.frames.FrameMaker`, running on across blocks) -> bits
+(:class:`~mpeg4fa.speech.bits.FbaBlocks`). The timings are written as they come.
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mpeg4fa.speech.align.errors import AlignError
+from mpeg4fa.speech.align.recording import HOP, Recording, frame_levels
+from mpeg4fa.speech.listen.core import Listened, expression_cues, listen
+from mpeg4fa.speech.visemes import PAUSE
+
+BLOCK_SECONDS = 30.0
+"""Audio heard at a time."""
+CUT_SECONDS = 3.0
+"""A block ends at the quietest 10 ms of its last this many seconds."""
+RAW_RATE = 16000
+"""Sample rate of raw PCM (``encode --speech -``) unless told otherwise."""
+RAW_FORMAT = "signed 16-bit little-endian mono (s16le)"
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where the audio comes from: a name, its rate, its length in seconds when known (else None), and
+    an iterator of mono int16 pieces at that rate."""
+
+    name: str
+    rate: int
+    seconds: float | None
+    pieces: Iterator[np.ndarray]
+
+
+def wav_source(path: str | os.PathLike) -> Source:
+    """A WAV file read piece by piece (any length), or other audio (MP3, FLAC...) read whole by
+    :func:`~mpeg4fa.speech.align.read_recording`; errors are :class:`AlignError` at their place."""
+    from mpeg4fa.speech.align.recording import read_recording
+    from mpeg4fa.wavread import WavError, _mono_int16, wav_info
+
+    path = Path(path)
+    if not path.is_file():
+        read_recording(path)  # the located "no such recording" / "not a file"
+    try:
+        info = wav_info(path)
+    except WavError:
+        rec = read_recording(path)  # other audio through PyAV, or the WAV error at its byte
+        return Source(str(path), rec.rate, rec.duration, iter([rec.samples]))
+    width = info.bits // 8
+
+    def pieces() -> Iterator[np.ndarray]:
+        step = 1 << 18
+        with open(path, "rb") as fh:
+            fh.seek(info.data_offset)
+            for start in range(0, info.frames, step):
+                n = min(step, info.frames - start)
+                raw = fh.read(n * width * info.channels)
+                if len(raw) < n * width * info.channels:
+                    raise AlignError("the file ends inside its samples", where=f"{path}: byte "
+                                     f"{info.data_offset + start * width * info.channels + len(raw)}",
+                                     hint="the file is truncated")
+                yield _mono_int16(raw, info)
+
+    return Source(str(path), info.rate, info.seconds, pieces())
+
+
+def raw_source(handle, rate: int = RAW_RATE, name: str = "<stdin>") -> Source:
+    """Raw PCM (:data:`RAW_FORMAT`) read from a binary file (standard input) as it comes."""
+    if not 1000 <= rate <= 768_000:
+        raise AlignError(f"--rate {rate} Hz for raw PCM is out of range", where=name, hint="give 1000 to 768000 Hz")
+
+    def pieces() -> Iterator[np.ndarray]:
+        odd = b""
+        while True:
+            data = handle.read(1 << 16)
+            if not data:
+                break
+            data = odd + data
+            cut = len(data) - len(data) % 2
+            odd = data[cut:]
+            yield np.frombuffer(data[:cut], "<i2").astype(np.int16)
+
+    return Source(name, rate, None, pieces())
+
+
+def blocks(source: Source, block_seconds: float = BLOCK_SECONDS) -> Iterator[tuple[float, Recording]]:
+    """``(offset s, Recording)`` blocks of the source, each cut at a quiet moment (see the module docstring)."""
+    rate = source.rate
+    size = int(block_seconds * rate)
+    buffered: list[np.ndarray] = []
+    held = 0
+    offset = 0
+    for piece in source.pieces:
+        buffered.append(piece)
+        held += len(piece)
+        while held >= size + int(CUT_SECONDS * rate):
+            x = np.concatenate(buffered)
+            tail = x[size - int(CUT_SECONDS * rate):size].astype(np.float64) / 32768.0
+            levels = frame_levels(tail, rate)
+            cut = size - int(CUT_SECONDS * rate) + int(np.argmin(levels)) * int(round(HOP * rate))
+            yield offset / rate, Recording(x[:cut], rate, source.name)
+            offset += cut
+            buffered, held = [x[cut:]], len(x) - cut
+    x = np.concatenate(buffered) if buffered else np.zeros(0, np.int16)
+    yield offset / rate, Recording(x, rate, source.name)
+
+
+@dataclass(frozen=True)
+class Heard:
+    """What :func:`stream_listened` wrote: seconds of audio, frames, stream bytes, the recogniser, words
+    heard, seconds of voice activity, blocks, notes, wall time."""
+
+    seconds: float
+    frames: int
+    bytes: int
+    recognizer: str
+    words: int
+    voiced: float
+    blocks: int
+    notes: tuple[str, ...]
+    wall: float
+
+    @property
+    def silent(self) -> bool:
+        return self.voiced == 0.0
+
+    @property
+    def speed(self) -> float:
+        """Seconds of audio per second of wall time."""
+        return self.seconds / self.wall if self.wall > 0 else float("inf")
+
+
+def _timing_items(listened: Listened, timings, offset: float) -> list[dict]:
+    """The timings as the JSON ``--timings`` writes (``encode``'s four keys), on the recording's clock, each
+    with the ``word`` recognised over it where the words recogniser heard one."""
+    words = listened.words
+    out = []
+    for t in timings:
+        item = t.as_dict()
+        item["start"], item["end"] = round(t.start + offset, 6), round(t.end + offset, 6)
+        if words and t.viseme != PAUSE:
+            mid = (t.start + t.end) / 2 + offset
+            near = [w.word for w in words if w.start <= mid < w.end]
+            if near:
+                item["word"] = near[0]
+        out.append(item)
+    return out
+
+
+def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer: str = "auto", lang: str = "auto",
+                    expression: tuple[str, int] | None = None, fps: float = 25.0, level: str = "high",
+                    idle: bool = False, seed: int = 0, fold: bool = True, compact: bool = True, options=None,
+                    progress: Progress | None = None, block_seconds: float = BLOCK_SECONDS) -> Heard:
+    """Hear ``source`` block by block and write its FBA stream to the binary file ``out`` (and the timed
+    visemes as JSON to the text file ``timings``, the audio as 16-bit WAV to the binary file ``audio``).
+    ``progress(done, total)`` counts seconds of audio (total 0 when a pipe's length is unknown)."""
+    from mpeg4fa.fba import EncodeOptions
+    from mpeg4fa.speech.bits import FbaBlocks
+    from mpeg4fa.speech.encoder import LEVELS, TEXT_CODING, StreamBuilder, closure_hold, phones
+    from mpeg4fa.speech.frames import FrameMaker
+    from mpeg4fa.speech.ipa import phoneme_fallbacks
+    from mpeg4fa.wav import PcmWriter
+
+    if level not in LEVELS:
+        raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
+    started = time.perf_counter()
+    maker = FrameMaker(fps, idle=idle, seed=seed, closure_hold=closure_hold(fps), fields=level != "low")
+    builder = StreamBuilder(level, fps, fold=fold, compact=compact)
+    bits = FbaBlocks(out, builder.build, options if options is not None else EncodeOptions(**TEXT_CODING), fps,
+                     place=lambda: (source.name, 1, 1))
+    wav = PcmWriter(audio, source.rate, name=getattr(audio, "name", "<wav>")) if audio is not None else None
+    listed = 0
+    total = int(round(source.seconds)) if source.seconds is not None else 0
+    end, words, voiced, count, used, notes = 0.0, 0, 0.0, 0, None, []
+    if progress is not None:
+        progress(0, total)
+    try:
+        with phoneme_fallbacks(source.name):
+            for offset, rec in blocks(source, block_seconds):
+                heard = listen(rec, recognizer=recognizer, lang=lang)
+                utt = phones(heard.utterance)
+                shifted = [type(t)(t.phoneme, t.viseme, t.start + offset, t.end + offset, t.set) for t in utt.timings]
+                spans = [s for s in _spans(shifted)]
+                cues = expression_cues(expression) if count == 0 else ()
+                end = offset + rec.duration
+                bits.add(maker.add(spans, cues, end))
+                if timings is not None:
+                    for item in _timing_items(heard, utt.timings, offset):
+                        text = json.dumps(item, ensure_ascii=False, indent=1).replace("\n", "\n ")
+                        timings.write(("[\n " if not listed else ",\n ") + text)
+                        listed += 1
+                if wav is not None:
+                    wav.write(rec.samples)
+                words += len(heard.words)
+                voiced += heard.voiced
+                notes += [f"{offset:.1f} s: {n}" for n in heard.notes]
+                used = heard.recognizer
+                count += 1
+                if progress is not None:
+                    progress(min(int(end), total) if total else int(end), total)
+        bits.add(maker.finish(end))
+        bits.finish()
+    except BaseException:
+        if wav is not None:
+            wav.abandon()
+        raise
+    if wav is not None:
+        wav.close()
+    if timings is not None:
+        timings.write("\n]\n" if listed else "[]\n")
+    return Heard(end, bits.frames, bits.bytes, used or recognizer, words, voiced, count, tuple(notes),
+                 time.perf_counter() - started)
+
+
+def _spans(timings):
+    """Viseme spans of timings (the :meth:`~mpeg4fa.speech.utterance.Utterance.spans` rule)."""
+    from mpeg4fa.speech.timeline import VisemeSpan
+
+    out: list[VisemeSpan] = []
+    for t in timings:
+        if t.viseme == PAUSE or t.end <= t.start:
+            continue
+        if out and out[-1].viseme == t.viseme and out[-1].set == t.set and abs(out[-1].end - t.start) < 1e-9:
+            out[-1] = VisemeSpan(t.viseme, out[-1].start, t.end, t.set)
+        else:
+            out.append(VisemeSpan(t.viseme, t.start, t.end, t.set))
+    return out
+
+
+def recording_of(source: Source, max_seconds: float | None = None) -> Recording:
+    """The whole source as one :class:`Recording` (for what is rendered in memory: ``say``); AlignError
+    past ``max_seconds`` (default the speech encoder's 30 min, :data:`mpeg4fa.wavread.MAX_SPEECH_SECONDS`)."""
+    from mpeg4fa.wavread import MAX_SPEECH_SECONDS
+
+    limit = MAX_SPEECH_SECONDS if max_seconds is None else max_seconds
+    parts, held = [], 0
+    for piece in source.pieces:
+        parts.append(piece)
+        held += len(piece)
+        if held > limit * source.rate:
+            raise AlignError(f"the recording lasts more than {limit / 60:g} min, more than is rendered at once",
+                             where=source.name, hint="encode it to a stream with 'mpeg4fa encode --speech' (any "
+                                                     "length), or cut it into parts")
+    return Recording(np.concatenate(parts) if parts else np.zeros(0, np.int16), source.rate, source.name)
