@@ -222,13 +222,18 @@ def _label(row: dict) -> str:
     return next((str(v) for v in row.values() if isinstance(v, str)), "row")
 
 
-def sections(data: Any, source: str, title: str = "", level: int = 4) -> list[str]:
+def _caption(name: str) -> str:
+    """A table's caption: bold text, not a heading (the page's contents list only the benchmarks)."""
+    return f"**{name}**\n\n"
+
+
+def sections(data: Any, source: str, title: str = "") -> list[str]:
     """The JSON as Markdown: its scalars as one key/value table, each list of records as a table, nested
     objects as their own sections (an object whose values are all objects: one table, a row each)."""
     out: list[str] = []
     if not isinstance(data, dict):
         return out
-    heading = f"{'#' * level} {title}\n\n" if title else ""
+    heading = _caption(title) if title else ""
     scalars = {k: v for k, v in data.items() if k not in SKIP_KEYS and _scalar(v)}
     if scalars:
         out.append(heading + table([{"figure": k, "value": v} for k, v in scalars.items()], source))
@@ -237,7 +242,7 @@ def sections(data: Any, source: str, title: str = "", level: int = 4) -> list[st
     for keys in grouped:
         first = keys[0]
         name = f"{title}: {first}" if title else first
-        out.append(heading + f"{'#' * level} {name}, ...\n\n"
+        out.append(heading + _caption(f"{name}, ...")
                    + table([{"": k, **data[k]} for k in keys], source))
         heading = ""
     done = {k for keys in grouped for k in keys}
@@ -248,21 +253,21 @@ def sections(data: Any, source: str, title: str = "", level: int = 4) -> list[st
         if isinstance(value, list):
             records = [v for v in value if isinstance(v, dict)]
             if records:
-                out.append(heading + f"{'#' * level} {name}\n\n" + table(records, source))
+                out.append(heading + _caption(name) + table(records, source))
                 heading = ""
                 for row in records[:MAX_ROWS]:
                     for sub, inner in row.items():
                         if isinstance(inner, list) and inner and all(isinstance(v, dict) for v in inner):
-                            out.append(f"{'#' * min(level + 1, 6)} {name}: {_label(row)}, {sub}\n\n"
+                            out.append(_caption(f"{name}: {_label(row)}, {sub}")
                                        + table(inner, source))
         elif isinstance(value, dict):
             if len(value) >= 2 and all(isinstance(v, dict) for v in value.values()) and \
                     all(all(_scalar(x) or isinstance(x, dict) for x in v.values()) for v in value.values()):
-                out.append(heading + f"{'#' * level} {name}\n\n"
+                out.append(heading + _caption(name)
                            + table([{"": k, **v} for k, v in value.items()], source))
                 heading = ""
             else:
-                out += sections(value, source, name, min(level + 1, 6) if title else level)
+                out += sections(value, source, name)
     return out
 
 
