@@ -61,6 +61,10 @@ export class Head {
       if (!part || !key.parts[part]) return;
       const source = Int32Array.from(key.parts[part]);
       if (source.length !== o.geometry.attributes.position.count) throw new Error(`head part ${part}: vertex count differs from its key`);
+      const { position, normal } = o.geometry.attributes;
+      if (position.isInterleavedBufferAttribute || (normal && normal.isInterleavedBufferAttribute)) {
+        throw new Error(`head part ${part}: interleaved vertex data (the pose writes plain arrays)`);
+      }
       o.frustumCulled = false;  // the vertices move; the rest pose's bounds do not
       this.parts.push({ mesh: o, source });
     });
@@ -125,16 +129,19 @@ export class Head {
       const ux = p[b] - p[a], uy = p[b + 1] - p[a + 1], uz = p[b + 2] - p[a + 2];
       const vx = p[c] - p[a], vy = p[c + 1] - p[a + 1], vz = p[c + 2] - p[a + 2];
       const nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-      for (const o of [a, b, c]) { n[o] += nx; n[o + 1] += ny; n[o + 2] += nz; }
+      n[a] += nx; n[a + 1] += ny; n[a + 2] += nz;
+      n[b] += nx; n[b + 1] += ny; n[b + 2] += nz;
+      n[c] += nx; n[c + 1] += ny; n[c + 2] += nz;
     }
     for (const { mesh, source } of this.parts) {
       const pos = mesh.geometry.attributes.position, nor = mesh.geometry.attributes.normal;
+      const pa = pos.array, na = nor ? nor.array : null;
       for (let i = 0; i < source.length; i++) {
-        const o = 3 * source[i];
-        pos.setXYZ(i, p[o] * MM, p[o + 1] * MM, p[o + 2] * MM);
-        if (nor) {
+        const o = 3 * source[i], q = 3 * i;
+        pa[q] = p[o] * MM; pa[q + 1] = p[o + 1] * MM; pa[q + 2] = p[o + 2] * MM;
+        if (na) {
           const len = Math.hypot(n[o], n[o + 1], n[o + 2]) || 1;
-          nor.setXYZ(i, n[o] / len, n[o + 1] / len, n[o + 2] / len);
+          na[q] = n[o] / len; na[q + 1] = n[o + 1] / len; na[q + 2] = n[o + 2] / len;
         }
       }
       pos.needsUpdate = true;
