@@ -43,8 +43,10 @@ class Renderer:
     def __init__(self, face: FaceModel, *, width: int = 512, height: int = 512, samples: int = 0,
                  camera: Camera | None = None, view: str | tuple[float, float] = "front",
                  materials: Materials | None = None, texture: np.ndarray | None = None,
-                 lighting: bool = True, key_light: tuple[float, float, float] | None = None) -> None:
-        """``key_light``: the main light's direction (toward the light, head frame; default upper left front)."""
+                 lighting: bool = True, key_light: tuple[float, float, float] | None = None,
+                 lashes: bool = True) -> None:
+        """``key_light``: the main light's direction (toward the light, head frame; default upper left front);
+        ``lashes=False`` leaves the lash cards out (the eyeball alone, e.g. to measure the pupils)."""
         if not (1 <= width <= MAX_SIZE and 1 <= height <= MAX_SIZE):
             raise RenderError(f"image size {width}x{height} is out of range", where="renderer",
                               hint=f"width and height from 1 to {MAX_SIZE}")
@@ -54,7 +56,7 @@ class Renderer:
         self.lighting = lighting
         self.key_light = _unit(KEY_LIGHT[0] if key_light is None else key_light)
         self.layout = build_layout(face.mesh)
-        self.lashes = build_lashes(face.mesh)
+        self.lashes = build_lashes(face.mesh) if lashes else None
         self.camera = camera or frame_points(face.mesh.feature_points(), self.width, self.height, view=view)
         self.ctx = gl_context()
         self._setup_gl(samples)

@@ -57,9 +57,10 @@ def test_head_is_framed_from_the_feature_points(face):
 
 
 def _close_up(face, part_labels: list[str], size: int = 128, margin: float = 0.6, lighting: bool = True) -> Renderer:
-    """A camera framed on a few feature points; unlit for geometric checks (no highlights)."""
+    """A camera framed on a few feature points; unlit for geometric checks (no highlights); no lashes,
+    so that the dark pixels are the pupils."""
     pts = np.array([face.mesh.fp(label) for label in part_labels])
-    return Renderer(face, width=size, height=size, lighting=lighting,
+    return Renderer(face, width=size, height=size, lighting=lighting, lashes=False,
                     camera=frame_points(pts, size, size, margin=margin))
 
 
