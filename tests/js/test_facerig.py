@@ -90,3 +90,32 @@ def test_facerig_on_real_speech(tmp_path, face):
     got, _ = pose_in_node(tmp_path, face, rows)
     for k, row in enumerate(rows):
         assert np.abs(got[k] - face.pose_values(row).vertices).max() < TOLERANCE_MM, k
+
+
+def test_neck_blend_rule_of_a_rig_without_partial_turns(tmp_path, face):
+    """A rig made where the deformer blends the neck back by its share (``neck: blend``, the rule before partial
+    turns) is posed by that rule: checked against the same steps in numpy."""
+    from mpeg4fa.face import motion
+    from mpeg4fa.face.deformers.feature_points import pose_in_head_frame
+
+    data = rig_data(face)
+    data["head"]["neck"] = "blend"
+    rows = np.zeros((2, 68))
+    rows[0, [47, 48, 49]] = (12000, -18000, 6000)
+    rows[1, [2, 47, 48]] = (400, -9000, 15000)
+    rig, rows_path, out = tmp_path / "rig.json", tmp_path / "rows.json", tmp_path / "poses.bin"
+    rig.write_text(json.dumps(data))
+    rows_path.write_text(json.dumps(rows.tolist()))
+    run = subprocess.run([need_node(), str(ROOT / "tests" / "js" / "pose_rig.mjs"), str(rig), str(rows_path), str(out)],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+    got = np.fromfile(out, "<f8").reshape(len(rows), -1, 3)
+    r = face.rig
+    fade_rows, fade_w = r.head_fade
+    centre = r.rest[r.fp_vertex[r.head_fp]]
+    for k, v in enumerate(rows):
+        p, _ = pose_in_head_frame(r, v)
+        turn = motion.head_rotation(*(v[[47, 48, 49]] * motion.ANGLE_UNIT_RAD))
+        want = centre + (p - centre) @ turn.T
+        want[fade_rows] = p[fade_rows] + fade_w[:, None] * (want[fade_rows] - p[fade_rows])
+        assert np.abs(got[k] - want).max() < 1e-6, k
