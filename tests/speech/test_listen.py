@@ -1,0 +1,140 @@
+"""Lip sync from a recording alone (mpeg4fa.speech.listen): espeak-ng speech with known phone times, and
+noise, silence and music that must leave the mouth at rest. The figures the issue asks for (closures within
+40 ms for >= 90 % in English, >= 75 % in other languages) are not reached by pocketsphinx's English phone loop
+on espeak-ng's voices: those checks are xfail with the measured figure; the rest hold what is reached now
+(tools/bench_lipsync_audio.py measures more sentences)."""
+import numpy as np
+import pytest
+
+pytest.importorskip("pocketsphinx")
+
+from mpeg4fa.speech.align import Recording  # noqa: E402
+from mpeg4fa.speech.encoder import encode_utterance, phones  # noqa: E402
+from mpeg4fa.speech.listen import (ENGLISH_DEFAULT, Phone, choose_recognizer, listen, phone_events,  # noqa: E402
+                                   phone_timings, recognize_phones, voice_activity)
+from mpeg4fa.speech.listen.compare import agreement, closure_onsets, onset_score, rest_share  # noqa: E402
+from mpeg4fa.speech.listen.signals import music, white_noise  # noqa: E402
+from mpeg4fa.speech.markup import parse_markup  # noqa: E402
+from mpeg4fa.speech.tts.espeak import EspeakEngine  # noqa: E402
+from mpeg4fa.speech.utterance import speak  # noqa: E402
+
+EN = ["Please bring the maps back before the boat leaves.",
+      "Peter picked a peck of pickled peppers, and my mother baked bread."]
+ES = ["Mi madre compró pan y manzanas en el mercado.", "Pablo bebe un poco de vino blanco por la mañana."]
+
+
+def spoken(text, lang):
+    """The transcript path's utterance of espeak-ng speech (its phone times are the truth) and the recording."""
+    utt = phones(speak(parse_markup(text), EspeakEngine(), lang=lang, rate=160))
+    return utt, Recording(utt.speech.samples, utt.speech.rate, text[:20])
+
+
+def as_recording(x, rate=16000):
+    return Recording(np.clip(np.rint(np.asarray(x) * 32768), -32768, 32767).astype(np.int16), rate, "signal")
+
+
+@pytest.fixture(scope="module")
+def scores():
+    out = {}
+    for lang, texts in (("en", EN), ("es", ES)):
+        hits = total = 0
+        agree = []
+        for text in texts:
+            ref, rec = spoken(text, lang)
+            heard = listen(rec, recognizer="phonetic", lang=lang)
+            got = phones(heard.utterance).timings
+            s = onset_score(ref.timings, got)
+            hits, total = hits + s.hits, total + s.reference
+            agree.append(agreement(ref.timings, got, rec.duration)[0])
+        out[lang] = (hits / total, float(np.mean(agree)), total)
+    return out
+
+
+def test_english_closures_and_frames_follow_the_transcript_path(scores):
+    share, agree, total = scores["en"]
+    assert total >= 10
+    assert share >= 0.5, share  # measured 0.64 on these two (bench: 16/25 on three)
+    assert agree >= 0.4, agree  # measured ~0.5
+
+
+def test_spanish_frames_follow_the_transcript_path(scores):
+    share, agree, total = scores["es"]
+    assert agree >= 0.35, agree  # measured ~0.44
+    assert share >= 0.2, share
+
+
+@pytest.mark.xfail(reason="issue 28's target; measured 0.64 (English), 0.27 (Spanish) on espeak-ng voices",
+                   strict=True)
+def test_closure_onsets_reach_the_issue_targets(scores):
+    assert scores["en"][0] >= 0.9 and scores["es"][0] >= 0.75
+
+
+@pytest.mark.parametrize("name, signal", [
+    ("white noise at -30 dBFS", lambda: white_noise(6.0, dbfs=-30.0)),
+    ("music", lambda: music(6.0)),
+    ("digital silence", lambda: np.zeros(16000 * 3)),
+    ("a 440 Hz tone", lambda: 0.3 * np.sin(2 * np.pi * 440 * np.arange(16000 * 3) / 16000)),
+])
+def test_noise_music_and_silence_leave_the_mouth_at_rest(name, signal):
+    rec = as_recording(signal())
+    heard = listen(rec, recognizer="phonetic")
+    assert rest_share(heard.utterance.timings, rec.duration) >= 0.95, name
+    encoded = encode_utterance(heard.utterance, level="low")
+    mouth = np.abs(encoded.values[:, 2:17]).max(axis=1)  # FAPs 3-17: jaw and lips
+    assert (mouth <= 1).mean() >= 0.95, name
+
+
+def test_speech_is_voice_active_and_noise_is_not():
+    ref, rec = spoken(EN[0], "en")
+    active = voice_activity(rec.floats(), rec.rate)
+    assert active.mean() >= 0.8
+    noisy = rec.floats()[: len(rec.samples)]
+    mixed = np.r_[white_noise(2.0, rec.rate, -30.0), noisy]
+    a = voice_activity(mixed, rec.rate)
+    assert a[:190].mean() <= 0.05 and a[200:].mean() >= 0.7
+
+
+def test_phones_map_through_ipa_features_and_silence_is_a_pause():
+    events = phone_events([Phone("SIL", 0.0, 0.1), Phone("M", 0.1, 0.2), Phone("AY", 0.2, 0.4), Phone("+NSN+", 0.4, 0.5)])
+    timings = phone_timings(events)
+    assert [t.viseme for t in timings] == ["none", "PP", "AA", "ih", "none"]  # AY split as a diphthong is
+    assert timings[2].start == pytest.approx(0.2) and timings[3].end == pytest.approx(0.4)
+
+
+def test_recognised_phones_are_timed_inside_the_recording():
+    ref, rec = spoken(EN[0], "en")
+    found = recognize_phones(rec)
+    assert found and all(0 <= p.start < p.end <= rec.duration + 1e-9 for p in found)
+    assert {"P", "B", "M"} & {p.name for p in found}
+    assert len(closure_onsets(ref.timings)) >= 5
+
+
+def test_auto_takes_the_measured_default_for_english_and_phones_for_the_rest():
+    assert choose_recognizer("auto", "auto") == ENGLISH_DEFAULT
+    assert choose_recognizer("auto", "en-gb") == ENGLISH_DEFAULT
+    assert choose_recognizer("auto", "es") == "phonetic"
+    assert choose_recognizer("words", "es") == "words"
+    with pytest.raises(ValueError):
+        choose_recognizer("nonsense", "en")
+
+
+def test_words_are_recognised_and_aligned_as_a_transcript():
+    ref, rec = spoken(EN[0], "en")
+    heard = listen(rec, recognizer="words", lang="en")
+    assert heard.recognizer == "words" and len(heard.words) >= 5
+    assert "please" in [w.word for w in heard.words]
+    assert heard.utterance.markup.text.split()[0] == "please"
+    s = onset_score(ref.timings, phones(heard.utterance).timings)
+    assert s.share >= 0.4, s
+
+
+def test_an_empty_recording_is_silent():
+    heard = listen(Recording(np.zeros(0, np.int16), 16000, "empty"))
+    assert heard.silent and heard.utterance.timings == ()
+    assert len(encode_utterance(heard.utterance).stream) == 1
+
+
+def test_expression_for_the_whole_clip():
+    heard = listen(as_recording(np.zeros(16000)), expression=("joy", 30))
+    (cue,) = heard.utterance.cues
+    assert (cue.expression, cue.intensity, cue.start) == ("joy", 30, 0.0)
