@@ -72,7 +72,7 @@ def test_bad_recordings_exit_1_with_one_line(cli, tmp_path, rec, argv, words):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--speech", "{rec}"], "--speech needs the transcript"),
+    (["--speech", "{rec}", "--transcript", "Hello", "--expression", "joy=9"], "without a transcript"),
     (["--transcript", "Hello"], "--transcript goes with --speech"),
     (["Hello", "--speech", "{rec}", "--transcript", "Hello"], "has no place beside it"),
     (["--speech", "{rec}", "--transcript", "Hello", "--engine", "estimate"], "--engine estimate with --speech"),
