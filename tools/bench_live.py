@@ -14,7 +14,8 @@ louder than -45 dBFS after at least 300 ms quieter), not taken from espeak-ng's 
   chunk: processing time (wall and the thread's CPU time, ``feed``; on a shared machine the wall time
   includes waiting for a core: the load average is recorded), and the backlog (how late the hand-over was: it grows if
   the stream falls behind). CPU share: process time over wall time.
-* **fast**: the chunks fed back to back, for the throughput (x real time).
+* **fast**: the chunks fed back to back, for the throughput (x real time); ``+fba``: each feed's frames
+  also coded as the server sends them (:class:`~mpeg4fa.speech.live.LiveEncoder`; realtime always codes).
 * **quality**: the live track's visemes against the text path's for the same speech (espeak-ng's own
   phonemes through the English table), and the recording path's (``speech.listen``, phones recognised
   from the whole file at once) against the same: what deciding in 320 ms windows costs.
@@ -41,7 +42,7 @@ sys.path.insert(0, str(ROOT))
 
 from mpeg4fa.spec import FAP_BY_NAME  # noqa: E402
 from mpeg4fa.speech.align.recording import frame_levels, resample  # noqa: E402
-from mpeg4fa.speech.live import LATENCY, LiveLipSync  # noqa: E402
+from mpeg4fa.speech.live import LATENCY, LiveEncoder, LiveLipSync  # noqa: E402
 from mpeg4fa.wav import write_pcm16  # noqa: E402
 from mpeg4fa.wavread import read_wav  # noqa: E402
 
@@ -125,8 +126,9 @@ def onsets(pcm: np.ndarray) -> list[float]:
     return out
 
 
-def run(pcm: np.ndarray, realtime: bool) -> dict:
+def run(pcm: np.ndarray, realtime: bool, coded: bool = False) -> dict:
     live = LiveLipSync(RATE, FPS)
+    coder = LiveEncoder(FPS) if coded else None
     step = int(CHUNK * RATE)
     n = -(-len(pcm) // step)
     proc, cpu_chunk, late, moved_at = np.zeros(n), np.zeros(n), np.zeros(n), []  # moved_at: (chunk, first moving frame time) per feed
@@ -141,6 +143,8 @@ def run(pcm: np.ndarray, realtime: bool) -> dict:
             late[k] = max(0.0, time.monotonic() - due)
         a, c = time.monotonic(), time.thread_time()
         frames = live.feed(pcm[k * step:(k + 1) * step])
+        if coder is not None and len(frames):
+            coder.encode(frames)
         proc[k], cpu_chunk[k] = time.monotonic() - a, time.thread_time() - c
         if len(frames):
             move = np.flatnonzero(np.abs(frames[:, LIPS]).max(axis=1) > 0)
@@ -159,7 +163,7 @@ def run(pcm: np.ndarray, realtime: bool) -> dict:
         lat_audio.append((k + 1) * CHUNK - onset)
         lat_wall.append((k - onset_chunk) * CHUNK + handed + (onset_chunk + 1) * CHUNK - onset)
     third = n // 3
-    return {"mode": "realtime" if realtime else "fast", "audio_s": len(pcm) / RATE, "chunks": n, "wall_s": wall,
+    return {"mode": ("realtime" if realtime else "fast") + ("+fba" if coded else ""), "audio_s": len(pcm) / RATE, "chunks": n, "wall_s": wall,
             "x_realtime": len(pcm) / RATE / wall, "cpu_share": cpu / wall, "cpu_per_audio_s": cpu / (len(pcm) / RATE),
             "chunk_ms": {"mean": 1e3 * proc.mean(), "p99": 1e3 * float(np.percentile(proc, 99)),
                          "max": 1e3 * proc.max(), "over_20ms": int((proc > CHUNK).sum())},
@@ -181,7 +185,9 @@ def _stats(xs: list[float]) -> dict:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--seconds", type=float, default=300.0)
-    p.add_argument("--mode", choices=("both", "realtime", "fast"), default="both")
+    p.add_argument("--mode", choices=("both", "realtime", "fast"), default="both",
+                   help="fast: as fast as possible, without and with FBA coding; realtime: a real-time clock, "
+                        "with FBA coding as the server does; both: all three")
     p.add_argument("--wav", type=Path)
     p.add_argument("--json", type=Path, default=ROOT / "tools" / "bench_live.json")
     args = p.parse_args()
@@ -193,15 +199,17 @@ def main() -> None:
         pcm, rate = read_wav(wav)
     if rate != RATE:
         pcm = np.clip(np.rint(resample(pcm / 32768.0, rate, RATE) * 32767), -32768, 32767).astype(np.int16)
-    results = [run(pcm, realtime) for realtime in ((False, True) if args.mode == "both" else (args.mode == "realtime",))]
+    modes = {"both": ((False, False), (False, True), (True, True)), "fast": ((False, False), (False, True)),
+             "realtime": ((True, True),)}[args.mode]
+    results = [run(pcm, realtime, coded) for realtime, coded in modes]
     print(f"live lip sync, {len(pcm) / RATE:.0f} s of espeak-ng speech in 20 ms chunks, latency {LATENCY * 1e3:.0f} ms")
-    print(f"{'mode':<9} {'x rt':>6} {'cpu':>5} {'chunk wall mean/p99/max ms':>26} {'>20ms':>5} "
+    print(f"{'mode':<13} {'x rt':>6} {'cpu':>5} {'chunk wall mean/p99/max ms':>26} {'>20ms':>5} "
           f"{'chunk cpu mean/p99/max ms':>26} {'>20ms':>5} "
           f"{'backlog max/first/last ms':>26} {'onsets':>7} {'move after onset ms (audio) mean/p95/max':>40} "
           f"{'wall mean/p95/max':>18}")
     for r in results:
         c, b, la, lw = r["chunk_ms"], r["backlog_ms"], r["latency_audio_ms"], r["latency_wall_ms"]
-        print(f"{r['mode']:<9} {r['x_realtime']:6.1f} {r['cpu_share']:5.0%} "
+        print(f"{r['mode']:<13} {r['x_realtime']:6.1f} {r['cpu_share']:5.0%} "
               f"{c['mean']:12.2f}/{c['p99']:6.2f}/{c['max']:6.2f} {c['over_20ms']:5d} "
               f"{r['chunk_cpu_ms']['mean']:12.2f}/{r['chunk_cpu_ms']['p99']:6.2f}/{r['chunk_cpu_ms']['max']:6.2f} "
               f"{r['chunk_cpu_ms']['over_20ms']:5d} "
