@@ -99,17 +99,17 @@ def phone_parts(phone: str) -> tuple[tuple[str, float, float], ...]:
 
 def _decoder():
     """A phone-loop decoder of its own (one per window: decoders are not shared across threads), tuned as the
-    recording path's (:func:`mpeg4fa.speech.listen.phones.phone_decoder`: fewer, longer phones)."""
+    recording path's (:func:`mpeg4fa.speech.listen.phones.phone_decoder`: the phone trigram's weight
+    lowered, so the acoustics are heard: p, b, m among them)."""
     from mpeg4fa.extras import require
 
     require("align", "pocketsphinx")
     from pocketsphinx import Decoder, get_model_path
 
-    from mpeg4fa.speech.listen.phones import BEAM, PHONE_INSERTION
+    from mpeg4fa.speech.listen.phones import LANGUAGE_WEIGHT
 
     phone_lm = Path(get_model_path()) / "en-us" / "en-us-phone.lm.bin"
-    return Decoder(samprate=RATE, allphone=str(phone_lm), bestpath=False, loglevel="FATAL", pip=PHONE_INSERTION,
-                   **BEAM)
+    return Decoder(samprate=RATE, allphone=str(phone_lm), bestpath=False, loglevel="FATAL", lw=LANGUAGE_WEIGHT)
 
 
 class LiveLipSync:
