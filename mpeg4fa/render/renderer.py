@@ -194,7 +194,7 @@ class Renderer:
         if self.texture is not None:
             self.texture.use(0)
         self.vao.render()
-        if self.lash_vao is not None:
+        if self.lash_vao is not None and self.texture is None:  # a photo texture has its own lashes, as its brows
             self.lash_vao.render()
         if self.ms_fbo is not None:
             ctx.copy_framebuffer(self.fbo, self.ms_fbo)
