@@ -133,6 +133,7 @@ float brow_cover(vec2 d) {
 }
 
 void main() {
+    float detail_mm = fwidth(v_detail.x);   // mm of detail coordinate per pixel (here: in uniform control flow)
     vec3 n = normalize(v_normal);
     vec3 to_eye = orthographic ? view_direction : normalize(camera_position - v_position);
     int slot;
@@ -174,6 +175,9 @@ void main() {
         float centre = (id + 0.5 + 0.4 * (hash(id) - 0.5)) * lash_strands.x + lean;
         float reach = 0.7 + 0.3 * hash(id + 11.0);        // uneven lengths
         float half_width = lash_strands.y * (1.0 - 0.85 * h / reach) * sqrt(v_tints.x);  // short ones thin
+        // seen from afar (strands under a pixel apart) the roots merge into the lash line; else they alias to dots
+        float merge = smoothstep(0.25, 0.8, detail_mm / lash_strands.x) * (1.0 - h / reach);
+        half_width = mix(half_width, 0.55 * lash_strands.x, merge);
         if (h > reach || abs(s - centre) > half_width) discard;
         slot = 1;
         base = lash_colour;
