@@ -1,0 +1,207 @@
+"""Lip sync from a recording alone (issue 28): how close the audio-only viseme track comes to the transcript
+path's, how still the mouth stays through noise and music, and how fast it runs.
+
+Speech: espeak-ng sentences in English (two voices), Spanish, French, German, Mandarin and Hindi, whose phone
+times are known (espeak-ng's own events). The transcript path's track is the utterance the text path makes of
+the same text (:func:`mpeg4fa.speech.utterance.speak`, stops moved to their closures): the track a perfect
+aligner would give. Mandarin is spoken through espeak-ng's ``cmn`` voice on the IPA route, so that both tracks
+use the 14 MPEG-4 visemes (the pinyin route's Chinese visemes have no PP to compare). The audio-only track is
+:func:`mpeg4fa.speech.listen.listen` of the audio alone, recogniser ``phonetic`` (all) and ``words`` (English).
+
+Measured (:mod:`mpeg4fa.speech.listen.compare`): closure onsets (viseme PP: p, b, m) found within 40 ms; the
+mean error of those found within 100 ms; closures added where the transcript has none; per-frame viseme
+agreement at 25 fps (frames where both rest left out). Rest: silence, white noise at -30 dBFS and synthetic
+music (:mod:`mpeg4fa.speech.listen.signals`), the share of 25 fps frames with no viseme shown and the share with
+the jaw and lips (FAPs 3-17) within one unit of neutral. Speed: :func:`~mpeg4fa.speech.listen.stream.stream_listened`
+of a 60 s English recording to an FBA stream, seconds of audio per wall second (the load average is printed:
+the machine is shared) and per second of the process's CPU time (pocketsphinx runs on one thread: what an
+idle core gives).
+
+``--human DIR``: also recordings of people, each ``NAME.wav`` with its transcript ``NAME.txt`` (e.g. the
+LibriVox files of pocketsphinx's source package, test/data/librivox, as tools/bench_align.py --human uses):
+the transcript path is then :func:`~mpeg4fa.speech.align.align_recording` of the transcript.
+
+    .venv/bin/python tools/bench_lipsync_audio.py [--json tools/bench_lipsync_audio.json] [--human DIR] [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from mpeg4fa.speech.align import Recording, align_recording, read_recording  # noqa: E402
+from mpeg4fa.speech.encoder import encode_utterance, phones  # noqa: E402
+from mpeg4fa.speech.listen import listen  # noqa: E402
+from mpeg4fa.speech.listen.compare import agreement, onset_score, rest_share  # noqa: E402
+from mpeg4fa.speech.listen.signals import music, white_noise  # noqa: E402
+from mpeg4fa.speech.listen.stream import Source, stream_listened  # noqa: E402
+from mpeg4fa.speech.markup import parse_markup  # noqa: E402
+from mpeg4fa.speech.tts.espeak import EspeakEngine  # noqa: E402
+from mpeg4fa.speech.utterance import speak  # noqa: E402
+
+SPEECH = {
+    "en": [("en-us", "Please bring the maps back before the boat leaves."),
+           ("en-us", "Peter picked a peck of pickled peppers, and my mother baked bread."),
+           ("en-us+f3", "My brother bought a big blue umbrella from the market."),
+           ("en-gb", "Bob might move the piano before the bus comes by."),
+           ("en-us+m3", "Maybe the puppy wants more bread and some apple pie.")],
+    "es": [("es", "Mi madre compró pan y manzanas en el mercado."),
+           ("es", "Pablo bebe un poco de vino blanco por la mañana."),
+           ("es", "El bombero abrió la puerta de la biblioteca.")],
+    "fr": [("fr", "Mon petit frère mange une pomme sur le banc."),
+           ("fr", "Paul a bu beaucoup de bière belge au bistrot."),
+           ("fr", "Ma mère prépare un bon repas pour papa.")],
+    "de": [("de", "Meine Mutter backt Brot am Montagmorgen."),
+           ("de", "Peter bringt die Butter und das Brot mit."),
+           ("de", "Im Sommer baden wir im blauen Meer.")],
+    "zh": [("cmn", "妈妈买了面包和苹果。"), ("cmn", "爸爸不喜欢喝咖啡，他每天喝茶。"), ("cmn", "朋友们明天去北京爬山。")],
+    "hi": [("hi", "मेरा भाई बाजार से पानी लाया।"), ("hi", "बाबा ने मुझे एक बड़ा पत्थर दिया।"),
+           ("hi", "माँ ने मुझे मीठा पराठा बनाकर दिया।")],
+}
+TARGET = {"en": 0.90}
+OTHER_TARGET = 0.75
+RATE = 160
+
+
+def _score(ref_timings, heard_timings, duration: float) -> dict:
+    s = onset_score(ref_timings, heard_timings)
+    a, n = agreement(ref_timings, heard_timings, duration)
+    return {"closures": s.reference, "hits": s.hits, "errors": list(s.errors), "extra": s.extra,
+            "agree_frames": a * n if n else 0.0, "frames": n}
+
+
+def _sum(rows: list[dict]) -> dict:
+    closures = sum(r["closures"] for r in rows)
+    hits = sum(r["hits"] for r in rows)
+    errors = [e for r in rows for e in r["errors"]]
+    frames = sum(r["frames"] for r in rows)
+    return {"closures": closures, "within_40ms": hits / closures if closures else float("nan"),
+            "mean_onset_error_ms": 1000 * float(np.mean(errors)) if errors else float("nan"),
+            "extra_closures": sum(r["extra"] for r in rows),
+            "frame_agreement": sum(r["agree_frames"] for r in rows) / frames if frames else float("nan"),
+            "frames": frames}
+
+
+def run_speech(quick: bool) -> list[dict]:
+    engine = EspeakEngine()
+    rows = []
+    for lang, items in SPEECH.items():
+        items = items[:2] if quick else items
+        per = {"phonetic": [], "words": []}
+        for voice, text in items:
+            code = voice.split("+")[0] if lang != "en" else "en"
+            ref = phones(speak(parse_markup(text), engine, lang=code, voice=voice, rate=RATE))
+            rec = Recording(ref.speech.samples, ref.speech.rate, text)
+            for how in (("phonetic", "words") if lang == "en" else ("phonetic",)):
+                heard = listen(rec, recognizer=how, lang=code)
+                per[how].append(_score(ref.timings, phones(heard.utterance).timings, rec.duration))
+        for how, got in per.items():
+            if got:
+                rows.append({"lang": lang, "recognizer": how, "sentences": len(got), **_sum(got)})
+    return rows
+
+
+def run_human(folder: Path) -> list[dict]:
+    per = {"phonetic": [], "words": []}
+    for wav in sorted(folder.glob("*.wav")):
+        txt = wav.with_suffix(".txt")
+        if not txt.exists():
+            continue
+        rec = read_recording(wav)
+        ref = phones(align_recording(rec, txt.read_text(encoding="utf-8").strip(), lang="en").utterance)
+        for how in per:
+            heard = listen(rec, recognizer=how, lang="en")
+            per[how].append(_score(ref.timings, phones(heard.utterance).timings, rec.duration))
+    return [{"lang": "en (human)", "recognizer": how, "sentences": len(got), **_sum(got)} for how, got in per.items()
+            if got]
+
+
+def _int16(x: np.ndarray) -> np.ndarray:
+    return np.clip(np.rint(x * 32768), -32768, 32767).astype(np.int16)
+
+
+def run_rest(seconds: float) -> list[dict]:
+    rate = 16000
+    clips = [("silence", np.zeros(int(seconds * rate))),
+             ("white noise -30 dBFS", white_noise(seconds, rate, -30.0)),
+             ("music -18 dBFS", music(seconds, rate, -18.0, seed=0)),
+             ("music -12 dBFS (seed 3)", music(seconds, rate, -12.0, seed=3))]
+    rows = []
+    for name, x in clips:
+        rec = Recording(_int16(x), rate, name)
+        heard = listen(rec, recognizer="phonetic")
+        enc = encode_utterance(heard.utterance, level="low")
+        mouth = np.abs(enc.values[:, 2:17]).max(axis=1)
+        rows.append({"clip": name, "seconds": seconds, "rest_frames": rest_share(heard.utterance.timings, rec.duration),
+                     "mouth_neutral_frames": float((mouth <= 1).mean())})
+    return rows
+
+
+def run_speed(seconds: float) -> list[dict]:
+    engine = EspeakEngine()
+    texts = [t for _, t in SPEECH["en"]]
+    parts, total = [], 0.0
+    while total < seconds:
+        s = engine.synthesize(texts[len(parts) % len(texts)], voice="en-us", rate=RATE)
+        parts.append(s.samples)
+        total += s.duration
+    x = np.concatenate(parts)
+    rate = s.rate
+    rows = []
+    for how in ("phonetic", "words"):
+        listen(Recording(x[:rate], rate), recognizer=how)  # models loaded before the clock starts
+        load = os.getloadavg()[0]
+        source = Source("speed", rate, len(x) / rate, iter([x]))
+        started, cpu = time.perf_counter(), time.process_time()
+        heard = stream_listened(source, io.BytesIO(), recognizer=how, lang="en")
+        wall, cpu = time.perf_counter() - started, time.process_time() - cpu
+        rows.append({"recognizer": how, "seconds": len(x) / rate, "wall_s": wall, "x_real_time": len(x) / rate / wall,
+                     "cpu_s": cpu, "x_real_time_cpu": len(x) / rate / cpu, "cpus": os.cpu_count(),
+                     "load_average": load, "frames": heard.frames})
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--json", type=Path, help="write the figures here")
+    ap.add_argument("--human", type=Path, metavar="DIR", help="also NAME.wav + NAME.txt recordings of people")
+    ap.add_argument("--quick", action="store_true", help="two sentences a language, 10 s clips, 20 s speed test")
+    args = ap.parse_args()
+    speech = run_speech(args.quick)
+    if args.human is not None:
+        speech += run_human(args.human)
+    print(f"{'lang':<11} {'recogniser':<9} {'sent':>4} {'PP':>4} {'<=40ms':>7} {'target':>6} {'err ms':>6} "
+          f"{'extra':>5} {'agree':>6}")
+    for r in speech:
+        target = TARGET.get(r["lang"].split()[0], OTHER_TARGET)
+        print(f"{r['lang']:<11} {r['recognizer']:<9} {r['sentences']:>4} {r['closures']:>4} {r['within_40ms']:>7.0%} "
+              f"{target:>6.0%} {r['mean_onset_error_ms']:>6.1f} {r['extra_closures']:>5} {r['frame_agreement']:>6.0%}")
+    en = {r["recognizer"]: r for r in speech if r["lang"] == "en"}
+    better = max(en, key=lambda k: (en[k]["within_40ms"] + en[k]["frame_agreement"]))
+    print(f"English: {better} matches the transcript path better (closures within 40 ms + frame agreement)")
+    rest = run_rest(10.0 if args.quick else 30.0)
+    print(f"\n{'clip':<26} {'rest frames':>11} {'mouth neutral':>13}   (target >= 95 %)")
+    for r in rest:
+        print(f"{r['clip']:<26} {r['rest_frames']:>11.1%} {r['mouth_neutral_frames']:>13.1%}")
+    speed = run_speed(20.0 if args.quick else 60.0)
+    print(f"\n{'recogniser':<10} {'audio s':>8} {'wall s':>7} {'x real time':>11} {'CPU s':>6} {'x per CPU s':>11} "
+          f"{'cpus':>5} {'load':>5}   (target >= 10x; one thread: 'x per CPU s' is what an idle core gives)")
+    for r in speed:
+        print(f"{r['recognizer']:<10} {r['seconds']:>8.1f} {r['wall_s']:>7.2f} {r['x_real_time']:>11.1f} {r['cpu_s']:>6.2f} "
+              f"{r['x_real_time_cpu']:>11.1f} {r['cpus']:>5} {r['load_average']:>5.1f}")
+    if args.json is not None:
+        args.json.write_text(json.dumps({"speech": speech, "english_better": better, "rest": rest, "speed": speed},
+                                        indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
