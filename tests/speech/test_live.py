@@ -125,18 +125,24 @@ def test_closures_shut_the_lips(fed):
         (np.abs(frames[:, col]) >= 0.8 * abs(pp[col])).any(), "'Maybe Bob ... map' never shut the lips"
 
 
-@pytest.mark.parametrize("kind", ["silence", "noise"])
-def test_silence_and_noise_keep_the_mouth_at_rest(kind):
+@pytest.mark.parametrize("kind", ["silence", "noise", "chord"])
+def test_silence_noise_and_a_held_chord_keep_the_mouth_at_rest(kind):
+    """A held chord (C major, its loudness swelling at 0.5 Hz) is voice to the detector: without the
+    steady-pitch gate the mouth moved in 91 % of its frames. (A melody of notes changing every 250 ms
+    still moves it in about 70 %: the pitch measure jumps between subharmonics of a pure tone.)"""
     n = 5 * RATE
     x = np.zeros(n)
     if kind == "noise":  # white noise at -30 dBFS
         x = np.random.default_rng(3).standard_normal(n)
         x *= 10 ** (-30 / 20) / np.sqrt(np.mean(x ** 2))
+    elif kind == "chord":
+        t = np.arange(n) / RATE
+        x = sum(0.15 * np.sin(2 * np.pi * f * t) for f in (261.6, 329.6, 392.0)) * (0.6 + 0.4 * np.sin(np.pi * t))
     pcm = np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16)
     out, tail = run(pcm, 320)
     frames = np.concatenate([f for _, f in out] + [tail])
     assert len(frames) == 5 * FPS
-    assert (~moving(frames)).mean() >= 0.95 if kind == "noise" else not moving(frames).any()
+    assert (~moving(frames)).mean() >= 0.95 if kind != "silence" else not moving(frames).any()
 
 
 def test_other_sample_rates_are_resampled_as_they_come(clip):
