@@ -29,8 +29,7 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
 - Voice: a 10 ms frame is voiced when pocketsphinx's voice activity detector (:class:`pocketsphinx.Vad`)
   hears speech in it and its spectrum is not flat (:func:`flatness`, white noise). A phone over
   unvoiced frames (more than :data:`REACH` after voice) is silence whatever the loop calls it, so
-  silence and noise keep the mouth at rest;
-  voice the loop still calls silence (the first window or two of speech) takes :data:`VOICE_VISEME`.
+  silence and noise keep the mouth at rest; voice the loop still calls silence (the first window or two of speech) takes :data:`VOICE_VISEME`.
   Music is voice to the detector; a pitch held for :data:`STEADY` s is a note, not a voice, and so is
   everything for :data:`MUSIC_HOLD` s after one (:meth:`LiveLipSync._notes`, the recording path's
   steadiness test on the frames already heard). Measured: a held chord leaves the mouth at rest in 98 %
@@ -39,9 +38,9 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
 
 Frames are ``(n, 68)`` low-level FAPs, rounded (column ``i`` is FAP ``i + 1``), as
 :class:`~.frames.FrameBlock` carries them: :meth:`LiveLipSync.feed` returns those that became due
-(possibly none), :meth:`LiveLipSync.flush` the rest, to the end of the audio fed. They can go to
-the bitstream frame by frame (:class:`mpeg4fa.fba.stream.FapStream` / the streaming encoder) or be
-shown at once.
+(possibly none), :meth:`LiveLipSync.flush` the rest, to the end of the audio fed. :class:`LiveEncoder`
+codes each batch as a complete fba_object (the text path's stream pass, :class:`~.encoder.StreamBuilder`),
+as ``mpeg4fa serve`` sends them to its page (:mod:`mpeg4fa.serve.microphone`).
 """
 from __future__ import annotations
 
