@@ -7,7 +7,9 @@ neck, turning with the head, twists into itself. Per pose this module gives:
 * **folded**: skin triangles whose normal turned by more than 90 degrees from rest
   (:func:`.quality.folded_triangles`; those inside the lip and lid loops are not counted);
 * **flipped**: pairs of neighbouring skin triangles that faced the same side at rest
-  (normals less than 90 degrees apart) and face against each other posed: a fold line;
+  (normals less than :data:`SAME_SIDE_DEGREES` apart) and face against each other posed
+  (more than 90 degrees): a fold line (a pair already at a sharp edge at rest, like the
+  neck's sides where they flare into the shoulders at the cut, is no new fold);
 * **strain / floor**: the worst edge strain (:func:`.quality.measure`) over the least any
   interpolation of the pose could have. The floor is :func:`.quality.strain_floor` over the
   skin feature points plus the neck's cut rim, held by the shoulders: a head turned 40
@@ -39,6 +41,8 @@ BROWS_FACTOR = 2.0
 """The brows at twice their usual extreme (the largest value streams and profiles use)."""
 CHEEK_LIFT = 600.0
 """FAPs 41/42 at this value (ENS): the cheeks lifted as far as the issue asks."""
+SAME_SIDE_DEGREES = 60.0
+"""Neighbouring triangles this close in direction at rest count as one smooth sheet."""
 RIM_BAND_MM = 0.5
 """Skin vertices within this of the neck's lowest point form its cut rim (held by the shoulders)."""
 
@@ -154,7 +158,7 @@ def flipped_pairs(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray) ->
     n0, n1 = normals(rest), normals(posed)
     before = np.einsum("ij,ij->i", n0[a], n0[b])
     after = np.einsum("ij,ij->i", n1[a], n1[b])
-    return int(((before > 0) & (after < 0)).sum())
+    return int(((before > np.cos(np.radians(SAME_SIDE_DEGREES))) & (after < 0)).sum())
 
 
 def held_floor(mesh, posed: np.ndarray, graph: SkinGraph) -> tuple[float, str]:

@@ -92,3 +92,44 @@ def cap_triangles(mesh: HeadMesh) -> np.ndarray:
     flip = normal[:, 1] > 0  # the cap faces down, out of the head
     tris[flip] = tris[flip][:, ::-1]
     return tris
+
+
+RIM_HARMONICS = 5
+"""The rim's outline keeps this many Fourier harmonics (round the loop) when it is smoothed."""
+RIM_BLEND_MM = 20.0
+"""How far up the neck the smoothed rim's change fades out."""
+
+
+def smooth_rim(mesh: HeadMesh) -> HeadMesh:
+    """The mesh with its cut's outline made smooth: the rim keeps the low harmonics of its outline
+    in the cut's plane (the generic head's flares into the shoulders left notches at the sides, a
+    jagged bottom edge from three-quarter views and fins that a head turn flipped), and the neck
+    above follows the change, fading out over :data:`RIM_BLEND_MM`. Nothing else moves."""
+    loop = rim_loop(mesh)
+    if len(loop) < 2 * RIM_HARMONICS + 3:
+        return mesh
+    v = mesh.vertices.copy()
+    outline = v[loop][:, [0, 2]]
+    spectrum = np.fft.rfft(outline, axis=0)
+    spectrum[RIM_HARMONICS + 1:] = 0.0
+    smooth = np.fft.irfft(spectrum, n=len(loop), axis=0)
+    delta = smooth - outline
+    skin = mesh.part("skin")
+    y = v[skin, 1]
+    height = y - y.min()
+    near = np.flatnonzero(height < RIM_BLEND_MM)
+    d2 = ((v[skin][near][:, None, [0, 2]] - outline[None]) ** 2).sum(axis=2)
+    w = 1.0 / np.maximum(d2, 1e-6) ** 2
+    follow = (w @ delta) / w.sum(axis=1, keepdims=True)
+    fade = 1.0 - np.clip(height[near] / RIM_BLEND_MM, 0.0, 1.0)
+    fade = fade * fade * (3.0 - 2.0 * fade)
+    rows = near + skin.start
+    v[rows[:, None], [0, 2]] += fade[:, None] * follow
+    v[loop[:, None], [0, 2]] = smooth
+    moved = np.union1d(rows, loop)
+    mirror = np.asarray(mesh.mirror)[moved]  # exactly mirror symmetric again (the FFT rounds)
+    x = 0.5 * (v[moved, 0] - v[mirror, 0])
+    z = 0.5 * (v[moved, 2] + v[mirror, 2])
+    v[moved, 0], v[moved, 2] = x, z
+    v[mirror, 0], v[mirror, 2] = -x, z
+    return mesh.with_vertices(v)

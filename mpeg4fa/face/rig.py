@@ -11,8 +11,9 @@
   no share (the upper lip neither drags nor holds the lower lip); weights under
   :data:`WEIGHT_FLOOR` are soft-thresholded away and every weight fades out between
   22 and 44 mm of surface distance from its point; the weights of points other
-  than the eye's (3.x) fade to 0 over :data:`LID_CLEAR_MM` before a lid margin
-  (a brow raise must not pull the margin off the eyeball)
+  than the eye's (3.x) fade to 0 over :data:`LID_CLEAR_MM` (or the point's own distance
+  to the margin, if less) before a lid margin (a brow raise must not pull the margin off
+  the eyeball; a fade that short left a brow raise's whole stretch in one band over the lid)
   (no step, fewer rows to move). A feature point's own vertex has weight 1 for
   itself and 0 for every other point, so each point moves exactly as its FAPs say
   and no other feature point moves.
@@ -54,7 +55,9 @@ the skull's base). The head's rotation fades in over the neck below the line thr
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
 TONGUE_REACH_MM = 30.0  # a tongue point carries the tongue around it this far (its tip the front third)
 WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
-LID_CLEAR_MM = 6.0  # brow, cheek and nose weights fade to 0 over this surface distance before a lid margin
+LID_CLEAR_MM = 24.0  # brow, cheek and nose weights fade to 0 over this surface distance before a lid margin
+# (or over the point's own distance to it, if less)
+# (6 mm left the whole stretch of a brow raise in a band just over the lid: brows at 400 folded there)
 CORNERS = (("2.4", "8.3"), ("2.5", "8.4"))  # (inner, outer) lip corner, left then right
 CORNER_MARGIN_MM = 1.0  # the outer lip corner stays at least this far outside the inner one
 
@@ -189,10 +192,15 @@ def skin_weights(mesh: HeadMesh, fps: list[int], driven: list[int]) -> sp.csr_ma
     margins = np.concatenate([shortest_loop(mesh, labels) for labels in LID_MARGIN_LOOPS]) - skin.start
     to_margin = dijkstra(edge_graph(local, mesh.triangles["skin"] - skin.start), indices=margins,
                          min_only=True, limit=LID_CLEAR_MM)
-    clear = 1.0 - smooth_down(to_margin / LID_CLEAR_MM)
+    # a point nearer a margin than LID_CLEAR_MM (the cheek's 5.3) fades over its own distance, so
+    # that it still moves exactly as its FAPs say
+    reach = np.minimum(LID_CLEAR_MM, to_margin[fp_v[controls] - skin.start])
     rows, cols, vals = [], [], []
     for c in keep:
-        col = faded[c] if mesh.fp_labels[controls[c]].startswith("3.") else faded[c] * clear
+        if mesh.fp_labels[controls[c]].startswith("3.") or reach[c] <= 0:
+            col = faded[c]
+        else:
+            col = faded[c] * (1.0 - smooth_down(to_margin / reach[c]))
         col = soft_floor(col, WEIGHT_FLOOR)
         nz = np.flatnonzero(col > 0)
         rows.append(nz + skin.start)

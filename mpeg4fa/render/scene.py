@@ -22,6 +22,10 @@ from mpeg4fa.render.details import brow_coordinates, cavity_weights, nose_coordi
 from mpeg4fa.render.materials import LIP_OUTLINE, PART_MATERIAL, lip_weights
 
 
+CAP_INSET_MM = 0.0
+"""The neck cap sits this far inside the rim (too little to see from below)."""
+
+
 @dataclass(frozen=True)
 class SceneLayout:
     source: np.ndarray     # (N,) mesh vertex index of each GL vertex
@@ -130,5 +134,8 @@ def vertex_data(layout: SceneLayout, vertices: np.ndarray, out: np.ndarray | Non
     if len(layout.cap):  # the cap is flat: one normal, its area-weighted mean
         p = vertices[layout.cap]
         n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]).sum(axis=0)
-        out[layout.cap_vertices, 3:] = n / max(float(np.linalg.norm(n)), 1e-12)
+        n /= max(float(np.linalg.norm(n)), 1e-12)
+        out[layout.cap_vertices, 3:] = n
+        # set in by CAP_INSET, so that from above its back never shows along the rim (depth ties)
+        out[layout.cap_vertices, :3] -= CAP_INSET_MM * n
     return out

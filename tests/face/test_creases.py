@@ -1,0 +1,159 @@
+"""No creases or folds at the extremes (issue 29 item 3), measured by :mod:`mpeg4fa.face.creases`.
+
+Per pose: no skin triangle folded (normal turned > 90 degrees from rest), no fold line
+(neighbours that were one smooth sheet at rest facing against each other), and the worst edge
+strain within twice the geometric floor (the floor with the neck's cut held by the shoulders),
+on the feature-point and ARKit deformers. The head turns (yaw and roll to 40 degrees with the
+jaw open, anger with a 37 degree turn) and the brows' squeeze at twice its extreme pass on the
+feature-point deformer, the brows at 400 on the ARKit one. What does not pass is marked with its measured figure; the cheeks
+at 600 cannot pass on this head at all: FAP 41 at 600 ENS lifts 5.3 30 mm, past the outer eye
+corner 3.7 that no FAP moves, so the skin between must turn over
+(:func:`test_cheeks_at_600_must_fold_on_this_head`).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import face_under
+from mpeg4fa.face import creases, quality
+from mpeg4fa.face.deformers.feature_points import partial_rotations
+from mpeg4fa.face.motion import head_rotation
+
+PASSING = ("yaw +40 jaw open", "yaw -40 jaw open", "roll +40 jaw open", "roll -40 jaw open", "anger yaw 37",
+           "squeeze x2", "brows 400")
+# measured on the generic head (folded / fold lines / strain over floor); not met yet
+NOT_YET = {
+    ("fap", "brows 400"): "0 folded, 4 fold lines at the middle brows 4.3/4.4 (the forehead just above a 20 mm "
+                          "raise moves less than the brow), ratio 1.41",
+    ("fap", "brows x2 down"): "12 folded at the inner brows 4.1/4.2, ratio 1.45",
+    ("arkit", "brows x2 down"): "6 folded at the inner brows, ratio 1.55",
+    ("fap", "pitch +40 jaw open"): "22 folded at the throat: the chin swings into the neck's front (36 mm tall)",
+    ("arkit", "pitch +40 jaw open"): "22 folded at the throat",
+    ("fap", "pitch -40 jaw open"): "strain 2.45 at the throat, 2.74 x the floor",
+    ("arkit", "pitch -40 jaw open"): "strain 2.45 at the throat, 2.75 x the floor",
+    ("fap", "yaw 40 pitch 20 jaw open"): "2 folded, 13 fold lines at the throat",
+    ("arkit", "yaw 40 pitch 20 jaw open"): "3 folded, 12 fold lines at the throat",
+    ("arkit", "yaw +40 jaw open"): "strain 2.16 at the lip corner 8.4 (the sculpted jawOpen), 2.19 x the floor",
+    ("arkit", "yaw -40 jaw open"): "strain 2.16 at the lip corner 8.3 (the sculpted jawOpen), 2.19 x the floor",
+    ("arkit", "roll +40 jaw open"): "2 folded at the lip corner (the sculpted jawOpen)",
+    ("arkit", "roll -40 jaw open"): "2 folded at the lip corner (the sculpted jawOpen)",
+    ("arkit", "anger yaw 37"): "2 folded, 6 fold lines at the lips (the sculpted anger units)",
+}
+DEFORMERS = ("fap", "arkit")
+FULL_RANGE_PASSING_AT_LEAST = 4
+"""Skin FAPs alone at their full default I range (+-i_max x quant step) that pass, of 96: most
+move a point 30-110 mm past fixed neighbours (raise_b_midlip 3720 MNS is 59 mm up through the
+upper lip, open_jaw 4320 MNS drops the chin 69 mm); a regression guard, measured 4 (4 +1200,
+16 +1080, 18 +-420)."""
+
+
+@pytest.fixture(scope="module")
+def graph(generic_face):
+    return quality.skin_graph(generic_face.mesh)
+
+
+@pytest.fixture(scope="module")
+def poses(generic_face):
+    return creases.crease_poses(generic_face)
+
+
+def _cases():
+    names = list(PASSING) + sorted({name for _, name in NOT_YET})
+    for deformer in DEFORMERS:
+        for name in dict.fromkeys(names):
+            marks = []
+            if (deformer, name) in NOT_YET:
+                marks.append(pytest.mark.xfail(reason=NOT_YET[(deformer, name)], strict=False))
+            yield pytest.param(deformer, name, marks=marks, id=f"{deformer}-{name.replace(' ', '_')}")
+
+
+@pytest.mark.parametrize("deformer,name", list(_cases()))
+def test_pose_has_no_fold_and_keeps_to_the_floor(request, graph, poses, deformer, name):
+    face = face_under(request, "generic", deformer)
+    m = creases.measure_pose(face, poses[name], graph)
+    assert m.folded == 0 and m.flipped == 0, f"{name}: {m}"
+    assert m.strain <= creases.STRAIN_LIMIT or m.ratio <= creases.FLOOR_FACTOR, f"{name}: {m}"
+
+
+def test_calibrated_head_turns_without_folds(generic_face):
+    """The conformance suite's adult head fitted to the generic one: a 40 degree turn with the jaw
+    open folds nothing there either."""
+    from mpeg4fa.conformance.manifest import default_root
+    from mpeg4fa.fdp import load_fdp
+
+    path = default_root() / "faces" / "adult.fdp"
+    if not path.is_file():
+        pytest.skip("the conformance suite's faces are not here")
+    face = generic_face.calibrate(load_fdp(path), method="elastic")
+    graph = quality.skin_graph(face.mesh)
+    for name in ("yaw +40 jaw open", "yaw -40 jaw open", "anger yaw 37"):
+        m = creases.measure_pose(face, creases.crease_poses(face)[name], graph)
+        assert m.ok(), f"{name}: {m}"
+
+
+def test_cheeks_at_600_must_fold_on_this_head(generic_face, graph, poses):
+    """Why cheeks at 600 stay: FAP 41 lifts 5.3 above the outer eye corner 3.7 (no FAP moves it),
+    which sat 15 mm above it at rest, so some skin between must turn over, and the measure sees it."""
+    face = generic_face
+    posed = face.pose_values(poses["cheek l 600"])
+    fp = dict(zip(face.mesh.fp_labels, posed.feature_points))
+    rest = face.feature_points()
+    assert rest["5.3"][1] < rest["3.7"][1] - 10 and fp["5.3"][1] > fp["3.7"][1] + 10
+    assert creases.measure_pose(face, poses["cheek l 600"], graph).folded > 0
+
+
+def test_full_range_does_not_regress(generic_face, graph):
+    passing = [name for name, values in creases.full_range_poses().items()
+               if creases.measure_pose(generic_face, values, graph).ok()]
+    assert len(creases.full_range_poses()) == 96
+    assert len(passing) >= FULL_RANGE_PASSING_AT_LEAST, passing
+
+
+def test_neck_share_fades_from_the_cut_to_the_head(generic_face):
+    """The share of a head turn: 0 on the cut, 1 at every feature point and on everything above
+    where the neck meets the head, and rising upward along the neck's front and back."""
+    mesh, rig = generic_face.mesh, generic_face.rig
+    share = np.ones(mesh.n_vertices)
+    rows, w = rig.head_fade
+    share[rows] = w
+    rim = creases.neck_rim(mesh)
+    assert np.all(share[rim] == 0.0)
+    assert np.all(share[mesh.fp_vertex] == 1.0)
+    y, z = mesh.vertices[:, 1], mesh.vertices[:, 2]
+    for z0, z1 in ((40.0, 90.0), (-40.0, 0.0)):  # the throat, the nape
+        band = rows[(z[rows] > z0) & (z[rows] < z1) & (np.abs(mesh.vertices[rows, 0]) < 10)]
+        order = band[np.argsort(y[band])]
+        assert len(order) > 3 and np.all(np.diff(share[order]) > -0.05)
+    assert 0.2 < np.median(w) < 0.8  # a long fade, not a band at the cut
+
+
+def test_partial_rotations_keep_lengths_and_end_at_the_turn():
+    r = head_rotation(0.3, np.radians(40), -0.2)
+    parts = partial_rotations(r, np.array([0.0, 0.5, 1.0]))
+    assert np.allclose(parts[0], np.eye(3)) and np.allclose(parts[2], r)
+    assert np.allclose(parts[1] @ parts[1], r)  # half the turn twice is the turn
+    assert np.allclose(np.einsum("nij,nkj->nik", parts, parts), np.eye(3))  # rotations: lengths kept
+
+
+def test_a_blend_of_positions_would_fold_the_neck(generic_face, graph, poses):
+    """The measure can fail: the old neck (positions blended toward the turned head over 30 mm) at
+    a 40 degree turn gives fold lines or strain far past the floor the new one keeps to."""
+    face = generic_face
+    values = poses["yaw +40 jaw open"]
+    posed = face.pose_values(values).vertices.copy()
+    rig = face.rig
+    rest = mesh_rest = face.mesh.vertices
+    centre = rest[rig.fp_vertex[rig.head_fp]]
+    r = head_rotation(0.0, values[48] * 1e-5, 0.0)
+    y = mesh_rest[:, 1]
+    skin = face.mesh.part("skin")
+    low = np.flatnonzero((y[:skin.stop] - y[skin].min()) < 30.0)
+    w = np.clip((y[low] - y[skin].min()) / 30.0, 0.0, 1.0)
+    w = w * w * (3 - 2 * w)
+    turned = centre + (rest[low] - centre) @ r.T
+    posed[low] = rest[low] + w[:, None] * (turned - rest[low])
+    q = quality.measure(face.mesh, posed, graph)
+    floor, _ = creases.held_floor(face.mesh, posed, graph)
+    new = creases.measure_pose(face, values, graph)
+    assert q.max_strain / floor > 1.3 * new.ratio
