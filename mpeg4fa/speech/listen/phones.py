@@ -24,10 +24,11 @@ SILENCE = "SIL"
 LANGUAGE_WEIGHT = 0.5
 """Weight of the phone trigram against the acoustics (pocketsphinx's ``-lw``, 6.5 by default). The
 trigram is English phonotactics; at 6.5 it talks the decoder out of what it hears (p b m heard as other
-phones or silence). Measured on espeak-ng sentences in six languages (tools/bench_lipsync_audio.py, the
-sweep of 2026-12-05): closure onsets within 40 ms, English 4/25 at 6.5, 12/25 at 2, 15/25 at 1, 16/25 at
+phones or silence). Measured by hand on 13 espeak-ng sentences in six languages with the measures of
+tools/bench_lipsync_audio.py (2026-12-05): closure onsets within 40 ms, English 4/25 at 6.5, 12/25 at 2, 15/25 at 1, 16/25 at
 0.5; per-frame agreement 0.26 -> 0.50; the other languages alike. Context-dependent phones
-(``allphone_ci`` off) found 18/25 but ran slower than real time."""
+(``allphone_ci`` off) found 18/25 but ran slower than real time; batch CMN and vocal-tract warping
+(``warp_params`` 0.8-1.1) changed nothing beyond a closure or two either way."""
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,8 @@ measures per frame of 10 ms (:data:`HOP`):
 
 Speech is then voiced, unsteady, loud-enough frames, widened by :data:`REACH` on either side (the
 unvoiced consonants next to the vowels: s, t, f, h, and the silent closure of a stop; a consonant
-cluster before a vowel takes ~150 ms), and kept only where at least :data:`MIN_VOICED` seconds of such frames come together (a click or a
-single periodic blip is not a syllable).
+cluster before a vowel takes ~150 ms), and kept only where at least :data:`MIN_VOICED` seconds of such
+frames come together (a click or a single periodic blip is not a syllable).
 """
 from __future__ import annotations
 
@@ -42,7 +42,8 @@ STEADY_SECONDS = 0.05
 MUSIC_WINDOW = 1.0
 MUSIC_SHARE = 0.25
 """... and where that many of the voiced frames of a second hold their pitch, it is music. Measured
-(2026-12-05): the synthetic music of :mod:`.signals` 0.50-0.53; espeak-ng English and Spanish 0.06-0.12 (at 0.2 a flat Hindi voice lost a sixth of its speech)."""
+(2026-12-05): the synthetic music of :mod:`.signals` 0.50-0.53; espeak-ng English and Spanish 0.06-0.12
+(at 0.2 a flat Hindi voice lost a sixth of its speech)."""
 REACH = 0.15
 """Seconds of unvoiced sound kept on each side of voiced speech (its consonants)."""
 MIN_VOICED = 0.08
