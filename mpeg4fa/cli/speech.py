@@ -491,7 +491,7 @@ def _encode_listened(args: argparse.Namespace, fdp) -> int:
                     timings=files.enter_context(open(timings, "w", encoding="utf-8")) if timings is not None else None,
                     recognizer=args.recognizer, lang=args.lang, expression=args.expression, fps=fps,
                     level=args.level, idle=args.idle, options=coding_options(args, EncodeOptions(**TEXT_CODING)),
-                    progress=bar)
+                    progress=bar if source.seconds is not None else None)  # a pipe's length is unknown
             if fdp is not None:
                 from ..fdp import save_fdp
                 save_fdp(fdp, fdp_out)
