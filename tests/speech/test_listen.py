@@ -138,3 +138,27 @@ def test_expression_for_the_whole_clip():
     heard = listen(as_recording(np.zeros(16000)), expression=("joy", 30))
     (cue,) = heard.utterance.cues
     assert (cue.expression, cue.intensity, cue.start) == ("joy", 30, 0.0)
+
+
+def test_a_long_recording_is_heard_in_blocks_cut_between_words():
+    import io
+
+    from mpeg4fa.speech.align.recording import frame_levels
+    from mpeg4fa.speech.listen.stream import Source, blocks, stream_listened
+
+    parts = [spoken(t, "en")[1].samples for t in EN * 3]
+    x = np.concatenate(parts)
+    rate = 22050
+    cuts = list(blocks(Source("long", rate, len(x) / rate, iter(np.array_split(x, 7))), block_seconds=5.0))
+    assert len(cuts) >= 3 and sum(len(r.samples) for _, r in cuts) == len(x)
+    for offset, rec in cuts[:-1]:
+        end = int(round((offset + rec.duration) * rate))
+        around = frame_levels(x[end - 220:end + 220] / 32768.0, rate)
+        assert around.min() <= frame_levels(x / 32768.0, rate).max() - 30  # a quiet moment, not mid-vowel
+    out, timings = io.BytesIO(), io.StringIO()
+    heard = stream_listened(Source("long", rate, len(x) / rate, iter([x])), out, timings=timings, block_seconds=5.0)
+    assert heard.blocks == len(cuts) and heard.frames == int(np.ceil(len(x) / rate * 25))
+    import json
+
+    starts = [t["start"] for t in json.loads(timings.getvalue())]
+    assert starts == sorted(starts) and starts[-1] > len(x) / rate - 3
