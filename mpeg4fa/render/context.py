@@ -37,20 +37,30 @@ def gl_context():
         return _CONTEXT
 
 
-def program(name: str):
-    """The shader program ``shaders/<name>.vert.glsl`` + ``.frag.glsl``, built once per process."""
-    prog = _PROGRAMS.get(name)
+def _with_defines(source: str, defines: tuple[str, ...]) -> str:
+    first, _, rest = source.partition("\n")  # after the #version line
+    return "\n".join([first, *(f"#define {d}" for d in defines), rest])
+
+
+def program(name: str, defines: tuple[str, ...] = ()):
+    """The shader program ``shaders/<name>.vert.glsl`` + ``.frag.glsl``, built once per process.
+
+    ``defines`` compile variants of one source (``#ifdef``): on llvmpipe every branch of a shader runs
+    for every fragment, so parts drawn by few pixels (the eyes) get a variant of their own."""
+    key = (name, tuple(defines))
+    prog = _PROGRAMS.get(key)
     if prog is None:
         shaders = resources.files("mpeg4fa.render").joinpath("shaders")
         try:
             prog = gl_context().program(
                 vertex_shader=shaders.joinpath(f"{name}.vert.glsl").read_text(encoding="utf-8"),
-                fragment_shader=shaders.joinpath(f"{name}.frag.glsl").read_text(encoding="utf-8"))
+                fragment_shader=_with_defines(shaders.joinpath(f"{name}.frag.glsl").read_text(encoding="utf-8"),
+                                              tuple(defines)))
         except RenderError:
             raise
         except Exception as exc:  # a shader that does not compile is a bug of ours: say which
             raise RenderError(f"shader build failed: {exc}", where=f"shaders/{name}") from None
-        _PROGRAMS[name] = prog
+        _PROGRAMS[key] = prog
     return prog
 
 

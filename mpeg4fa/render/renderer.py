@@ -20,8 +20,9 @@ from mpeg4fa.limits import SAMPLES, LimitError
 from mpeg4fa.render.camera import Camera, frame_points
 from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
+from mpeg4fa.render.iris import IRIS_SCALE, iris_pattern
 from mpeg4fa.render.lashes import build_lashes, lash_vertices
-from mpeg4fa.render.materials import Materials
+from mpeg4fa.render.materials import PART_MATERIAL, Materials
 from mpeg4fa.render.scene import build_layout, vertex_data
 
 _EYES = (("eye_l", "l-eye"), ("eye_r", "r-eye"))
@@ -30,6 +31,21 @@ MAX_SIZE = 8192
 KEY_LIGHT = ((-0.45, 0.45, 0.77), (0.78, 0.76, 0.72))
 FILL_LIGHT = ((0.65, 0.05, 0.75), (0.28, 0.30, 0.34))
 AMBIENT = (0.24, 0.24, 0.26)
+
+
+class _Uniforms:
+    """Sets a uniform on each of the program variants that has it (bytes are written, values assigned)."""
+
+    def __init__(self, programs) -> None:
+        self.programs = programs
+
+    def __setitem__(self, name: str, value) -> None:
+        for prog in self.programs:
+            if name in prog:
+                if isinstance(value, bytes):
+                    prog[name].write(value)
+                else:
+                    prog[name].value = value
 
 
 def _unit(v) -> np.ndarray:
@@ -61,6 +77,10 @@ class Renderer:
         self.ctx = gl_context()
         self._setup_gl(samples)
         self.set_texture(texture)
+        pattern = np.round(np.clip(iris_pattern() / IRIS_SCALE, 0.0, 1.0) * 255).astype(np.uint8)  # 8-bit: llvmpipe's fast path
+        self.iris_texture = self.ctx.texture((pattern.shape[1], pattern.shape[0]), 4,
+                                             np.dstack([pattern, np.full(pattern.shape[:2], 255, np.uint8)]).tobytes())
+        self.iris_texture.repeat_x, self.iris_texture.repeat_y = True, False
         self._vertex_data = np.empty((self.layout.n_vertices, 6), np.float32)
         self._lash_data = np.empty((self.lashes.n_vertices, 6), np.float32) if self.lashes else None
         self._pixels = np.empty((self.height, self.width, 3), np.uint8)
@@ -81,6 +101,9 @@ class Renderer:
                               where="renderer", hint=f"one of {here}")
         self.samples = int(samples)
         self.program = program("face")  # shared: uniforms are set again before every draw
+        self.eye_program = program("face", ("EYES",))
+        self.lash_program = program("face", ("LASHES",))
+        self.uniforms = _Uniforms((self.program, self.eye_program, self.lash_program))
         size = (self.width, self.height)
         self.fbo = ctx.framebuffer(ctx.renderbuffer(size, 4), ctx.depth_renderbuffer(size))
         self.ms_fbo = None
@@ -96,46 +119,67 @@ class Renderer:
                                                    (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints",
                                                     "in_detail", "in_nose")],
                                     index_buffer=self.index, index_element_size=4)
+        # the eyes' triangles, one block of the index buffer, are drawn by the eye variant
+        eye_slots = [PART_MATERIAL["eye_l"], PART_MATERIAL["eye_r"]]
+        is_eye = np.flatnonzero(np.isin(lay.material[lay.indices[:, 0]], eye_slots))
+        self.eye_vao = None
+        self.face_ranges = [(0, 3 * len(lay.indices))]
+        if len(is_eye) and is_eye[-1] - is_eye[0] + 1 == len(is_eye):
+            a, b = 3 * int(is_eye[0]), 3 * (int(is_eye[-1]) + 1)
+            self.face_ranges = [(0, a), (b, 3 * len(lay.indices) - b)]
+            self.eye_range = (a, b - a)
+            self.eye_vao = ctx.vertex_array(
+                self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
+                                   (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints", "in_detail",
+                                    "in_nose")],
+                index_buffer=self.index, index_element_size=4)
+        else:  # not one block: everything by one variant that has the eyes' code
+            self.vao = ctx.vertex_array(self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
+                                                           (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material",
+                                                            "in_tints", "in_detail", "in_nose")],
+                                        index_buffer=self.index, index_element_size=4)
         self.lash_vao = self.lash_buffers = None
-        if self.lashes is not None:  # a second draw with the same program: the cards along the lid margins
+        if self.lashes is not None:  # a draw of their own: the cards along the lid margins
             lash = self.lashes
             dynamic = ctx.buffer(reserve=lash.n_vertices * 6 * 4, dynamic=True)
             static = ctx.buffer(lash.static.tobytes())
             index = ctx.buffer(lash.indices.tobytes())
             self.lash_buffers = (dynamic, static, index)
             self.lash_vao = ctx.vertex_array(
-                self.program, [(dynamic, "3f 3f", "in_position", "in_normal"),
-                               (static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints", "in_detail", "in_nose")],
+                self.lash_program, [(dynamic, "3f 3f", "in_position", "in_normal"),
+                                    (static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints", "in_detail",
+                                     "in_nose")],
                 index_buffer=index, index_element_size=4)
 
     def _apply_uniforms(self) -> None:
         """Materials, lights, camera and texture (the program is shared by all renderers)."""
-        m, prog = self.materials, self.program
+        m, prog = self.materials, self.uniforms
         slots = [m.skin, m.mouth, m.sclera, m.teeth, m.tongue, m.gums]
-        prog["base_colour"].write(np.array([s.colour for s in slots], np.float32).tobytes())
-        prog["shine"].write(np.array([(s.specular, s.shininess) for s in slots], np.float32).tobytes())
-        prog["lip_colour"].value = tuple(m.lips)
-        prog["brow_colour"].value = tuple(m.brows)
-        prog["cavity_colour"].value = tuple(m.cavity)
-        prog["iris_colour"].value = tuple(m.iris)
-        prog["pupil_colour"].value = tuple(m.pupil)
-        prog["lash_colour"].value = tuple(m.lashes)
+        prog["base_colour"] = np.array([s.colour for s in slots], np.float32).tobytes()
+        prog["shine"] = np.array([(s.specular, s.shininess) for s in slots], np.float32).tobytes()
+        prog["lip_colour"] = tuple(m.lips)
+        prog["brow_colour"] = tuple(m.brows)
+        prog["cavity_colour"] = tuple(m.cavity)
+        prog["iris_colour"] = tuple(m.iris)
+        prog["pupil_colour"] = tuple(m.pupil)
+        prog["lash_colour"] = tuple(m.lashes)
         looks = eye_looks()
-        prog["cornea_radius"].value = looks.cornea_radius
-        prog["wet"].value = (looks.wet_specular, looks.wet_shininess)
-        prog["lash_strands"].value = (looks.lash_spacing, looks.lash_width)
-        prog["iris_radius"].value = float(self.face.fapu.IRISD0) / 2.0
-        prog["light_direction"].write(np.array([self.key_light, _unit(FILL_LIGHT[0])], np.float32).tobytes())
-        prog["light_colour"].write(np.array([KEY_LIGHT[1], FILL_LIGHT[1]], np.float32).tobytes())
-        prog["ambient"].value = AMBIENT
+        prog["cornea_radius"] = looks.cornea_radius
+        prog["wet"] = (looks.wet_specular, looks.wet_shininess)
+        prog["lash_strands"] = (looks.lash_spacing, looks.lash_width)
+        prog["iris_radius"] = float(self.face.fapu.IRISD0) / 2.0
+        prog["light_direction"] = np.array([self.key_light, _unit(FILL_LIGHT[0])], np.float32).tobytes()
+        prog["light_colour"] = np.array([KEY_LIGHT[1], FILL_LIGHT[1]], np.float32).tobytes()
+        prog["ambient"] = AMBIENT
         camera = self.camera
-        prog["world_to_clip"].write(camera.matrix.T.astype(np.float32).tobytes())
-        prog["camera_position"].value = tuple(camera.position)
-        prog["orthographic"].value = camera.orthographic
-        prog["view_direction"].value = tuple(-camera.view[2, :3])
-        prog["lighting"].value = self.lighting
-        prog["use_texture"].value = self.texture is not None
-        prog["skin_texture"].value = 0
+        prog["world_to_clip"] = camera.matrix.T.astype(np.float32).tobytes()
+        prog["camera_position"] = tuple(camera.position)
+        prog["orthographic"] = camera.orthographic
+        prog["view_direction"] = tuple(-camera.view[2, :3])
+        prog["lighting"] = self.lighting
+        prog["use_texture"] = self.texture is not None
+        prog["skin_texture"] = 0
+        prog["iris_texture"] = 1
 
     def set_camera(self, camera: Camera) -> None:
         """Look from another camera (e.g. :func:`.camera.frame_points` with another view)."""
@@ -170,11 +214,11 @@ class Renderer:
             centres.append(centre)
             axes.append(_unit(front - centre))
             pupils.append(max(pose.pupil_diameter.get(part, 0.0), 0.0) / 2.0)
-        prog = self.program
-        prog["eye_centre"].write(np.array(centres, np.float32).tobytes())
-        prog["eye_axis"].write(np.array(axes, np.float32).tobytes())
-        prog["pupil_radius"].write(np.array(pupils, np.float32).tobytes())
-        prog["nose_wrinkle"].value = nose_wrinkle(self._neutral_points,
+        prog = self.uniforms
+        prog["eye_centre"] = np.array(centres, np.float32).tobytes()
+        prog["eye_axis"] = np.array(axes, np.float32).tobytes()
+        prog["pupil_radius"] = np.array(pupils, np.float32).tobytes()
+        prog["nose_wrinkle"] = nose_wrinkle(self._neutral_points,
                                                   points_of(self.face.mesh.fp_labels, pose.feature_points))
 
     def draw(self, pose: Pose) -> None:
@@ -193,7 +237,12 @@ class Renderer:
         ctx.disable(ctx.CULL_FACE)
         if self.texture is not None:
             self.texture.use(0)
-        self.vao.render()
+        self.iris_texture.use(1)
+        for first, count in self.face_ranges:
+            if count:
+                self.vao.render(vertices=count, first=first)
+        if self.eye_vao is not None:
+            self.eye_vao.render(vertices=self.eye_range[1], first=self.eye_range[0])
         if self.lash_vao is not None and self.texture is None:  # a photo texture has its own lashes, as its brows
             self.lash_vao.render()
         if self.ms_fbo is not None:
@@ -214,7 +263,7 @@ class Renderer:
 
     def release(self) -> None:
         """Free this renderer's GPU objects (the shared context stays)."""
-        for obj in (self.vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture,
+        for obj in (self.vao, self.eye_vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture, self.iris_texture,
                     self.lash_vao, *(self.lash_buffers or ())):
             if obj is not None:
                 obj.release()

@@ -1,6 +1,9 @@
 #version 330 core
 // Materials: 0 skin (back faces: the inside of the head), 1 left eye, 2 right eye, 3 teeth, 4 tongue,
 // 6 lashes (cards along the lid margins, render/lashes.py); slot 5 is the gums (teeth above their gum line).
+// Three variants (render/context.program's defines): none for skin, teeth and tongue; EYES for the
+// eyeballs; LASHES for the lash cards (llvmpipe runs every branch for every fragment, and a discard
+// anywhere costs the whole draw its early depth test: each part pays only for its own code).
 // The eyes are drawn procedurally: sclera, then an iris disc of the FAPU's IRISD0 and a pupil
 // whose diameter follows FAPs 29/30, both centred on the eyeball's gaze axis. Lit, the iris has
 // fibres, a collarette, furrows and a dark limbal ring in the eye's own frame (they turn with the
@@ -36,6 +39,7 @@ uniform float nose_wrinkle;       // 0..1 (face/looks.py)
 
 uniform bool use_texture;
 uniform sampler2D skin_texture;
+uniform sampler2D iris_texture;   // the iris's pattern around (x) and out from the pupil (y): render/iris.py
 
 uniform vec3 light_direction[2];  // toward the lights
 uniform vec3 light_colour[2];
@@ -51,37 +55,18 @@ in vec2 v_nose;
 
 out vec4 colour;
 
+const float IRIS_SCALE = 2.0;     // render/iris.py stores the pattern over this
 const float TOOTH_MM = 7.0;       // a typical tooth width, for the tip rounding
 const float TIP_MM = 1.1;         // radius of a tooth's rounded corners
 const float CROWN_MM = 9.5;       // crown height at the middle of a tooth (gum line above)
 const float WRINKLE_MM = 4.2;     // spacing of the nose creases
 const float BACK_TEETH_SHADE = 0.3;  // premolars and molars: the light that reaches inside the mouth
 
+#ifdef LASHES
 float hash(float x) { return fract(sin(x * 127.1 + 311.7) * 43758.5453); }
+#endif
 
-// The iris's pattern at (theta, r): r 0 at the pupil's edge .. 1 at the limbus. Brightness about 1.
-vec3 iris_pattern(float theta, float r) {
-    // radial fibres that wave a little as they run out, of two widths
-    float fibres = 0.5 + 0.3 * sin(97.0 * theta + 1.7 * sin(11.0 * theta + 4.0 * r))
-                       + 0.2 * sin(53.0 * theta - 2.3 * r + 1.3 * sin(7.0 * theta));
-    // the collarette: a jagged bright ring about a third of the way out; inside it the pupillary zone
-    float ruff_r = 0.3 + 0.04 * sin(11.0 * theta) + 0.02 * sin(23.0 * theta + 1.0);
-    float ruff = exp(-pow((r - ruff_r) / 0.05, 2.0));
-    float pupillary = 1.0 - smoothstep(ruff_r - 0.03, ruff_r + 0.03, r);
-    // crypts: dark pits just outside the collarette
-    float cell = floor(theta * 2.546);   // 16 around
-    float crypt = step(0.55, hash(cell)) * exp(-pow((r - ruff_r - 0.14 - 0.1 * hash(cell + 5.0)) / 0.06, 2.0))
-                * smoothstep(0.2, 0.0, abs(fract(theta * 2.546) - 0.5) - 0.15);
-    // contraction furrows: faint dark rings in the outer part
-    float furrows = exp(-pow((r - 0.72) / 0.025, 2.0)) + exp(-pow((r - 0.86) / 0.02, 2.0));
-    float b = mix(0.8 + 0.45 * fibres, 0.7 + 0.2 * fibres, pupillary);
-    b *= 1.0 + 0.45 * ruff - 0.45 * crypt - 0.2 * furrows * (0.6 + 0.4 * sin(5.0 * theta));
-    b *= mix(1.0, 0.45, smoothstep(0.82, 1.0, r));    // the dark limbal ring
-    b *= mix(0.55, 1.0, smoothstep(0.0, 0.06, r));    // the pupil's dark rim
-    vec3 warm = mix(vec3(1.0), vec3(1.25, 1.1, 0.8), 0.5 * fibres * (1.0 - pupillary));  // light fibres paler, yellower
-    return b * warm;
-}
-
+#ifdef EYES
 vec3 eye_colour(int eye, out int slot, out vec3 wet_normal) {
     vec3 axis = eye_axis[eye];
     vec3 offset = v_position - eye_centre[eye];
@@ -112,13 +97,15 @@ vec3 eye_colour(int eye, out int slot, out vec3 wet_normal) {
     vec3 e2 = cross(axis, e1);
     float theta = atan(dot(side, e2), dot(side, e1));
     float r = clamp((across - pupil_radius[eye]) / max(iris_radius - pupil_radius[eye], 1e-3), 0.0, 1.0);
-    vec3 iris = iris_colour * iris_pattern(theta, r);
+    vec3 iris = iris_colour * textureLod(iris_texture, vec2(theta * 0.15915494 + 0.5, r), 0.0).rgb * IRIS_SCALE;
     if (across > iris_radius) {                     // limbal ring, blended into the sclera
         float t = (across - iris_radius) / (limbus - iris_radius);
         return mix(iris_colour * 0.4, base_colour[2] * 0.85, t);
     }
     return iris;
 }
+
+#endif
 
 // How much brow covers this point: (along 0 inner .. 1 outer, height above the brow curve, mm).
 float brow_cover(vec2 d) {
@@ -133,7 +120,9 @@ float brow_cover(vec2 d) {
 }
 
 void main() {
+#ifdef LASHES
     float detail_mm = fwidth(v_detail.x);   // mm of detail coordinate per pixel (here: in uniform control flow)
+#endif
     vec3 n = normalize(v_normal);
     vec3 to_eye = orthographic ? view_direction : normalize(camera_position - v_position);
     int slot;
@@ -164,9 +153,12 @@ void main() {
             n = -n;
             shade = 0.55;
         }
+#ifdef EYES
     } else if (v_material == 1 || v_material == 2) {
         base = eye_colour(v_material - 1, slot, wet_normal);
         wetness = 1.0;
+#endif
+#ifdef LASHES
     } else if (v_material == 6) {                       // lashes: strands cut out of the card
         float s = v_detail.x;                             // mm along the margin
         float h = v_detail.y;                             // 0 at the root .. 1 at the tip
@@ -182,6 +174,7 @@ void main() {
         slot = 1;
         base = lash_colour;
         if (dot(n, to_eye) < 0.0) n = -n;
+#endif
     } else if (v_material == 3) {
         float f = fract(v_detail.x);                      // across one tooth, 0 and 1 at the gaps
         float from_gap = (0.5 - abs(f - 0.5)) * TOOTH_MM;  // mm from the nearest gap
@@ -224,8 +217,10 @@ void main() {
         light += lambert * light_colour[i];
         vec3 h = normalize(light_direction[i] + to_eye);
         spec += (lambert > 0.0 ? pow(max(dot(n, h), 0.0), shine[slot].y) : 0.0) * shine[slot].x;
+#ifdef EYES
         if (wetness > 0.0 && dot(wet_normal, light_direction[i]) > 0.0)   // the tear film mirrors the light
             reflection += pow(max(dot(wet_normal, h), 0.0), wet.y) * wet.x * light_colour[i];
+#endif
     }
     vec3 rgb = (base * light + vec3(spec) + reflection) * shade;
     colour = vec4(pow(clamp(rgb, 0.0, 1.0), vec3(1.0 / 1.15)), 1.0);
