@@ -165,11 +165,12 @@ void main() {
         float id = floor(s / lash_strands.x);
         float lean = 0.25 * (hash(id + 3.0) - 0.5) * h;   // strands cross a little toward their tips
         float centre = (id + 0.5 + 0.4 * (hash(id) - 0.5)) * lash_strands.x + lean;
-        float reach = 0.7 + 0.3 * hash(id + 11.0);        // uneven lengths
+        // seen from afar (strands under a pixel apart) the roots merge into the lash line and the tips,
+        // which would alias to loose dots, are left off
+        float afar = smoothstep(0.25, 0.8, detail_mm / lash_strands.x);
+        float reach = (0.7 + 0.3 * hash(id + 11.0)) * (1.0 - 0.5 * afar);   // uneven lengths
         float half_width = lash_strands.y * (1.0 - 0.85 * h / reach) * sqrt(v_tints.x);  // short ones thin
-        // seen from afar (strands under a pixel apart) the roots merge into the lash line; else they alias to dots
-        float merge = smoothstep(0.25, 0.8, detail_mm / lash_strands.x) * (1.0 - h / reach);
-        half_width = mix(half_width, 0.55 * lash_strands.x, merge);
+        half_width = mix(half_width, 0.55 * lash_strands.x, afar * max(1.0 - h / reach, 0.0));
         if (h > reach || abs(s - centre) > half_width) discard;
         slot = 1;
         base = lash_colour;
