@@ -167,7 +167,7 @@ void main() {
         float centre = (id + 0.5 + 0.4 * (hash(id) - 0.5)) * lash_strands.x + lean;
         // seen from afar (strands under a pixel apart) the roots merge into the lash line and the tips,
         // which would alias to loose dots, are left off
-        float afar = smoothstep(0.25, 0.8, detail_mm / lash_strands.x);
+        float afar = smoothstep(0.6, 1.5, detail_mm / lash_strands.x);
         float reach = (0.7 + 0.3 * hash(id + 11.0)) * (1.0 - 0.5 * afar);   // uneven lengths
         float half_width = lash_strands.y * (1.0 - 0.85 * h / reach) * sqrt(v_tints.x);  // short ones thin
         half_width = mix(half_width, 0.55 * lash_strands.x, afar * max(1.0 - h / reach, 0.0));
