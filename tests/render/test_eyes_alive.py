@@ -147,3 +147,32 @@ def test_pupils_still_dilate(eyes):
     small = _masks(face, camera)["pupil"].sum()
     wide = _masks(face, camera, {29: 300, 30: 300})["pupil"].sum()
     assert wide > 1.5 * small, (small, wide)
+
+
+@pytest.mark.parametrize("which", ["procedural", "generic"])
+def test_lash_cards_ride_on_the_lids_outside_the_eyeballs(request, which):
+    """Geometry, no pixels: the upper lashes come down with a closing lid (their tips by over half the
+    lid point's drop, at the median: less toward the corners, as the lid) and no lash vertex is ever inside an eyeball, at rest, half closed or shut."""
+    from mpeg4fa.render.lashes import build_lashes, lash_vertices
+
+    if which == "generic":
+        request.getfixturevalue("generic_head_installed")
+    face = request.getfixturevalue(f"{which}_face")
+    lashes = build_lashes(face.mesh)
+    assert lashes is not None and lashes.n_vertices > 0
+    close = (face.mesh.fp("3.1")[1] - face.mesh.fp("3.3")[1]) / face.fapu.unit("IRISD")
+    k = len(lashes.rows)
+    upper = np.isin(lashes.rows, [m.rows for m in lid_margins(face.mesh) if m.side == "upper"][0])
+    tips = {}
+    for name, values in (("rest", {}), ("half", {19: close / 2, 20: close / 2}), ("shut", {19: close, 20: close})):
+        pose = face.deform(values)
+        cards = lash_vertices(lashes, pose.vertices)[:, :3]
+        for part, joint in (("eye_l", "l-eye"), ("eye_r", "r-eye")):
+            centre = pose.vertices[face.mesh.joints[joint]]
+            radius = np.linalg.norm(pose.vertices[pose.parts[part]] - centre, axis=1).max()
+            assert np.linalg.norm(cards - centre, axis=1).min() > radius, (name, part)
+        tips[name] = cards[2 * k:][upper & (lashes.length > 0.5 * lashes.length.max())]
+    drop = face.mesh.fp("3.1")[1] - face.deform({19: close}).feature_points[face.mesh.fp_labels.index("3.1")][1]
+    down = tips["rest"][:, 1] - tips["shut"][:, 1]  # the lid's own closure falls toward the corners, so do these
+    assert down.min() > 0 and np.median(down) > 0.5 * drop, (down, drop)
+    assert ((tips["rest"][:, 1] - tips["half"][:, 1]) > 0).all()
