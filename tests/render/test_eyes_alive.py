@@ -152,7 +152,8 @@ def test_pupils_still_dilate(eyes):
 @pytest.mark.parametrize("which", ["procedural", "generic"])
 def test_lash_cards_ride_on_the_lids_outside_the_eyeballs(request, which):
     """Geometry, no pixels: the upper lashes come down with a closing lid (their tips by over half the
-    lid point's drop, at the median: less toward the corners, as the lid) and no lash vertex is ever inside an eyeball, at rest, half closed or shut."""
+    lid point's drop, at the median: less toward the corners, as the lid) and no lash vertex is ever
+    inside an eyeball, at rest, half closed or shut."""
     from mpeg4fa.render.lashes import build_lashes, lash_vertices
 
     if which == "generic":
