@@ -77,7 +77,8 @@ class Renderer:
         self.ctx = gl_context()
         self._setup_gl(samples)
         self.set_texture(texture)
-        pattern = np.round(np.clip(iris_pattern() / IRIS_SCALE, 0.0, 1.0) * 255).astype(np.uint8)  # 8-bit: llvmpipe's fast path
+        # 8-bit, llvmpipe's fast path
+        pattern = np.round(np.clip(iris_pattern() / IRIS_SCALE, 0.0, 1.0) * 255).astype(np.uint8)
         self.iris_texture = self.ctx.texture((pattern.shape[1], pattern.shape[0]), 4,
                                              np.dstack([pattern, np.full(pattern.shape[:2], 255, np.uint8)]).tobytes())
         self.iris_texture.repeat_x, self.iris_texture.repeat_y = True, False
@@ -263,7 +264,8 @@ class Renderer:
 
     def release(self) -> None:
         """Free this renderer's GPU objects (the shared context stays)."""
-        for obj in (self.vao, self.eye_vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture, self.iris_texture,
+        for obj in (self.vao, self.eye_vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture,
+                    self.iris_texture,
                     self.lash_vao, *(self.lash_buffers or ())):
             if obj is not None:
                 obj.release()
