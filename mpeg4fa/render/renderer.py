@@ -135,6 +135,7 @@ class Renderer:
                                     "in_nose")],
                 index_buffer=self.index, index_element_size=4)
         else:  # not one block: everything by one variant that has the eyes' code
+            self.vao.release()
             self.vao = ctx.vertex_array(self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
                                                            (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material",
                                                             "in_tints", "in_detail", "in_nose")],
