@@ -275,8 +275,10 @@ def _expression(text: str) -> tuple[str, int]:
         intensity = int(value)
     except ValueError:
         intensity = -1
-    if not 0 <= intensity <= 63:
-        raise argparse.ArgumentTypeError(f"{text!r}: the intensity is a whole number from 0 to 63")
+    from mpeg4fa.spec import FULL_INTENSITY
+
+    if not 0 <= intensity <= FULL_INTENSITY:
+        raise argparse.ArgumentTypeError(f"{text!r}: the intensity is a whole number from 0 to {FULL_INTENSITY}")
     return name.strip(), intensity
 
 

@@ -322,5 +322,6 @@ def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
     w = 1.0 - smooth_down((y - bottom) / (top - bottom))
     w[skin.stop:] = 1.0
     w[:skin.start] = 1.0
+    w[mesh.fp_vertex] = 1.0  # feature points of the head turn with it in full (the standard's head rotation)
     idx = np.flatnonzero(w < 1.0)
     return idx, w[idx]

@@ -50,6 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mpeg4fa.spec import N_FAPS
 from mpeg4fa.speech.align.sphinx import OFFSET, RATE
 from mpeg4fa.speech.frames import FrameMaker
 from mpeg4fa.speech.timeline import LAG, LAG_SHARE, LEAD, VisemeSpan, _checked_spans
@@ -349,7 +350,7 @@ class LiveLipSync:
         """Frames with times up to ``until`` (s), which the commits must reach ``LEAD`` past."""
         stop = math.floor(round(until * self.fps, 9)) + 1 if until >= 0 else 0
         if stop <= self.maker.next:
-            return np.zeros((0, 68))
+            return np.zeros((0, N_FAPS))
         assert (stop - 1) / self.fps <= self.committed - LEAD + 1e-9, "a frame went out before its moves were known"
         return self.maker._frames(stop).values
 

@@ -22,6 +22,7 @@ and resynchronised at every word or syllable boundary (:mod:`.wordsync`).
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,6 +61,20 @@ class Timing:
                 "end": round(self.end, 6)}
 
 
+def viseme_spans(timings: Iterable[Timing]) -> list[VisemeSpan]:
+    """Viseme spans of ``timings`` for the timeline: pauses left out, repeats of one viseme that touch joined
+    (the rule :meth:`Utterance.spans` and the recording-only path share)."""
+    out: list[VisemeSpan] = []
+    for t in timings:
+        if t.viseme == PAUSE or t.end <= t.start:
+            continue
+        if out and out[-1].viseme == t.viseme and out[-1].set == t.set and abs(out[-1].end - t.start) < 1e-9:
+            out[-1] = VisemeSpan(t.viseme, out[-1].start, t.end, t.set)
+        else:
+            out.append(VisemeSpan(t.viseme, t.start, t.end, t.set))
+    return out
+
+
 @dataclass(frozen=True)
 class Utterance:
     speech: Speech
@@ -69,15 +84,7 @@ class Utterance:
 
     def spans(self) -> list[VisemeSpan]:
         """Viseme spans for the timeline: pauses left out, repeats of one viseme joined."""
-        out: list[VisemeSpan] = []
-        for t in self.timings:
-            if t.viseme == PAUSE or t.end <= t.start:
-                continue
-            if out and out[-1].viseme == t.viseme and out[-1].set == t.set and abs(out[-1].end - t.start) < 1e-9:
-                out[-1] = VisemeSpan(t.viseme, out[-1].start, t.end, t.set)
-            else:
-                out.append(VisemeSpan(t.viseme, t.start, t.end, t.set))
-        return out
+        return viseme_spans(self.timings)
 
 
 def speaks_ipa(engine: Engine) -> bool:

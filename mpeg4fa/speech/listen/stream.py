@@ -21,6 +21,7 @@ import numpy as np
 from mpeg4fa.speech.align.errors import AlignError
 from mpeg4fa.speech.align.recording import HOP, Recording, frame_levels
 from mpeg4fa.speech.listen.core import Listened, expression_cues, listen
+from mpeg4fa.speech.utterance import viseme_spans
 from mpeg4fa.speech.visemes import PAUSE
 
 BLOCK_SECONDS = 30.0
@@ -193,7 +194,7 @@ def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer
                 heard = listen(rec, recognizer=recognizer, lang=lang)
                 utt = phones(heard.utterance)
                 shifted = [type(t)(t.phoneme, t.viseme, t.start + offset, t.end + offset, t.set) for t in utt.timings]
-                spans = [s for s in _spans(shifted)]
+                spans = viseme_spans(shifted)
                 cues = expression_cues(expression) if count == 0 else ()
                 end = offset + rec.duration
                 bits.add(maker.add(spans, cues, end))
@@ -223,21 +224,6 @@ def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer
         timings.write("\n]\n" if listed else "[]\n")
     return Heard(end, bits.frames, bits.bytes, used or recognizer, words, voiced, count, tuple(notes),
                  time.perf_counter() - started)
-
-
-def _spans(timings):
-    """Viseme spans of timings (the :meth:`~mpeg4fa.speech.utterance.Utterance.spans` rule)."""
-    from mpeg4fa.speech.timeline import VisemeSpan
-
-    out: list[VisemeSpan] = []
-    for t in timings:
-        if t.viseme == PAUSE or t.end <= t.start:
-            continue
-        if out and out[-1].viseme == t.viseme and out[-1].set == t.set and abs(out[-1].end - t.start) < 1e-9:
-            out[-1] = VisemeSpan(t.viseme, out[-1].start, t.end, t.set)
-        else:
-            out.append(VisemeSpan(t.viseme, t.start, t.end, t.set))
-    return out
 
 
 def recording_of(source: Source, max_seconds: float | None = None) -> Recording:
