@@ -732,7 +732,7 @@ def main(argv: list[str] | None = None) -> int:
     info = machine_info(pin_one_core())
     print(f"mpeg4fa {info['mpeg4fa']} codec benchmark: Python {info['python']}, numpy {info['numpy']}, "
           f"{info['platform']}, {info['cpu_count']} CPUs ({info['process']})\n")
-    report: dict = {"machine": info, "args": {"vectors": str(args.vectors), "frames": args.frames,
+    report: dict = {"machine": info, "args": {"vectors": os.path.relpath(args.vectors, REPO), "frames": args.frames,
                                               "repeat": args.repeat, "decode_frames": args.decode_frames,
                                               "tiny_frames": args.tiny_frames, "items": sorted(items)}}
     ok = True
