@@ -148,67 +148,119 @@ class BitReader {
 // 1 to cum[0..s] when symbol s is seen, which is count(s) += 1. Here the counts sit in a Fenwick tree
 // over the symbols in reverse order (prefix m = cum[n - m]), so finding a symbol and counting it take
 // O(log n) where the table took O(n): P models of wide ranges have thousands of symbols.
-class AdaptiveModel {
-  constructor(n) {
-    this.n = n;
+//
+// All the models of one segment live in one bank of flat typed arrays (as the compiled Python path
+// lays them out): the decoder's loop then touches no object but the bank, V8 sees one shape, and a
+// snapshot for streaming input is a few slice() calls.
+//
+// The Fenwick sums at multiples of 32 (the nodes a search visits first and an update last) sit apart,
+// in ``coarse``: 66 models of 3,721 symbols keep those in 15 KB that stay in the L1 cache, so that a
+// symbol costs two cache lines of the big arrays (its 32-node block of ``tree``, its count) where the
+// plain tree cost one per level (12), which is where the decoder's time went on wide ranges.
+const BLOCK_BITS = 5, BLOCK = 1 << BLOCK_BITS;
+
+/** The adaptive models of one segment: model m has size[m] symbols, counts at freq[foff[m] + s] and
+ * its Fenwick sums at tree[toff[m] + x], x = 1 .. 2 * top[m] - 1 (top: the largest power of two <= n),
+ * those at x = 32 j read from coarse[coff[m] + j]. Sums past n read as "too much" (0x7fff). */
+class ModelBank {
+  /** Fresh models of ``sizes`` symbols each, or (``from`` given) a copy of a bank. */
+  constructor(sizes, from = null) {
+    if (from !== null) {
+      this.count = from.count;
+      this.size = from.size;  // shared: never written after construction
+      this.top = from.top;
+      this.foff = from.foff;
+      this.toff = from.toff;
+      this.coff = from.coff;
+      this.total = from.total.slice();
+      this.freq = from.freq.slice();
+      this.tree = from.tree.slice();
+      this.coarse = from.coarse.slice();
+      return;
+    }
+    const count = sizes.length;
+    this.count = count;
+    this.size = Int32Array.from(sizes);
+    this.top = new Int32Array(count);
+    this.foff = new Int32Array(count);
+    this.toff = new Int32Array(count);
+    this.coff = new Int32Array(count);
+    this.total = new Int32Array(count);
+    let nf = 0, nt = 0, nc = 0;
+    for (let m = 0; m < count; m++) {
+      const n = this.size[m];
+      let top = 1;
+      while (top * 2 <= n) top *= 2;
+      this.top[m] = top;
+      this.foff[m] = nf;
+      this.toff[m] = nt;
+      this.coff[m] = nc;
+      nf += n;
+      nt += 2 * top;
+      nc += (2 * top) >> BLOCK_BITS;
+    }
     // counts and their sums never pass 16383 (the halving), so 16 bits hold them: half the memory of
     // 66 models of up to 3,721 symbols, which is what the decoder's time goes on (cache misses)
-    this.freq = new Int16Array(n).fill(1);
-    this.top = 1;
-    while (this.top * 2 <= n) this.top *= 2;
-    // sums past n read as "too much", so the search needs no bounds test
-    this.tree = new Int16Array(2 * this.top).fill(0x7fff, n + 1);
-    this.total = n;
-    this.build();
+    this.freq = new Int16Array(nf).fill(1);
+    this.tree = new Int16Array(nt);
+    this.coarse = new Int16Array(nc);
+    for (let m = 0; m < count; m++) {
+      const n = this.size[m], t0 = this.toff[m], c0 = this.coff[m], top2 = 2 * this.top[m];
+      // sums past n read as "too much", so the search needs no bounds test
+      this.tree.fill(0x7fff, t0 + n + 1, t0 + top2);
+      this.coarse.fill(0x7fff, c0 + (n >> BLOCK_BITS) + 1, c0 + (top2 >> BLOCK_BITS));
+      this.total[m] = n;
+      this.build(m);
+    }
   }
-  build() {
-    const { n, freq, tree } = this;
-    tree.fill(0, 0, n + 1);
+  /** Model m's Fenwick sums from its counts, in O(n). */
+  build(m) {
+    const n = this.size[m], freq = this.freq, tree = this.tree, f0 = this.foff[m], t0 = this.toff[m];
+    tree.fill(0, t0, t0 + n + 1);
     for (let x = 1; x <= n; x++) {
-      tree[x] += freq[n - x];  // reversed position x - 1 holds symbol n - x
+      tree[t0 + x] += freq[f0 + n - x];  // reversed position x - 1 holds symbol n - x
       const parent = x + (x & -x);
-      if (parent <= n) tree[parent] += tree[x];
+      if (parent <= n) tree[t0 + parent] += tree[t0 + x];
     }
+    const coarse = this.coarse, c0 = this.coff[m];
+    for (let j = 1; j <= n >> BLOCK_BITS; j++) coarse[c0 + j] = tree[t0 + (j << BLOCK_BITS)];
   }
-  /** Count ``symbol``; halve every count first when the total reached 16383 (as arith.py). */
-  update(symbol) {
-    const { n, freq, tree } = this;
-    if (this.total === MAX_FREQUENCY) {
-      let total = 0;
-      for (let j = 0; j < n; j++) { freq[j] = (freq[j] + 1) >> 1; total += freq[j]; }
-      this.total = total;
-      this.build();
-    }
-    freq[symbol] += 1;
-    this.total += 1;
-    for (let x = n - symbol; x <= n; x += x & -x) tree[x] += 1;
+  /** Halve every count of model m (its total reached 16383), as arith.py. */
+  halve(m) {
+    const n = this.size[m], freq = this.freq, f0 = this.foff[m];
+    let total = 0;
+    for (let j = f0; j < f0 + n; j++) { freq[j] = (freq[j] + 1) >> 1; total += freq[j]; }
+    this.total[m] = total;
+    this.build(m);
   }
-  copy() {
-    const m = Object.create(AdaptiveModel.prototype);
-    Object.assign(m, this, { freq: this.freq.slice(), tree: this.tree.slice() });
-    return m;
-  }
+  copy() { return new ModelBank(null, this); }
 }
 
-/** One arithmetic-coded segment: one symbol per model, written into ``out``. */
-function decodeSegment(r, models, adapt, out) {
-  const buf = r.buf, nbits = r.nbytes * 8;
+/** The fault where the segment's next bit should be: more bytes needed (streaming), the stream's end,
+ * or a stuffed bit that is not '1'. Returned, for the caller to throw, so that no closure holds ``p``. */
+function segmentFault(r, p, nbits) {
+  if (p >= nbits) {
+    if (!r.final) { r.wanted = r.baseBits + p + 1; return NEED_MORE; }
+    return new FbaError(SEGMENT_ENDS, r.baseBits + p);
+  }
+  return new FbaError(STUFFING_EXPECTED, r.baseBits + p - 1);
+}
+
+/** One arithmetic-coded segment: one symbol per model, written into ``out``. Intra (``bank`` null):
+ * uniform models of ``sizes[m]`` symbols; predictive: the adaptive models of ``bank``, counted. All
+ * integer arithmetic below stays under 2**31 (lengths <= 2**16, adaptive totals <= 16383), except the
+ * uniform models' products, which stay exact as doubles (Math.floor). */
+function decodeSegment(r, sizes, bank, out) {
+  const buf = r.buf, nbytes = r.nbytes, nbits = nbytes * 8;
   let p = r.p, zerorun = 0, code = 0, bit = 0;
-  // one bit, the stuffed '1' after 22 zeros dropped (inlined twice below: V8 runs it ~20% faster so)
-  const fault = () => {
-    if (p >= nbits) {
-      if (!r.final) { r.wanted = r.baseBits + p + 1; throw NEED_MORE; }
-      throw new FbaError(SEGMENT_ENDS, r.baseBits + p);
-    }
-    throw new FbaError(STUFFING_EXPECTED, r.baseBits + p - 1);
-  };
+  // one bit, the stuffed '1' after 22 zeros dropped (inlined twice below: V8 runs it faster so)
   for (let i = 0; i < 16; i++) {
     for (;;) {
-      if (p >= nbits) fault();
+      if (p >= nbits) throw segmentFault(r, p, nbits);
       bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
       p++;
       if (zerorun === MAX_ZERO_RUN) {
-        if (!bit) fault();
+        if (!bit) throw segmentFault(r, p, nbits);
         zerorun = 0;
         continue;
       }
@@ -217,34 +269,55 @@ function decodeSegment(r, models, adapt, out) {
     }
     code = (code << 1) | bit;
   }
+  const adapt = bank !== null;
+  const freq = adapt ? bank.freq : null, tree = adapt ? bank.tree : null, totals = adapt ? bank.total : null;
+  const top = adapt ? bank.top : null, size = adapt ? bank.size : null, coarse = adapt ? bank.coarse : null;
+  const foff = adapt ? bank.foff : null, toff = adapt ? bank.toff : null, coff = adapt ? bank.coff : null;
   let low = 0, high = TOP;
-  const nm = models.length;
+  const nm = out.length;
   for (let m = 0; m < nm; m++) {
     const length = high - low + 1;
-    let total, cumHi, cumLo, symbol;
+    let symbol = 0, cumLo = 0, cumHi = 0, total = 0;
     if (!adapt) {
-      total = models[m];
+      total = sizes[m];
       const target = Math.floor(((code - low + 1) * total - 1) / length);
       symbol = total - target - 1;
       cumHi = target + 1;
       cumLo = target;
+      high = low - 1 + Math.floor((length * cumHi) / total);
+      low = low + Math.floor((length * cumLo) / total);
     } else {
-      const model = models[m];
-      total = model.total;
-      const target = Math.floor(((code - low + 1) * total - 1) / length);
-      // the largest m whose first m reversed counts sum to <= target: cum[i] <= target < cum[i - 1], i = n - m
-      const tree = model.tree, n = model.n;
-      let pos = 0, rem = target;
-      for (let step = model.top; step > 0; step >>= 1) {
-        const t = tree[pos + step];
-        if (t <= rem) { pos += step; rem -= t; }
+      total = totals[m];
+      const target = (((code - low + 1) * total - 1) / length) | 0;
+      // the largest pos whose first pos reversed counts sum to <= target: cum[i] <= target < cum[i - 1],
+      // i = n - pos; without branches (a sum past the target leaves pos and rem as they are)
+      const t0 = toff[m], c0 = coff[m], n = size[m];
+      let pos = 0, rem = target, step = top[m];
+      for (; step >= BLOCK; step >>= 1) {  // nodes at multiples of 32
+        const t = coarse[c0 + ((pos + step) >> BLOCK_BITS)];
+        const keep = (rem - t) >> 31;  // -1 when t > rem
+        pos += step & ~keep;
+        rem -= t & ~keep;
+      }
+      for (; step > 0; step >>= 1) {  // within one block of 32
+        const t = tree[t0 + pos + step];
+        const keep = (rem - t) >> 31;
+        pos += step & ~keep;
+        rem -= t & ~keep;
       }
       symbol = n - 1 - pos;
       cumLo = target - rem;
-      cumHi = cumLo + model.freq[symbol];
+      cumHi = cumLo + freq[foff[m] + symbol];
+      high = low - 1 + (((length * cumHi) / total) | 0);
+      low = low + (((length * cumLo) / total) | 0);
+      // count the symbol (arith.py: halve every count first when the total reached 16383)
+      if (total === MAX_FREQUENCY) bank.halve(m);
+      freq[foff[m] + symbol] += 1;
+      totals[m] += 1;
+      let x = n - symbol;
+      for (; x <= n && (x & (BLOCK - 1)) !== 0; x += x & -x) tree[t0 + x] += 1;
+      if (x <= n) for (let j = x >> BLOCK_BITS, nj = n >> BLOCK_BITS; j <= nj; j += j & -j) coarse[c0 + j] += 1;
     }
-    high = low - 1 + Math.floor((length * cumHi) / total);
-    low = low + Math.floor((length * cumLo) / total);
     // Renormalise in one step where no stuffed bit can be among the bits read: while low and high
     // share their top bit the interval lies in one half (n doublings, the bits they share), then
     // each doubling of the middle half (low '01..', high '10..') is a doubling modulo 2**16 with
@@ -256,7 +329,7 @@ function decodeSegment(r, models, adapt, out) {
     const i = p >> 3;
     if (bits === 0) {
       // the interval is wide: nothing to read
-    } else if (zerorun + bits <= MAX_ZERO_RUN && p + bits <= nbits && i + 2 < r.nbytes) {
+    } else if (zerorun + bits <= MAX_ZERO_RUN && p + bits <= nbits && i + 2 < nbytes) {
       const word = (buf[i] << 16) | (buf[i + 1] << 8) | buf[i + 2];
       const w = (word >> (24 - (p & 7) - bits)) & ((1 << bits) - 1);
       const flip = k ? Q2 : 0;
@@ -276,11 +349,11 @@ function decodeSegment(r, models, adapt, out) {
       low <<= 1;
       high = (high << 1) | 1;
       for (;;) {
-        if (p >= nbits) fault();
+        if (p >= nbits) throw segmentFault(r, p, nbits);
         bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
         p++;
         if (zerorun === MAX_ZERO_RUN) {
-          if (!bit) fault();
+          if (!bit) throw segmentFault(r, p, nbits);
           zerorun = 0;
           continue;
         }
@@ -289,7 +362,6 @@ function decodeSegment(r, models, adapt, out) {
       }
       code = (code << 1) | bit;
     }
-    if (adapt) models[m].update(symbol);
     out[m] = symbol;
   }
   r.p = p - REWIND_BITS;
@@ -316,6 +388,43 @@ for (const part of [FACE, BODY]) part.order = part.rangeGroups.flat();
 
 const floorDiv = (a, b) => Math.floor(a / b);
 
+/** What a segment needs from its coder, in one shape for both coders: the fields coded (``idx``), the
+ * quantiser steps, the I and P ranges (minimum, size), the predictions, the models since the intra
+ * header, and the symbols and values of the last segment (reused, no allocation per frame). */
+class SegmentCoder {
+  constructor(n) {
+    this.idx = new Int32Array(n);
+    this.qstep = new Float64Array(n);
+    this.imin = new Float64Array(n);
+    this.isize = new Float64Array(n);
+    this.pmin = new Float64Array(n);
+    this.psize = new Float64Array(n);
+    this.prev = null;       // Float64Array: the last value of every field of the part, by field
+    this.pModels = null;    // ModelBank, made at the first P segment after an intra header
+    this.symbols = new Int32Array(n);
+    this.values = new Float64Array(n);
+  }
+  /** The uniform intra sizes, or null for P (the adaptive bank, made on first use). */
+  bank(intra) {
+    if (intra) return null;
+    if (this.pModels === null) this.pModels = new ModelBank(this.psize, null);
+    return this.pModels;
+  }
+  /** Values (numbers, in coding order) from the symbols of the last segment. */
+  decode(intra) {
+    const n = this.idx.length, values = this.values, symbols = this.symbols, lo = intra ? this.imin : this.pmin;
+    const qstep = this.qstep, prev = this.prev, idx = this.idx;
+    for (let k = 0; k < n; k++) {
+      const level = symbols[k] + lo[k];
+      let v = qstep[k] === 0 ? level : level * qstep[k];
+      if (!intra) v += prev[idx[k]];
+      prev[idx[k]] = v;
+      values[k] = v;
+    }
+    return values;
+  }
+}
+
 /** FAPs 3..68 or the BAPs: ranges, quantiser steps, prediction and models since the last intra header. */
 class ValueCoder {
   constructor(part) {
@@ -323,8 +432,8 @@ class ValueCoder {
     this.ranges = [0, 1, 2, 3].map(() => new Float64Array(part.n));  // I max, I min, P max, P min
     this.defaultsApplied = false;
     this.prev = new Float64Array(part.n);
-    this.idx = [];
-    this.pModels = null;
+    this.seg = new SegmentCoder(0);
+    this.seg.prev = this.prev;
   }
   startIntra(params) {
     const part = this.part;
@@ -349,41 +458,30 @@ class ValueCoder {
       }
     }
     const idx = part.order.filter((i) => params.mask[i]);
-    this.idx = idx;
-    this.qstep = idx.map((i) => part.quantStep[i] * step);
-    this.imin = idx.map((i) => this.ranges[1][i]);
-    this.isize = idx.map((i, k) => this.ranges[0][i] - this.imin[k] + 1);
-    this.pmin = idx.map((i) => this.ranges[3][i]);
-    this.psize = idx.map((i, k) => this.ranges[2][i] - this.pmin[k] + 1);
-    this.intraModels = this.isize.slice();
-    this.pModels = null;
-    this.symbols = new Int32Array(idx.length);  // reused by every segment until the next intra header
-    this.values = new Float64Array(idx.length);
-  }
-  models(intra) {
-    if (intra) return this.intraModels;
-    if (this.pModels === null) this.pModels = this.psize.map((s) => new AdaptiveModel(s));
-    return this.pModels;
-  }
-  /** Values (numbers, in coding order) from the symbols of one segment. */
-  decode(symbols, intra) {
-    const n = this.idx.length, values = this.values, lo = intra ? this.imin : this.pmin;
-    for (let k = 0; k < n; k++) {
-      const level = symbols[k] + lo[k];
-      let v = this.qstep[k] === 0 ? level : level * this.qstep[k];
-      if (!intra) v += this.prev[this.idx[k]];
-      this.prev[this.idx[k]] = v;
-      values[k] = v;
-    }
-    return values;
+    const seg = new SegmentCoder(idx.length);
+    seg.prev = this.prev;
+    const [iMax, iMin, pMax, pMin] = this.ranges;
+    idx.forEach((i, k) => {
+      seg.idx[k] = i;
+      seg.qstep[k] = part.quantStep[i] * step;
+      seg.imin[k] = iMin[i];
+      seg.isize[k] = iMax[i] - iMin[i] + 1;
+      seg.pmin[k] = pMin[i];
+      seg.psize[k] = pMax[i] - pMin[i] + 1;
+    });
+    this.seg = seg;
   }
   snapshot() {
     return { ranges: this.ranges.map((a) => a.slice()), prev: this.prev.slice(), defaultsApplied: this.defaultsApplied,
-      idx: this.idx, qstep: this.qstep, imin: this.imin, isize: this.isize, pmin: this.pmin, psize: this.psize,
-      intraModels: this.intraModels, symbols: this.symbols, values: this.values,
-      pModels: this.pModels && this.pModels.map((m) => m.copy()) };
+      seg: this.seg, pModels: this.seg.pModels && this.seg.pModels.copy() };
   }
-  restore(s) { Object.assign(this, s); }
+  restore(s) {
+    this.ranges = s.ranges; this.defaultsApplied = s.defaultsApplied;
+    this.prev.set(s.prev);
+    this.seg = s.seg;
+    this.seg.prev = this.prev;
+    this.seg.pModels = s.pModels;
+  }
 }
 
 const FIELDS = SPEC.high_level_fields;
@@ -393,18 +491,14 @@ class FieldCoder {
   constructor(fap) {
     this.fields = FIELDS.filter((f) => f.fap === fap);
     const n = this.fields.length;
-    this.idx = Array.from({ length: n }, (_, k) => k);
     this.quantised = this.fields.map((f) => f.quantised);
     this.iMax = this.fields.map((f) => f.i_max);
-    this.imin = this.fields.map((f) => f.i_min);
     this.pMax = this.fields.map((f) => f.p_max);
     this.pmin = this.fields.map((f) => f.p_min);
     this.prev = new Float64Array(n);
-    this.qstep = new Array(n).fill(0);
     this.names = this.fields.map((f) => `FAP ${fap} ${f.field}`);
-    this.pModels = null;
-    this.symbols = new Int32Array(n);
-    this.values = new Float64Array(n);
+    this.seg = new SegmentCoder(n);
+    this.seg.prev = this.prev;
   }
   startIntra(q) {
     if (q) {
@@ -413,14 +507,18 @@ class FieldCoder {
         if (f.quantised) { this.iMax[k] = top; this.pMax[k] = top; this.pmin[k] = -top; }
       });
     }
-    this.qstep = this.quantised.map((isQ) => (isQ ? q : 0));
-    this.isize = this.iMax.map((m, k) => m - this.imin[k] + 1);
-    this.psize = this.pMax.map((m, k) => m - this.pmin[k] + 1);
-    this.intraModels = this.isize.slice();
-    this.pModels = null;
+    const seg = new SegmentCoder(this.fields.length);
+    seg.prev = this.prev;
+    this.fields.forEach((f, k) => {
+      seg.idx[k] = k;
+      seg.qstep[k] = this.quantised[k] ? q : 0;
+      seg.imin[k] = f.i_min;
+      seg.isize[k] = this.iMax[k] - f.i_min + 1;
+      seg.pmin[k] = this.pmin[k];
+      seg.psize[k] = this.pMax[k] - this.pmin[k] + 1;
+    });
+    this.seg = seg;
   }
-  models(intra) { return ValueCoder.prototype.models.call(this, intra); }
-  decode(symbols, intra) { return ValueCoder.prototype.decode.call(this, symbols, intra); }
   /** Selects must name a viseme 0..14 / expression 0..6. */
   checkSelects(values, bitOffset, frame) {
     for (let k = 0; k < values.length; k++) {
@@ -431,10 +529,15 @@ class FieldCoder {
   }
   snapshot() {
     return { iMax: this.iMax.slice(), pMax: this.pMax.slice(), pmin: this.pmin.slice(), prev: this.prev.slice(),
-      qstep: this.qstep, isize: this.isize, psize: this.psize, intraModels: this.intraModels,
-      pModels: this.pModels && this.pModels.map((m) => m.copy()) };
+      seg: this.seg, pModels: this.seg.pModels && this.seg.pModels.copy() };
   }
-  restore(s) { Object.assign(this, s); }
+  restore(s) {
+    this.iMax = s.iMax; this.pMax = s.pMax; this.pmin = s.pmin;
+    this.prev.set(s.prev);
+    this.seg = s.seg;
+    this.seg.prev = this.prev;
+    this.seg.pModels = s.pModels;
+  }
 }
 
 // ---- header syntax (syntax.py) ----------------------------------------------------------------
@@ -629,8 +732,9 @@ class Decoder {
   }
 
   segment(coder, intra) {
-    decodeSegment(this.r, coder.models(intra), !intra, coder.symbols);
-    return coder.decode(coder.symbols, intra);  // coder.values: read before the next segment of this coder
+    const seg = coder.seg;
+    decodeSegment(this.r, seg.isize, seg.bank(intra), seg.symbols);
+    return seg.decode(intra);  // seg.values: read before the next segment of this coder
   }
 
   plane(k, planeCode) {
@@ -676,7 +780,7 @@ class Decoder {
     if (mask[0]) this.highLevel(this.viseme, frame.viseme, VISEME_BITS, frame.index, intra);
     if (mask[1]) this.highLevel(this.expression, frame.expression, EXPRESSION_BITS, frame.index, intra);
     const values = this.segment(this.faps, intra);
-    const idx = this.faps.idx;
+    const idx = this.faps.seg.idx;
     for (let k = 0; k < idx.length; k++) frame.fapValues[idx[k]] = values[k];
     frame.fapMask.set(mask);
   }
@@ -704,7 +808,7 @@ class Decoder {
       throw new FbaError("a predicted plane carries body data but no intra plane has set up the body", r.pos);
     }
     const values = this.segment(this.baps, intra);
-    const idx = this.baps.idx;
+    const idx = this.baps.seg.idx;
     for (let k = 0; k < idx.length; k++) frame.bapValues[idx[k]] = values[k];
     frame.bapMask.set(this.body.mask);
   }
