@@ -78,6 +78,7 @@ class BitReader {
     this.p = 0;          // read index in bits into buf
     this.final = false;  // no more bytes will come: a short read is the stream's end
     this.wanted = 0;     // absolute bit count the last attempt needed: no retry before it has arrived
+    this.stuffing = 0;   // stuffing bits before the start code peekStartCode() found
   }
   get pos() { return this.baseBits + this.p; }
   get nbits() { return this.nbytes * 8; }
@@ -122,7 +123,7 @@ class BitReader {
     this.p += n;
     return v;
   }
-  /** The start code at the next byte boundary as [code, stuffing bits], or null (see bits.py). */
+  /** The start code at the next byte boundary, its stuffing bits in ``stuffing``; -1 if none (see bits.py). */
   peekStartCode() {
     const rest = 8 - (this.p & 7);
     for (let skip = rest === 8 ? 0 : rest; skip <= rest; skip += 8) {
@@ -130,9 +131,9 @@ class BitReader {
       const i = (this.p + skip) >> 3;  // a byte boundary: the word is four whole bytes
       const buf = this.buf;
       const word = ((buf[i] << 24) | (buf[i + 1] << 16) | (buf[i + 2] << 8) | buf[i + 3]) >>> 0;
-      if (word >>> 8 === 1) return [word, skip];
+      if (word >>> 8 === 1) { this.stuffing = skip; return word; }
     }
-    return null;
+    return -1;
   }
   skipStuffing(n) {
     if (n === 0) return;
@@ -290,20 +291,17 @@ function decodeSegment(r, sizes, bank, out) {
       total = totals[m];
       const target = (((code - low + 1) * total - 1) / length) | 0;
       // the largest pos whose first pos reversed counts sum to <= target: cum[i] <= target < cum[i - 1],
-      // i = n - pos; without branches (a sum past the target leaves pos and rem as they are)
+      // i = n - pos. With branches: skewed counts take the same path again and again, and the CPU that
+      // predicts it loads the next node before this one arrives (a branchless search waited: 1.5x slower)
       const t0 = toff[m], c0 = coff[m], n = size[m];
       let pos = 0, rem = target, step = top[m];
       for (; step >= BLOCK; step >>= 1) {  // nodes at multiples of 32
         const t = coarse[c0 + ((pos + step) >> BLOCK_BITS)];
-        const keep = (rem - t) >> 31;  // -1 when t > rem
-        pos += step & ~keep;
-        rem -= t & ~keep;
+        if (t <= rem) { pos += step; rem -= t; }
       }
       for (; step > 0; step >>= 1) {  // within one block of 32
         const t = tree[t0 + pos + step];
-        const keep = (rem - t) >> 31;
-        pos += step & ~keep;
-        rem -= t & ~keep;
+        if (t <= rem) { pos += step; rem -= t; }
       }
       symbol = n - 1 - pos;
       cumLo = target - rem;
@@ -410,16 +408,17 @@ class SegmentCoder {
     if (this.pModels === null) this.pModels = new ModelBank(this.psize, null);
     return this.pModels;
   }
-  /** Values (numbers, in coding order) from the symbols of the last segment. */
-  decode(intra) {
+  /** Values from the symbols of the last segment: into ``dest`` by field (a frame's array), or when
+   * ``dest`` is null into ``values`` in coding order (returned either way). */
+  decode(intra, dest) {
     const n = this.idx.length, values = this.values, symbols = this.symbols, lo = intra ? this.imin : this.pmin;
     const qstep = this.qstep, prev = this.prev, idx = this.idx;
     for (let k = 0; k < n; k++) {
-      const level = symbols[k] + lo[k];
+      const level = symbols[k] + lo[k], i = idx[k];
       let v = qstep[k] === 0 ? level : level * qstep[k];
-      if (!intra) v += prev[idx[k]];
-      prev[idx[k]] = v;
-      values[k] = v;
+      if (!intra) v += prev[i];
+      prev[i] = v;
+      if (dest === null) values[k] = v; else dest[i] = v;
     }
     return values;
   }
@@ -659,6 +658,7 @@ const VISEME_BITS = ["viseme_def"];
 const EXPRESSION_BITS = ["init_face", "expression_def"];
 const ZERO_BAP_MASK = new Uint8Array(N_BAPS);
 const ZERO_BAP_VALUES = new Int32Array(N_BAPS);
+const FRAME_BYTES = (N_FAPS + 10) * 4 + Math.ceil(N_FAPS / 4) * 4, SLAB_FRAMES = 256;
 
 function foreignKind(head) {
   const at = (offset, magic) => magic.every((b, k) => head[offset + k] === b);
@@ -689,14 +689,19 @@ class Decoder {
     this.objectStartCode = null;  // set once the object start code is read
     this.k = 0;
     this.done = false;
+    this.slab = null;
+    this.slabUsed = 0;
   }
 
-  /** A frame's face arrays (values, viseme, expression, mask) as views of one slab shared by 256 frames:
-   * a typed array's own buffer costs V8 far more than a view. */
-  frameInts() {
-    const size = N_FAPS + 10 + Math.ceil(N_FAPS / 4);
-    if (this.slab === undefined || this.slabUsed === 256) { this.slab = new Int32Array(size * 256); this.slabUsed = 0; }
-    return this.slab.subarray(size * this.slabUsed, size * ++this.slabUsed);
+  /** The byte offset of a frame's face arrays (values, viseme, expression, mask) in ``this.slab``, one
+   * buffer shared by 256 frames: a typed array's own buffer costs V8 far more than a view, and a view
+   * made by its constructor less than one made by subarray(). */
+  frameSlot() {
+    if (this.slab === null || this.slabUsed === SLAB_FRAMES) {
+      this.slab = new ArrayBuffer(SLAB_FRAMES * FRAME_BYTES);
+      this.slabUsed = 0;
+    }
+    return FRAME_BYTES * this.slabUsed++;
   }
 
   objectStart() {
@@ -717,12 +722,12 @@ class Decoder {
   /** Consume a plane start code (returned, 0 if none) or the end code (null). */
   betweenPlanes() {
     const r = this.r;
-    const found = r.peekStartCode();
-    if (found === null) {
+    const code = r.peekStartCode();
+    if (code === -1) {
       if (!r.available(8)) throw new FbaError(NO_END_CODE, r.pos);
       return 0;
     }
-    const [code, stuffing] = found;
+    const stuffing = r.stuffing;
     if (code !== END_CODE && code !== PLANE_START_CODE && code !== PLANE_START_CODE_OLD) {
       throw new FbaError(`unexpected start code ${hex8(code)} between planes`, r.pos + stuffing);
     }
@@ -731,10 +736,12 @@ class Decoder {
     return code === END_CODE ? null : code;
   }
 
-  segment(coder, intra) {
+  /** One segment of ``coder``: its values into ``dest`` by field, or (``dest`` null) returned in coding
+   * order (``seg.values``: read before the next segment of this coder). */
+  segment(coder, intra, dest) {
     const seg = coder.seg;
     decodeSegment(this.r, seg.isize, seg.bank(intra), seg.symbols);
-    return seg.decode(intra);  // seg.values: read before the next segment of this coder
+    return seg.decode(intra, dest);
   }
 
   plane(k, planeCode) {
@@ -751,11 +758,11 @@ class Decoder {
       if (fr.fps <= 0) throw new FbaError("frame rate 0 in the intra header", pos);
       this.fps = fr.fps;
     }
-    const ints = this.frameInts();
+    const at = this.frameSlot(), slab = this.slab;
     const frame = {
-      index: k, timestamp: 0.0, objectMask: mask, fapMask: new Uint8Array(ints.buffer, ints.byteOffset + (N_FAPS + 10) * 4, N_FAPS),
-      fapValues: ints.subarray(0, N_FAPS), viseme: ints.subarray(N_FAPS, N_FAPS + 4),
-      expression: ints.subarray(N_FAPS + 4, N_FAPS + 10), bapMask: ZERO_BAP_MASK, bapValues: ZERO_BAP_VALUES,
+      index: k, timestamp: 0.0, objectMask: mask, fapMask: new Uint8Array(slab, at + (N_FAPS + 10) * 4, N_FAPS),
+      fapValues: new Int32Array(slab, at, N_FAPS), viseme: new Int32Array(slab, at + N_FAPS * 4, 4),
+      expression: new Int32Array(slab, at + (N_FAPS + 4) * 4, 6), bapMask: ZERO_BAP_MASK, bapValues: ZERO_BAP_VALUES,
       skip, startCode: planeCode, bits: 0, params,
     };
     if (mask & FACE_BIT) this.faceData(frame, isIntra);
@@ -779,9 +786,7 @@ class Decoder {
     const mask = this.face.mask;
     if (mask[0]) this.highLevel(this.viseme, frame.viseme, VISEME_BITS, frame.index, intra);
     if (mask[1]) this.highLevel(this.expression, frame.expression, EXPRESSION_BITS, frame.index, intra);
-    const values = this.segment(this.faps, intra);
-    const idx = this.faps.seg.idx;
-    for (let k = 0; k < idx.length; k++) frame.fapValues[idx[k]] = values[k];
+    this.segment(this.faps, intra, frame.fapValues);
     frame.fapMask.set(mask);
   }
 
@@ -789,7 +794,7 @@ class Decoder {
   highLevel(coder, out, rawBits, index, intra) {
     const r = this.r;
     const pos = r.pos;
-    const values = this.segment(coder, intra);
+    const values = this.segment(coder, intra, null);
     coder.checkSelects(values, pos, index);
     const n = values.length;
     for (let j = 0; j < n; j++) out[j] = values[j];
@@ -807,9 +812,7 @@ class Decoder {
     } else if (this.body === null) {
       throw new FbaError("a predicted plane carries body data but no intra plane has set up the body", r.pos);
     }
-    const values = this.segment(this.baps, intra);
-    const idx = this.baps.seg.idx;
-    for (let k = 0; k < idx.length; k++) frame.bapValues[idx[k]] = values[k];
+    this.segment(this.baps, intra, frame.bapValues);
     frame.bapMask.set(this.body.mask);
   }
 
