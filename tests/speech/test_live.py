@@ -128,8 +128,7 @@ def test_closures_shut_the_lips(fed):
 @pytest.mark.parametrize("kind", ["silence", "noise", "chord"])
 def test_silence_noise_and_a_held_chord_keep_the_mouth_at_rest(kind):
     """A held chord (C major, its loudness swelling at 0.5 Hz) is voice to the detector: without the
-    steady-pitch gate the mouth moved in 91 % of its frames. (A melody of notes changing every 250 ms
-    still moves it in about 70 %: the pitch measure jumps between subharmonics of a pure tone.)"""
+    steady-pitch gate the mouth moved in 91 % of its frames (melodies: the next test)."""
     n = 5 * RATE
     x = np.zeros(n)
     if kind == "noise":  # white noise at -30 dBFS
@@ -143,6 +142,54 @@ def test_silence_noise_and_a_held_chord_keep_the_mouth_at_rest(kind):
     frames = np.concatenate([f for _, f in out] + [tail])
     assert len(frames) == 5 * FPS
     assert (~moving(frames)).mean() >= 0.95 if kind != "silence" else not moving(frames).any()
+
+
+def melody(kind: str, seconds: float = 8.0, seed: int = 1, dbfs: float = -12.0) -> np.ndarray:
+    """Notes of 0.3 s, 220-880 Hz (seeded, on the semitones), as pure tones, sawtooths (band-limited) or an
+    organ's drawbars; RMS ``dbfs``."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(0.3 * RATE)) / RATE
+    ramp = np.minimum(1, t / 0.01) * np.minimum(1, (0.3 - t) / 0.01)
+    partials = {"sine": [(1, 1.0)], "sawtooth": [(k, 1 / k) for k in range(1, 40)],
+                "organ": [(0.5, 0.6), (1, 1.0), (2, 0.7), (3, 0.4), (4, 0.3), (6, 0.2), (8, 0.15)]}[kind]
+    notes = []
+    for _ in range(int(seconds / 0.3)):
+        f = 220 * 2 ** (rng.integers(0, 25) / 12)
+        notes.append(ramp * sum(a * np.sin(2 * np.pi * f * m * t) for m, a in partials if f * m < RATE / 2))
+    x = np.concatenate(notes)
+    return x / np.sqrt(np.mean(x ** 2)) * 10 ** (dbfs / 20)
+
+
+@pytest.mark.parametrize("kind", ["sine", "sawtooth", "organ", "music"])
+def test_melodies_and_music_keep_the_mouth_at_rest(kind):
+    """Measured 97.4 % at rest for each melody, 97.5 % for the music (the first 0.2 s move the mouth);
+    before the pitch was taken on windows within the audio heard and at its period's shortest lag: 18 %, 19 %,
+    65 % and 8 %."""
+    from mpeg4fa.speech.listen.signals import music
+
+    x = music(8.0, RATE) if kind == "music" else melody(kind)
+    out, tail = run(np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16), 320)
+    frames = np.concatenate([f for _, f in out] + [tail])
+    rest = (~moving(frames)).mean()
+    print(f"{kind}: at rest in {rest:.1%} of the frames")
+    assert rest >= 0.95, f"{kind}: the mouth at rest in only {rest:.0%} of the frames"
+
+
+@pytest.mark.parametrize("lang, text", [("es", "Mi madre compró pan y manzanas en el mercado."),
+                                        ("de", "Meine Mutter backt heute Brot für die ganze Familie.")])
+def test_speech_in_other_languages_moves_the_mouth(lang, text):
+    """The music gate leaves speech alone: the mouth moves in (measured) 99-100 % of the 40 ms frames
+    louder than -45 dBFS, as before it."""
+    from mpeg4fa.speech.tts.espeak import EspeakEngine
+
+    s = EspeakEngine().synthesize(text, voice=lang)
+    x = np.r_[np.zeros(RATE // 2), resample(s.samples / 32768.0, s.rate, RATE), np.zeros(RATE // 2)]
+    out, tail = run(np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16), 320)
+    frames = np.concatenate([f for _, f in out] + [tail])
+    loud = frame_levels(x, RATE) > -45
+    spoken = np.array([loud[4 * k:4 * k + 4].any() for k in range(len(frames))])
+    share = moving(frames)[spoken].mean()
+    assert spoken.sum() >= 40 and share >= 0.9, f"{lang}: the mouth moved in {share:.0%} of the spoken frames"
 
 
 def test_other_sample_rates_are_resampled_as_they_come(clip):

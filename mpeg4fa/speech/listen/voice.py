@@ -31,6 +31,9 @@ WINDOW = 256
 """Samples per periodicity window at :data:`RATE` (32 ms: two periods of a 62 Hz voice)."""
 LAGS = (20, 128)
 """Pitch lags searched, in samples at :data:`RATE`: 2.5-16 ms, 400-62 Hz."""
+PEAK_SHARE = 0.9
+"""A lag whose autocorrelation is this share of the best is the period, if it is the shortest such
+(:func:`lag_peaks`)."""
 PERIODIC = 0.45
 """Normalised autocorrelation peak above which a frame is voiced."""
 FLOOR_DBFS = -55.0
@@ -51,9 +54,34 @@ MIN_VOICED = 0.08
 before the steadiness test catches it often does not)."""
 
 
+def lag_peaks(windows: np.ndarray, lo: int, hi: int, shortest: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of ``windows`` (samples): the normalised autocorrelation's peak over lags ``lo..hi``
+    (unbiased: each lag's sum over fewer products scaled back to the window; 0 for a silent row), and
+    the lag taken for the period: the best, or (``shortest``) the shortest local peak within
+    :data:`PEAK_SHARE` of the best. A pure tone's autocorrelation is as high at every multiple of its
+    period, so the best lag alone jumps between them from frame to frame and a held note looks like a
+    gliding voice; the recording path's music test forgives those jumps over a second
+    (:func:`_held`), the live one, deciding on 0.12 s, cannot."""
+    size = windows.shape[1]
+    w = windows - windows.mean(axis=1, keepdims=True)
+    spec = np.fft.rfft(w, 2 * size, axis=1)
+    ac = np.fft.irfft(spec.real ** 2 + spec.imag ** 2, axis=1)[:, :hi + 2]
+    energy = ac[:, 0]
+    lags = np.arange(lo - 1, hi + 2)
+    ac = ac[:, lo - 1:hi + 2] * (size / (size - lags))[None, :] / np.maximum(energy, 1e-12)[:, None]
+    inner = ac[:, 1:-1]
+    best = inner.max(axis=1)
+    first = np.argmax(inner, axis=1)
+    if shortest:
+        peaks = (inner >= ac[:, :-2]) & (inner >= ac[:, 2:]) & (inner >= PEAK_SHARE * best[:, None])
+        first = np.where(peaks.any(axis=1), np.argmax(peaks, axis=1), first)
+    value = np.where(energy < 1e-9, 0.0, np.clip(best, 0.0, 1.0))
+    return value, lo + first
+
+
 def periodicity(x: np.ndarray, rate: int, hop: float = HOP) -> tuple[np.ndarray, np.ndarray]:
     """Per ``hop`` frame of ``x`` (float mono): the normalised autocorrelation peak over pitch lags
-    (0 for a silent frame), and the pitch (Hz) at that peak."""
+    (0 for a silent frame), and the pitch (Hz) at its period (:func:`lag_peaks`)."""
     y = resample(x, rate, RATE)
     step = int(round(hop * RATE))
     frames = max(1, int(np.ceil(len(x) / rate / hop)))
@@ -62,22 +90,11 @@ def periodicity(x: np.ndarray, rate: int, hop: float = HOP) -> tuple[np.ndarray,
     peak = np.zeros(frames)
     pitch = np.zeros(frames)
     block = 4096  # frames at a time: memory of a block, whatever the length
-    lo, hi = LAGS
     for first in range(0, frames, block):
         n = min(block, frames - first)
         idx = (first + np.arange(n))[:, None] * step + np.arange(WINDOW)[None, :]
-        w = pad[idx]
-        w = w - w.mean(axis=1, keepdims=True)
-        spec = np.fft.rfft(w, 2 * WINDOW, axis=1)
-        ac = np.fft.irfft(spec.real ** 2 + spec.imag ** 2, axis=1)[:, :hi + 1]
-        energy = ac[:, 0]
-        # unbiased: each lag's sum over fewer products, scaled back to the window
-        ac = ac[:, lo:hi + 1] * (WINDOW / (WINDOW - np.arange(lo, hi + 1)))[None, :]
-        best = np.argmax(ac, axis=1)
-        value = ac[np.arange(n), best] / np.maximum(energy, 1e-12)
-        value[energy < 1e-9] = 0.0
-        peak[first:first + n] = np.clip(value, 0.0, 1.0)
-        pitch[first:first + n] = RATE / (lo + best)
+        peak[first:first + n], lag = lag_peaks(pad[idx], *LAGS)
+        pitch[first:first + n] = RATE / lag
     return peak, pitch
 
 
