@@ -247,15 +247,23 @@ function segmentFault(r, p, nbits) {
   return new FbaError(STUFFING_EXPECTED, r.baseBits + p - 1);
 }
 
-/** One arithmetic-coded segment: one symbol per model, written into ``out``. Intra (``bank`` null):
- * uniform models of ``sizes[m]`` symbols; predictive: the adaptive models of ``bank``, counted. All
+/** One arithmetic-coded segment of ``seg`` (a SegmentCoder): one symbol per model, made a value at once
+ * (its level times its quantiser step, plus the prediction in a P segment) and written into ``dest``
+ * by field, or into ``seg.values`` in coding order when ``dest`` is null. Intra (``bank`` null):
+ * uniform models of ``seg.isize[m]`` symbols; predictive: the adaptive models of ``bank``, counted. All
  * integer arithmetic below stays under 2**31 (lengths <= 2**16, adaptive totals <= 16383), except the
  * uniform models' products, which stay exact as doubles (Math.floor). */
-function decodeSegment(r, sizes, bank, out) {
+function decodeSegment(r, seg, bank, dest) {
   const buf = r.buf, nbytes = r.nbytes, nbits = nbytes * 8;
   let p = r.p, zerorun = 0, code = 0, bit = 0;
-  // one bit, the stuffed '1' after 22 zeros dropped (inlined twice below: V8 runs it faster so)
-  for (let i = 0; i < 16; i++) {
+  // the first 16 bits in one read: a run of 22 zeros cannot fit in them, so no stuffed bit is there
+  const i0 = p >> 3;
+  if (p + 16 <= nbits && i0 + 2 < nbytes) {
+    code = (((buf[i0] << 16) | (buf[i0 + 1] << 8) | buf[i0 + 2]) >> (8 - (p & 7))) & TOP;
+    zerorun = code ? 31 - Math.clz32(code & -code) : 16;
+    p += 16;
+  } else for (let i = 0; i < 16; i++) {
+    // one bit, the stuffed '1' after 22 zeros dropped (inlined twice: V8 runs it faster so)
     for (;;) {
       if (p >= nbits) throw segmentFault(r, p, nbits);
       bit = (buf[p >> 3] >> (7 - (p & 7))) & 1;
@@ -274,8 +282,10 @@ function decodeSegment(r, sizes, bank, out) {
   const freq = adapt ? bank.freq : null, tree = adapt ? bank.tree : null, totals = adapt ? bank.total : null;
   const top = adapt ? bank.top : null, size = adapt ? bank.size : null, coarse = adapt ? bank.coarse : null;
   const foff = adapt ? bank.foff : null, toff = adapt ? bank.toff : null, coff = adapt ? bank.coff : null;
+  const sizes = seg.isize, lo = adapt ? seg.pmin : seg.imin, qstep = seg.qstep, prev = seg.prev, idx = seg.idx;
+  const values = seg.values;
   let low = 0, high = TOP;
-  const nm = out.length;
+  const nm = idx.length;
   for (let m = 0; m < nm; m++) {
     const length = high - low + 1;
     let symbol = 0, cumLo = 0, cumHi = 0, total = 0;
@@ -360,7 +370,10 @@ function decodeSegment(r, sizes, bank, out) {
       }
       code = (code << 1) | bit;
     }
-    out[m] = symbol;
+    const level = symbol + lo[m], field = idx[m], q = qstep[m];
+    const v = (q === 0 ? level : level * q) + (adapt ? prev[field] : 0);
+    prev[field] = v;
+    if (dest === null) values[m] = v; else dest[field] = v;
   }
   r.p = p - REWIND_BITS;
 }
@@ -388,7 +401,7 @@ const floorDiv = (a, b) => Math.floor(a / b);
 
 /** What a segment needs from its coder, in one shape for both coders: the fields coded (``idx``), the
  * quantiser steps, the I and P ranges (minimum, size), the predictions, the models since the intra
- * header, and the symbols and values of the last segment (reused, no allocation per frame). */
+ * header, and the values of the last segment (reused, no allocation per frame). */
 class SegmentCoder {
   constructor(n) {
     this.idx = new Int32Array(n);
@@ -399,7 +412,6 @@ class SegmentCoder {
     this.psize = new Float64Array(n);
     this.prev = null;       // Float64Array: the last value of every field of the part, by field
     this.pModels = null;    // ModelBank, made at the first P segment after an intra header
-    this.symbols = new Int32Array(n);
     this.values = new Float64Array(n);
   }
   /** The uniform intra sizes, or null for P (the adaptive bank, made on first use). */
@@ -407,20 +419,6 @@ class SegmentCoder {
     if (intra) return null;
     if (this.pModels === null) this.pModels = new ModelBank(this.psize, null);
     return this.pModels;
-  }
-  /** Values from the symbols of the last segment: into ``dest`` by field (a frame's array), or when
-   * ``dest`` is null into ``values`` in coding order (returned either way). */
-  decode(intra, dest) {
-    const n = this.idx.length, values = this.values, symbols = this.symbols, lo = intra ? this.imin : this.pmin;
-    const qstep = this.qstep, prev = this.prev, idx = this.idx;
-    for (let k = 0; k < n; k++) {
-      const level = symbols[k] + lo[k], i = idx[k];
-      let v = qstep[k] === 0 ? level : level * qstep[k];
-      if (!intra) v += prev[i];
-      prev[i] = v;
-      if (dest === null) values[k] = v; else dest[i] = v;
-    }
-    return values;
   }
 }
 
@@ -740,8 +738,8 @@ class Decoder {
    * order (``seg.values``: read before the next segment of this coder). */
   segment(coder, intra, dest) {
     const seg = coder.seg;
-    decodeSegment(this.r, seg.isize, seg.bank(intra), seg.symbols);
-    return seg.decode(intra, dest);
+    decodeSegment(this.r, seg, seg.bank(intra), dest);
+    return seg.values;
   }
 
   plane(k, planeCode) {
