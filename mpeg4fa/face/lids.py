@@ -23,6 +23,14 @@ A frame turns the lid point by the angle that lowers it by exactly value x IRISD
 times that angle. Rotations about the eye centre keep every vertex at its
 distance from the centre, so a lid that starts outside the eyeball never cuts
 into it, at any value.
+
+The lids also **ride on the eye's pitch** (FAPs 25/26, :func:`lid_drops`): a real upper
+lid keeps its margin near the top of the iris as the eye looks up or down, and the lower
+lid follows less. Each lid point turns about the eye centre by a share of the eyeball's
+pitch (:data:`FOLLOW`), eased into a limit at the ends of the range, and its own FAP closes
+it from there toward the opposite lid where that one now is (so a blink in any gaze still
+shuts the eye, margin on margin). With the eyes straight ahead the lids move by their FAPs
+alone, value x IRISD.
 """
 from __future__ import annotations
 
@@ -40,6 +48,18 @@ from mpeg4fa.face.regions import LID_MARGIN_LOOPS, edge_graph, path_through, smo
 LID_HEIGHT_MM = 9.0  # the lid sheet fades out over this surface distance from the margin (to the crease)
 ORBIT_MARGIN_MM = 9.0  # the sheet reaches this far beyond the eyeball's radius from its centre
 OVERLAP_MM = 0.3  # a closed margin reaches this far past the opposite one (but at the lid point)
+
+FOLLOW = {"upper": (1.0, 25.0, 60.0), "lower": (0.35, 8.0, 15.0)}
+"""Per lid: (share of the eyeball's pitch the lid point turns by, most degrees it turns up, most
+degrees it turns down). The generic head's open upper margin sits at the top of the iris (its
+opening is IRISD0), so a share under 1 bares sclera above the iris when the eye looks down and
+hides the iris under the lid when it looks up (tests/render/test_gaze_lid_pixels.py's measure at
+20 deg, front: sclera px per column above the iris / upper lid's share of the iris, straight
+0.8 / 0.02; share 0: 17.3 / 0.48, 1/2: 8.6 / 0.20, 2/3: 5.6 / 0.14, 1: 0.1 / 0.04). The upper lid
+rises 25 deg at most (further and the lid sheet bunches under the brow) and follows down to 60;
+the lower one moves little."""
+KNEE = 0.6  # the follow is linear up to this share of its limit, then eases into the limit
+SLIT = 0.1  # share of the opening that a gaze alone leaves between the lid points (far down, the eye is a slit)
 
 
 def _lid_table() -> dict[int, tuple[str, str, str, str, str, str, str]]:
@@ -138,6 +158,62 @@ def turn_lid(points: np.ndarray, sheet: LidSheet, rest: np.ndarray, drop: float)
     dz = points[sheet.rows, 2] - centre[2]
     points[sheet.rows, 1] = centre[1] + c * dy - s * dz
     points[sheet.rows, 2] = centre[2] + s * dy + c * dz
+
+
+def _ease(angle: float, up: float, down: float) -> float:
+    """``angle`` (rad, + down) up to KNEE of its limit, then easing into the limit (slope 1 at the knee)."""
+    limit = np.radians(down if angle > 0 else up)
+    knee = KNEE * limit
+    a = abs(angle)
+    if a <= knee:
+        return angle
+    return float(np.sign(angle) * (knee + (limit - knee) * np.tanh((a - knee) / (limit - knee))))
+
+
+def follow_drop(sheet: LidSheet, side: str, rest: np.ndarray, pitch: float) -> float:
+    """How far (mm, + down) the lid point of ``sheet`` (``side`` "upper" or "lower") descends as its
+    eye pitches by ``pitch`` rad (+ down)."""
+    share, up, down = FOLLOW[side]
+    angle = _ease(share * pitch, up, down)
+    y, z = rest[sheet.point, 1:] - rest[sheet.joint, 1:]
+    return float(y - (y * np.cos(angle) - z * np.sin(angle)))
+
+
+def lid_moves(sheets: dict[int, LidSheet], rest: np.ndarray, values: np.ndarray,
+              irisd: float) -> dict[int, tuple[float, float]]:
+    """Per lid that moves this frame: (mm its own FAP drops its point, mm the gaze drops it), + down.
+
+    A lid FAP alone moves its point by value x IRISD (the FAPU semantics); the eye's pitch adds
+    each lid's follow (:func:`follow_drop`). A lid that its own FAP closes goes from its followed
+    place toward the opposite lid's followed place: at the closing value it lies on it, whatever
+    the gaze, and the gaze alone leaves at least :data:`SLIT` of the opening.
+    """
+    v = np.asarray(values, dtype=np.float64)
+    pitch_fap = {eye: fap for fap, (eye, kind) in motion.EYE_ROTATION.items() if kind == "pitch"}
+    out = {}
+    for eye in ("eye_l", "eye_r"):
+        faps = {LIDS[f][6]: f for f in sheets if LIDS[f][0] == eye}
+        if set(faps) != {"upper", "lower"}:
+            continue
+        up, low = sheets[faps["upper"]], sheets[faps["lower"]]
+        pitch = v[pitch_fap[eye] - 1] * motion.ANGLE_UNIT_RAD
+        follow_u = follow_drop(up, "upper", rest, pitch) if pitch else 0.0
+        follow_l = follow_drop(low, "lower", rest, pitch) if pitch else 0.0
+        opening = float(rest[up.point, 1] - rest[low.point, 1])
+        follow_u = min(follow_u, follow_l + (1.0 - SLIT) * max(opening, 0.0))
+        close_u = v[faps["upper"] - 1] * irisd  # mm each FAP closes its lid (down for the upper, up for the lower)
+        close_l = v[faps["lower"] - 1] * irisd
+        t_u = float(np.clip(close_u / opening, 0.0, 1.0)) if opening > 0 else 0.0
+        t_l = float(np.clip(close_l / opening, 0.0, 1.0)) if opening > 0 else 0.0
+        moves = {faps["upper"]: (close_u, follow_u + t_u * (follow_l - follow_u)),
+                 faps["lower"]: (-close_l, follow_l + t_l * (follow_u - follow_l))}
+        out.update({f: m for f, m in moves.items() if m[0] or m[1]})
+    return out
+
+
+def lid_drops(sheets: dict[int, LidSheet], rest: np.ndarray, values: np.ndarray, irisd: float) -> dict[int, float]:
+    """How far (mm, + down) each lid point moves this frame, its FAP's and its gaze's share together (:func:`lid_moves`)."""
+    return {fap: close + follow for fap, (close, follow) in lid_moves(sheets, rest, values, irisd).items()}
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ import pytest
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, coupled_points
 from mpeg4fa.face.fapu import DISTANCES
+from mpeg4fa.face.lids import LIDS, lid_drops
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.face.rig import CORNER_MARGIN_MM, CORNERS
 from mpeg4fa.spec import FAPS, N_FAPS
@@ -129,6 +130,13 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
         errors.append((f"{label} {axis} angle", abs(angle - amount) / abs(amount)))
         errors.append((f"{label} stays on the eyeball", abs(np.linalg.norm(a) - np.linalg.norm(b)) / np.linalg.norm(b)))
         assert np.abs(pose.part(eye)[0] - pose.feature_points[index[label]]).max() == 0
+        if axis == "pitch":  # the eye's lids ride on its pitch (face/lids.py): their points drop by lid_drops
+            drops = lid_drops(rig.lids, rig.rest, _frame(fap, value), fapu.unit("IRISD"))
+            for lid, (lid_eye, _, point, *_) in LIDS.items():
+                if lid_eye == eye:
+                    i = index[point]
+                    errors.append((f"{point} rides on the pitch", abs(-moved[i][1] - drops[lid]) / abs(drops[lid])))
+                    coupled.add(i)
     elif fap in motion.EYE_THRUST:
         label = record.feature_point[0]
         amount = value * fapu.unit("ES")

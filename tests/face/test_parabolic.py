@@ -257,7 +257,11 @@ def test_eye_rotation_keeps_every_eye_vertex_on_its_sphere(face):
             s = face.posing.eyes[eye].sphere
             r = np.linalg.norm(pose.part(eye) - s.centre, axis=1)
             np.testing.assert_allclose(r, s.radius, atol=1e-9)
-        np.testing.assert_array_equal(pose.part("skin"), face.mesh.vertices[face.mesh.part("skin")])
+        # the skin stays, but for the lids that ride on the eyes' pitch (face/lids.py lid_drops)
+        moved = np.flatnonzero(np.any(pose.vertices != face.mesh.vertices, axis=1))
+        skin = face.mesh.part("skin")
+        lids = np.concatenate([sheet.rows for sheet in face.rig.lids.values()])
+        assert np.isin(moved[(moved >= skin.start) & (moved < skin.stop)], lids).all()
 
 
 def test_eye_turn_and_thrust_together(face):

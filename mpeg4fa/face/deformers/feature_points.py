@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.lids import turn_lid
+from mpeg4fa.face.lids import lid_drops, turn_lid
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.rig import CORNER_MARGIN_MM, Rig
 
@@ -49,11 +49,9 @@ def point_motion(rig: Rig, v: np.ndarray) -> np.ndarray:
 
 
 def apply_lids(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
-    """FAPs 19-22: turn each lid sheet so that its point moves by value x IRISD (in place)."""
-    for fap, sheet in rig.lids.items():
-        if v[fap - 1]:
-            drop = -motion.direction(fap)[1] * v[fap - 1] * rig.fapu.unit("IRISD")
-            turn_lid(p, sheet, rig.rest, drop)
+    """FAPs 19-22, and the lids' follow of the eyes' pitch: turn each lid sheet (in place, :func:`.lids.lid_drops`)."""
+    for fap, drop in lid_drops(rig.lids, rig.rest, v, rig.fapu.unit("IRISD")).items():
+        turn_lid(p, rig.lids[fap], rig.rest, drop)
 
 
 def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[np.ndarray, dict[str, float]]:

@@ -39,6 +39,10 @@ the feature-point deformer's lid sheets, :mod:`.lids`: on the lid's side of the 
 the orbit) moves by the same rule with the margin's rates at its x, scaled by a fall-off from 1
 at the margin to 0 at :data:`.lids.LID_HEIGHT_MM` of surface distance (toward brow or cheek).
 
+The lids ride on the eye's pitch (FAPs 25/26) as in the feature-point deformer: the share
+:func:`.lids.lid_moves` gives the gaze turns the lid sheet about the eye centre
+(:func:`.lids.turn_lid`), then the lid's own FAP closes it from there by the rule above.
+
 Lids slide over the eyeball, not through it: a moved vertex keeps its x, takes its new height,
 and its depth is solved so that it stays at its distance from the eyeball centre, and at least
 :data:`LID_CLEARANCE_MM` outside the eyeball (a sphere slightly larger than the eye). On a
@@ -56,7 +60,7 @@ from mpeg4fa.face import motion
 from mpeg4fa.face.deformers.feature_points import apply_head_rotation, pose_in_head_frame
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import EyeFrame, Parabola, Sphere, closed_by, fit_sphere, lid_parabola, middle_share
-from mpeg4fa.face.lids import LID_HEIGHT_MM, LIDS, OVERLAP_MM
+from mpeg4fa.face.lids import LID_HEIGHT_MM, LIDS, OVERLAP_MM, lid_moves, turn_lid
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.regions import edge_graph, path_through, smooth_down
@@ -229,10 +233,11 @@ class ParabolicDeformer:
         still_eyes = v.copy()  # the eyes are this deformer's: the feature-point layers leave them at rest
         still_eyes[[f - 1 for f in _EYE_FAPS]] = 0.0
         p, pupils = pose_in_head_frame(rig, still_eyes, lids=False)
-        irisd = rig.fapu.unit("IRISD")
-        for fap, lid in self.lids.items():
-            if v[fap - 1]:
-                apply_lid(p, lid, v[fap - 1] * irisd)
+        for fap, (close, follow) in lid_moves(rig.lids, rig.rest, v, rig.fapu.unit("IRISD")).items():
+            if follow:  # riding on the eye's pitch: the lid sheet turns with it, as in the feature-point deformer
+                turn_lid(p, rig.lids[fap], rig.rest, follow)
+            if close:  # then its own FAP closes it along the parabola (closure: down for the upper lid, up for the lower)
+                apply_lid(p, self.lids[fap], -self.lids[fap].sign * close)
         apply_eyes(p, self.eyes, v, rig.rest, rig.fapu.unit("ES"))
         apply_head_rotation(rig, p, v)
         return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
