@@ -247,13 +247,73 @@ function segmentFault(r, p, nbits) {
   return new FbaError(STUFFING_EXPECTED, r.baseBits + p - 1);
 }
 
-/** One arithmetic-coded segment of ``seg`` (a SegmentCoder): one symbol per model, made a value at once
- * (its level times its quantiser step, plus the prediction in a P segment) and written into ``dest``
- * by field, or into ``seg.values`` in coding order when ``dest`` is null. Intra (``bank`` null):
- * uniform models of ``seg.isize[m]`` symbols; predictive: the adaptive models of ``bank``, counted. All
- * integer arithmetic below stays under 2**31 (lengths <= 2**16, adaptive totals <= 16383), except the
- * uniform models' products, which stay exact as doubles (Math.floor). */
-function decodeSegment(r, seg, bank, dest) {
+/** Bits of one segment one at a time, the stuffed '1' after 22 zeros dropped, as arith.py reads them. */
+class SegmentBits {
+  constructor(r) {
+    this.r = r;
+    this.p = r.p;
+    this.nbits = r.nbytes * 8;
+    this.zerorun = 0;
+  }
+  next() {
+    const r = this.r;
+    for (;;) {
+      if (this.p >= this.nbits) throw segmentFault(r, this.p, this.nbits);
+      const bit = (r.buf[this.p >> 3] >> (7 - (this.p & 7))) & 1;
+      this.p++;
+      if (this.zerorun === MAX_ZERO_RUN) {
+        if (!bit) throw segmentFault(r, this.p, this.nbits);
+        this.zerorun = 0;
+        continue;
+      }
+      this.zerorun = bit === 0 ? this.zerorun + 1 : 0;
+      return bit;
+    }
+  }
+}
+
+/** An intra segment of ``seg`` (a SegmentCoder): uniform models of ``seg.isize[m]`` symbols, renormalised
+ * bit by bit as arith.py (one segment per intra header: plain code, kept out of the P path so that V8
+ * optimises that one for what it sees on every frame). Each symbol becomes a value at once (its level
+ * times its quantiser step) written into ``dest`` by field, or into ``seg.values`` in coding order when
+ * ``dest`` is null. The products stay exact as doubles (Math.floor): a size may pass 2**15. */
+function decodeUniform(r, seg, dest) {
+  const bits = new SegmentBits(r);
+  let code = 0;
+  for (let i = 0; i < 16; i++) code = (code << 1) | bits.next();
+  const sizes = seg.isize, lo = seg.imin, qstep = seg.qstep, prev = seg.prev, idx = seg.idx, values = seg.values;
+  let low = 0, high = TOP;
+  for (let m = 0; m < idx.length; m++) {
+    const total = sizes[m], length = high - low + 1;
+    const target = Math.floor(((code - low + 1) * total - 1) / length);
+    const symbol = total - target - 1;
+    high = low - 1 + Math.floor((length * (target + 1)) / total);
+    low = low + Math.floor((length * target) / total);
+    for (;;) {
+      if (high < Q2) {
+        // nothing
+      } else if (low >= Q2) {
+        code -= Q2; low -= Q2; high -= Q2;
+      } else if (low >= Q1 && high < Q3) {
+        code -= Q1; low -= Q1; high -= Q1;
+      } else break;
+      low <<= 1;
+      high = (high << 1) | 1;
+      code = (code << 1) | bits.next();
+    }
+    const level = symbol + lo[m], field = idx[m], q = qstep[m];
+    const v = q === 0 ? level : level * q;
+    prev[field] = v;
+    if (dest === null) values[m] = v; else dest[field] = v;
+  }
+  r.p = bits.p - REWIND_BITS;
+}
+
+/** A predictive segment of ``seg``: the adaptive models of ``bank``, counted; each symbol becomes a
+ * value at once (level times step, plus the prediction), written as decodeUniform writes them. The
+ * integer arithmetic stays under 2**31 (lengths <= 2**16, totals <= 16383). The decoder's time is
+ * spent here: one code path for every P frame, no allocation, no closure. */
+function decodeAdaptive(r, seg, bank, dest) {
   const buf = r.buf, nbytes = r.nbytes, nbits = nbytes * 8;
   let p = r.p, zerorun = 0, code = 0, bit = 0;
   // the first 16 bits in one read: a run of 22 zeros cannot fit in them, so no stuffed bit is there
@@ -278,54 +338,39 @@ function decodeSegment(r, seg, bank, dest) {
     }
     code = (code << 1) | bit;
   }
-  const adapt = bank !== null;
-  const freq = adapt ? bank.freq : null, tree = adapt ? bank.tree : null, totals = adapt ? bank.total : null;
-  const top = adapt ? bank.top : null, size = adapt ? bank.size : null, coarse = adapt ? bank.coarse : null;
-  const foff = adapt ? bank.foff : null, toff = adapt ? bank.toff : null, coff = adapt ? bank.coff : null;
-  const sizes = seg.isize, lo = adapt ? seg.pmin : seg.imin, qstep = seg.qstep, prev = seg.prev, idx = seg.idx;
-  const values = seg.values;
+  const freq = bank.freq, tree = bank.tree, totals = bank.total, top = bank.top, size = bank.size;
+  const coarse = bank.coarse, foff = bank.foff, toff = bank.toff, coff = bank.coff;
+  const lo = seg.pmin, qstep = seg.qstep, prev = seg.prev, idx = seg.idx, values = seg.values;
   let low = 0, high = TOP;
   const nm = idx.length;
   for (let m = 0; m < nm; m++) {
     const length = high - low + 1;
-    let symbol = 0, cumLo = 0, cumHi = 0, total = 0;
-    if (!adapt) {
-      total = sizes[m];
-      const target = Math.floor(((code - low + 1) * total - 1) / length);
-      symbol = total - target - 1;
-      cumHi = target + 1;
-      cumLo = target;
-      high = low - 1 + Math.floor((length * cumHi) / total);
-      low = low + Math.floor((length * cumLo) / total);
-    } else {
-      total = totals[m];
-      const target = (((code - low + 1) * total - 1) / length) | 0;
-      // the largest pos whose first pos reversed counts sum to <= target: cum[i] <= target < cum[i - 1],
-      // i = n - pos. With branches: skewed counts take the same path again and again, and the CPU that
-      // predicts it loads the next node before this one arrives (a branchless search waited: 1.5x slower)
-      const t0 = toff[m], c0 = coff[m], n = size[m];
-      let pos = 0, rem = target, step = top[m];
-      for (; step >= BLOCK; step >>= 1) {  // nodes at multiples of 32
-        const t = coarse[c0 + ((pos + step) >> BLOCK_BITS)];
-        if (t <= rem) { pos += step; rem -= t; }
-      }
-      for (; step > 0; step >>= 1) {  // within one block of 32
-        const t = tree[t0 + pos + step];
-        if (t <= rem) { pos += step; rem -= t; }
-      }
-      symbol = n - 1 - pos;
-      cumLo = target - rem;
-      cumHi = cumLo + freq[foff[m] + symbol];
-      high = low - 1 + (((length * cumHi) / total) | 0);
-      low = low + (((length * cumLo) / total) | 0);
-      // count the symbol (arith.py: halve every count first when the total reached 16383)
-      if (total === MAX_FREQUENCY) bank.halve(m);
-      freq[foff[m] + symbol] += 1;
-      totals[m] += 1;
-      let x = n - symbol;
-      for (; x <= n && (x & (BLOCK - 1)) !== 0; x += x & -x) tree[t0 + x] += 1;
-      if (x <= n) for (let j = x >> BLOCK_BITS, nj = n >> BLOCK_BITS; j <= nj; j += j & -j) coarse[c0 + j] += 1;
+    const total = totals[m];
+    const target = (((code - low + 1) * total - 1) / length) | 0;
+    // the largest pos whose first pos reversed counts sum to <= target: cum[i] <= target < cum[i - 1],
+    // i = n - pos. With branches: skewed counts take the same path again and again, and the CPU that
+    // predicts it loads the next node before this one arrives (a branchless search waited: 1.5x slower)
+    const t0 = toff[m], c0 = coff[m], nsym = size[m];
+    let pos = 0, rem = target, step = top[m];
+    for (; step >= BLOCK; step >>= 1) {  // nodes at multiples of 32
+      const t = coarse[c0 + ((pos + step) >> BLOCK_BITS)];
+      if (t <= rem) { pos += step; rem -= t; }
     }
+    for (; step > 0; step >>= 1) {  // within one block of 32
+      const t = tree[t0 + pos + step];
+      if (t <= rem) { pos += step; rem -= t; }
+    }
+    const symbol = nsym - 1 - pos;
+    const cumLo = target - rem, cumHi = cumLo + freq[foff[m] + symbol];
+    high = low - 1 + (((length * cumHi) / total) | 0);
+    low = low + (((length * cumLo) / total) | 0);
+    // count the symbol (arith.py: halve every count first when the total reached 16383)
+    if (total === MAX_FREQUENCY) bank.halve(m);
+    freq[foff[m] + symbol] += 1;
+    totals[m] += 1;
+    let x = nsym - symbol;
+    for (; x <= nsym && (x & (BLOCK - 1)) !== 0; x += x & -x) tree[t0 + x] += 1;
+    if (x <= nsym) for (let j = x >> BLOCK_BITS, nj = nsym >> BLOCK_BITS; j <= nj; j += j & -j) coarse[c0 + j] += 1;
     // Renormalise in one step where no stuffed bit can be among the bits read: while low and high
     // share their top bit the interval lies in one half (n doublings, the bits they share), then
     // each doubling of the middle half (low '01..', high '10..') is a doubling modulo 2**16 with
@@ -371,7 +416,7 @@ function decodeSegment(r, seg, bank, dest) {
       code = (code << 1) | bit;
     }
     const level = symbol + lo[m], field = idx[m], q = qstep[m];
-    const v = (q === 0 ? level : level * q) + (adapt ? prev[field] : 0);
+    const v = (q === 0 ? level : level * q) + prev[field];
     prev[field] = v;
     if (dest === null) values[m] = v; else dest[field] = v;
   }
@@ -414,9 +459,8 @@ class SegmentCoder {
     this.pModels = null;    // ModelBank, made at the first P segment after an intra header
     this.values = new Float64Array(n);
   }
-  /** The uniform intra sizes, or null for P (the adaptive bank, made on first use). */
-  bank(intra) {
-    if (intra) return null;
+  /** The adaptive models of the P segments, made on first use after the intra header. */
+  bank() {
     if (this.pModels === null) this.pModels = new ModelBank(this.psize, null);
     return this.pModels;
   }
@@ -738,7 +782,7 @@ class Decoder {
    * order (``seg.values``: read before the next segment of this coder). */
   segment(coder, intra, dest) {
     const seg = coder.seg;
-    decodeSegment(this.r, seg, seg.bank(intra), dest);
+    if (intra) decodeUniform(this.r, seg, dest); else decodeAdaptive(this.r, seg, seg.bank(), dest);
     return seg.values;
   }
 
