@@ -22,9 +22,10 @@
 * **Jaw**: a weight per vertex read off the CC0 ``jawOpen`` face unit (the fraction
   of a rigid jaw rotation each vertex follows), 1 on the lower teeth and at 2.1.
 * **Head**: 1 on the whole head, fading to 0 down the neck: a neck vertex turns by a share
-  of the head's rotation that grows smoothly from 0 at the cut to 1 where the neck meets the
-  head (under the chin at the front, the skull's base at the back: :func:`_head_weights`), so
-  a turn twists the neck along its length instead of folding it in one band.
+  of the head's rotation that grows from 0 at the cut to 1 where the neck meets the head (the
+  jaw line at the front, so the skin under the chin takes part; the skull's base at the back:
+  :func:`_head_weights`), evenly in the angle seen from 7.1, so a turn twists the neck along its
+  length instead of folding it in one band, and a nod spreads over the whole throat.
 * **Lids**: sheets of skin turning about the eye centres (:mod:`.lids`).
 * **Eyes, upper teeth**: rigid.
 """
@@ -34,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import connected_components, dijkstra
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, add_couplings, couplings
@@ -51,7 +52,24 @@ NECK_TOP = ((0.55, 0.30), (-0.25, 0.70))
 """Where the neck meets the head, front then back, as (depth, height): depth in units of the
 7.1 -> 2.1 depth ahead of 7.1 (0.55: just behind the chin's underside; -0.25: behind the spine),
 height as the share of the height from the neck's cut up to 7.1 (0.30: under the chin; 0.70:
-the skull's base). The head's rotation fades in over the neck below the line through them."""
+the skull's base). The head's rotation fades in over the neck below the line through them
+(and below the jaw line, :data:`JAW_LINE_MARGIN_MM`, where that is higher)."""
+JAW_LINE_MARGIN_MM = 6.0
+"""At the front the head's share reaches 1 this far below the jaw line (the plane through the chin
+2.1 and the jaw angles 2.13/2.14), so the skin under the chin blends between the head and the neck:
+with the line at the old height under the chin (36 mm above the cut) a nod of 20-40 degrees put the
+whole turn into the throat's two rows of 15 mm edges (strain 2.7 x the floor looking up, folds
+looking down); 5-7 mm measure the same, 2 mm or less runs the line through the jaw's lower edge,
+whose small triangles then fold."""
+JAW_LINE_FALL = 1.0
+"""Behind the jaw angles the line falls this many mm per mm back, down to the line :data:`NECK_TOP` draws
+(the ear and the nape keep the share they had)."""
+SHARE_POWER = 1.5
+"""The share is ``1 - (1 - t)**SHARE_POWER`` of the angle ``t`` (0 at the cut, 1 at the line): level
+where it meets the head (no crease along the line), nowhere more than 1.5 x as steep as an even rise. Folds
+come where a nod turns one row past the next: a share that rises evenly in the angle from 7.1 keeps
+each row behind the one above it up to a nod as large as the angle the throat spans (33 degrees from
+the cut to the chin)."""
 TONGUE_ROOT_MM = 6.0  # tongue vertices within this of its back end are fixed
 TONGUE_REACH_MM = 30.0  # a tongue point carries the tongue around it this far (its tip the front third)
 WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight moves 0.2 mm at 20 mm)
@@ -309,19 +327,50 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
 def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
     """The vertices that turn only partly with the head, and their share of its rotation.
 
-    A neck vertex's share grows from 0 at the cut to 1 at the line where the neck meets the
-    head (:data:`NECK_TOP`, lower at the front than at the back), smoothly (zero slope at both
-    ends). Everything not listed turns fully."""
-    y, z = mesh.vertices[:, 1], mesh.vertices[:, 2]
+    A neck vertex's share grows from 0 at the cut to 1 at the line where the neck meets the head:
+    :data:`NECK_TOP` at the sides and back, the jaw line less :data:`JAW_LINE_MARGIN_MM` at the front,
+    whichever is higher. It grows with the angle between straight down from 7.1 and the vertex
+    (a cone about the vertical through 7.1): a nod turns every point about 7.1, so a share even in
+    that angle spreads the nod evenly along the throat. Everything not listed turns fully."""
+    v = mesh.vertices
+    x, y, z = v[:, 0], v[:, 1], v[:, 2]
     skin = mesh.part("skin")
     bottom = y[skin].min()
     centre, chin = mesh.fp("7.1"), mesh.fp("2.1")
     depth, height = chin[2] - centre[2], centre[1] - bottom
     (zf, hf), (zb, hb) = ((centre[2] + a * depth, bottom + b * height) for a, b in NECK_TOP)
     top = hf + (hb - hf) * np.clip((zf - z) / (zf - zb), 0.0, 1.0)
-    w = 1.0 - smooth_down((y - bottom) / (top - bottom))
+    angles = [label for label in ("2.13", "2.14") if label in mesh.fp_labels]
+    if angles:
+        angle = np.mean([mesh.fp(label) for label in angles], axis=0)
+        slope = (angle[1] - chin[1]) / (angle[2] - chin[2]) if abs(angle[2] - chin[2]) > 1e-6 else 0.0
+        jaw = chin[1] + slope * (z - chin[2]) - JAW_LINE_MARGIN_MM - JAW_LINE_FALL * np.maximum(angle[2] - z, 0.0)
+        top = np.maximum(top, jaw)
+    rho = np.hypot(x - centre[0], z - centre[2])
+    below = np.arctan2(rho, centre[1] - y)
+    at_cut = np.arctan2(rho, centre[1] - bottom)
+    at_top = np.arctan2(rho, np.maximum(centre[1] - top, 1e-6))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip(np.nan_to_num((below - at_cut) / (at_top - at_cut), nan=1.0), 0.0, 1.0)
+    t[y >= top] = 1.0
+    t[_cut_off_from_the_cut(mesh, t < 1.0)] = 1.0  # the mouth's inside below the line turns with the head
+    w = 1.0 - (1.0 - t) ** SHARE_POWER
     w[skin.stop:] = 1.0
     w[:skin.start] = 1.0
     w[mesh.fp_vertex] = 1.0  # feature points of the head turn with it in full (the standard's head rotation)
     idx = np.flatnonzero(w < 1.0)
     return idx, w[idx]
+
+
+def _cut_off_from_the_cut(mesh: HeadMesh, below: np.ndarray) -> np.ndarray:
+    """Skin vertices in ``below`` that no path within ``below`` joins to the neck's cut (the floor of
+    the mouth's inside: joined to the neck only over the lips, which turn with the head)."""
+    skin = mesh.part("skin")
+    local = np.flatnonzero(below[skin])
+    if not len(local):
+        return local
+    graph = adjacency(mesh.triangles["skin"] - skin.start, skin.stop - skin.start)[local][:, local]
+    _, label = connected_components(graph, directed=False)
+    y = mesh.vertices[skin, 1][local]
+    held = np.unique(label[y <= y.min() + 1e-6])
+    return local[~np.isin(label, held)] + skin.start

@@ -104,3 +104,69 @@ def test_bottom_edge_is_smooth_from_every_view(generic_face):
     for values in ({49: 69813, 3: 900}, {48: 30000, 50: -40000}):
         posed = generic_face.deform(values).vertices
         assert np.abs(posed[loop] - mesh.vertices[loop]).max() < 1e-9
+
+
+# -- the throat under a nod (issue 29 item 3): the head's share spreads over the whole throat --------
+
+def _nod(degrees: float, jaw: float = 0.0) -> np.ndarray:
+    from mpeg4fa.face.creases import turn
+
+    values = np.zeros(68)
+    values[47], values[2] = turn(degrees), jaw
+    return values
+
+
+@pytest.mark.parametrize("degrees", [-40.0, 30.0])
+def test_a_nod_spreads_over_the_throat(generic_face, degrees):
+    """Looking up 40 degrees or down 30 (the throat spans 33 degrees seen from 7.1, from the cut to the
+    chin) with the jaw shut: no fold, no fold line, strain within twice the floor. The share that rose
+    from the cut to 1 36 mm up, under the chin, stretched the throat's two rows to 2.47 x the floor
+    looking up and turned one row past the next looking down (10 folded, 18 fold lines at 30)."""
+    from mpeg4fa.face import creases, quality
+
+    m = creases.measure_pose(generic_face, _nod(degrees), quality.skin_graph(generic_face.mesh))
+    assert m.folded == 0 and m.flipped == 0 and m.ratio <= creases.FLOOR_FACTOR, m
+
+
+def test_the_skin_under_the_chin_takes_a_share(generic_face):
+    """Along the throat's midline the share rises from 0 at the cut to 1 at the chin 2.1, with the
+    angle seen from 7.1: under the chin it is partial (the submental skin blends head and neck)."""
+    mesh, rig = generic_face.mesh, generic_face.rig
+    share = np.ones(mesh.n_vertices)
+    rows, w = rig.head_fade
+    share[rows] = w
+    v = mesh.vertices
+    skin = mesh.part("skin")
+    centre, chin = mesh.fp("7.1"), mesh.fp("2.1")
+    from mpeg4fa.face.quality import skin_graph
+
+    mid = np.flatnonzero((np.abs(v[:skin.stop, 0]) < 0.5) & (v[:skin.stop, 2] > 60.0) & (v[:skin.stop, 2] <= chin[2])
+                         & (v[:skin.stop, 1] < chin[1] + 5.0))
+    mid = np.setdiff1d(mid, skin_graph(mesh).inside)  # the outside: not the mouth's inside
+    angle = np.arctan2(v[mid, 2] - centre[2], centre[1] - v[mid, 1])
+    order = mid[np.argsort(angle)]
+    assert len(order) >= 6 and share[order[0]] == 0.0
+    assert np.all(np.diff(share[order]) >= 0.0)
+    under = order[(v[order, 1] > chin[1] - 5.0) & (v[order, 2] < chin[2] - 10.0)]  # the underside, short of 2.1
+    assert len(under) >= 3 and 0.5 < share[under].min() and share[under].max() < 1.0, share[under]
+
+
+def test_a_nod_of_40_with_the_jaw_open_must_fold(generic_face):
+    """Why pitch +40 with the jaw open stays: the chin 2.1 turns with the head about 7.1 in full (the
+    standard), and the jaw open lands it below the cut and behind the neck's front at the midline,
+    while the cut stays. The midline's skin from the cut rises at rest and must reach a point below
+    the cut and behind it: going back, the neck's skin can only rise (or it turns over), and the skin
+    under the chin can only go forward (or it turns over), so the skin between turns over, or passes
+    through itself; the measure sees the fold."""
+    from mpeg4fa.face import creases, quality
+    from mpeg4fa.face.neck import rim_loop
+
+    mesh = generic_face.mesh
+    poses = creases.crease_poses(generic_face)
+    posed = generic_face.pose_values(poses["pitch +40 jaw open"]).vertices
+    loop = rim_loop(mesh)
+    front = loop[(np.abs(mesh.vertices[loop, 0]) < 10.0) & (mesh.vertices[loop, 2] > 0.0)]
+    chin = posed[mesh.fp_vertex[mesh.fp_index("2.1")]]
+    assert chin[1] < mesh.vertices[loop, 1].min() - 10.0 and chin[2] < mesh.vertices[front, 2].min() - 20.0
+    m = creases.measure_pose(generic_face, poses["pitch +40 jaw open"], quality.skin_graph(mesh))
+    assert m.folded + m.flipped > 0
