@@ -2,7 +2,9 @@
 // with every call's CPU time (the first includes V8's warm-up) and what the calls decoded (frames and
 // the sum of every frame's FAP values: the Python half checks both, so both sides did the same work).
 // CPU time, not wall time: the machines these run on are shared, and a busy neighbour stretches wall
-// time, not CPU time. The process's CPU time counts V8's helper threads (GC, compiler) too.
+// time, not CPU time. The process's CPU time counts V8's helper threads (GC, compiler) too. The timed
+// calls run back to back, with nothing between them that allocates (each pays for the garbage of the
+// one before, as a decoder in a page would); the checks and shown.js's timing come after them.
 //   node tools/bench_fbajs.mjs R FILE...
 import { readFileSync } from "node:fs";
 import { decode } from "../mpeg4fa/serve/static/js/fba/fba.js";
@@ -13,22 +15,24 @@ const cpuSeconds = (since) => { const d = process.cpuUsage(since); return (d.use
 const [reps, ...files] = process.argv.slice(2);
 for (const path of files) {
   const bytes = new Uint8Array(readFileSync(path));
-  const times = [], shownTimes = [];
-  let frames = -1, valueSum = 0;
-  for (let i = 0; i < Number(reps); i++) {
+  const n = Number(reps), times = new Float64Array(n), counts = new Int32Array(n), ends = new Float64Array(n);
+  let s = null;
+  for (let i = 0; i < n; i++) {
     const t0 = process.cpuUsage();
-    const s = decode(bytes);
-    times.push(cpuSeconds(t0));
+    s = decode(bytes);
+    times[i] = cpuSeconds(t0);
+    counts[i] = s.frames.length;
+    ends[i] = s.frames[s.frames.length - 1].timestamp;
+  }
+  if (counts.some((c) => c !== counts[0]) || ends.some((t) => t !== ends[0])) throw new Error("the calls decoded differently");
+  let valueSum = 0;  // the last call's values, every one read
+  for (const f of s.frames) for (let j = 0; j < f.fapValues.length; j++) valueSum += f.fapValues[j];
+  const shownTimes = [];
+  for (let i = 0; i < n; i++) {
     const t1 = process.cpuUsage();
     shownValues(s.frames);
     shownTimes.push(cpuSeconds(t1));
-    // outside the timing: every call must have decoded the whole stream, its values there to read
-    let sum = 0;
-    for (const f of s.frames) for (let j = 0; j < f.fapValues.length; j++) sum += f.fapValues[j];
-    if (frames !== -1 && (s.frames.length !== frames || sum !== valueSum)) throw new Error(`call ${i} decoded differently`);
-    frames = s.frames.length;
-    valueSum = sum;
   }
-  process.stdout.write(JSON.stringify({ path, frames, value_sum: valueSum, times_s: times,
+  process.stdout.write(JSON.stringify({ path, frames: counts[0], value_sum: valueSum, times_s: Array.from(times),
     shown_times_s: shownTimes }) + "\n");
 }

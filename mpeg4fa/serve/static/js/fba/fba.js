@@ -9,8 +9,8 @@
 //   const dec = new StreamDecoder();              // bytes in pieces, frames out as soon as complete
 //   for (const frame of dec.push(chunk)) ...; for (const frame of dec.end()) ...;
 //
-// A frame: {index, timestamp, objectMask, fapMask (Uint8Array 68), fapValues (Int32Array 68),
-// viseme (Int32Array 4: select1, select2, blend, viseme_def), expression (Int32Array 6: select1,
+// A frame (class Frame): {index, timestamp, objectMask, fapMask (Uint8Array 68), fapValues (Int32Array
+// 68), viseme (Int32Array 4: select1, select2, blend, viseme_def), expression (Int32Array 6: select1,
 // intensity1, select2, intensity2, init_face, expression_def), bapMask (Uint8Array 296), bapValues
 // (Int32Array 296), skip, startCode, bits, params (intra headers only, else null)}.
 import SPEC from "./spec.js";
@@ -275,9 +275,9 @@ class SegmentBits {
 /** An intra segment of ``seg`` (a SegmentCoder): uniform models of ``seg.isize[m]`` symbols, renormalised
  * bit by bit as arith.py (one segment per intra header: plain code, kept out of the P path so that V8
  * optimises that one for what it sees on every frame). Each symbol becomes a value at once (its level
- * times its quantiser step) written into ``dest`` by field, or into ``seg.values`` in coding order when
- * ``dest`` is null. The products stay exact as doubles (Math.floor): a size may pass 2**15. */
-function decodeUniform(r, seg, dest) {
+ * times its quantiser step) written into ``dest[at + field]``, or into ``seg.values`` in coding order
+ * when ``dest`` is null. The products stay exact as doubles (Math.floor): a size may pass 2**15. */
+function decodeUniform(r, seg, dest, at) {
   const bits = new SegmentBits(r);
   let code = 0;
   for (let i = 0; i < 16; i++) code = (code << 1) | bits.next();
@@ -304,7 +304,7 @@ function decodeUniform(r, seg, dest) {
     const level = symbol + lo[m], field = idx[m], q = qstep[m];
     const v = q === 0 ? level : level * q;
     prev[field] = v;
-    if (dest === null) values[m] = v; else dest[field] = v;
+    if (dest === null) values[m] = v; else dest[at + field] = v;
   }
   r.p = bits.p - REWIND_BITS;
 }
@@ -313,7 +313,7 @@ function decodeUniform(r, seg, dest) {
  * value at once (level times step, plus the prediction), written as decodeUniform writes them. The
  * integer arithmetic stays under 2**31 (lengths <= 2**16, totals <= 16383). The decoder's time is
  * spent here: one code path for every P frame, no allocation, no closure. */
-function decodeAdaptive(r, seg, bank, dest) {
+function decodeAdaptive(r, seg, bank, dest, at) {
   const buf = r.buf, nbytes = r.nbytes, nbits = nbytes * 8;
   let p = r.p, zerorun = 0, code = 0, bit = 0;
   // the first 16 bits in one read: a run of 22 zeros cannot fit in them, so no stuffed bit is there
@@ -418,7 +418,7 @@ function decodeAdaptive(r, seg, bank, dest) {
     const level = symbol + lo[m], field = idx[m], q = qstep[m];
     const v = (q === 0 ? level : level * q) + prev[field];
     prev[field] = v;
-    if (dest === null) values[m] = v; else dest[field] = v;
+    if (dest === null) values[m] = v; else dest[at + field] = v;
   }
   r.p = p - REWIND_BITS;
 }
@@ -700,7 +700,41 @@ const VISEME_BITS = ["viseme_def"];
 const EXPRESSION_BITS = ["init_face", "expression_def"];
 const ZERO_BAP_MASK = new Uint8Array(N_BAPS);
 const ZERO_BAP_VALUES = new Int32Array(N_BAPS);
-const FRAME_BYTES = (N_FAPS + 10) * 4 + Math.ceil(N_FAPS / 4) * 4, SLAB_FRAMES = 256;
+// a frame's face arrays in its slab: values (int32 0..67), viseme (68..71), expression (72..77), mask bytes
+const VISEME_AT = N_FAPS, EXPRESSION_AT = N_FAPS + 4, MASK_BYTE = (N_FAPS + 10) * 4;
+const FRAME_BYTES = MASK_BYTE + Math.ceil(N_FAPS / 4) * 4, SLAB_FRAMES = 256;
+
+/** A decoded frame. Its face arrays live in a slab that 256 frames share, written as the frame is
+ * decoded; the typed arrays that show them are made when first read (and kept). A frame then costs the
+ * garbage collector one small object, not five: a decoder holds thousands of frames, and V8's young
+ * generation copies every live one at each collection. */
+export class Frame {
+  constructor(index, objectMask, skip, startCode, params, slab, at) {
+    this.index = index;
+    this.timestamp = 0.0;
+    this.objectMask = objectMask;
+    this.bapMask = ZERO_BAP_MASK;
+    this.bapValues = ZERO_BAP_VALUES;
+    this.skip = skip;
+    this.startCode = startCode;
+    this.bits = 0;
+    this.params = params;
+    this._slab = slab;
+    this._at = at;  // byte offset in the slab
+    this._fapMask = null;
+    this._fapValues = null;
+    this._viseme = null;
+    this._expression = null;
+  }
+  /** Uint8Array(68): 1 where the frame sends the FAP. */
+  get fapMask() { return this._fapMask ??= new Uint8Array(this._slab, this._at + MASK_BYTE, N_FAPS); }
+  /** Int32Array(68): the FAP values (FAPU integers; unsent FAPs 0). */
+  get fapValues() { return this._fapValues ??= new Int32Array(this._slab, this._at, N_FAPS); }
+  /** Int32Array(4): FAP 1's select1, select2, blend, viseme_def. */
+  get viseme() { return this._viseme ??= new Int32Array(this._slab, this._at + VISEME_AT * 4, 4); }
+  /** Int32Array(6): FAP 2's select1, intensity1, select2, intensity2, init_face, expression_def. */
+  get expression() { return this._expression ??= new Int32Array(this._slab, this._at + EXPRESSION_AT * 4, 6); }
+}
 
 function foreignKind(head) {
   const at = (offset, magic) => magic.every((b, k) => head[offset + k] === b);
@@ -731,16 +765,19 @@ class Decoder {
     this.objectStartCode = null;  // set once the object start code is read
     this.k = 0;
     this.done = false;
-    this.slab = null;
+    this.slab = null;      // ArrayBuffer of the frames being decoded, and views of all of it to write them
+    this.slabInts = null;
+    this.slabBytes = null;
     this.slabUsed = 0;
   }
 
   /** The byte offset of a frame's face arrays (values, viseme, expression, mask) in ``this.slab``, one
-   * buffer shared by 256 frames: a typed array's own buffer costs V8 far more than a view, and a view
-   * made by its constructor less than one made by subarray(). */
+   * buffer shared by 256 frames: a typed array's own buffer costs V8 far more than a share of one. */
   frameSlot() {
     if (this.slab === null || this.slabUsed === SLAB_FRAMES) {
       this.slab = new ArrayBuffer(SLAB_FRAMES * FRAME_BYTES);
+      this.slabInts = new Int32Array(this.slab);
+      this.slabBytes = new Uint8Array(this.slab);
       this.slabUsed = 0;
     }
     return FRAME_BYTES * this.slabUsed++;
@@ -778,11 +815,11 @@ class Decoder {
     return code === END_CODE ? null : code;
   }
 
-  /** One segment of ``coder``: its values into ``dest`` by field, or (``dest`` null) returned in coding
+  /** One segment of ``coder``: its values into ``dest[at + field]``, or (``dest`` null) returned in coding
    * order (``seg.values``: read before the next segment of this coder). */
-  segment(coder, intra, dest) {
+  segment(coder, intra, dest, at) {
     const seg = coder.seg;
-    if (intra) decodeUniform(this.r, seg, dest); else decodeAdaptive(this.r, seg, seg.bank(), dest);
+    if (intra) decodeUniform(this.r, seg, dest, at); else decodeAdaptive(this.r, seg, seg.bank(), dest, at);
     return seg.values;
   }
 
@@ -800,13 +837,8 @@ class Decoder {
       if (fr.fps <= 0) throw new FbaError("frame rate 0 in the intra header", pos);
       this.fps = fr.fps;
     }
-    const at = this.frameSlot(), slab = this.slab;
-    const frame = {
-      index: k, timestamp: 0.0, objectMask: mask, fapMask: new Uint8Array(slab, at + (N_FAPS + 10) * 4, N_FAPS),
-      fapValues: new Int32Array(slab, at, N_FAPS), viseme: new Int32Array(slab, at + N_FAPS * 4, 4),
-      expression: new Int32Array(slab, at + (N_FAPS + 4) * 4, 6), bapMask: ZERO_BAP_MASK, bapValues: ZERO_BAP_VALUES,
-      skip, startCode: planeCode, bits: 0, params,
-    };
+    const at = this.frameSlot();
+    const frame = new Frame(k, mask, skip, planeCode, params, this.slab, at);
     if (mask & FACE_BIT) this.faceData(frame, isIntra);
     if (mask & BODY_BIT) this.bodyData(frame, isIntra);
     frame.timestamp = tc !== null ? tc.totalSeconds : this.nextPts;
@@ -826,21 +858,22 @@ class Decoder {
       throw new FbaError("a predicted plane carries face data but no intra plane has set up the face", r.pos);
     }
     const mask = this.face.mask;
-    if (mask[0]) this.highLevel(this.viseme, frame.viseme, VISEME_BITS, frame.index, intra);
-    if (mask[1]) this.highLevel(this.expression, frame.expression, EXPRESSION_BITS, frame.index, intra);
-    this.segment(this.faps, intra, frame.fapValues);
-    frame.fapMask.set(mask);
+    const base = frame._at >> 2;
+    if (mask[0]) this.highLevel(this.viseme, base + VISEME_AT, VISEME_BITS, frame.index, intra);
+    if (mask[1]) this.highLevel(this.expression, base + EXPRESSION_AT, EXPRESSION_BITS, frame.index, intra);
+    this.segment(this.faps, intra, this.slabInts, base);
+    this.slabBytes.set(mask, frame._at + MASK_BYTE);
   }
 
   /** FAP 1 or FAP 2: its arithmetic-coded fields, then its one-bit flags. */
-  highLevel(coder, out, rawBits, index, intra) {
-    const r = this.r;
+  highLevel(coder, at, rawBits, index, intra) {
+    const r = this.r, out = this.slabInts;
     const pos = r.pos;
-    const values = this.segment(coder, intra, null);
+    const values = this.segment(coder, intra, null, 0);
     coder.checkSelects(values, pos, index);
     const n = values.length;
-    for (let j = 0; j < n; j++) out[j] = values[j];
-    for (let j = 0; j < rawBits.length; j++) out[n + j] = r.read(1, rawBits[j]);
+    for (let j = 0; j < n; j++) out[at + j] = values[j];
+    for (let j = 0; j < rawBits.length; j++) out[at + n + j] = r.read(1, rawBits[j]);
   }
 
   bodyData(frame, intra) {
@@ -854,7 +887,7 @@ class Decoder {
     } else if (this.body === null) {
       throw new FbaError("a predicted plane carries body data but no intra plane has set up the body", r.pos);
     }
-    this.segment(this.baps, intra, frame.bapValues);
+    this.segment(this.baps, intra, frame.bapValues, 0);
     frame.bapMask.set(this.body.mask);
   }
 
