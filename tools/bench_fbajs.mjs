@@ -5,7 +5,7 @@
 // time, not CPU time. The process's CPU time counts V8's helper threads (GC, compiler) too. The timed
 // calls run back to back, with nothing between them that allocates (each pays for the garbage of the
 // one before, as a decoder in a page would); the checks and shown.js's timing come after them.
-//   node tools/bench_fbajs.mjs R FILE...
+//   node tools/bench_fbajs.mjs R FILE...   (R calls per file, all reported: the caller drops V8's warm-up)
 import { readFileSync } from "node:fs";
 import { decode } from "../mpeg4fa/serve/static/js/fba/fba.js";
 import { shownValues } from "../mpeg4fa/serve/static/js/fba/shown.js";

@@ -10,8 +10,9 @@ skipped with a note when ``--vectors`` is absent) and the 60 s full-mask stream 
 ``tools/bench_codec.py`` (FAP 1, FAP 2 and 66 low-level FAPs on every frame, tight ranges; its
 generator is imported, not copied). Each is decoded R times by ``mpeg4fa.fba.decode(backend=
 "compiled")`` in this process (CPU time, as for Node; after a warm-up call, so numba's compile is not counted) and by
-``decode()`` of fba.js in one Node process per round (the first call of each, with V8's warm-up, is
-shown apart and left out of the rest), in ``--rounds`` interleaved rounds. Reported: the best and the
+``decode()`` of fba.js in one Node process per round, in ``--rounds`` interleaved rounds. Each Node
+process first makes ``--node-warmup`` calls that are not counted, as numba's compile is not: V8 compiles
+the decoder in tiers over the first calls (the first call's speed is shown apart). Reported: the best and the
 median call of each side and their ratios. The same work on both sides: each call decodes the whole
 stream into frames whose values are there to read (Python: the FapStream's arrays; Node: the frame
 objects with their typed arrays); every Node call's frame count and sum of FAP values are checked
@@ -65,9 +66,9 @@ def best_time(fn, repeat: int):
     return min(times), result
 
 
-def node_times(node: str, paths: list[Path], repeat: int) -> dict[str, dict]:
-    """Per path: fba.js's CPU time per call in one Node process (the first call, V8's warm-up, first)."""
-    run = subprocess.run([node, str(NODE_BENCH), str(repeat + 1), *map(str, paths)], capture_output=True,
+def node_times(node: str, paths: list[Path], repeat: int, warmup: int) -> dict[str, dict]:
+    """Per path: fba.js's CPU time per call in one Node process, ``warmup`` calls then ``repeat``."""
+    run = subprocess.run([node, str(NODE_BENCH), str(warmup + repeat), *map(str, paths)], capture_output=True,
                          text=True, check=True)
     return {d["path"]: d for d in map(json.loads, run.stdout.splitlines())}
 
@@ -114,6 +115,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=15)
     parser.add_argument("--rounds", type=int, default=3,
                         help="rounds of Node then Python (all calls pooled: best and median reported)")
+    parser.add_argument("--node-warmup", type=int, default=10,
+                        help="calls each Node process makes before those counted (V8's tiers compile the decoder)")
     parser.add_argument("--frames", type=int, default=int(60 * FPS), help="frames of the full-mask stream")
     parser.add_argument("--json", type=Path, default=REPO / "tools" / "bench_fbajs.json")
     parser.add_argument("--pose-frames", type=int, default=250, help="frames posed by facerig.js and by Python")
@@ -142,11 +145,12 @@ def main(argv: list[str] | None = None) -> int:
         decoded: dict[str, set] = {str(p): set() for _, p in cases}  # (frames, sum of FAP values) of Node's calls
         streams = {}
         for _ in range(args.rounds):  # interleaved, so that a busy spell on the machine hits both
-            for key, j in node_times(node, [p for _, p in cases], args.repeat).items():
+            warm = max(1, args.node_warmup)
+            for key, j in node_times(node, [p for _, p in cases], args.repeat, warm).items():
                 decoded[key].add((j["frames"], j["value_sum"]))
                 first_s[key].append(j["times_s"][0])
-                node_s[key] += j["times_s"][1:]
-                shown_s[key] += j["shown_times_s"][1:]
+                node_s[key] += j["times_s"][warm:]
+                shown_s[key] += j["shown_times_s"][warm:]
             for _, path in cases:
                 data = path.read_bytes()
                 t, streams[path] = cpu_times(lambda: decode(data, backend="compiled"), args.repeat)
@@ -175,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     head_line = (f"{'stream':36} {'frames':>7} {'Python f/s best':>16} {'median':>8} {'Node f/s best':>14} "
                  f"{'median':>8} {'1st call':>9} {'ratio best':>10} {'median':>7}")
     print(f"fba.js (Node {version}) vs mpeg4fa.fba compiled, {args.rounds} rounds x {args.repeat} calls each side "
-          f"({platform.processor() or platform.machine()})")
+          f"after warm-up ({args.node_warmup} Node calls, 1 Python call) ({platform.processor() or platform.machine()})")
     print(head_line)
     print("-" * len(head_line))
     for r in rows:
@@ -189,7 +193,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\nthe head posed (facerig.js, the player's pose) from {pose['frames']} frames of the full-mask stream, "
           f"{pose['vertices']} vertices: Node {pose['node_ms_per_pose']:.2f} ms/frame, Python "
           f"{pose['python_ms_per_pose']:.2f} ms/frame, vertices at most {pose['max_vertex_difference_mm']:.1e} mm apart")
-    args.json.write_text(json.dumps({"node": version, "repeat": args.repeat, "rounds": args.rounds, "rows": rows,
+    args.json.write_text(json.dumps({"node": version, "repeat": args.repeat, "rounds": args.rounds,
+                                     "node_warmup": args.node_warmup, "rows": rows,
                                      "pose": pose}, indent=2))
     print(f"wrote {args.json}")
     return 0
