@@ -136,3 +136,42 @@ def detour_fade(vertices: np.ndarray, triangles: np.ndarray,
 def soft_floor(w: np.ndarray, floor: float) -> np.ndarray:
     """``max(w - floor, 0) / (1 - floor)``: tiny weights go to 0 without a step (1 stays 1, 0 stays 0)."""
     return np.maximum(w - floor, 0.0) / (1.0 - floor)
+
+
+WIDE_REACH_MM = 50.0
+"""A wide weight is 0 from this surface distance of its point on (the narrow ones fade out by 44 mm)."""
+WIDE_MEMBRANE = 0.1
+"""Membrane stiffness of the wide weights per unit of bending (1/mm^2): smooth at the point (bending),
+nearly linear beyond ~3 mm (membrane), so the slope spreads evenly between a point and what holds it."""
+
+
+def wide_weights(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray,
+                 held: list[np.ndarray]) -> np.ndarray:
+    """``(V, len(points))`` weights over the widest support the held skin leaves: 1 at each point,
+    0 at its ``held`` vertices (the other points, the lid margins) and past :data:`WIDE_REACH_MM`.
+
+    Each minimises ``w (L M^-1 L + WIDE_MEMBRANE L) w`` (L the cotangent Laplacian, M the vertex
+    areas): the smoothest fall-off from the point to what holds it, so that a displacement larger
+    than the narrow weights' reach is spread over all the skin that may follow (the forehead up to
+    the hairline under a 20 mm brow raise) instead of turning a band of it over.
+    """
+    from scipy.sparse.linalg import splu
+
+    from mpeg4fa.face.elastic import cotan_laplacian
+
+    n = len(vertices)
+    lap, mass = cotan_laplacian(vertices, triangles, n)
+    mass = np.maximum(mass, 1e-9 * max(float(mass.mean()), 1e-12))
+    energy = (lap.T @ sp.diags(1.0 / mass) @ lap + WIDE_MEMBRANE * lap).tocsr()
+    geo = dijkstra(edge_graph(vertices, triangles), indices=np.asarray(points), limit=WIDE_REACH_MM + 1.0)
+    out = np.zeros((n, len(points)))
+    for k, point in enumerate(points):
+        fixed = ~(geo[k] < WIDE_REACH_MM)
+        fixed[held[k]] = True
+        fixed[point] = True
+        free = np.flatnonzero(~fixed)
+        out[point, k] = 1.0
+        if len(free):
+            rhs = -energy[free][:, [point]].toarray().ravel()
+            out[free, k] = splu(energy[free][:, free].tocsc()).solve(rhs)
+    return np.clip(out, 0.0, 1.0)

@@ -15,7 +15,9 @@ lips that funnel and pucker). This deformer:
    the animation is as symmetric and as one-sided as the FAPs;
 3. corrects the sculpted skin so that every skin feature point lands exactly on
    its target: the residuals spread by the same smooth skin weights that the
-   feature-point deformer uses (:func:`.rig.skin_weights`), for every skin point.
+   feature-point deformer uses (:func:`.rig.skin_weights`), for every skin point;
+   where that would turn skin over (brows pulled down twice their extreme), the fold
+   guard of the feature-point deformer spreads them wider (:class:`.FoldGuard`).
 
 Eyes, teeth and tongue come from the feature-point deformer, and so do the lids
 (:mod:`.lids`, turned after the sculpt): the sculpted ``eyeBlink*`` units move
@@ -30,12 +32,15 @@ from importlib import resources
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deformers.feature_points import apply_head_rotation, apply_lids, pose_in_head_frame
+from mpeg4fa.face.deformers.feature_points import (FoldGuard, apply_head_rotation, apply_lids,
+                                                   pose_in_head_frame, skin_guard)
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.regions import edge_graph, smooth_down
 from mpeg4fa.face.rig import Rig, skin_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
@@ -57,7 +62,7 @@ def _mapping() -> list[dict]:
         return list(csv.DictReader(f))
 
 
-MIDLINE_FADE_MM = 4.0
+MIDLINE_FADE_MM = 6.0
 """A two-sided unit driven by one side's FAP keeps that side: its weight fades across x = 0 over +- this."""
 _FLIP_X = np.array([-1.0, 1.0, 1.0])
 _SIDES = {"Left": "Right", "Right": "Left"}
@@ -93,6 +98,35 @@ def _shape(mesh: HeadMesh, name: str, x: np.ndarray) -> np.ndarray:
     return shape * (t * t * (3 - 2 * t))[:, None]
 
 
+CORNER_REFIT_MM = (3.0, 9.0)
+"""Around the outer lip corners (8.3/8.4) the sculpted ``jawOpen`` is replaced, within the first
+distance (surface mm) and fading out by the second, by the rig's own jaw: each vertex turning by its
+share of the rotation the unit gives the chin (:func:`.rig._jaw_weights` reads those shares off this
+unit). The sculpt has a step at the corners (strain 2.7 over 0.3 mm edges at full weight) that a
+40 degree turn with the jaw open made the worst strain of the face, 2.2 x its floor."""
+
+
+def refit_corners(mesh: HeadMesh, rig: Rig, shape: np.ndarray) -> np.ndarray:
+    """``jawOpen``'s deltas with the lip corners re-fitted to the rig's jaw rotation (see above)."""
+    skin = mesh.part("skin")
+    corners = [mesh.fp_vertex[mesh.fp_index(label)] - skin.start for label in ("8.3", "8.4")]
+    geo = dijkstra(edge_graph(mesh.vertices[skin], mesh.triangles["skin"] - skin.start), indices=corners,
+                   min_only=True, limit=CORNER_REFIT_MM[1] + 1.0)
+    near = smooth_down((geo - CORNER_REFIT_MM[0]) / (CORNER_REFIT_MM[1] - CORNER_REFIT_MM[0]))
+    pivot = mesh.vertices[rig.joints["mouth"]]
+    chin = mesh.fp_vertex[rig.chin_fp]
+    a = (mesh.vertices[chin] - pivot)[1:]
+    b = a + shape[chin, 1:]
+    angle = np.arctan2(b[1], b[0]) - np.arctan2(a[1], a[0])
+    rows, w = rig.jaw_rows
+    share = np.zeros(mesh.n_vertices)
+    share[rows] = w
+    turn = share[:, None] * ((mesh.vertices - pivot) @ (motion.rotation_matrix(0, angle) - np.eye(3)).T)
+    out = shape.copy()
+    out[skin] += near[:, None] * (turn[skin] - shape[skin])
+    return out
+
+
 def build_arkit_rig(mesh: HeadMesh, rig: Rig) -> ArkitRig:
     """Gains, sculpted deltas and the correction weights for one neutral face."""
     units = mesh.face_units
@@ -105,6 +139,8 @@ def build_arkit_rig(mesh: HeadMesh, rig: Rig) -> ArkitRig:
     side_of = {int(r["fap"]): _side(mesh, int(r["fap"])) for r in rows}
     names = tuple(dict.fromkeys(_driven(r["unit"], side_of[int(r["fap"])]) for r in rows))
     dense = {name: _shape(mesh, name, x) for name in names}
+    if "jawOpen" in dense:
+        dense["jawOpen"] = refit_corners(mesh, rig, dense["jawOpen"])
     gains = np.zeros((len(names), N_FAPS))
     count = np.zeros(len(names))
     for r in rows:
@@ -145,14 +181,18 @@ def unit_weights(arkit: ArkitRig, values: np.ndarray) -> np.ndarray:
     return np.clip(arkit.gains @ values, 0.0, 1.0)
 
 
-def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray) -> Pose:
-    """Pose one frame with the sculpted face units, feature points exactly where the FAPs put them."""
+def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guards: tuple[FoldGuard, FoldGuard] | None = None) -> Pose:
+    """Pose one frame with the sculpted face units, feature points exactly where the FAPs put them.
+
+    ``guards``: the feature-point deformer's (for the targets) and one over the correction's columns."""
     v = np.asarray(values, dtype=np.float64)
-    p, pupils = pose_in_head_frame(rig, v, lids=False)
+    p, pupils = pose_in_head_frame(rig, v, lids=False, guard=guards[0] if guards else None)
     skin = rig.parts["skin"]
     sculpted = rig.rest[skin] + (arkit.deltas @ unit_weights(arkit, v)).reshape(-1, 3)
     residual = p[arkit.fp_global] - sculpted[arkit.fp_local]
     p[skin] = sculpted + arkit.correction @ residual
+    if guards:
+        guards[1].relieve(p, residual)
     apply_lids(rig, p, v)  # after sculpting: the lids turn over the eyeball as in the feature-point deformer
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
@@ -164,10 +204,20 @@ class ArkitDeformer:
 
     rig: Rig
     arkit: ArkitRig
+    guards: tuple[FoldGuard, FoldGuard] | None = None
 
     def __call__(self, values: np.ndarray) -> Pose:
-        return deform_arkit(self.rig, self.arkit, values)
+        return deform_arkit(self.rig, self.arkit, values, self.guards)
+
+
+def correction_guard(mesh: HeadMesh, arkit: ArkitRig) -> FoldGuard:
+    """The fold guard over the correction's columns (a feature point per distinct skin vertex)."""
+    first = {}
+    for i, v in enumerate(mesh.fp_vertex):
+        first.setdefault(int(v), i)
+    return FoldGuard(mesh, np.array([first[int(v)] for v in arkit.fp_global]), arkit.correction)
 
 
 def build(mesh: HeadMesh, rig: Rig) -> ArkitDeformer:
-    return ArkitDeformer(rig, build_arkit_rig(mesh, rig))
+    arkit = build_arkit_rig(mesh, rig)
+    return ArkitDeformer(rig, arkit, (skin_guard(mesh, rig), correction_guard(mesh, arkit)))

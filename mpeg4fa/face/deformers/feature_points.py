@@ -5,17 +5,35 @@ One call per frame, vectorised: a sparse product for the translational FAPs
 (eyelids, tongue roll, jaw, eyeballs, head), each over its own vertices. Order
 matters and is fixed: lips and brows move in the jaw's frame, the jaw and eyes
 move in the head's frame, the head moves last.
+
+A **fold guard** (:class:`FoldGuard`) watches the skin the translations moved: where some
+triangle is about to turn over (brows at 400 lifting 20 mm, brows pulled down twice their
+extreme), the points that move it spread their motion over wide weights
+(:func:`.regions.wide_weights`) instead, by a share that grows as the triangle nears the
+fold. Feature points stay exactly where the FAPs put them; at the amplitudes of visemes
+and expressions nothing changes.
 """
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
+import scipy.sparse as sp
 
 from mpeg4fa.face import motion
+from mpeg4fa.face.couplings import PASSIVE_POINTS
 from mpeg4fa.face.lids import lid_drops, turn_lid
+from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
+from mpeg4fa.face.regions import LID_MARGIN_LOOPS, shortest_loop, wide_weights
 from mpeg4fa.face.rig import CORNER_MARGIN_MM, Rig
 
 EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
+FOLD_START = 0.15
+"""The guard starts where a skin triangle keeps less than this share of its area facing its rest
+normal (1 at rest, 0 edge-on, < 0 turned over); brows at their largest used raise keep 0.15."""
+FOLD_FULL = 0.0
+"""... and spreads the motion of the points around it over their wide weights in full from here."""
 _JAW_FAP = {kind: fap for fap, kind in motion.JAW.items()}  # "open" -> 3, "thrust" -> 14, "shift" -> 15
 
 
@@ -48,16 +66,97 @@ def point_motion(rig: Rig, v: np.ndarray) -> np.ndarray:
     return m
 
 
+class FoldGuard:
+    """Keeps skin from turning over under large translations (see the module docstring).
+
+    ``columns`` are the points whose motion a narrow weight matrix ``(skin vertices, K)``
+    spreads; their wide weights hold every other point and, for all but the eye's points, the lid
+    margins. Built lazily: a face that never nears a fold never pays for the wide weights.
+    """
+
+    def __init__(self, mesh: HeadMesh, columns: np.ndarray, narrow: sp.spmatrix):
+        from mpeg4fa.face.quality import skin_graph  # the crease measure's own idea of outside skin
+
+        self.mesh, self.columns = mesh, np.asarray(columns)
+        self.skin = mesh.part("skin")
+        self.narrow = sp.csc_matrix(narrow)
+        graph = skin_graph(mesh)
+        inside = np.zeros(mesh.n_vertices, bool)
+        inside[graph.inside] = True
+        moved = np.zeros(mesh.n_vertices, bool)
+        moved[self.skin.start + np.unique(self.narrow.nonzero()[0])] = True
+        tris = graph.triangles[~inside[graph.triangles].any(axis=1) & moved[graph.triangles].any(axis=1)]
+        self.triangles = tris
+        p = mesh.vertices[tris]
+        n0 = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        self.rest_normal = n0 / np.maximum(np.einsum("ij,ij->i", n0, n0), 1e-12)[:, None]
+        # the watched triangles each column moves
+        local = tris - self.skin.start
+        self.support = []
+        for k in range(len(self.columns)):
+            rows = np.zeros(self.narrow.shape[0], bool)
+            rows[self.narrow[:, k].nonzero()[0]] = True
+            self.support.append(np.flatnonzero(rows[local].any(axis=1)))
+
+    @cached_property
+    def shift(self) -> np.ndarray:
+        """``(skin vertices, K)``: wide minus narrow weights, what the guard adds per unit of share."""
+        mesh, skin = self.mesh, self.skin
+        labels = [mesh.fp_labels[c] for c in self.columns]
+        points = mesh.fp_vertex[self.columns] - skin.start
+        anchors = [int(v) - skin.start for i, v in enumerate(mesh.fp_vertex)
+                   if skin.start <= v < skin.stop and mesh.fp_labels[i] not in PASSIVE_POINTS]
+        held = np.unique(np.concatenate([anchors, points]))
+        margins = np.concatenate([shortest_loop(mesh, loop) for loop in LID_MARGIN_LOOPS]) - skin.start
+        with_margins = np.union1d(held, margins)
+        wide = wide_weights(mesh.vertices[skin], mesh.triangles["skin"] - skin.start, points,
+                            [held if label.startswith("3.") else with_margins for label in labels])
+        return wide - self.narrow.toarray()
+
+    def facing(self, p: np.ndarray) -> np.ndarray:
+        """Per watched triangle: its posed area along its rest normal, over its rest area."""
+        q = p[self.triangles]
+        return np.einsum("ij,ij->i", np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]), self.rest_normal)
+
+    def relieve(self, p: np.ndarray, moves: np.ndarray) -> None:
+        """Where ``p`` (the narrow weights having spread ``moves``, ``(K, 3)``) nears a fold, move the
+        columns around it toward their wide weights (in place)."""
+        c = self.facing(p)
+        if not len(c) or c.min() >= FOLD_START:
+            return
+        s = 1.0 - _smooth_step((c - FOLD_FULL) / (FOLD_START - FOLD_FULL))
+        share = np.array([s[t].max() if len(t) else 0.0 for t in self.support])
+        share[~np.any(moves, axis=1)] = 0.0
+        on = np.flatnonzero(share > 0)
+        if len(on):
+            p[self.skin] += self.shift[:, on] @ (share[on, None] * moves[on])
+
+
+def _smooth_step(x: np.ndarray) -> np.ndarray:
+    t = np.clip(x, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def skin_guard(mesh: HeadMesh, rig: Rig) -> FoldGuard:
+    """The feature-point deformer's guard: over the rig's skin columns."""
+    skin = rig.parts["skin"]
+    narrow = rig.weights[skin.start:skin.stop]
+    columns = np.flatnonzero(np.asarray(abs(narrow).sum(axis=0)).ravel() > 0)
+    return FoldGuard(mesh, columns, narrow[:, columns])
+
+
 def apply_lids(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
     """FAPs 19-22, and the lids' follow of the eyes' pitch: turn each lid sheet (in place, :func:`.lids.lid_drops`)."""
     for fap, drop in lid_drops(rig.lids, rig.rest, v, rig.fapu.unit("IRISD")).items():
         turn_lid(p, rig.lids[fap], rig.rest, drop)
 
 
-def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[np.ndarray, dict[str, float]]:
+def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True,
+                       guard: FoldGuard | None = None) -> tuple[np.ndarray, dict[str, float]]:
     """Every layer but the head rotation: vertices in the head's own frame, and pupil sizes.
 
-    ``lids=False`` leaves the lids to the caller (the ARKit deformer turns them after sculpting).
+    ``lids=False`` leaves the lids to the caller (the ARKit deformer turns them after sculpting);
+    ``guard`` (over the rig's skin columns) keeps the skin the translations move from folding.
     """
     rest = rig.rest
     p = rest.copy()
@@ -66,6 +165,8 @@ def pose_in_head_frame(rig: Rig, v: np.ndarray, *, lids: bool = True) -> tuple[n
     fp_motion = point_motion(rig, v)
     if fp_motion.any():
         p[rig.moving] += rig.weights_moving @ fp_motion
+        if guard is not None:
+            guard.relieve(p, fp_motion[guard.columns])
 
     if lids:
         apply_lids(rig, p, v)
@@ -139,14 +240,15 @@ def apply_head_rotation(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
         p[rows] = centre + np.einsum("nij,nj->ni", partial_rotations(rotation, w), before)
 
 
-def deform(rig: Rig, values: np.ndarray) -> Pose:
+def deform(rig: Rig, values: np.ndarray, guard: FoldGuard | None = None) -> Pose:
     """Pose the face for one frame of low-level FAP values (68, FAP 1/2 columns ignored)."""
     v = np.asarray(values, dtype=np.float64)
-    p, pupils = pose_in_head_frame(rig, v)
+    p, pupils = pose_in_head_frame(rig, v, guard=guard)
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
 
 
-def build(mesh, rig: Rig):
-    """The deformer as the registry builds it: the rig's smooth weights, nothing more to set up."""
-    return lambda values: deform(rig, values)
+def build(mesh: HeadMesh, rig: Rig):
+    """The deformer as the registry builds it: the rig's smooth weights and their fold guard."""
+    guard = skin_guard(mesh, rig)
+    return lambda values: deform(rig, values, guard)

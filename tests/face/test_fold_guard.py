@@ -1,0 +1,101 @@
+"""The feature-point deformer's fold guard (issue 29 item 3): skin does not turn over under large
+translations, feature points stay exact, and where nothing nears a fold nothing changes.
+
+Measured on the generic head with :mod:`mpeg4fa.face.creases` (folded triangles, fold lines,
+strain over the geometric floor)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mpeg4fa.face import creases, quality
+from mpeg4fa.face.couplings import PASSIVE_POINTS
+from mpeg4fa.face.deformers import feature_points as fp
+from mpeg4fa.spec.profiles import EXPRESSION_PROFILES, VISEME_PROFILES
+
+BROWS = range(31, 37)
+
+
+@pytest.fixture(scope="module")
+def graph(generic_face):
+    return quality.skin_graph(generic_face.mesh)
+
+
+@pytest.fixture(scope="module")
+def guard(generic_face):
+    return fp.skin_guard(generic_face.mesh, generic_face.rig)
+
+
+class _Posed:
+    """A face stand-in whose poses come from :func:`.feature_points.deform` with or without the guard."""
+
+    def __init__(self, face, guard):
+        self.mesh, self.rig, self.guard = face.mesh, face.rig, guard
+
+    def pose_values(self, values):
+        return fp.deform(self.rig, np.asarray(values, float), self.guard)
+
+
+def _brows(value: float) -> np.ndarray:
+    v = np.zeros(68)
+    v[[f - 1 for f in BROWS]] = value
+    return v
+
+
+@pytest.mark.parametrize("name", ["brows 400", "brows x2 down"])
+def test_without_the_guard_the_brows_fold(generic_face, graph, name):
+    """The measure sees what the guard removes: the narrow weights alone fold or crease these."""
+    m = creases.measure_pose(_Posed(generic_face, None), creases.crease_poses(generic_face)[name], graph)
+    assert m.folded + m.flipped > 0, m
+
+
+def test_brows_fold_at_no_amplitude_on_the_way(generic_face, graph, guard):
+    """Raised 100 -> 400 and lowered 0.5 -> 2 x their largest used value, in steps: the guard's
+    share grows smoothly with the pose, so no amplitude in between folds either."""
+    face = _Posed(generic_face, guard)
+    used = quality.used_magnitudes()
+    bad = []
+    for value in np.arange(100.0, 401.0, 50.0):
+        m = creases.measure_pose(face, _brows(value), graph)
+        bad += [] if m.ok() else [(value, m)]
+    for k in np.arange(0.5, 2.01, 0.25):
+        v = np.zeros(68)
+        for f in BROWS:
+            v[f - 1] = -k * used[f][1]
+        m = creases.measure_pose(face, v, graph)
+        bad += [] if m.ok() else [(-k, m)]
+    assert not bad, bad
+
+
+def test_feature_points_stay_where_the_faps_put_them(generic_face, guard):
+    """At brows 400 the guard is on in full; every feature point still sits exactly where it
+    does without it (value x FAPU along the FAP's direction), the brows 20 mm up; only the
+    points no FAP names, which ride on the skin (:data:`.couplings.PASSIVE_POINTS`), follow it."""
+    v = _brows(400.0)
+    with_guard = fp.deform(generic_face.rig, v, guard)
+    without = fp.deform(generic_face.rig, v)
+    named = [i for i, label in enumerate(generic_face.mesh.fp_labels) if label not in PASSIVE_POINTS]
+    assert np.allclose(with_guard.feature_points[named], without.feature_points[named], atol=1e-9)
+    lift = with_guard.feature_points - generic_face.mesh.feature_points()
+    i = generic_face.mesh.fp_index("4.3")
+    assert lift[i, 1] == pytest.approx(400.0 * generic_face.fapu.unit("ENS"))
+    # ... and the skin did change: the forehead above follows the brow further up
+    assert np.abs(with_guard.vertices - without.vertices).max() > 1.0
+
+
+def test_nothing_changes_where_nothing_nears_a_fold(generic_face, guard):
+    """Visemes and expressions whose skin keeps every triangle facing (share > FOLD_START) pose
+    exactly as without the guard: the guard costs them nothing and changes nothing."""
+    looks = list(VISEME_PROFILES["mpeg4"].items()) + list(EXPRESSION_PROFILES.items()) + [("brows 200", _brows(200.0))]
+    quiet = 0
+    for name, values in looks:
+        v = np.asarray(values, float).copy()
+        v[:2] = 0
+        p, _ = fp.pose_in_head_frame(generic_face.rig, v, lids=False)
+        if guard.facing(p).min() < fp.FOLD_START:
+            continue
+        quiet += 1
+        a = fp.deform(generic_face.rig, v).vertices
+        b = fp.deform(generic_face.rig, v, guard).vertices
+        assert np.array_equal(a, b), name
+    assert quiet >= 10
