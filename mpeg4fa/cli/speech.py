@@ -312,6 +312,9 @@ def _recording_args(args: argparse.Namespace, given_text: bool, what: str) -> bo
         if clash:
             raise UsageError(f"{clash[0]} goes with --transcript (espeak-ng's reference for the alignment)",
                              hint=f"add --transcript, or drop {clash[0]}")
+        from ..speech.listen.core import check_language
+
+        check_language(args.recognizer, args.lang)  # before anything is read: exit 1, one line
     if args.pcm_rate != 16000 and str(args.speech) != "-":
         raise UsageError("--pcm-rate is the rate of raw PCM from standard input (--speech -)",
                          hint="drop --pcm-rate: a WAV file says its own rate")

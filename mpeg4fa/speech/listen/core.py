@@ -42,9 +42,22 @@ ENGINE = "recording"
 
 
 def is_english(lang: str) -> bool:
-    """Whether ``lang`` is English for the recogniser (``auto`` is: no text to tell otherwise)."""
+    """Whether ``lang`` is English for the recogniser (``auto`` is: no text to tell otherwise; ``--voice``
+    goes only with a transcript, so the language is ``--lang``'s)."""
     code = (lang or "auto").lower()
     return code in ("auto", "en") or code.startswith("en-")
+
+
+def check_language(recognizer: str, lang: str) -> None:
+    """AlignError for the ``words`` recogniser with a language other than English: its dictionary and
+    language model are English, so it would hear English words in any speech (and the mouth would say
+    them); ``phonetic`` hears the phones of any language."""
+    if recognizer == "words" and not is_english(lang):
+        from mpeg4fa.speech.align.errors import AlignError
+
+        raise AlignError(f"the words recogniser knows only English, not {lang!r}", where="--recognizer words",
+                         hint="use --recognizer phonetic, which hears the phones of any language, or give what "
+                              "is said with --transcript")
 
 
 def choose_recognizer(recognizer: str, lang: str) -> str:
@@ -117,6 +130,7 @@ def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto"
     ``expression`` (name, intensity 0-63) for the whole clip. ``active``: its voice activity per 10 ms
     frame, when already known (:func:`~.voice.voice_activity`)."""
     how = choose_recognizer(recognizer, lang)
+    check_language(how, lang)
     if active is None:
         active = voice_activity(recording.floats(), recording.rate)
     heard: list[HeardWord] = []
