@@ -10,7 +10,9 @@
 // gaze), and the wet eye mirrors each light: a tight specular on the cornea, a steeper cap than the
 // eyeball (its normal), so the highlight sits on the iris and moves with the light and the view.
 // The skin mixes in the lip and brow colours (untextured only) and the dark of the oral cavity;
-// the teeth get their shape from tooth coordinates: gaps, rounded tips, scalloped gums.
+// the teeth get their shape from tooth coordinates: gaps, rounded tips, scalloped gums; the premolars
+// and molars and any tooth's inner side sit in the mouth's shadow (at three-quarter the far side's back
+// teeth, lit by the key light on that side, read as a grey wall against the dark cavity).
 // Unlit, every part is one flat colour (the tests classify pixels by it): brows, cavity and gums
 // are then pure where their weight is 1, and hair strokes and tooth gaps are left out.
 uniform vec3 camera_position;
@@ -60,7 +62,8 @@ const float TOOTH_MM = 7.0;       // a typical tooth width, for the tip rounding
 const float TIP_MM = 1.1;         // radius of a tooth's rounded corners
 const float CROWN_MM = 9.5;       // crown height at the middle of a tooth (gum line above)
 const float WRINKLE_MM = 4.2;     // spacing of the nose creases
-const float BACK_TEETH_SHADE = 0.3;  // premolars and molars: the light that reaches inside the mouth
+const float BACK_TEETH_SHADE = 0.12; // premolars and molars: the light that reaches inside the mouth
+const float LINGUAL_SHADE = 0.3;     // a tooth's inner side (the far side's, seen across an open mouth): in its shadow
 
 #ifdef LASHES
 float hash(float x) { return fract(sin(x * 127.1 + 311.7) * 43758.5453); }
@@ -196,11 +199,13 @@ void main() {
             // down at the biting edge, so lean them toward the viewer (a tooth's labial face)
             // (front teeth only: seen from the side, the molars' bulges and gaps read as stripes)
             float back = smoothstep(2.0, 4.0, abs(v_detail.x));
-            if (dot(n, to_eye) < 0.0) n = -n;
+            bool lingual = dot(n, to_eye) < 0.0;          // the arch seen from inside: the far side's inner faces
+            if (lingual) n = -n;
             n = normalize(n + 0.7 * to_eye + cross(vec3(0.0, 1.0, 0.0), n) * (1.8 * f - 0.9) * (1.0 - back));
             if (lighting) shade = mix(mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap)), 0.9, back);  // the gaps
             // teeth further back along the arch sit deeper in the mouth, in its shadow
             shade *= mix(1.0, BACK_TEETH_SHADE, smoothstep(2.0, 5.0, abs(v_detail.x)));
+            if (lingual && lighting) shade *= LINGUAL_SHADE;
         }
     } else {
         slot = v_material;   // 4 tongue
