@@ -9,6 +9,7 @@ frames (:class:`~mpeg4fa.speech.frames.FrameMaker`, running on across blocks) ->
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import time
@@ -20,7 +21,7 @@ import numpy as np
 
 from mpeg4fa.speech.align.errors import AlignError
 from mpeg4fa.speech.align.recording import HOP, Recording, frame_levels
-from mpeg4fa.speech.listen.core import Listened, expression_cues, listen
+from mpeg4fa.speech.listen.core import Listened, check_language, expression_cues, listen
 from mpeg4fa.speech.utterance import viseme_spans
 from mpeg4fa.speech.visemes import PAUSE
 
@@ -161,13 +162,87 @@ def _timing_items(listened: Listened, timings, offset: float) -> list[dict]:
     return out
 
 
+def _helper_init() -> None:
+    """In the helper process: Ctrl-C is the parent's to handle (it ends the helper), and a terminate
+    ends it quietly (not through the parent's handlers, inherited by the fork)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), signal.SIG_DFL)
+
+
+def _listen_block(rec: Recording, recognizer: str, lang: str) -> tuple[Listened, dict]:
+    """:func:`.core.listen` in the helper, with the phonemes it showed by a guess (to be warned about once,
+    by the parent: the helper's log is a copy)."""
+    from mpeg4fa.speech.ipa import phoneme_fallbacks
+
+    with phoneme_fallbacks() as log:
+        before = {k: v[0] for k, v in log.seen.items()}
+        heard = listen(rec, recognizer=recognizer, lang=lang)
+    return heard, {k: [v[0] - before.get(k, 0), v[1], v[2]] for k, v in log.seen.items() if v[0] > before.get(k, 0)}
+
+
+@contextlib.contextmanager
+def _helper(wanted: bool) -> Iterator[list]:
+    """A one-process pool for :func:`heard_blocks`, started when first asked for (``[pool]`` once started);
+    none where the machine has one core or cannot fork (a spawned process would load the models again)."""
+    import multiprocessing as mp
+
+    started: list = []
+    able = wanted and (os.cpu_count() or 1) >= 2 and "fork" in mp.get_all_start_methods()
+
+    def start():
+        if not started:
+            started.append(mp.get_context("fork").Pool(1, initializer=_helper_init))
+        return started[0]
+
+    try:
+        yield [start] if able else []
+    finally:
+        for pool in started:
+            pool.terminate()
+            pool.join()
+
+
+def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: str, helper: list,
+                 fallbacks) -> Iterator[tuple[float, Recording, Listened]]:
+    """``(offset, block, Listened)`` in order. With a ``helper`` (:func:`_helper`) two blocks are heard at
+    once, one in the helper process: pocketsphinx holds the GIL while it decodes (over 90 % of the time),
+    so only a second process puts a second core to work. A block waits for the next before it is heard
+    (one block alone is heard here, with no process started); ``fallbacks``: the
+    :class:`~mpeg4fa.speech.ipa.FallbackLog` the helper's guessed phonemes join."""
+    held = None
+    for offset, rec in blocks(source, block_seconds):
+        if not helper:
+            yield offset, rec, listen(rec, recognizer=recognizer, lang=lang)
+            continue
+        if held is None:
+            held = offset, rec
+            continue
+        job = helper[0]().apply_async(_listen_block, (held[1], recognizer, lang))
+        here = listen(rec, recognizer=recognizer, lang=lang)
+        there, guessed = job.get()
+        for phoneme, (n, what, read_as) in guessed.items():
+            fallbacks.seen.setdefault(phoneme, [0, what, read_as])[0] += n
+        yield held[0], held[1], there
+        yield offset, rec, here
+        held = None
+    if held is not None:
+        yield held[0], held[1], listen(held[1], recognizer=recognizer, lang=lang)
+
+
 def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer: str = "auto", lang: str = "auto",
                     expression: tuple[str, int] | None = None, fps: float = 25.0, level: str = "high",
                     idle: bool = False, seed: int = 0, fold: bool = True, compact: bool = True, options=None,
-                    progress: Progress | None = None, block_seconds: float = BLOCK_SECONDS) -> Heard:
+                    progress: Progress | None = None, block_seconds: float = BLOCK_SECONDS,
+                    two_cores: bool = True) -> Heard:
     """Hear ``source`` block by block and write its FBA stream to the binary file ``out`` (and the timed
     visemes as JSON to the text file ``timings``, the audio as 16-bit WAV to the binary file ``audio``).
-    ``progress(done, total)`` counts seconds of audio (total 0 when a pipe's length is unknown)."""
+    ``progress(done, total)`` counts seconds of audio (total 0 when a pipe's length is unknown).
+    ``two_cores``: hear two blocks at once where the machine has the cores (:func:`heard_blocks`; the
+    stream is the same)."""
     from mpeg4fa.fba import EncodeOptions
     from mpeg4fa.speech.bits import FbaBlocks
     from mpeg4fa.speech.encoder import LEVELS, TEXT_CODING, StreamBuilder, closure_hold, phones
@@ -177,6 +252,7 @@ def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer
 
     if level not in LEVELS:
         raise ValueError(f"level {level!r}: one of {', '.join(LEVELS)}")
+    check_language(recognizer, lang)
     started = time.perf_counter()
     maker = FrameMaker(fps, idle=idle, seed=seed, closure_hold=closure_hold(fps), fields=level != "low")
     builder = StreamBuilder(level, fps, fold=fold, compact=compact)
@@ -189,9 +265,8 @@ def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer
     if progress is not None:
         progress(0, total)
     try:
-        with phoneme_fallbacks(source.name):
-            for offset, rec in blocks(source, block_seconds):
-                heard = listen(rec, recognizer=recognizer, lang=lang)
+        with phoneme_fallbacks(source.name) as fallbacks, _helper(two_cores) as helper:
+            for offset, rec, heard in heard_blocks(source, block_seconds, recognizer, lang, helper, fallbacks):
                 utt = phones(heard.utterance)
                 shifted = [type(t)(t.phoneme, t.viseme, t.start + offset, t.end + offset, t.set) for t in utt.timings]
                 spans = viseme_spans(shifted)
