@@ -114,3 +114,33 @@ def test_shown_values_match_resolve():
             warnings.simplefilter("ignore", ClampWarning)
             want = resolve(stream)
         np.testing.assert_array_equal(np.array(got[str(path)]["shown"]).reshape(want.shape), want, err_msg=str(path))
+
+
+def test_streaming_across_model_halvings(tmp_path):
+    """A stream long enough that every adaptive model halves its counts (a total of 16383 comes after
+    some 16,350 P frames): fba.js decodes it as Python does, whole and in pieces. In pieces, a plane cut
+    short by the end of the bytes so far is decoded again: its counts taken back, or the models copied
+    before it where it halves them; pieces of 1 byte cut every plane, the halving ones included."""
+    from mpeg4fa.fba import EncodeOptions, FapStream, encode
+
+    n = 16600
+    rng = np.random.default_rng(31)
+    s = FapStream.empty(n)
+    s.source_fps = 25.0
+    s.timestamps[:] = np.arange(n) / 25.0
+    cols = [0, 1, 2, 3, 18, 47]  # FAP 1, FAP 2, jaw, a lip, a head rotation (step 128): tight and wide
+    s.fap_mask[:, cols] = True
+    for c in cols[2:]:
+        walk = np.clip(np.cumsum(rng.integers(-3, 4, n)), -300, 300)
+        s.fap_values[:, c] = walk * (128 if c == 47 else 1)
+    s.viseme[:, 0], s.viseme[:, 1] = rng.integers(0, 15, n), rng.integers(0, 15, n)
+    s.viseme[:, 2] = rng.integers(0, 64, n)
+    s.expression[:, 0], s.expression[:, 2] = rng.integers(0, 7, n), rng.integers(0, 7, n)
+    s.expression[:, 1], s.expression[:, 3] = rng.integers(0, 64, n), rng.integers(0, 64, n)
+    path = tmp_path / "long.fba"
+    path.write_bytes(encode(s, EncodeOptions(fap_quant=1, intra_period=0)))
+    whole = js_decode([path])[str(path)]
+    compare(path, whole)
+    for chunk in (1, 97):
+        pieces = js_decode([path], chunk=chunk)[str(path)]
+        assert pieces["error"] is None and pieces["frames"] == whole["frames"], chunk

@@ -234,6 +234,16 @@ class ModelBank {
     this.total[m] = total;
     this.build(m);
   }
+  /** Take back one count of symbol ``s`` of model m (streaming input: a plane cut short by the end of
+   * the bytes so far is decoded again when more arrive). Never across a halving. */
+  uncount(m, s) {
+    const n = this.size[m], t0 = this.toff[m], c0 = this.coff[m], tree = this.tree, coarse = this.coarse;
+    this.freq[this.foff[m] + s] -= 1;
+    this.total[m] -= 1;
+    let x = n - s;
+    for (; x <= n && (x & (BLOCK - 1)) !== 0; x += x & -x) tree[t0 + x] -= 1;
+    if (x <= n) for (let j = x >> BLOCK_BITS, nj = n >> BLOCK_BITS; j <= nj; j += j & -j) coarse[c0 + j] -= 1;
+  }
   copy() { return new ModelBank(null, this); }
 }
 
@@ -340,7 +350,7 @@ function decodeAdaptive(r, seg, bank, dest, at) {
   }
   const freq = bank.freq, tree = bank.tree, totals = bank.total, top = bank.top, size = bank.size;
   const coarse = bank.coarse, foff = bank.foff, toff = bank.toff, coff = bank.coff;
-  const lo = seg.pmin, qstep = seg.qstep, prev = seg.prev, idx = seg.idx, values = seg.values;
+  const lo = seg.pmin, qstep = seg.qstep, prev = seg.prev, idx = seg.idx, values = seg.values, symbols = seg.symbols;
   let low = 0, high = TOP;
   const nm = idx.length;
   for (let m = 0; m < nm; m++) {
@@ -361,6 +371,7 @@ function decodeAdaptive(r, seg, bank, dest, at) {
       if (t <= rem) { pos += step; rem -= t; }
     }
     const symbol = nsym - 1 - pos;
+    symbols[m] = symbol;  // before it is counted: a plane cut short uncounts it (SegmentCoder.rollback)
     const cumLo = target - rem, cumHi = cumLo + freq[foff[m] + symbol];
     high = low - 1 + (((length * cumHi) / total) | 0);
     low = low + (((length * cumLo) / total) | 0);
@@ -457,7 +468,26 @@ class SegmentCoder {
     this.psize = new Float64Array(n);
     this.prev = null;       // Float64Array: the last value of every field of the part, by field
     this.pModels = null;    // ModelBank, made at the first P segment after an intra header
+    this.symbols = new Int32Array(n);  // the last P segment's symbols
     this.values = new Float64Array(n);
+  }
+  /** The P models before a plane, for streaming input: the bank and its totals, or a whole copy when
+   * a model is about to halve (a halving cannot be taken back). A copy per plane cost a megabyte on
+   * wide ranges. */
+  mark() {
+    const bank = this.pModels;
+    if (bank === null) return { bank, totals: null, copy: null };
+    if (bank.total.includes(MAX_FREQUENCY)) return { bank, totals: null, copy: bank.copy() };
+    return { bank, totals: bank.total.slice(), copy: null };
+  }
+  /** Back to ``mark``: a plane has at most one P segment per coder, so the models it counted are those
+   * whose total moved (a prefix, if the segment stopped midway), each with its symbol in ``symbols``. */
+  rollback(mark) {
+    if (mark.copy !== null) { this.pModels = mark.copy; return; }
+    this.pModels = mark.bank;
+    if (mark.bank === null) return;
+    const bank = mark.bank, totals = bank.total;
+    for (let m = bank.count - 1; m >= 0; m--) if (totals[m] !== mark.totals[m]) bank.uncount(m, this.symbols[m]);
   }
   /** The adaptive models of the P segments, made on first use after the intra header. */
   bank() {
@@ -514,14 +544,13 @@ class ValueCoder {
   }
   snapshot() {
     return { ranges: this.ranges.map((a) => a.slice()), prev: this.prev.slice(), defaultsApplied: this.defaultsApplied,
-      seg: this.seg, pModels: this.seg.pModels && this.seg.pModels.copy() };
+      seg: this.seg, models: this.seg.mark() };
   }
   restore(s) {
     this.ranges = s.ranges; this.defaultsApplied = s.defaultsApplied;
     this.prev.set(s.prev);
     this.seg = s.seg;
-    this.seg.prev = this.prev;
-    this.seg.pModels = s.pModels;
+    this.seg.rollback(s.models);
   }
 }
 
@@ -570,14 +599,13 @@ class FieldCoder {
   }
   snapshot() {
     return { iMax: this.iMax.slice(), pMax: this.pMax.slice(), pmin: this.pmin.slice(), prev: this.prev.slice(),
-      seg: this.seg, pModels: this.seg.pModels && this.seg.pModels.copy() };
+      seg: this.seg, models: this.seg.mark() };
   }
   restore(s) {
     this.iMax = s.iMax; this.pMax = s.pMax; this.pmin = s.pmin;
     this.prev.set(s.prev);
     this.seg = s.seg;
-    this.seg.prev = this.prev;
-    this.seg.pModels = s.pModels;
+    this.seg.rollback(s.models);
   }
 }
 
