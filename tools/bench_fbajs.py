@@ -8,11 +8,12 @@ A script run on demand, not a test::
 Streams: the real ``headmotion_long.fba`` (2253 frames, FAP 1, FAP 2 and all groups on every frame;
 skipped with a note when ``--vectors`` is absent) and the 60 s full-mask stream of
 ``tools/bench_codec.py`` (FAP 1, FAP 2 and 66 low-level FAPs on every frame, tight ranges; its
-generator is imported, not copied). Each is decoded R times by ``mpeg4fa.fba.decode(backend=
-"compiled")`` in this process (CPU time, as for Node; after a warm-up call, so numba's compile is not counted) and by
-``decode()`` of fba.js in one Node process per round, in ``--rounds`` interleaved rounds. Each Node
-process first makes ``--node-warmup`` calls that are not counted, as numba's compile is not: V8 compiles
-the decoder in tiers over the first calls (the first call's speed is shown apart). Reported: the best and the
+generator is imported, not copied). Each is decoded by ``mpeg4fa.fba.decode(backend="compiled")`` in
+this process (CPU time, as for Node; after a warm-up call, so that numba's compile is not counted) and
+by ``decode()`` of fba.js in one Node process (``bench_fbajs.mjs``), taking turns: ``--rounds`` turns
+of ``--repeat`` calls on each side, so that a busy spell on a shared machine hits both. The Node
+process first makes ``--node-warmup`` calls per stream that are not counted, as numba's compile is
+not: V8 compiles the decoder in tiers over its first calls (the first call's speed is shown apart). Reported: the best and the
 median call of each side and their ratios. The same work on both sides: each call decodes the whole
 stream into frames whose values are there to read (Python: the FapStream's arrays; Node: the frame
 objects with their typed arrays); every Node call's frame count and sum of FAP values are checked
@@ -66,11 +67,24 @@ def best_time(fn, repeat: int):
     return min(times), result
 
 
-def node_times(node: str, paths: list[Path], repeat: int, warmup: int) -> dict[str, dict]:
-    """Per path: fba.js's CPU time per call in one Node process, ``warmup`` calls then ``repeat``."""
-    run = subprocess.run([node, str(NODE_BENCH), str(warmup + repeat), *map(str, paths)], capture_output=True,
-                         text=True, check=True)
-    return {d["path"]: d for d in map(json.loads, run.stdout.splitlines())}
+class NodeBench:
+    """The Node half, one process for the whole run: ``calls(path, n)`` has it decode ``path`` n times."""
+
+    def __init__(self, node: str) -> None:
+        self.proc = subprocess.Popen([node, str(NODE_BENCH)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     text=True, bufsize=1)
+
+    def calls(self, path: Path, n: int) -> dict:
+        self.proc.stdin.write(json.dumps({"path": str(path), "calls": n}) + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError(f"{NODE_BENCH.name} stopped (exit {self.proc.wait()})")
+        return json.loads(line)
+
+    def close(self) -> None:
+        self.proc.stdin.close()
+        self.proc.wait(timeout=30)
 
 
 def same_frames(node: str, path: Path, stream) -> bool:
@@ -112,11 +126,11 @@ def pose_times(node: str, stream, folder: Path, n: int) -> dict:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--vectors", type=Path, default=REPO.parent / "shared" / "vectors" / "fba")
-    parser.add_argument("--repeat", type=int, default=15)
-    parser.add_argument("--rounds", type=int, default=3,
-                        help="rounds of Node then Python (all calls pooled: best and median reported)")
+    parser.add_argument("--repeat", type=int, default=3, help="calls per turn on each side")
+    parser.add_argument("--rounds", type=int, default=15,
+                        help="turns of Node then Python per stream (all calls pooled: best and median reported)")
     parser.add_argument("--node-warmup", type=int, default=10,
-                        help="calls each Node process makes before those counted (V8's tiers compile the decoder)")
+                        help="Node calls per stream before those counted (V8's tiers compile the decoder)")
     parser.add_argument("--frames", type=int, default=int(60 * FPS), help="frames of the full-mask stream")
     parser.add_argument("--json", type=Path, default=REPO / "tools" / "bench_fbajs.json")
     parser.add_argument("--pose-frames", type=int, default=250, help="frames posed by facerig.js and by Python")
@@ -139,22 +153,26 @@ def main(argv: list[str] | None = None) -> int:
         cases.append((f"full mask, 66 FAPs + FAP 1/2, {args.frames / FPS:g} s", full))
         decode(full, backend="compiled")  # numba's compile, not counted
         node_s: dict[str, list] = {str(p): [] for _, p in cases}
-        first_s: dict[str, list] = {str(p): [] for _, p in cases}
+        first_s: dict[str, float] = {}
         shown_s: dict[str, list] = {str(p): [] for _, p in cases}
         py_s: dict[str, list] = {str(p): [] for _, p in cases}
         decoded: dict[str, set] = {str(p): set() for _, p in cases}  # (frames, sum of FAP values) of Node's calls
         streams = {}
-        for _ in range(args.rounds):  # interleaved, so that a busy spell on the machine hits both
-            warm = max(1, args.node_warmup)
-            for key, j in node_times(node, [p for _, p in cases], args.repeat, warm).items():
-                decoded[key].add((j["frames"], j["value_sum"]))
-                first_s[key].append(j["times_s"][0])
-                node_s[key] += j["times_s"][warm:]
-                shown_s[key] += j["shown_times_s"][warm:]
+        bench = NodeBench(node)
+        try:
             for _, path in cases:
-                data = path.read_bytes()
-                t, streams[path] = cpu_times(lambda: decode(data, backend="compiled"), args.repeat)
-                py_s[str(path)] += t
+                first_s[str(path)] = bench.calls(path, max(1, args.node_warmup))["times_s"][0]
+            for _ in range(args.rounds):  # turns, so that a busy spell on the machine hits both
+                for _, path in cases:
+                    key, data = str(path), path.read_bytes()
+                    j = bench.calls(path, args.repeat)
+                    decoded[key].add((j["frames"], j["value_sum"]))
+                    node_s[key] += j["times_s"]
+                    shown_s[key] += j["shown_times_s"]
+                    t, streams[path] = cpu_times(lambda: decode(data, backend="compiled"), args.repeat)
+                    py_s[key] += t
+        finally:
+            bench.close()
         rows = []
         for name, path in cases:
             data = path.read_bytes()
@@ -171,14 +189,14 @@ def main(argv: list[str] | None = None) -> int:
             rows.append({"stream": name, "frames": n, "bytes": len(data), "calls_each": len(py_s[key]),
                          "python_compiled_fps": n / py_best, "python_compiled_median_fps": n / py_med,
                          "node_fps": n / js_best, "node_median_fps": n / js_med,
-                         "node_first_call_fps": n / float(np.median(first_s[key])),
+                         "node_first_call_fps": n / first_s[key],
                          "node_shown_fps": n / min(shown_s[key]),
                          "ratio_node_over_python": py_best / js_best,
                          "ratio_median_node_over_python": py_med / js_med})
         pose = pose_times(node, streams[full], Path(tmp), args.pose_frames)
     head_line = (f"{'stream':36} {'frames':>7} {'Python f/s best':>16} {'median':>8} {'Node f/s best':>14} "
                  f"{'median':>8} {'1st call':>9} {'ratio best':>10} {'median':>7}")
-    print(f"fba.js (Node {version}) vs mpeg4fa.fba compiled, {args.rounds} rounds x {args.repeat} calls each side "
+    print(f"fba.js (Node {version}) vs mpeg4fa.fba compiled: {args.rounds} turns x {args.repeat} calls on each side "
           f"after warm-up ({args.node_warmup} Node calls, 1 Python call) ({platform.processor() or platform.machine()})")
     print(head_line)
     print("-" * len(head_line))
@@ -188,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
               f"{r['node_fps']:>14,.0f} {r['node_median_fps']:>8,.0f} {r['node_first_call_fps']:>9,.0f} "
               f"{r['ratio_node_over_python']:>9.2f}x {r['ratio_median_node_over_python']:>6.2f}x {'PASS' if ok else 'FAIL'}")
     print("(ratio: Node frames/s over the compiled path's, of the best and of the median calls; target >= 1, "
-          "aim >= 1.5. 1st call: the median first call of a Node process, with V8's warm-up. shown.js resolves "
+          "aim >= 1.5. 1st call: the Node process's first call, with V8's warm-up. shown.js resolves "
           + ", ".join(f"{r['node_shown_fps']:,.0f}" for r in rows) + " frames/s on top.)")
     print(f"\nthe head posed (facerig.js, the player's pose) from {pose['frames']} frames of the full-mask stream, "
           f"{pose['vertices']} vertices: Node {pose['node_ms_per_pose']:.2f} ms/frame, Python "
