@@ -140,9 +140,11 @@ def soft_floor(w: np.ndarray, floor: float) -> np.ndarray:
 
 WIDE_REACH_MM = 50.0
 """A wide weight is 0 from this surface distance of its point on (the narrow ones fade out by 44 mm)."""
-WIDE_MEMBRANE = 0.1
-"""Membrane stiffness of the wide weights per unit of bending (1/mm^2): smooth at the point (bending),
-nearly linear beyond ~3 mm (membrane), so the slope spreads evenly between a point and what holds it."""
+WIDE_MEMBRANE = 0.03
+"""Membrane stiffness of the wide weights per unit of bending (1/mm^2): smooth near the point (bending),
+nearly linear beyond ~6 mm (membrane), so the slope spreads evenly between a point and what holds it.
+Bending alone (0) left 2 fold lines at the outer eye corner under brows at 400; 0.1 made each point a
+peak (brows raised together came out wavy)."""
 
 
 def wide_weights(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray,

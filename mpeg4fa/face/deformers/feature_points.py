@@ -111,7 +111,14 @@ class FoldGuard:
         with_margins = np.union1d(held, margins)
         wide = wide_weights(mesh.vertices[skin], mesh.triangles["skin"] - skin.start, points,
                             [held if label.startswith("3.") else with_margins for label in labels])
-        return wide - self.narrow.toarray()
+        narrow = self.narrow.toarray()
+        # where the narrow weights share the skin out whole (along the brow line between 4.1, 4.3
+        # and 4.5), so do the wide ones: each point's wide weight alone sags between the points,
+        # and brows raised together came out wavy
+        have, need = wide.sum(axis=1), narrow.sum(axis=1)
+        total = 0.5 * (have + need + np.sqrt((need - have) ** 2 + _SOFT ** 2)) - 0.5 * _SOFT  # a smooth max
+        wide *= np.where(have > 0, total / np.maximum(have, 1e-12), 0.0)[:, None]
+        return wide - narrow
 
     def facing(self, p: np.ndarray) -> np.ndarray:
         """Per watched triangle: its posed area along its rest normal, over its rest area."""
@@ -130,6 +137,9 @@ class FoldGuard:
         on = np.flatnonzero(share > 0)
         if len(on):
             p[self.skin] += self.shift[:, on] @ (share[on, None] * moves[on])
+
+
+_SOFT = 0.05  # width of the smooth max's rounding (a weight sum)
 
 
 def _smooth_step(x: np.ndarray) -> np.ndarray:
