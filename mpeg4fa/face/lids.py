@@ -34,6 +34,7 @@ alone, value x IRISD.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -162,12 +163,12 @@ def turn_lid(points: np.ndarray, sheet: LidSheet, rest: np.ndarray, drop: float)
 
 def _ease(angle: float, up: float, down: float) -> float:
     """``angle`` (rad, + down) up to KNEE of its limit, then easing into the limit (slope 1 at the knee)."""
-    limit = np.radians(down if angle > 0 else up)
+    limit = math.radians(down if angle > 0 else up)
     knee = KNEE * limit
     a = abs(angle)
     if a <= knee:
         return angle
-    return float(np.sign(angle) * (knee + (limit - knee) * np.tanh((a - knee) / (limit - knee))))
+    return math.copysign(knee + (limit - knee) * math.tanh((a - knee) / (limit - knee)), angle)
 
 
 def follow_drop(sheet: LidSheet, side: str, rest: np.ndarray, pitch: float) -> float:
@@ -175,8 +176,13 @@ def follow_drop(sheet: LidSheet, side: str, rest: np.ndarray, pitch: float) -> f
     eye pitches by ``pitch`` rad (+ down)."""
     share, up, down = FOLLOW[side]
     angle = _ease(share * pitch, up, down)
-    y, z = rest[sheet.point, 1:] - rest[sheet.joint, 1:]
-    return float(y - (y * np.cos(angle) - z * np.sin(angle)))
+    y, z = (float(rest[sheet.point, k] - rest[sheet.joint, k]) for k in (1, 2))
+    return y - (y * math.cos(angle) - z * math.sin(angle))
+
+
+_EYE_LIDS = tuple((eye, next(f for f, (e, kind) in motion.EYE_ROTATION.items() if e == eye and kind == "pitch"),
+                   {LIDS[f][6]: f for f in LIDS if LIDS[f][0] == eye}) for eye in ("eye_l", "eye_r"))
+"""Per eye: its pitch FAP (25/26) and its lid FAPs by side."""
 
 
 def lid_moves(sheets: dict[int, LidSheet], rest: np.ndarray, values: np.ndarray,
@@ -189,22 +195,22 @@ def lid_moves(sheets: dict[int, LidSheet], rest: np.ndarray, values: np.ndarray,
     the gaze, and the gaze alone leaves at least :data:`SLIT` of the opening.
     """
     v = np.asarray(values, dtype=np.float64)
-    pitch_fap = {eye: fap for fap, (eye, kind) in motion.EYE_ROTATION.items() if kind == "pitch"}
     out = {}
-    for eye in ("eye_l", "eye_r"):
-        faps = {LIDS[f][6]: f for f in sheets if LIDS[f][0] == eye}
-        if set(faps) != {"upper", "lower"}:
+    for eye, pitch_fap, faps in _EYE_LIDS:
+        if not (v[pitch_fap - 1] or v[faps["upper"] - 1] or v[faps["lower"] - 1]):
+            continue
+        if faps["upper"] not in sheets or faps["lower"] not in sheets:
             continue
         up, low = sheets[faps["upper"]], sheets[faps["lower"]]
-        pitch = v[pitch_fap[eye] - 1] * motion.ANGLE_UNIT_RAD
+        pitch = float(v[pitch_fap - 1]) * motion.ANGLE_UNIT_RAD
         follow_u = follow_drop(up, "upper", rest, pitch) if pitch else 0.0
         follow_l = follow_drop(low, "lower", rest, pitch) if pitch else 0.0
         opening = float(rest[up.point, 1] - rest[low.point, 1])
         follow_u = min(follow_u, follow_l + (1.0 - SLIT) * max(opening, 0.0))
-        close_u = v[faps["upper"] - 1] * irisd  # mm each FAP closes its lid (down for the upper, up for the lower)
-        close_l = v[faps["lower"] - 1] * irisd
-        t_u = float(np.clip(close_u / opening, 0.0, 1.0)) if opening > 0 else 0.0
-        t_l = float(np.clip(close_l / opening, 0.0, 1.0)) if opening > 0 else 0.0
+        close_u = float(v[faps["upper"] - 1]) * irisd  # mm each FAP closes its lid (down for the upper, up for the lower)
+        close_l = float(v[faps["lower"] - 1]) * irisd
+        t_u = min(max(close_u / opening, 0.0), 1.0) if opening > 0 else 0.0
+        t_l = min(max(close_l / opening, 0.0), 1.0) if opening > 0 else 0.0
         moves = {faps["upper"]: (close_u, follow_u + t_u * (follow_l - follow_u)),
                  faps["lower"]: (-close_l, follow_l + t_l * (follow_u - follow_l))}
         out.update({f: m for f, m in moves.items() if m[0] or m[1]})

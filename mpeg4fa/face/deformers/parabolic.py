@@ -57,7 +57,7 @@ import numpy as np
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deformers.feature_points import apply_head_rotation, pose_in_head_frame
+from mpeg4fa.face.deformers.feature_points import FoldGuard, apply_head_rotation, pose_in_head_frame, skin_guard
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import EyeFrame, Parabola, Sphere, closed_by, fit_sphere, lid_parabola, middle_share
 from mpeg4fa.face.lids import LID_HEIGHT_MM, LIDS, OVERLAP_MM, lid_moves, turn_lid
@@ -226,13 +226,14 @@ class ParabolicDeformer:
     rig: Rig
     eyes: dict[str, EyeBall]
     lids: dict[int, LidContour]
+    guard: FoldGuard | None = None  # the feature-point deformer's fold guard (the skin away from the eyes is its)
 
     def __call__(self, values: np.ndarray) -> Pose:
         v = np.asarray(values, dtype=np.float64)
         rig = self.rig
         still_eyes = v.copy()  # the eyes are this deformer's: the feature-point layers leave them at rest
         still_eyes[[f - 1 for f in _EYE_FAPS]] = 0.0
-        p, pupils = pose_in_head_frame(rig, still_eyes, lids=False)
+        p, pupils = pose_in_head_frame(rig, still_eyes, lids=False, guard=self.guard)
         for fap, (close, follow) in lid_moves(rig.lids, rig.rest, v, rig.fapu.unit("IRISD")).items():
             if follow:  # riding on the eye's pitch: the lid sheet turns with it, as in the feature-point deformer
                 turn_lid(p, rig.lids[fap], rig.rest, follow)
@@ -246,4 +247,4 @@ class ParabolicDeformer:
 def build(mesh: HeadMesh, rig: Rig) -> ParabolicDeformer:
     """Fit the eyeballs, the lid parabolas and the lid rates once per face."""
     eyes = build_eyes(mesh)
-    return ParabolicDeformer(rig=rig, eyes=eyes, lids=build_lid_contours(mesh, rig, eyes))
+    return ParabolicDeformer(rig=rig, eyes=eyes, lids=build_lid_contours(mesh, rig, eyes), guard=skin_guard(mesh, rig))
