@@ -112,9 +112,13 @@ class BitReader {
     if (!this.available(n)) throw new FbaError(truncated(what, n, this.left()), this.pos);
   }
   bitsAt(p, n) {
-    const buf = this.buf;
+    const buf = this.buf, i = p >> 3;
+    if (n <= 24 && i + 3 < this.nbytes) {  // four whole bytes hold them
+      const word = ((buf[i] << 24) | (buf[i + 1] << 16) | (buf[i + 2] << 8) | buf[i + 3]) >>> 0;
+      return (word >>> (32 - (p & 7) - n)) & ((1 << n) - 1);
+    }
     let v = 0;
-    for (let i = p; i < p + n; i++) v = v * 2 + ((buf[i >> 3] >> (7 - (i & 7))) & 1);
+    for (let b = p; b < p + n; b++) v = v * 2 + ((buf[b >> 3] >> (7 - (b & 7))) & 1);
     return v;
   }
   read(n, what = "a field") {
@@ -151,14 +155,25 @@ class BitReader {
 // O(log n) where the table took O(n): P models of wide ranges have thousands of symbols.
 //
 // All the models of one segment live in one bank of flat typed arrays (as the compiled Python path
-// lays them out): the decoder's loop then touches no object but the bank, V8 sees one shape, and a
-// snapshot for streaming input is a few slice() calls.
+// lays them out): the decoder's loop then touches no object but the bank, and V8 sees one shape.
 //
 // The Fenwick sums at multiples of 32 (the nodes a search visits first and an update last) sit apart,
 // in ``coarse``: 66 models of 3,721 symbols keep those in 15 KB that stay in the L1 cache, so that a
 // symbol costs two cache lines of the big arrays (its 32-node block of ``tree``, its count) where the
 // plain tree cost one per level (12), which is where the decoder's time went on wide ranges.
 const BLOCK_BITS = 5, BLOCK = 1 << BLOCK_BITS;
+
+let LOWBITS = new Int16Array(0);
+/** x & -x for x = 0 .. n at least: the Fenwick sums of a fresh model (every count 1), copied in at once
+ * where a loop in the interpreter cost as much as the intra frame's headers (an intra header is rare,
+ * so V8 seldom compiles what it runs). */
+function lowbits(n) {
+  if (LOWBITS.length <= n) {
+    LOWBITS = new Int16Array(2 * n + 2);
+    for (let x = 1; x < LOWBITS.length; x++) LOWBITS[x] = x & -x;
+  }
+  return LOWBITS;
+}
 
 /** The adaptive models of one segment: model m has size[m] symbols, counts at freq[foff[m] + s] and
  * its Fenwick sums at tree[toff[m] + x], x = 1 .. 2 * top[m] - 1 (top: the largest power of two <= n),
@@ -205,13 +220,15 @@ class ModelBank {
     this.freq = new Int16Array(nf).fill(1);
     this.tree = new Int16Array(nt);
     this.coarse = new Int16Array(nc);
+    const tree = this.tree, coarse = this.coarse;
     for (let m = 0; m < count; m++) {
       const n = this.size[m], t0 = this.toff[m], c0 = this.coff[m], top2 = 2 * this.top[m];
+      tree.set(lowbits(n).subarray(1, n + 1), t0 + 1);  // every count 1: sum over (x - lowbit x, x]
+      for (let j = 1; j <= n >> BLOCK_BITS; j++) coarse[c0 + j] = tree[t0 + (j << BLOCK_BITS)];
       // sums past n read as "too much", so the search needs no bounds test
-      this.tree.fill(0x7fff, t0 + n + 1, t0 + top2);
-      this.coarse.fill(0x7fff, c0 + (n >> BLOCK_BITS) + 1, c0 + (top2 >> BLOCK_BITS));
+      tree.fill(0x7fff, t0 + n + 1, t0 + top2);
+      coarse.fill(0x7fff, c0 + (n >> BLOCK_BITS) + 1, c0 + (top2 >> BLOCK_BITS));
       this.total[m] = n;
-      this.build(m);
     }
   }
   /** Model m's Fenwick sums from its counts, in O(n). */
