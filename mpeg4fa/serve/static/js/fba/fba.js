@@ -520,11 +520,13 @@ class ValueCoder {
     this.ranges = [0, 1, 2, 3].map(() => new Float64Array(part.n));  // I max, I min, P max, P min
     this.defaultsApplied = false;
     this.prev = new Float64Array(part.n);
+    this.savedPrev = new Float64Array(part.n);  // prev at the last snapshot (streaming input)
     this.seg = new SegmentCoder(0);
     this.seg.prev = this.prev;
   }
   startIntra(params) {
     const part = this.part;
+    this.ranges = this.ranges.map((a) => a.slice());  // new arrays: a snapshot holds the old ones
     const step = part.stepMultiplier(params.quant);
     const scaler = step || 1;
     if (!this.defaultsApplied && part.defaultI !== null) {
@@ -559,13 +561,14 @@ class ValueCoder {
     });
     this.seg = seg;
   }
+  /** The state before a plane (streaming input), without copying what a plane never changes in place. */
   snapshot() {
-    return { ranges: this.ranges.map((a) => a.slice()), prev: this.prev.slice(), defaultsApplied: this.defaultsApplied,
-      seg: this.seg, models: this.seg.mark() };
+    this.savedPrev.set(this.prev);
+    return { ranges: this.ranges, defaultsApplied: this.defaultsApplied, seg: this.seg, models: this.seg.mark() };
   }
   restore(s) {
     this.ranges = s.ranges; this.defaultsApplied = s.defaultsApplied;
-    this.prev.set(s.prev);
+    this.prev.set(this.savedPrev);
     this.seg = s.seg;
     this.seg.rollback(s.models);
   }
@@ -583,11 +586,13 @@ class FieldCoder {
     this.pMax = this.fields.map((f) => f.p_max);
     this.pmin = this.fields.map((f) => f.p_min);
     this.prev = new Float64Array(n);
+    this.savedPrev = new Float64Array(n);
     this.names = this.fields.map((f) => `FAP ${fap} ${f.field}`);
     this.seg = new SegmentCoder(n);
     this.seg.prev = this.prev;
   }
   startIntra(q) {
+    this.iMax = this.iMax.slice(); this.pMax = this.pMax.slice(); this.pmin = this.pmin.slice();  // a snapshot holds the old
     if (q) {
       const top = floorDiv(SPEC.full_intensity + (q >> 1), q);
       this.fields.forEach((f, k) => {
@@ -615,12 +620,12 @@ class FieldCoder {
     }
   }
   snapshot() {
-    return { iMax: this.iMax.slice(), pMax: this.pMax.slice(), pmin: this.pmin.slice(), prev: this.prev.slice(),
-      seg: this.seg, models: this.seg.mark() };
+    this.savedPrev.set(this.prev);
+    return { iMax: this.iMax, pMax: this.pMax, pmin: this.pmin, seg: this.seg, models: this.seg.mark() };
   }
   restore(s) {
     this.iMax = s.iMax; this.pMax = s.pMax; this.pmin = s.pmin;
-    this.prev.set(s.prev);
+    this.prev.set(this.savedPrev);
     this.seg = s.seg;
     this.seg.rollback(s.models);
   }
