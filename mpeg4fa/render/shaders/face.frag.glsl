@@ -204,7 +204,7 @@ void main() {
             n = normalize(n + 0.7 * to_eye + cross(vec3(0.0, 1.0, 0.0), n) * (1.8 * f - 0.9) * (1.0 - back));
             if (lighting) shade = mix(mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap)), 0.9, back);  // the gaps
             // teeth further back along the arch sit deeper in the mouth, in its shadow
-            shade *= mix(1.0, BACK_TEETH_SHADE, smoothstep(2.0, 5.0, abs(v_detail.x)));
+            shade *= mix(1.0, BACK_TEETH_SHADE, smoothstep(2.0, 4.0, abs(v_detail.x)));
             if (lingual && lighting) shade *= LINGUAL_SHADE;
         }
     } else {
