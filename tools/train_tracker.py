@@ -1,0 +1,308 @@
+"""Train the tracker's landmark -> FAP map (mpeg4fa/tracking/data/fap_map.npz) on renders of the generic head.
+
+    .venv/bin/python tools/train_tracker.py [--out out/train_tracker] [--seconds 20] [--ridge R] [--no-write]
+
+Why: see :mod:`mpeg4fa.tracking.learned`. The data: the generic head wearing training textures (Grace Hopper's
+photo from matplotlib's sample data, the same photo mirrored and darkened, three tinted faces of scikit-image's
+Labeled Faces in the Wild subset, and the head's own untextured skin) plays random FAP streams (speech visemes and expression tags from other texts than tools/track_loop.py's,
+blinks and half blinks, gaze, smooth random motion of every learned FAP on its own, and head turns up to
+30 degrees yaw, 15 pitch, 12 roll), rendered at 320 and 448 pixels and tracked frame by frame by the same
+landmark model and tracker (:class:`mpeg4fa.tracking.FaceTracker`, ``keep_inputs``) as a video is. Frames
+are cached in OUT/cache, so a second run only fits.
+
+Each region's ridge penalty is chosen by leaving each family of training textures out in turn. Held out, never
+trained on: one stream per training texture (``held-out stream``), and tools/track_loop.py's own closed loop (its stream and the astronaut's texture: ``held-out texture``). Per group: correlation and RMS
+share of the range (tools/track_loop.py's compare, unsmoothed). Deterministic (fixed seeds); prints a table
+and writes OUT/train_tracker.json and the map.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+FPS = 25.0
+LFW = {3: (1.0, 0.82, 0.7), 27: (0.75, 0.55, 0.42), 52: (1.0, 0.86, 0.78)}
+"""Faces of scikit-image's Labeled Faces in the Wild subset (25 x 25 grey photos) -> their skin tint."""
+TRAIN_TEXTURES = ("grace", "grace-mirrored", "grace-dark", "skin", *(f"lfw-{k}" for k in LFW))
+HELD_OUT_TEXTURE = "astronaut"
+TRAIN_SEEDS = (11, 12, 13)
+LFW_SEEDS = (14, 15)
+HELD_OUT_SEED = 19
+SIZES = (320, 448)
+RIDGES = (0.0003, 0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
+TEXTS = (
+    "(joy, 60, 0.8) Good morning everybody, welcome to the show. (surprise, 50, 0.6) What a lovely day it is!",
+    "(sadness, 50, 0.7) I lost my keys again, and the bus left without me. (anger, 40, 0.6) Typical, just typical.",
+    "(fear, 45, 0.7) Did you hear that noise? (surprise, 60, 0.5) Oh, it was only the cat. (joy, 50, 0.6) Silly me.",
+    "(disgust, 45, 0.7) This soup tastes of old socks. (joy, 35, 0.6) But the bread is fresh and warm, thank you.",
+    "(anger, 55, 0.6) Stop that right now! (sadness, 40, 0.6) Please, I am so tired. (joy, 45, 0.7) Thank you, friend.",
+    "(surprise, 40, 0.6) Seven big boxes of apples arrived. (fear, 35, 0.5) Where will we put them all, Jim?",
+)
+WANDER = {  # FAP: (low, high) of its own smooth random motion (FAPU), beside speech and expressions
+    3: (0, 600), 4: (-150, 150), 5: (-300, 200), 6: (-150, 150), 7: (-150, 150), 8: (-120, 160), 9: (-120, 160),
+    10: (-200, 150), 11: (-200, 150), 12: (-150, 300), 13: (-150, 300), 19: (-250, 600), 20: (-250, 600),
+    21: (-100, 250), 22: (-100, 250), 31: (-150, 250), 32: (-150, 250), 33: (-120, 250), 34: (-120, 250),
+    35: (-100, 220), 36: (-100, 220), 37: (0, 100), 38: (0, 100), 51: (-150, 100), 52: (-300, 100),
+    53: (-150, 200), 54: (-150, 200), 55: (-100, 60), 56: (-100, 60), 57: (-200, 100), 58: (-200, 100),
+    59: (-150, 350), 60: (-150, 350)}
+PAIRS = ((4, 5), (6, 7), (8, 9), (10, 11), (12, 13), (19, 20), (21, 22), (31, 32), (33, 34), (35, 36), (37, 38),
+         (53, 54), (55, 56), (57, 58), (59, 60))
+
+
+def _loop_tool():
+    spec = importlib.util.spec_from_file_location("track_loop_tool", Path(__file__).with_name("track_loop.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _smooth(rng: np.random.Generator, n: int, hz: float) -> np.ndarray:
+    """A smooth random curve in [-1, 1]: three sines of random phase around ``hz``."""
+    t = np.arange(n) / FPS
+    out = sum(np.sin(2 * np.pi * rng.uniform(0.5, 1.5) * hz * t + rng.uniform(0, 2 * np.pi)) for _ in range(3))
+    return out / 3.0
+
+
+def training_values(seed: int, seconds: float) -> np.ndarray:
+    """(n, 68) FAP values of one training stream: a still first second (the neutral), then everything."""
+    from mpeg4fa.decoded.limits import clamp
+    from mpeg4fa.speech.encoder import encode_text
+
+    tool = _loop_tool()
+    rng = np.random.default_rng(seed)
+    n = int(round(seconds * FPS))
+    still = int(round(tool.STILL_SECONDS * FPS))
+    values = np.zeros((n, 68))
+    k = still
+    while k < n:  # speech, one text after another with a pause between
+        text = TEXTS[int(rng.integers(len(TEXTS)))]
+        speech = encode_text(text, engine="estimate", fps=FPS, level="low", fold=False).values
+        m = min(len(speech), n - k)
+        values[k:k + m] = speech[:m] * rng.uniform(0.6, 1.3)
+        k += m + int(rng.uniform(0.2, 1.0) * FPS)
+    ramp = np.clip((np.arange(n) - still) / FPS, 0, 1)
+    for fap, (low, high) in WANDER.items():  # each FAP's own motion, on in some stretches only
+        gate = np.clip(2.0 * _smooth(rng, n, 0.08) + 0.3, 0, 1)
+        wave = 0.5 * (_smooth(rng, n, rng.uniform(0.2, 0.6)) + 1.0) * (high - low) + low
+        values[:, fap - 1] += wave * gate * ramp
+    for a, b in PAIRS:  # left and right alike half the time
+        alike = _smooth(rng, n, 0.1) > 0
+        values[alike, b - 1] = values[alike, a - 1]
+    k = still + int(rng.uniform(0.2, 1.0) * FPS)
+    while k + len(tool.BLINK_SHAPE) < n:  # blinks and half blinks
+        peak = rng.uniform(0.5, 1.0) * tool.BLINK_PEAK
+        for j, share in enumerate(tool.BLINK_SHAPE):
+            values[k + j, 18:20] = np.maximum(values[k + j, 18:20], share * peak)
+        k += int(rng.uniform(0.8, 2.5) * FPS)
+    for col, amp in ((22, 12000), (23, 12000), (24, 8000), (25, 8000)):  # gaze
+        values[:, col] = amp * _smooth(rng, n, 0.25) * ramp
+    for col, degrees in ((47, 15), (48, 30), (49, 12)):  # head pitch, yaw, roll
+        values[:, col] = np.radians(degrees) / 1e-5 * _smooth(rng, n, 0.12) * ramp
+    values[:still] = 0.0
+    return np.rint(clamp(values)[0])
+
+
+def textures() -> dict[str, np.ndarray | None]:
+    """Skin textures by name: the training ones and the held-out astronaut (baked as tools/track_loop.py does)."""
+    import matplotlib.cbook
+    from PIL import Image
+    from skimage import data, transform
+
+    from mpeg4fa.face import FaceModel
+    from mpeg4fa.render.texture import PhotoView, bake_texture
+    from mpeg4fa.tracking import feature_points, find_landmarks
+    from mpeg4fa.tracking.segment import close_openings
+
+    face = FaceModel.default()
+
+    def bake(photo: np.ndarray, name: str) -> np.ndarray:
+        found = find_landmarks(photo, name)
+        points = {k: (float(v[0]), float(v[1])) for k, v in feature_points(found).items()}
+        return bake_texture(face.mesh, PhotoView(close_openings(photo, found.points), points, "front"),
+                            size=512).image
+
+    grace = np.asarray(Image.open(matplotlib.cbook.get_sample_data("grace_hopper.jpg", asfileobj=False)))
+    dark = np.clip(grace.astype(np.float64) * [0.62, 0.5, 0.42], 0, 255).astype(np.uint8)
+    out = {"grace": bake(grace, "grace_hopper"), "grace-mirrored": bake(np.ascontiguousarray(grace[:, ::-1]), "grace"),
+           "grace-dark": bake(dark, "grace dark"), "skin": None, "astronaut": _loop_tool().textured_head(512)[1]}
+    faces = data.lfw_subset()
+    for k, tint in LFW.items():  # 300 pixels, tinted, padded with their own edge: a face the landmark model finds
+        grey = transform.resize(faces[k], (300, 300), order=3)
+        rgb = (np.clip(grey[..., None] * np.array(tint), 0, 1) * 255).astype(np.uint8)
+        out[f"lfw-{k}"] = bake(np.pad(rgb, ((100, 100), (100, 100), (0, 0)), mode="edge"), f"lfw {k}")
+    return out
+
+
+def record(values: np.ndarray, texture: np.ndarray | None, size: int) -> np.ndarray:
+    """Render the values on the generic head and find the landmarks of every frame ((n, 478, 3), NaN: lost)."""
+    from mpeg4fa.face import FaceModel
+    from mpeg4fa.render import Renderer
+    from mpeg4fa.tracking import LandmarkFinder, TrackingWarning
+
+    face = FaceModel.default()
+    out = np.full((len(values), 478, 3), np.nan)
+    image = np.empty((size, size, 3), np.uint8)
+    with Renderer(face, width=size, height=size, samples=2, texture=texture) as renderer, \
+            LandmarkFinder(static=False) as finder, warnings.catch_warnings():
+        warnings.simplefilter("ignore", TrackingWarning)  # a second "face" in a texture's pattern: the largest is used
+        for k, row in enumerate(values):
+            renderer.render(face.pose_values(row), out=image)
+            found = finder.find(image)
+            if found is not None:
+                out[k] = found.points
+    return out
+
+
+def runs(cache: Path, seconds: float) -> list[dict]:
+    """Every training and held-out run: name, texture, seed, values, landmarks (rendered once, then cached)."""
+    cache.mkdir(parents=True, exist_ok=True)
+    plan = [(tex, seed, SIZES[(i + j) % len(SIZES)]) for i, tex in enumerate(TRAIN_TEXTURES)
+            for j, seed in enumerate((*(LFW_SEEDS if tex.startswith("lfw") else TRAIN_SEEDS), HELD_OUT_SEED))]
+    baked = None
+    out = []
+    for tex, seed, size in plan:
+        path = cache / f"{tex}_{seed}_{size}_{seconds:g}s.npz"
+        values = training_values(seed, seconds)
+        if path.exists():
+            with np.load(path) as data:
+                landmarks = data["landmarks"]
+        else:
+            baked = baked or textures()
+            started = time.perf_counter()
+            landmarks = record(values, baked[tex], size)
+            np.savez_compressed(path, landmarks=landmarks.astype(np.float32))
+            print(f"  rendered and tracked {path.name}: {len(values)} frames in "
+                  f"{time.perf_counter() - started:.0f} s", file=sys.stderr)
+        out.append({"texture": tex, "seed": seed, "size": size, "values": values, "landmarks": landmarks,
+                    "held_out": seed == HELD_OUT_SEED})
+    return out
+
+
+def inputs(landmarks: np.ndarray) -> tuple[np.ndarray, np.ndarray, object]:
+    """The tracker's inputs of one run (its neutral chosen as a video's is): displacements, angles, FAPU."""
+    from mpeg4fa.tracking import FaceTracker
+
+    with FaceTracker(FPS, smooth=False, fap_map=None, keep_inputs=True) as tracker:
+        for frame in landmarks:
+            tracker.push_landmarks(frame if np.isfinite(frame).all() else None)
+        moved, angles = tracker.inputs()
+        return moved, angles, tracker.fapu
+
+
+def evaluate(fap_map, runs_: list[dict]) -> dict:
+    """Per group figures (tools/track_loop.py's compare) of the map's values on the runs, pooled."""
+    tool = _loop_tool()
+    sent, got = [], []
+    for run in runs_:
+        ok = np.isfinite(run["angles"]).all(axis=1)
+        tracked = np.zeros_like(run["values"])
+        rows = fap_map.predict(run["moved"][ok], run["angles"][ok], run["fapu"])
+        tracked[np.ix_(np.flatnonzero(ok), fap_map.faps - 1)] = rows
+        tracked[:, 47:50] = np.where(ok[:, None], run["angles"] / 1e-5, 0.0)
+        sent.append(run["values"])
+        got.append(tracked)
+    report = tool.compare(np.concatenate(sent), np.concatenate(got), np.array([], dtype=int))
+    return {name: {k: g[k] for k in ("correlation", "rms_share", "pass")} for name, g in report["groups"].items()}
+
+
+def _stack(runs_: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray, list, np.ndarray]:
+    """The runs' tracked frames together: displacements, angles, values, FAPU per run, each frame's run."""
+    ok = [np.isfinite(r["angles"]).all(axis=1) for r in runs_]
+    return (np.concatenate([r["moved"][k] for r, k in zip(runs_, ok)]),
+            np.concatenate([r["angles"][k] for r, k in zip(runs_, ok)]),
+            np.concatenate([r["values"][k] for r, k in zip(runs_, ok)]), [r["fapu"] for r in runs_],
+            np.concatenate([np.full(int(k.sum()), i) for i, k in enumerate(ok)]))
+
+
+def fit(train: list[dict], ridges: list[float]):
+    """Each region's map at the penalty that reads held-out textures best: per penalty, each family of textures
+    (Grace Hopper's, the LFW faces, the bare skin) is left out in turn, the rest fitted, and the left-out family's
+    correlation (the region's FAPs pooled) averaged; then the region is fitted on every training run at the best."""
+    from mpeg4fa.tracking import learned
+
+    families = sorted({r["texture"].split("-")[0] for r in train})
+    parts = {f: _stack([r for r in train if r["texture"].split("-")[0] != f]) for f in families}
+    left = {f: _stack([r for r in train if r["texture"].split("-")[0] == f]) for f in families}
+    moved, angles, values, fapus, which = _stack(train)
+    regions, chosen = [], {}
+    for name, (landmarks, faps) in learned.REGIONS.items():
+        landmarks, faps = np.array(landmarks), np.array(faps)
+        cols = faps - 1
+        scores = []
+        for ridge in ridges:
+            corr = []
+            for f in families:
+                m, a, v, u, w = parts[f]
+                region = learned.fit_region(m, a, v[:, cols], u, landmarks, faps, ridge, runs=w)
+                hm, ha, hv, hu, hw = left[f]
+                got = np.concatenate([region.predict(hm[hw == i], ha[hw == i], x) for i, x in enumerate(hu)])
+                corr.append(float(np.corrcoef(hv[:, cols].ravel(), got.ravel())[0, 1]))
+            scores.append(float(np.mean(corr)))
+        best = int(np.argmax(scores))
+        regions.append(learned.fit_region(moved, angles, values[:, cols], fapus, landmarks, faps, ridges[best],
+                                          runs=which))
+        chosen[name] = {"ridge": ridges[best], "left_out_texture_correlation": round(scores[best], 4)}
+        print(f"  {name}: ridge {ridges[best]:g}, correlation on left-out textures "
+              + ", ".join(f"{r:g}: {c:.3f}" for r, c in zip(ridges, scores)), file=sys.stderr)
+    return learned.FapMap(tuple(regions)), chosen, len(moved)
+
+
+def main(argv: list[str] | None = None) -> int:
+    from mpeg4fa.tracking import learned
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, default=Path("out/train_tracker"))
+    parser.add_argument("--seconds", type=float, default=20.0, help="length of each training stream")
+    parser.add_argument("--ridge", type=float, help="the penalty (default: per region, the best of a few on the "
+                                                    "held-out streams)")
+    parser.add_argument("--no-write", action="store_true", help="fit and report only; leave the shipped map")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    all_runs = runs(args.out / "cache", args.seconds)
+    for run in all_runs:
+        run["moved"], run["angles"], run["fapu"] = inputs(run["landmarks"])
+        run["moved"] = run["moved"].astype(np.float32)
+    train = [r for r in all_runs if not r["held_out"]]
+    held = [r for r in all_runs if r["held_out"]]
+    fap_map, chosen, frames = fit(train, [args.ridge] if args.ridge is not None else list(RIDGES))
+    report = {"regions": chosen, "frames_trained": frames, "faps": [int(f) for f in fap_map.faps],
+              "textures_trained": list(TRAIN_TEXTURES), "held_out_texture": HELD_OUT_TEXTURE,
+              "seconds_per_stream": args.seconds, "train": evaluate(fap_map, train),
+              "held_out_stream": evaluate(fap_map, held)}
+    if not args.no_write:
+        learned.DATA.parent.mkdir(parents=True, exist_ok=True)
+        fap_map.save(learned.DATA, frames=frames)
+        learned.trained_map.cache_clear()
+        tool = _loop_tool()
+        loop = tool.run(12.0, 384, FPS, args.out / "loop")  # the astronaut and the loop's own stream: never trained on
+        report["held_out_texture_loop"] = {name: {k: g[k] for k in ("correlation", "rms_share", "pass")}
+                                           for name, g in loop["groups"].items()}
+        report["held_out_texture_blinks"] = loop["blinks"]
+    report["seconds"] = round(time.perf_counter() - started, 1)
+    print(f"{'group':28} " + " ".join(f"{k:>24}" for k in ("train", "held-out stream", "held-out texture (loop)")))
+    for name in report["train"]:
+        cells = []
+        for key in ("train", "held_out_stream", "held_out_texture_loop"):
+            g = report.get(key, {}).get(name)
+            cells.append(f"{g['correlation']:.3f} / {100 * (g['rms_share'] or 0):5.1f} %" if g else "-")
+        print(f"{name:28} " + " ".join(f"{c:>24}" for c in cells))
+    if "held_out_texture_blinks" in report:
+        b = report["held_out_texture_blinks"]
+        print(f"blinks (loop): {b['found_within_a_frame']}/{b['sent']} within a frame, {b['extra_peaks']} extra")
+    print(f"{frames} frames trained; correlation / RMS share of the range (the loop: smoothed, as tracked)")
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "train_tracker.json").write_text(json.dumps(report, indent=1))
+    print(f"wrote {args.out / 'train_tracker.json'}" + ("" if args.no_write else f", {learned.DATA.relative_to(ROOT)}"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
