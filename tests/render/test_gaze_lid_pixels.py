@@ -7,9 +7,9 @@ Drawn unlit with colour-coded materials (skin red, sclera blue, iris green, pupi
 * the **sclera above the iris**: in the middle half of the iris's columns, sclera pixels above the topmost
   iris pixel, per column (a band of white between the upper lid and the iris).
 
-The generic head's open upper lid sits at the top of the iris (3 % of it covered, 0.7 px of sclera above).
-Before the lids rode on the pitch, looking up 20 deg hid 48 % of the iris under the upper lid and looking
-down 20 deg bared 15 px of sclera per column above it.
+The generic head's open upper lid sits at the top of the iris (2 % of it covered, 0.8 px of sclera above,
+front). Before the lids rode on the pitch, looking up 20 deg hid 48 % of the iris under the upper lid and
+looking down 20 deg bared 17.3 px of sclera per column above it; now 4 % and 0.1 px.
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ high at the top of the 11.5 mm iris (a lid margin within about a lash's thicknes
 the follow the share moved by 0.45 looking up."""
 SCLERA_ROWS = 1.5
 """Sclera above the iris, px per column, allowed when looking down: the rim where the lid's edge and the
-iris's top share pixels (0.7 at straight gaze); before the follow, 15 at 20 deg down."""
+iris's top share pixels (0.8 at straight gaze); before the follow, 17.3 at 20 deg down."""
 
 
 @pytest.fixture(scope="module", params=[(view, d) for d in EXACT_DEFORMERS for view in ("front", "three-quarter")],
