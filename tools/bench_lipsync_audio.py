@@ -6,10 +6,13 @@ times are known (espeak-ng's own events). The transcript path's track is the utt
 the same text (:func:`mpeg4fa.speech.utterance.speak`, stops moved to their closures): the track a perfect
 aligner would give. Mandarin is spoken through espeak-ng's ``cmn`` voice on the IPA route, so that both tracks
 use the 14 MPEG-4 visemes (the pinyin route's Chinese visemes have no PP to compare). The audio-only track is
-:func:`mpeg4fa.speech.listen.listen` of the audio alone, recogniser ``phonetic`` (all) and ``words`` (English).
+:func:`mpeg4fa.speech.listen.listen` of the audio alone, recogniser ``phonetic`` (all) and ``words`` (English);
+the phonetic one's p, b and m placed by the closure detector (:mod:`mpeg4fa.speech.listen.closures`), which
+tools/train_listen_closures.py trains on espeak-ng pseudo-words, never these sentences.
 
 Measured (:mod:`mpeg4fa.speech.listen.compare`): closure onsets (viseme PP: p, b, m) found within 40 ms; the
-mean error of those found within 100 ms; closures added where the transcript has none; per-frame viseme
+mean error of those found within 100 ms; the closures the audio-only track shows (found) and those of them
+farther than 100 ms from any in the transcript's track (extra; precision = 1 - extra / found); per-frame viseme
 agreement at 25 fps (frames where both rest left out). Rest: silence, white noise at -30 dBFS and synthetic
 music (:mod:`mpeg4fa.speech.listen.signals`), the share of 25 fps frames with no viseme shown and the share with
 the jaw and lips (FAPs 3-17) within one unit of neutral. Speed: :func:`~mpeg4fa.speech.listen.stream.stream_listened`
@@ -22,6 +25,7 @@ LibriVox files of pocketsphinx's source package, test/data/librivox, as tools/be
 the transcript path is then :func:`~mpeg4fa.speech.align.align_recording` of the transcript.
 
     .venv/bin/python tools/bench_lipsync_audio.py [--json tools/bench_lipsync_audio.json] [--human DIR] [--quick]
+        [--without-detector]
 """
 from __future__ import annotations
 
@@ -40,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from mpeg4fa.speech.align import Recording, align_recording, read_recording  # noqa: E402
 from mpeg4fa.speech.encoder import encode_utterance, phones  # noqa: E402
 from mpeg4fa.speech.listen import listen  # noqa: E402
-from mpeg4fa.speech.listen.compare import agreement, onset_score, rest_share  # noqa: E402
+from mpeg4fa.speech.listen.compare import agreement, closure_onsets, onset_score, rest_share  # noqa: E402
 from mpeg4fa.speech.listen.signals import music, white_noise  # noqa: E402
 from mpeg4fa.speech.listen.stream import Source, stream_listened  # noqa: E402
 from mpeg4fa.speech.markup import parse_markup  # noqa: E402
@@ -75,7 +79,7 @@ def _score(ref_timings, heard_timings, duration: float) -> dict:
     s = onset_score(ref_timings, heard_timings)
     a, n = agreement(ref_timings, heard_timings, duration)
     return {"closures": s.reference, "hits": s.hits, "errors": list(s.errors), "extra": s.extra,
-            "agree_frames": a * n if n else 0.0, "frames": n}
+            "found": len(closure_onsets(heard_timings)), "agree_frames": a * n if n else 0.0, "frames": n}
 
 
 def _sum(rows: list[dict]) -> dict:
@@ -83,9 +87,10 @@ def _sum(rows: list[dict]) -> dict:
     hits = sum(r["hits"] for r in rows)
     errors = [e for r in rows for e in r["errors"]]
     frames = sum(r["frames"] for r in rows)
+    found, extra = sum(r["found"] for r in rows), sum(r["extra"] for r in rows)
     return {"closures": closures, "within_40ms": hits / closures if closures else float("nan"),
             "mean_onset_error_ms": 1000 * float(np.mean(errors)) if errors else float("nan"),
-            "extra_closures": sum(r["extra"] for r in rows),
+            "found": found, "extra_closures": extra, "precision": (found - extra) / found if found else float("nan"),
             "frame_agreement": sum(r["agree_frames"] for r in rows) / frames if frames else float("nan"),
             "frames": frames}
 
@@ -174,16 +179,26 @@ def main() -> None:
     ap.add_argument("--json", type=Path, help="write the figures here")
     ap.add_argument("--human", type=Path, metavar="DIR", help="also NAME.wav + NAME.txt recordings of people")
     ap.add_argument("--quick", action="store_true", help="two sentences a language, 10 s clips, 20 s speed test")
+    ap.add_argument("--without-detector", action="store_true",
+                    help="the phone loop's own p, b, m (the closure detector off): the figures before it")
     args = ap.parse_args()
+    if args.without_detector:
+        from functools import partial
+
+        from mpeg4fa.speech.listen import core
+        from mpeg4fa.speech.listen.phones import recognize_phones
+
+        core.recognize_phones = partial(recognize_phones, closures=False)
     speech = run_speech(args.quick)
     if args.human is not None:
         speech += run_human(args.human)
     print(f"{'lang':<11} {'recogniser':<9} {'sent':>4} {'PP':>4} {'<=40ms':>7} {'target':>6} {'err ms':>6} "
-          f"{'extra':>5} {'agree':>6}")
+          f"{'found':>5} {'extra':>5} {'prec':>5} {'agree':>6}")
     for r in speech:
         target = TARGET.get(r["lang"].split()[0], OTHER_TARGET)
         print(f"{r['lang']:<11} {r['recognizer']:<9} {r['sentences']:>4} {r['closures']:>4} {r['within_40ms']:>7.0%} "
-              f"{target:>6.0%} {r['mean_onset_error_ms']:>6.1f} {r['extra_closures']:>5} {r['frame_agreement']:>6.0%}")
+              f"{target:>6.0%} {r['mean_onset_error_ms']:>6.1f} {r['found']:>5} {r['extra_closures']:>5} "
+              f"{r['precision']:>5.0%} {r['frame_agreement']:>6.0%}")
     en = {r["recognizer"]: r for r in speech if r["lang"] == "en"}
     better = max(en, key=lambda k: (en[k]["within_40ms"] + en[k]["frame_agreement"]))
     print(f"English: {better} matches the transcript path better (closures within 40 ms + frame agreement)")

@@ -75,9 +75,10 @@ def decode_pcm(decoder, pcm: bytes) -> list:
     return list(decoder.seg()) if decoder.hyp() is not None else []
 
 
-def recognize_phones(recording: Recording, *, offset: float = 0.0) -> list[Phone]:
+def recognize_phones(recording: Recording, *, offset: float = 0.0, closures: bool = True) -> list[Phone]:
     """The phones pocketsphinx's phone loop hears in ``recording`` (any rate: resampled to 16 kHz), each
-    with its time in seconds (plus ``offset``), silences included as ``SIL``."""
+    with its time in seconds (plus ``offset``), silences included as ``SIL``; with ``closures``, p, b and m
+    placed and added by the closure detector (:func:`.closures.refined_phones`)."""
     from mpeg4fa.speech.align.sphinx import OFFSET, pcm16k
 
     if len(recording.samples) == 0:
@@ -90,6 +91,10 @@ def recognize_phones(recording: Recording, *, offset: float = 0.0) -> list[Phone
         end = min(end_of_audio, (s.end_frame + 1) * HOP + OFFSET)
         if end > start:
             out.append(Phone(s.word, offset + start, offset + end))
+    if closures:
+        from mpeg4fa.speech.listen.closures import refined_phones
+
+        out = refined_phones(recording, out, offset)
     return out
 
 

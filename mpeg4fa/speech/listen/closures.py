@@ -1,0 +1,158 @@
+"""Where the lips shut, from the signal: a small detector of bilabial closures (p, b, m) that refines what
+pocketsphinx's phone loop hears.
+
+The phone loop (:mod:`.phones`) misses about half of the p, b and m of synthetic voices: it hears a
+voiced b as G, a nasal murmur or a stop's silence as SIL (tools/bench_lipsync_audio.py). The detector
+looks at the spectrum around each 10 ms frame (24 log mel bands, +-100 ms, relative to the recording's
+loud end) and gives the probability that the lips are shut there; a one-hidden-layer network trained by
+tools/train_listen_closures.py on espeak-ng speech of random pseudo-words in six languages (never the
+benchmark's sentences), with their known phone times, filtered, reverberated and noised so that a
+recording's colour and level do not decide. Its weights are :mod:`.closure_weights`.
+
+:func:`refine_closures` combines the two: a labial the recogniser heard starts where the detector's
+closure starts (within :data:`SNAP`); a closure the detector is sure of (:data:`SURE`, at least
+:data:`LONGEST_UNHEARD` long) is shut even where the recogniser heard another phone.
+"""
+from __future__ import annotations
+
+import base64
+from functools import lru_cache
+
+import numpy as np
+
+from mpeg4fa.speech.align.recording import Recording, resample
+
+RATE = 16000
+HOP = 160
+WINDOW = 400
+NFFT = 512
+BANDS = 24
+FLOOR_DB = -60.0
+"""Levels below the loud end by more than this read as this: digital zero and a noise floor alike."""
+CONTEXT = np.arange(-10, 11, 2)
+"""Frames (10 ms) either side that the detector sees."""
+FIRST = (WINDOW / 2) / RATE - HOP / RATE / 2
+"""Start (s) of frame 0's 10 ms slot: frame k is centred at k * 10 ms + 12.5 ms."""
+LABIALS = frozenset({"P", "B", "M"})
+THRESHOLD = 0.2
+"""Probability above which a frame is a closure (spans of two frames or more)."""
+SNAP = 0.06
+"""A recognised labial that starts this close to a detected closure takes the closure's start."""
+OPEN = frozenset("AA AE AH AO AW AY EH ER EY IH IY OW OY UH UW HH S Z SH ZH".split())
+"""Phones heard with the mouth open or the tongue making the sound: a closure the recogniser heard as one
+of these is not shut on the detector's word alone (on recordings of people the detector alone was right
+2 times in 29, tools/bench_lipsync_audio.py --human)."""
+SURE = 0.7
+LONGEST_UNHEARD = 3
+"""A closure no labial was heard in is shut when its peak probability reaches :data:`SURE` over at least
+this many frames."""
+
+
+@lru_cache(maxsize=1)
+def mel_bank() -> np.ndarray:
+    """Triangular mel filters, 80-7600 Hz, each summing to one (BANDS x NFFT/2+1)."""
+    def to_mel(f):
+        return 2595 * np.log10(1 + np.asarray(f) / 700)
+
+    edges = 700 * (10 ** (np.linspace(to_mel(80), to_mel(7600), BANDS + 2) / 2595) - 1)
+    bins = np.fft.rfftfreq(NFFT, 1 / RATE)
+    lo, mid, hi = edges[:-2, None], edges[1:-1, None], edges[2:, None]
+    bank = np.clip(np.minimum((bins - lo) / (mid - lo), (hi - bins) / (hi - mid)), 0, None)
+    return bank / bank.sum(axis=1, keepdims=True)
+
+
+def log_mel(x: np.ndarray) -> np.ndarray:
+    """``x`` (float, 16 kHz) -> (frames, BANDS) levels in units of 20 dB below the loud end (95th
+    percentile of the frames' loudest band), floored at :data:`FLOOR_DB`: a level-free picture."""
+    n = max(0, (len(x) - WINDOW) // HOP + 1)
+    if n == 0:
+        return np.zeros((0, BANDS))
+    frames = np.lib.stride_tricks.sliding_window_view(x, WINDOW)[::HOP][:n] * np.hanning(WINDOW)
+    power = np.abs(np.fft.rfft(frames, NFFT)) ** 2
+    db = 10 * np.log10(power @ mel_bank().T + 1e-12)
+    return np.maximum(db - np.percentile(db.max(axis=1), 95), FLOOR_DB) / 20.0
+
+
+def features(levels: np.ndarray) -> np.ndarray:
+    """Each frame's context (:data:`CONTEXT`), its slope (next minus previous frame) and a bias input."""
+    n = len(levels)
+    k = np.arange(n)
+    context = levels[np.clip(k[:, None] + CONTEXT[None, :], 0, n - 1)].reshape(n, -1)
+    slope = levels[np.minimum(k + 1, n - 1)] - levels[np.maximum(k - 1, 0)]
+    return np.hstack([context, slope, np.ones((n, 1))])
+
+
+@lru_cache(maxsize=1)
+def weights() -> tuple[np.ndarray, np.ndarray]:
+    """The detector's layers (:mod:`.closure_weights`, float16 in base64)."""
+    from mpeg4fa.speech.listen import closure_weights as w
+
+    hidden = np.frombuffer(base64.b64decode(w.HIDDEN), "<f2").astype(np.float64).reshape(w.SHAPE)
+    out = np.frombuffer(base64.b64decode(w.OUTPUT), "<f2").astype(np.float64)
+    return hidden, out
+
+
+def predict(x: np.ndarray, hidden: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """The network: tanh hidden layer, logistic output."""
+    h = np.tanh(x @ hidden)
+    return 1.0 / (1.0 + np.exp(-(h @ out[:-1] + out[-1])))
+
+
+def closure_probability(samples: np.ndarray, rate: int) -> np.ndarray:
+    """Probability that the lips are shut, per 10 ms frame of ``samples`` (float, any rate)."""
+    levels = log_mel(resample(np.asarray(samples, dtype=np.float64), rate, RATE))
+    if not len(levels):
+        return np.zeros(0)
+    return predict(features(levels), *weights())
+
+
+def closure_spans(probability: np.ndarray, threshold: float = THRESHOLD) -> list[tuple[float, float, float]]:
+    """Runs of two frames or more above ``threshold``: (start s, end s, peak probability)."""
+    on = np.r_[False, probability > threshold, False].astype(np.int8)
+    starts, ends = np.flatnonzero(np.diff(on) == 1), np.flatnonzero(np.diff(on) == -1)
+    step = HOP / RATE
+    return [(FIRST + a * step, FIRST + b * step, float(probability[a:b].max()))
+            for a, b in zip(starts, ends) if b - a >= 2]
+
+
+def refine_closures(phones: list, spans: list[tuple[float, float, float]], offset: float = 0.0) -> list:
+    """``phones`` (:class:`~.phones.Phone`) with the detector's closures (``spans``, s from ``offset``)
+    applied: a span near a recognised labial, or a sure one, becomes that labial (``B`` where none was
+    heard), cutting the phones it overlaps (see the module docstring)."""
+    from mpeg4fa.speech.listen.phones import SILENCE, Phone
+
+    out = list(phones)
+    for a, b, peak in spans:
+        a, b = a + offset, b + offset
+        heard = [p for p in out if p.name in LABIALS and abs(p.start - a) <= SNAP]
+        if not heard:
+            under = {p.name for p in out if p.end > a + 0.005 and p.start < min(b, a + 0.03)}
+            if peak < SURE or b - a < LONGEST_UNHEARD * HOP / RATE - 1e-9 or not under or under <= OPEN:
+                continue
+        name = heard[0].name if heard else "B"
+        if heard:  # the heard labial keeps its own end where it runs past the span
+            b = max(b, max(p.end for p in heard))
+        kept = []
+        for p in out:
+            if p.end <= a or p.start >= b:
+                kept.append(p)
+                continue
+            if p.start < a and p in heard:  # heard early: the phone before it runs on to the closure
+                if kept and abs(kept[-1].end - p.start) < 1e-9:
+                    kept[-1] = Phone(kept[-1].name, kept[-1].start, a)
+                else:
+                    kept.append(Phone(SILENCE, p.start, a))
+            elif p.start < a:
+                kept.append(Phone(p.name, p.start, a))
+            if p.end > b:
+                kept.append(Phone(p.name, b, p.end))
+        kept.append(Phone(name, a, b))
+        out = sorted(kept, key=lambda p: p.start)
+    return out
+
+
+def refined_phones(recording: Recording, phones: list, offset: float = 0.0) -> list:
+    """:func:`refine_closures` of ``phones`` heard in ``recording`` (times from ``offset``)."""
+    if len(recording.samples) == 0:
+        return list(phones)
+    return refine_closures(phones, closure_spans(closure_probability(recording.floats(), recording.rate)), offset)
