@@ -13,10 +13,14 @@ this process (CPU time, as for Node; after a warm-up call, so that numba's compi
 by ``decode()`` of fba.js in one Node process (``bench_fbajs.mjs``), taking turns: ``--rounds`` turns
 of ``--repeat`` calls on each side, so that a busy spell on a shared machine hits both. The Node
 process first makes ``--node-warmup`` calls per stream that are not counted, as numba's compile is
-not: V8 compiles the decoder in tiers over its first calls (the first call's speed is shown apart). Reported: the best and the
-median call of each side and their ratios. The same work on both sides: each call decodes the whole
-stream into frames whose values are there to read (Python: the FapStream's arrays; Node: the frame
-objects with their typed arrays); every Node call's frame count and sum of FAP values are checked
+not: V8 compiles the decoder in tiers over its first calls (the first call's speed is shown apart).
+Reported: the best and the median call of each side and their ratios.
+
+The same work on both sides: each call decodes the whole stream, every value written where it can be
+read at once (Python: the FapStream's arrays; Node: one Frame object per frame over the slab of values
+the decoder writes, its typed arrays made on first read). As Node leaves those typed arrays to the
+first read, it is timed twice: decode() alone, and decode() plus making every frame's four arrays
+("arrays made"), the ratio with Python given for both. Checked: every Node call's frame count and last timestamp, the sum of every FAP value of Node's calls
 against Python's, and fba.js's frames against the Python decoder's (values, masks, times). Target
 (issue 31): Node at least as fast as the compiled path (ratio >= 1; aimed at >= 1.5, best and median,
 so that the noise of a shared machine cannot flip it). Then the head posed from the same decoded frames by ``facerig.js``
@@ -74,8 +78,8 @@ class NodeBench:
         self.proc = subprocess.Popen([node, str(NODE_BENCH)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                      text=True, bufsize=1)
 
-    def calls(self, path: Path, n: int) -> dict:
-        self.proc.stdin.write(json.dumps({"path": str(path), "calls": n}) + "\n")
+    def calls(self, path: Path, n: int, arrays: bool = False) -> dict:
+        self.proc.stdin.write(json.dumps({"path": str(path), "calls": n, "arrays": arrays}) + "\n")
         self.proc.stdin.flush()
         line = self.proc.stdout.readline()
         if not line:
@@ -153,6 +157,7 @@ def main(argv: list[str] | None = None) -> int:
         cases.append((f"full mask, 66 FAPs + FAP 1/2, {args.frames / FPS:g} s", full))
         decode(full, backend="compiled")  # numba's compile, not counted
         node_s: dict[str, list] = {str(p): [] for _, p in cases}
+        arrays_s: dict[str, list] = {str(p): [] for _, p in cases}  # decode() plus every frame's arrays made
         first_s: dict[str, float] = {}
         shown_s: dict[str, list] = {str(p): [] for _, p in cases}
         py_s: dict[str, list] = {str(p): [] for _, p in cases}
@@ -162,6 +167,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             for _, path in cases:
                 first_s[str(path)] = bench.calls(path, max(1, args.node_warmup))["times_s"][0]
+                bench.calls(path, max(1, args.node_warmup), arrays=True)
             for _ in range(args.rounds):  # turns, so that a busy spell on the machine hits both
                 for _, path in cases:
                     key, data = str(path), path.read_bytes()
@@ -169,6 +175,7 @@ def main(argv: list[str] | None = None) -> int:
                     decoded[key].add((j["frames"], j["value_sum"]))
                     node_s[key] += j["times_s"]
                     shown_s[key] += j["shown_times_s"]
+                    arrays_s[key] += bench.calls(path, args.repeat, arrays=True)["times_s"]
                     t, streams[path] = cpu_times(lambda: decode(data, backend="compiled"), args.repeat)
                     py_s[key] += t
         finally:
@@ -192,7 +199,11 @@ def main(argv: list[str] | None = None) -> int:
                          "node_first_call_fps": n / first_s[key],
                          "node_shown_fps": n / min(shown_s[key]),
                          "ratio_node_over_python": py_best / js_best,
-                         "ratio_median_node_over_python": py_med / js_med})
+                         "ratio_median_node_over_python": py_med / js_med,
+                         "node_arrays_made_fps": n / min(arrays_s[key]),
+                         "node_arrays_made_median_fps": n / float(np.median(arrays_s[key])),
+                         "ratio_arrays_made_node_over_python": py_best / min(arrays_s[key]),
+                         "ratio_arrays_made_median_node_over_python": py_med / float(np.median(arrays_s[key]))})
         pose = pose_times(node, streams[full], Path(tmp), args.pose_frames)
     head_line = (f"{'stream':36} {'frames':>7} {'Python f/s best':>16} {'median':>8} {'Node f/s best':>14} "
                  f"{'median':>8} {'1st call':>9} {'ratio best':>10} {'median':>7}")
@@ -208,6 +219,10 @@ def main(argv: list[str] | None = None) -> int:
     print("(ratio: Node frames/s over the compiled path's, of the best and of the median calls; target >= 1, "
           "aim >= 1.5. 1st call: the Node process's first call, with V8's warm-up. shown.js resolves "
           + ", ".join(f"{r['node_shown_fps']:,.0f}" for r in rows) + " frames/s on top.)")
+    print("with every frame's four typed arrays made in the timed call (fba.js makes them on first read): "
+          + "; ".join(f"{r['stream'].split(' ')[0]} {r['node_arrays_made_fps']:,.0f} f/s best, "
+                      f"{r['node_arrays_made_median_fps']:,.0f} median, ratio {r['ratio_arrays_made_node_over_python']:.2f}x / "
+                      f"{r['ratio_arrays_made_median_node_over_python']:.2f}x" for r in rows))
     print(f"\nthe head posed (facerig.js, the player's pose) from {pose['frames']} frames of the full-mask stream, "
           f"{pose['vertices']} vertices: Node {pose['node_ms_per_pose']:.2f} ms/frame, Python "
           f"{pose['python_ms_per_pose']:.2f} ms/frame, vertices at most {pose['max_vertex_difference_mm']:.1e} mm apart")
