@@ -38,9 +38,9 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
   pure tone's autocorrelation is as high at each multiple of its period). Measured (8 s each,
   tools/bench_live.py's rest rows): a held chord, melodies of pure, sawtooth and organ tones (220-880 Hz,
   0.3 s notes, -12 dBFS) and the synthetic music of :mod:`.listen.signals` leave the mouth at rest in
-  97-100 % of their frames (before: 98 % for the chord, 18-65 % for the melodies, 8 % for the music: the
+  96.5-100 % of their frames (before: 98 % for the chord, 18-65 % for the melodies, 8 % for the music: the
   pitch was taken on windows running past the audio heard, and jumped between a tone's subharmonics);
-  espeak-ng speech in en, es, de moves the mouth in 99-100 % of its frames, as before.
+  espeak-ng speech in en, es, de, fr moves the mouth in 98.9-100 % of its frames, as before.
 
 Frames are ``(n, 68)`` low-level FAPs, rounded (column ``i`` is FAP ``i + 1``), as
 :class:`~.frames.FrameBlock` carries them: :meth:`LiveLipSync.feed` returns those that became due
@@ -83,19 +83,23 @@ FLAT = 0.3
 VOICE_VISEME = "E"
 """The shape of a voice the phone loop has not made out yet (it calls the start of speech silence for a
 window or two): the neutral vowel's, as espeak-ng's schwa ``@`` has it."""
-STEADY = 0.12
+STEADY = 0.15
 """A pitch held this long (s) is a note of music, not a voice (:data:`~.listen.voice.STEADY_SECONDS`)."""
 MUSIC_HOLD = 0.5
-MUSIC_SUNG = 0.3
+"""Seconds after a held note that are music too (the next note's onset comes before its steadiness)."""
+HELD_CENTS = 10.0
+"""A pitch that moves less than this (cents) is held. Tighter than the recording path's
+:data:`~.listen.voice.STEADY_CENTS` (15): the pitch here lies between whole lags, where a note holds within
+1-4 cents and a voice's glides show; at 15 cents a sentence-final "ah" of espeak-ng held the mouth shut."""
+MUSIC_SUNG = 0.2
 """Seconds of periodic sound within the last second before the share rule may call it music (a voice's
 first syllable can hold its pitch for a few frames)."""
 MUSIC_SHARE = 0.33
-"""Share of the periodic frames of the last second whose pitch holds (:data:`~.listen.voice.STEADY_CENTS`
-over :data:`~.listen.voice.STEADY_SECONDS`) from which it is music. Measured with this module's pitch
-(2026-12-05): espeak-ng speech en, es, de, fr at most 0.19-0.26 (median 0.06-0.11); the synthetic music
-of :mod:`.listen.signals` at least 0.38 (median 0.55-0.64), melodies of pure, sawtooth and organ tones at
-least 0.65. (The recording path's 0.25 is on a centred second, where speech never comes as near.)"""
-"""Seconds after a held note that are music too (the next note's onset comes before its steadiness)."""
+"""Share of the periodic frames of the last second whose pitch holds (within :data:`HELD_CENTS` of the pitch
+:data:`~.listen.voice.STEADY_SECONDS` before) from which it is music. Measured with this module's pitch
+(2026-12-05): espeak-ng speech in en, es, de, fr at most 0.14-0.19 (median 0.04-0.08); the synthetic music
+of :mod:`.listen.signals` at least 0.36 (median 0.55-0.64), melodies of pure, sawtooth and organ tones at
+least 0.65."""
 VOICE_RATE = 8000
 """The rate the recording path measures pitch at (:data:`~.listen.voice.RATE`); its lags are scaled from it."""
 PITCH_WINDOW = 512
@@ -278,7 +282,7 @@ class LiveLipSync:
         the :data:`PITCH_WINDOW` samples that end with it (never past the audio heard), its period the
         shortest lag near the best (:func:`~.listen.voice.lag_peaks`: a pure tone's best lag alone jumps
         between multiples of its period)."""
-        from mpeg4fa.speech.listen.voice import LAGS, MUSIC_WINDOW, PERIODIC, STEADY_CENTS, STEADY_SECONDS, lag_peaks
+        from mpeg4fa.speech.listen.voice import LAGS, MUSIC_WINDOW, PERIODIC, STEADY_SECONDS, lag_peaks
 
         n = int(round(VAD_FRAME * RATE))
         x = np.concatenate([self.pitch_context, y.astype(np.float64) / 32768.0])
@@ -295,7 +299,7 @@ class LiveLipSync:
         # once make the period jump between them: a chord's notes are not all held every frame)
         lag = int(round(STEADY_SECONDS / VAD_FRAME))
         d = np.abs(history[lag:] - history[:-lag]) % 1200  # NaN (unvoiced) compares False
-        held = np.r_[np.zeros(min(lag, len(history)), bool), np.minimum(d, 1200 - d) < STEADY_CENTS]
+        held = np.r_[np.zeros(min(lag, len(history)), bool), np.minimum(d, 1200 - d) < HELD_CENTS]
         self.held = np.concatenate([self.held, held[-frames:] if frames else held[:0]])
         self.sung = np.concatenate([self.sung, np.isfinite(cents)])
         span = int(round(MUSIC_WINDOW / VAD_FRAME))
@@ -312,7 +316,7 @@ class LiveLipSync:
             past = history[max(0, now - steady):now + 1]
             if len(past) == steady + 1 and np.isfinite(past).all():
                 d = np.abs(past - past[-1]) % 1200
-                if (np.minimum(d, 1200 - d) < STEADY_CENTS).all():
+                if (np.minimum(d, 1200 - d) < HELD_CENTS).all():
                     self.music_left = int(round(MUSIC_HOLD / VAD_FRAME))
             if shared[k]:
                 self.music_left = max(self.music_left, int(round(MUSIC_HOLD / VAD_FRAME)))

@@ -58,7 +58,7 @@ def lag_peaks(windows: np.ndarray, lo: int, hi: int, shortest: bool = False) -> 
     """Per row of ``windows`` (samples): the normalised autocorrelation's peak over lags ``lo..hi``
     (unbiased: each lag's sum over fewer products scaled back to the window; 0 for a silent row), and
     the lag taken for the period: the best, or (``shortest``) the shortest local peak within
-    :data:`PEAK_SHARE` of the best. A pure tone's autocorrelation is as high at every multiple of its
+    :data:`PEAK_SHARE` of the best, placed between whole lags. A pure tone's autocorrelation is as high at every multiple of its
     period, so the best lag alone jumps between them from frame to frame and a held note looks like a
     gliding voice; the recording path's music test forgives those jumps over a second
     (:func:`_held`), the live one, deciding on 0.12 s, cannot."""
@@ -72,11 +72,18 @@ def lag_peaks(windows: np.ndarray, lo: int, hi: int, shortest: bool = False) -> 
     inner = ac[:, 1:-1]
     best = inner.max(axis=1)
     first = np.argmax(inner, axis=1)
-    if shortest:
-        peaks = (inner >= ac[:, :-2]) & (inner >= ac[:, 2:]) & (inner >= PEAK_SHARE * best[:, None])
-        first = np.where(peaks.any(axis=1), np.argmax(peaks, axis=1), first)
     value = np.where(energy < 1e-9, 0.0, np.clip(best, 0.0, 1.0))
-    return value, lo + first
+    if not shortest:
+        return value, lo + first
+    peaks = (inner >= ac[:, :-2]) & (inner >= ac[:, 2:]) & (inner >= PEAK_SHARE * best[:, None])
+    first = np.where(peaks.any(axis=1), np.argmax(peaks, axis=1), first)
+    # the peak between lags (a parabola through it and its neighbours): a whole lag is 5-15 cents at a
+    # voice's pitch, so whole lags make a slowly gliding voice look held for several frames
+    rows = np.arange(len(first))
+    a, b, c = ac[rows, first], ac[rows, first + 1], ac[rows, first + 2]
+    bend = a - 2 * b + c
+    shift = np.where(bend < -1e-12, 0.5 * (a - c) / np.where(bend < -1e-12, bend, -1.0), 0.0)
+    return value, lo + first + np.clip(shift, -0.5, 0.5)
 
 
 def periodicity(x: np.ndarray, rate: int, hop: float = HOP) -> tuple[np.ndarray, np.ndarray]:

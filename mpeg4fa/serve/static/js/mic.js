@@ -3,15 +3,19 @@
 // mpeg4fa/serve/microphone.py), which listens (mpeg4fa.speech.live) and answers with the face as FBA1
 // messages. Those go to the player's own handler (window.player.onBinary): decoded by fba.js and played on
 // the player's clock like a sentence's stream. Their media times are the session's; they are moved onto the
-// player's clock at the first one, MARGIN ahead of it (a little room for the network's jitter), or at 0
-// when the player's clock has not started (it starts then, with its own prebuffer).
+// player's clock at the first one: a frame shows the server's latency plus MARGIN (a little room for the
+// network's jitter) after its audio was sent, however late the first answer came. A session has no end the
+// page knows of, so the player keeps only the frames shown in the last KEEP s (window.player.trim) and what
+// is still to come; the status line says how far the face is behind the voice.
 const MIC = "MIC1", FBA = "FBA1";
 const RATE = 16000;
-const MARGIN = 0.08;  // s between a face frame's arrival and its showing, once the clock runs
+const MARGIN = 0.08;  // s of room for the network on top of the server's latency
+const KEEP = 2;  // s of frames kept behind the one showing
+const DEFAULT_LATENCY = 0.18;  // s, the server's (mpeg4fa.speech.live.LATENCY) until its "started" message says
 
 const state = {  // read by the browser test (window.mic)
   on: false, starting: false, sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null,
-  errors: [], offset: null, levels: [], contextRate: null,
+  errors: [], offset: null, levels: [], contextRate: null, frames: 0, dropped: 0, mostHeld: 0,
 };
 window.mic = state;
 
@@ -49,19 +53,40 @@ function onMessage(e) {
   const player = window.player;
   const t = view.getFloat64(4, true);
   if (state.offset === null) {
-    state.offset = Number.isFinite(player.mediaTime) ? player.mediaTime + MARGIN - t : -t;
+    // the audio sent so far ends about now: a frame of session time t shows at now + (t - sent) + latency +
+    // MARGIN, whenever the first answer came (a server slow to start must not leave the face behind the voice
+    // for the whole session: the frames it is late with are simply past when they come)
+    player.startClock();
+    const latency = state.started ? state.started.latency : DEFAULT_LATENCY;
+    state.offset = player.mediaNow() - state.sent / RATE + latency + MARGIN;
     player.done = null;  // a finished sentence's "back to rest" must not hold the face still
   }
   view.setFloat64(4, t + state.offset, true);
   state.faces++;
   state.faceBytes += buffer.byteLength - 12;
+  const held = player.frames.length;
   player.onBinary(buffer);
+  state.frames += player.frames.length - held;
+  state.dropped += player.trim(KEEP);
+  state.mostHeld = Math.max(state.mostHeld, player.frames.length);
+}
+
+/** The status line while the microphone runs: how far the face shown is behind the audio sent, and the
+ * frames received and held (null when it does not run: the player's own lines). */
+function statusLines() {
+  if (!state.on && !state.starting) return null;
+  const player = window.player;
+  if (state.offset === null) return [`microphone: listening, ${(state.sent / RATE).toFixed(1)} s sent, no face yet`];
+  const behind = state.sent / RATE - (player.mediaNow() - state.offset);
+  return [`microphone: listening, the face ${Math.max(0, behind * 1000).toFixed(0)} ms behind the voice`,
+          `${state.frames} frames in ${state.faces} messages, ${player.frames.length} held, underruns ${player.underruns}`];
 }
 
 async function start() {
   state.starting = true;
   Object.assign(state, { sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null, offset: null,
-                         levels: [] });
+                         levels: [], frames: 0, dropped: 0, mostHeld: 0 });
+  window.player.statusLines = statusLines;
   button.disabled = true;
   try {
     ws = new WebSocket(`ws://${location.host}/ws`);

@@ -181,14 +181,29 @@ frame();
 state.pose = (k) => { state.held = true; apply(state.frames[k].values); scene.render(); };
 /** Feature points of the drawn head (mm), read back from its vertices. */
 state.featurePoints = () => head.featurePoints();
+/** Drop the frames whose time passed more than ``seconds`` ago (the one showing then stays), so that an
+ * endless source (the microphone) holds what it shows and what is coming, not all it ever sent; returns how
+ * many went. By the clock, not by what was drawn: a page stalled for a while trims all the same. */
+state.trim = (seconds) => {
+  const before = mediaTime() - seconds;
+  let n = 0;
+  while (n + 1 < state.frames.length && state.frames[n + 1].t <= before) n++;
+  if (n) { state.frames.splice(0, n); state.shown = Math.max(-1, state.shown - n); }
+  return n;
+};
+/** The media time now (-Infinity before the clock starts), and the clock started (if it has not): for a
+ * source that places its frames by its own clock (the microphone). */
+state.mediaNow = mediaTime;
+state.startClock = startClock;
 
 function setStatus() {
   const s = state;
   statusBox.textContent = [
     s.ready ? `head ready${head.deformerNote ? ` (${head.deformerNote})` : ""}` : "loading the head…",
     ws ? "connected" : "not connected",
-    `frames ${s.frames.length} (shown ${s.shownFrames}), audio chunks ${s.audioChunks}, FBA ${s.fbaBytes} bytes in ${s.segments.length} segments`,
-    `first frame ${s.latencyMs === null ? "-" : s.latencyMs.toFixed(0) + " ms"}, underruns ${s.underruns}, clock ${s.clock}`,
+    ...(s.statusLines && s.statusLines()) || [  // another source's own lines while it runs (the microphone)
+      `frames ${s.frames.length} (shown ${s.shownFrames}), audio chunks ${s.audioChunks}, FBA ${s.fbaBytes} bytes in ${s.segments.length} segments`,
+      `first frame ${s.latencyMs === null ? "-" : s.latencyMs.toFixed(0) + " ms"}, underruns ${s.underruns}, clock ${s.clock}`],
     s.done ? `done: ${s.done.duration.toFixed(2)} s${s.done.stopped ? " (stopped)" : ""}` : "",
     ...s.errors.slice(-2).map((e) => `error (${e.where}): ${e.error}`),
   ].filter(Boolean).join("\n");
