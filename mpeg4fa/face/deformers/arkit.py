@@ -35,8 +35,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deformers.feature_points import (FoldGuard, apply_head_rotation, apply_lids,
-                                                   pose_in_head_frame, skin_guard)
+from mpeg4fa.face.deformers.feature_points import FoldGuard, apply_head_rotation, apply_lids, pose_in_head_frame
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
@@ -181,18 +180,20 @@ def unit_weights(arkit: ArkitRig, values: np.ndarray) -> np.ndarray:
     return np.clip(arkit.gains @ values, 0.0, 1.0)
 
 
-def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guards: tuple[FoldGuard, FoldGuard] | None = None) -> Pose:
+def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guard: FoldGuard | None = None) -> Pose:
     """Pose one frame with the sculpted face units, feature points exactly where the FAPs put them.
 
-    ``guards``: the feature-point deformer's (for the targets) and one over the correction's columns."""
+    ``guard`` (over the correction's columns) spreads the correction wider where it would fold skin.
+    The targets come from the feature-point deformer without its guard: the guard moves no named
+    point, but the lid centres 3.13/3.14 ride on its wider skin, and pulled there they tented the lids."""
     v = np.asarray(values, dtype=np.float64)
-    p, pupils = pose_in_head_frame(rig, v, lids=False, guard=guards[0] if guards else None)
+    p, pupils = pose_in_head_frame(rig, v, lids=False)
     skin = rig.parts["skin"]
     sculpted = rig.rest[skin] + (arkit.deltas @ unit_weights(arkit, v)).reshape(-1, 3)
     residual = p[arkit.fp_global] - sculpted[arkit.fp_local]
     p[skin] = sculpted + arkit.correction @ residual
-    if guards:
-        guards[1].relieve(p, residual)
+    if guard is not None:
+        guard.relieve(p, residual)
     apply_lids(rig, p, v)  # after sculpting: the lids turn over the eyeball as in the feature-point deformer
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
@@ -204,10 +205,10 @@ class ArkitDeformer:
 
     rig: Rig
     arkit: ArkitRig
-    guards: tuple[FoldGuard, FoldGuard] | None = None
+    guard: FoldGuard | None = None
 
     def __call__(self, values: np.ndarray) -> Pose:
-        return deform_arkit(self.rig, self.arkit, values, self.guards)
+        return deform_arkit(self.rig, self.arkit, values, self.guard)
 
 
 def correction_guard(mesh: HeadMesh, arkit: ArkitRig) -> FoldGuard:
@@ -220,4 +221,4 @@ def correction_guard(mesh: HeadMesh, arkit: ArkitRig) -> FoldGuard:
 
 def build(mesh: HeadMesh, rig: Rig) -> ArkitDeformer:
     arkit = build_arkit_rig(mesh, rig)
-    return ArkitDeformer(rig, arkit, (skin_guard(mesh, rig), correction_guard(mesh, arkit)))
+    return ArkitDeformer(rig, arkit, correction_guard(mesh, arkit))
