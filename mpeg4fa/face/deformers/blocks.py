@@ -78,7 +78,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face.couplings import PASSIVE_POINTS
-from mpeg4fa.face.deformers.feature_points import deform
+from mpeg4fa.face.deformers.feature_points import FoldGuard, deform, skin_guard
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
@@ -304,14 +304,17 @@ def _place(m: sp.csr_matrix, rows: np.ndarray, n_rows: int) -> sp.csr_matrix:
 class BlocksDeformer:
     """The block deformer set up for one face: ``values (68,) -> Pose``.
 
-    ``block_rig`` is the face's rig with the blocks' skin weights in; ``blocks`` the blocks."""
+    ``block_rig`` is the face's rig with the blocks' skin weights in; ``blocks`` the blocks; ``guard``
+    the feature-point deformer's fold guard over those weights (the skin outside the blocks folds no more
+    than it does there)."""
 
     rig: Rig
     block_rig: Rig
     blocks: tuple[Block, ...]
+    guard: FoldGuard | None = None
 
     def __call__(self, values: np.ndarray) -> Pose:
-        return deform(self.block_rig, values)
+        return deform(self.block_rig, values, self.guard)
 
     def parameters(self, values: np.ndarray) -> dict[str, np.ndarray]:
         """Each block's 12 parameters (:data:`PARAMETERS`) for one frame of FAP values: the field of
@@ -353,7 +356,7 @@ def blocks_deformer(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) 
     weights = block_weights(rig, blocks)
     moving = np.unique(weights.nonzero()[0])
     block_rig = replace(rig, weights=weights, moving=moving, weights_moving=weights[moving])
-    return BlocksDeformer(rig=rig, block_rig=block_rig, blocks=blocks)
+    return BlocksDeformer(rig=rig, block_rig=block_rig, blocks=blocks, guard=skin_guard(mesh, block_rig))
 
 
 def build(mesh: HeadMesh, rig: Rig, regions: Sequence[str] = REGIONS) -> BlocksDeformer:
