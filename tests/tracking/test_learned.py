@@ -14,7 +14,7 @@ FAPU = Fapu(IRISD0=20.0, ES0=60.0, ENS0=40.0, MNS0=30.0, MW0=50.0)
 
 def test_fit_recovers_a_linear_map_and_answers_in_the_persons_own_units():
     rng = np.random.default_rng(3)
-    moved = rng.normal(0, 0.02, (800, learned.N_FACE, 3))
+    moved = rng.normal(0, 0.02, (800, learned.FACE_LANDMARKS, 3))
     angles = rng.normal(0, 0.2, (800, 3))
     landmarks = np.array([13, 14, 61, 291])
     truth = rng.normal(size=(learned.design(moved[:1, landmarks], angles[:1]).shape[1], 2))
@@ -32,10 +32,10 @@ def test_fit_recovers_a_linear_map_and_answers_in_the_persons_own_units():
 def test_shipped_map_is_still_at_rest_and_bounded():
     fap_map = learned.trained_map()
     assert fap_map is not None, "mpeg4fa/tracking/data/fap_map.npz is missing: run tools/train_tracker.py"
-    assert all(r.landmarks.max() < learned.N_FACE for r in fap_map.regions)
+    assert all(r.landmarks.max() < learned.FACE_LANDMARKS for r in fap_map.regions)
     assert set(fap_map.faps) <= set(rules.TRANSLATIONS) and len(set(fap_map.faps)) == len(fap_map.faps)
-    assert np.all(fap_map.predict(np.zeros((1, learned.N_FACE, 3)), np.zeros((1, 3)), FAPU) == 0)
-    wild = np.random.default_rng(4).normal(0, 1.0, (50, learned.N_FACE, 3))  # landmarks thrown an eye distance
+    assert np.all(fap_map.predict(np.zeros((1, learned.FACE_LANDMARKS, 3)), np.zeros((1, 3)), FAPU) == 0)
+    wild = np.random.default_rng(4).normal(0, 1.0, (50, learned.FACE_LANDMARKS, 3))  # landmarks thrown an eye distance
     out = fap_map.predict(wild, np.zeros((50, 3)), FAPU)
     assert np.all(np.abs(out) <= fap_map.bound) and fap_map.bound.max() <= 2500  # 1.5 x the widest trained jaw (2.3 MNS0)
 

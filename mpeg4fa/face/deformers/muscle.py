@@ -60,7 +60,7 @@ from scipy.optimize import nnls
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS
-from mpeg4fa.face.deformers.feature_points import apply_head_rotation, apply_lids, pose_in_head_frame
+from mpeg4fa.face.deformers.feature_points import FoldGuard, apply_head_rotation, apply_lids, pose_in_head_frame, skin_guard
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.muscles import CROSS_ES, Muscle, muscle_basis, place_muscles
 from mpeg4fa.face.regions import smooth_down
@@ -182,10 +182,11 @@ def muscle_motion(mrig: MuscleRig, k: np.ndarray) -> np.ndarray:
     return (b_fp @ k).reshape(-1, 3)
 
 
-def deform_muscle(rig: Rig, mrig: MuscleRig, values: np.ndarray) -> Pose:
-    """Pose one frame: muscles shape the skin, feature points exactly where the FAPs put them."""
+def deform_muscle(rig: Rig, mrig: MuscleRig, values: np.ndarray, guard: FoldGuard | None = None) -> Pose:
+    """Pose one frame: muscles shape the skin, feature points exactly where the FAPs put them; ``guard``
+    is the feature-point deformer's fold guard for the skin under the muscles."""
     v = np.asarray(values, dtype=np.float64)
-    p, pupils = pose_in_head_frame(rig, v, lids=False)
+    p, pupils = pose_in_head_frame(rig, v, lids=False, guard=guard)
     k = contractions(rig, mrig, v)
     if k.any():
         delta = (mrig.field @ k).reshape(-1, 3)
@@ -207,9 +208,10 @@ class MuscleDeformer:
 
     rig: Rig
     muscle_rig: MuscleRig
+    guard: FoldGuard | None = None
 
     def __call__(self, values: np.ndarray) -> Pose:
-        return deform_muscle(self.rig, self.muscle_rig, values)
+        return deform_muscle(self.rig, self.muscle_rig, values, self.guard)
 
     def contractions(self, values: np.ndarray) -> dict[str, float]:
         """Muscle name -> contraction (mm) for one frame."""
@@ -217,7 +219,7 @@ class MuscleDeformer:
 
 
 def build(mesh: HeadMesh, rig: Rig) -> MuscleDeformer:
-    return MuscleDeformer(rig, build_muscle_rig(mesh, rig))
+    return MuscleDeformer(rig, build_muscle_rig(mesh, rig), skin_guard(mesh, rig))
 
 
 @dataclass(frozen=True)
