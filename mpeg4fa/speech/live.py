@@ -35,8 +35,9 @@ How (the numbers are the defaults; ``tools/bench_live.py`` measures them):
   is a second in which at least :data:`MUSIC_SHARE` of the periodic frames keep their pitch (several notes
   at once, plucked and decaying); everything for :data:`MUSIC_HOLD` s after either is music too. Each
   frame's pitch is taken on the 32 ms that end with it, its period the shortest lag near the best (a
-  pure tone's autocorrelation is as high at each multiple of its period). Measured (8 s each,
-  tools/bench_live.py's rest rows): a held chord, melodies of pure, sawtooth and organ tones (220-880 Hz,
+  pure tone's autocorrelation is as high at each multiple of its period). Measured (8 s each, 2026-12-05;
+  tests/speech/test_live.py holds the melodies, the music and the speech to them): a held chord, melodies
+  of pure, sawtooth and organ tones (220-880 Hz,
   0.3 s notes, -12 dBFS) and the synthetic music of :mod:`.listen.signals` leave the mouth at rest in
   96.5-100 % of their frames (before: 98 % for the chord, 18-65 % for the melodies, 8 % for the music: the
   pitch was taken on windows running past the audio heard, and jumped between a tone's subharmonics);

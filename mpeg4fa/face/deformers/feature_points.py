@@ -90,11 +90,11 @@ class FoldGuard:
         p = mesh.vertices[tris]
         n0 = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
         self.rest_normal = n0 / np.maximum(np.einsum("ij,ij->i", n0, n0), 1e-12)[:, None]
-        # which watched triangles each column moves: (triangles, K), 1 where it does
         local = tris - self.skin.start
-        touch = sp.csr_matrix(self.narrow != 0, dtype=np.float64)
-        self.support = sp.csr_matrix(((touch[local[:, 0]] + touch[local[:, 1]] + touch[local[:, 2]]) > 0),
-                                     dtype=np.float64)
+        dense = self.narrow.toarray()
+        w = [dense[local[:, k]] for k in range(3)]  # (T, K) each
+        # which watched triangles each column moves: (triangles, K), 1 where it does
+        self.touches = ((w[0] != 0) | (w[1] != 0) | (w[2] != 0)).astype(np.float64)
         # how steeply each column's weight changes across each triangle (1/mm): a triangle whose
         # sum of |motion| x steepness stays under 1 - sqrt(FOLD_START) keeps at least FOLD_START of
         # its facing area (the in-plane map's singular values stay above 1 - that sum), so it is
@@ -102,10 +102,7 @@ class FoldGuard:
         e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
         sq = np.einsum("ij,ij->i", n0, n0)
         g0, g1, g2 = (np.cross(n0, e) / np.maximum(sq, 1e-12)[:, None] for e in (p[:, 2] - p[:, 1], -e2, e1))
-        dense = self.narrow.toarray()
-        w = [dense[local[:, k]] for k in range(3)]  # (T, K) each
         grad = (w[0][:, :, None] * g0[:, None] + w[1][:, :, None] * g1[:, None] + w[2][:, :, None] * g2[:, None])
-        self.touches = self.support.toarray()
         self.steep = sp.csr_matrix(np.linalg.norm(grad, axis=2) * self.touches)
 
     @cached_property
