@@ -6,8 +6,10 @@ feature-point deformer (:mod:`mpeg4fa.face.deformers.feature_points`) is linear 
 moves the feature points by a linear map of the FAPs (``rig.translate``), then keeps each inner lip
 corner inside its outer one (a rule, not a sum), spreads the points' motion to the skin by a linear
 map (``rig.weights``), and turns lids, tongue, jaw, eyes and head by rotations that act on the
-moved vertices. So the head ships with that rig as data (:func:`rig_data`), and ``static/js/facerig.js``
-runs the same steps in the page (float64, all vertices, a few milliseconds a frame): every vertex is
+moved vertices; the lids also follow the eyes' pitch (:func:`~mpeg4fa.face.lids.lid_moves`), and a fold
+guard (:class:`~mpeg4fa.face.deformers.feature_points.FoldGuard`) spreads large translations over wide
+weights where skin would turn over. So the head ships with that rig as data (:func:`rig_data`, the guard's
+arrays precomputed), and ``static/js/facerig.js`` runs the same steps in the page (float64, all vertices, a few milliseconds a frame): every vertex is
 where the Python face puts it, to rounding. Numbers of the standard come in already applied (FAPU x
 direction in ``translate``, directions of the jaw and eye FAPs, the angle unit), never retyped.
 """
@@ -17,13 +19,13 @@ import json
 
 import numpy as np
 
-from mpeg4fa.face import motion
+from mpeg4fa.face import lids, motion
 from mpeg4fa.face.deformers import feature_points
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.face.rig import CORNER_MARGIN_MM
 from mpeg4fa.spec import ANGLE_UNIT
 
-RIG_VERSION = 1
+RIG_VERSION = 2
 """Bumped when the layout of :func:`rig_data` changes (``static/js/facerig.js`` checks it)."""
 
 
@@ -33,6 +35,32 @@ def _ints(a) -> list[int]:
 
 def _floats(a) -> list[float]:
     return np.asarray(a, dtype=np.float64).ravel().tolist()
+
+
+def _fold_guard(face: FaceModel) -> dict:
+    """The feature-point deformer's fold guard as data: its watched triangles, each column's steepness
+    over the triangles it touches (CSR by triangle), and its wide-minus-narrow weights (CSR by skin vertex)."""
+    guard = feature_points.skin_guard(face.mesh, face.rig)
+    t_rows, t_cols = np.nonzero(guard.touches)  # row-major: CSR order
+    steep = guard.steep.toarray()[t_rows, t_cols]  # 0 where a touched triangle is flat in a column: sums the same
+    shift = guard.shift
+    rows = np.flatnonzero(np.any(shift != 0, axis=1))
+    s_rows, s_cols = np.nonzero(shift[rows])
+    return {"fold_start": float(feature_points.FOLD_START), "fold_full": float(feature_points.FOLD_FULL),
+            "columns": _ints(guard.columns), "triangles": _ints(guard.triangles), "rest_normal": _floats(guard.rest_normal),
+            "touches": {"indptr": _ints(np.searchsorted(t_rows, np.arange(len(guard.triangles) + 1))),
+                        "indices": _ints(t_cols), "steep": _floats(steep)},
+            "shift": {"rows": _ints(guard.skin.start + rows), "indptr": _ints(np.searchsorted(s_rows, np.arange(len(rows) + 1))),
+                      "indices": _ints(s_cols), "data": _floats(shift[rows][s_rows, s_cols])}}
+
+
+def _gaze(face: FaceModel) -> dict:
+    """The lids' follow of the eyes' pitch (:func:`~mpeg4fa.face.lids.lid_moves`) as data: per eye its pitch
+    FAP and its lid FAPs, and the follow's shares, limits (degrees), knee and slit."""
+    return {"eyes": [{"pitch": int(pitch), "upper": int(faps["upper"]), "lower": int(faps["lower"])}
+                     for _eye, pitch, faps in lids._EYE_LIDS],
+            "follow": {side: [float(x) for x in f] for side, f in lids.FOLLOW.items()},
+            "knee": float(lids.KNEE), "slit": float(lids.SLIT)}
 
 
 def rig_data(face: FaceModel) -> dict:
@@ -64,7 +92,8 @@ def rig_data(face: FaceModel) -> dict:
                                                   "data": _floats(w.data)},
         "irisd": float(fapu.unit("IRISD")),
         "lids": [{"fap": int(fap), "rows": _ints(s.rows), "ratios": _floats(s.ratios), "joint": int(s.joint),
-                  "point": int(s.point), "down": float(-motion.direction(fap)[1])} for fap, s in rig.lids.items()],
+                  "point": int(s.point)} for fap, s in rig.lids.items()],
+        "gaze": _gaze(face), "fold": _fold_guard(face),
         "roll": {"fap": motion.TONGUE_ROLL, "axis_fp": None if roll_first is None else int(roll_first),
                  "parts": [{"rows": _ints(r), "weights": _floats(wt), "side": float(side)}
                            for r, wt, side in rig.roll_rows.values()]},

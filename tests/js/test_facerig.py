@@ -63,13 +63,6 @@ def pose_in_node(tmp_path, face, rows: np.ndarray) -> tuple[np.ndarray, dict]:
     return np.fromfile(out, "<f8").reshape(len(rows), n, 3), json.loads(run.stdout)
 
 
-NOT_PORTED = pytest.mark.xfail(
-    strict=True, reason="facerig.js has neither the feature-point deformer's fold guard (6cc084c, a46508f) nor the "
-    "lids' follow of the eyes' pitch (17fa3c6): measured 1.3-5.9 mm off on the rows where they act (rows 3, 8, 10-15); "
-    "the head-turn rows still match to 1e-13 mm")
-
-
-@NOT_PORTED
 def test_facerig_poses_every_vertex_as_python(tmp_path, face):
     rows = rows_to_check(np.random.default_rng(31))
     got, timing = pose_in_node(tmp_path, face, rows)
@@ -82,7 +75,6 @@ def test_facerig_poses_every_vertex_as_python(tmp_path, face):
             assert np.abs(want - face.mesh.vertices).max() > 0.5, k
 
 
-@NOT_PORTED
 def test_facerig_on_real_speech(tmp_path, face):
     if not SHARED.is_dir():
         pytest.skip(f"{SHARED} is absent: the real streams are not on this machine")

@@ -3,12 +3,13 @@
 // A port of mpeg4fa/face/deformers/feature_points.py (deform): 68 shown FAP values in, every vertex of
 // the head out, in millimetres, float64. The rig comes as data (mpeg4fa/serve/fap_head.py rig_data):
 // the linear map FAPs -> feature point motion (FAPU x direction already applied), the inner/outer lip
-// corner rule, the sparse map feature point motion -> skin, the lid sheets, the tongue roll, the jaw,
-// the eyes and the head turn with its fade down the neck, in that order (lips move in the jaw's frame,
-// the jaw and eyes in the head's). Same steps, same order, same numbers: the page's head is the
+// corner rule, the sparse map feature point motion -> skin and its fold guard (wide weights where skin
+// would turn over), the lid sheets (their FAPs and their follow of the eyes' pitch), the tongue roll,
+// the jaw, the eyes and the head turn with its fade down the neck, in that order (lips move in the
+// jaw's frame, the jaw and eyes in the head's). Same steps, same order, same numbers: the page's head is the
 // Python face's to rounding, not an approximation of it.
 
-const RIG_VERSION = 1;
+const RIG_VERSION = 2;
 
 /** Right-handed rotation by ``angle`` about axis 0, 1 or 2, as a row-major 3x3 (motion.rotation_matrix). */
 export function rotation(axis, angle) {
@@ -56,6 +57,19 @@ export function partialRotation(r) {
   };
 }
 
+/** ``angle`` (rad, + down) up to ``knee`` of its limit, then easing into the limit (lids._ease). */
+function ease(angle, up, down, knee) {
+  const limit = (angle > 0 ? down : up) * (Math.PI / 180), k = knee * limit, a = Math.abs(angle);
+  if (a <= k) return angle;
+  return Math.sign(angle) * (k + (limit - k) * Math.tanh((a - k) / (limit - k)));
+}
+
+/** 0 at or below 0, 1 at or above 1, a cubic with zero slope at both ends (feature_points._smooth_step). */
+function smoothStep(x) {
+  const t = Math.min(1, Math.max(0, x));
+  return t * t * (3 - 2 * t);
+}
+
 const i32 = (a) => Int32Array.from(a);
 const f64 = (a) => Float64Array.from(a);
 
@@ -75,7 +89,17 @@ export class FaceRig {
     this.moving = i32(data.moving);
     this.w = { indptr: i32(data.weights.indptr), indices: i32(data.weights.indices), data: f64(data.weights.data) };
     this.irisd = data.irisd;
-    this.lids = data.lids.map((l) => ({ ...l, rows: i32(l.rows), ratios: f64(l.ratios) }));
+    this.lids = new Map(data.lids.map((l) => [l.fap, { ...l, rows: i32(l.rows), ratios: f64(l.ratios) }]));
+    this.gaze = data.gaze;
+    const f = data.fold;
+    this.fold = {
+      start: f.fold_start, full: f.fold_full, columns: i32(f.columns), triangles: i32(f.triangles),
+      normal: f64(f.rest_normal), indptr: i32(f.touches.indptr), indices: i32(f.touches.indices), steep: f64(f.touches.steep),
+      shift: { rows: i32(f.shift.rows), indptr: i32(f.shift.indptr), indices: i32(f.shift.indices), data: f64(f.shift.data) },
+    };
+    const k = this.fold.columns.length, t = this.fold.triangles.length / 3;
+    this.fold.size = new Float64Array(k); this.fold.share = new Float64Array(k); this.fold.moves = new Float64Array(3 * k);
+    this.fold.near = new Float64Array(t);
     this.roll = { ...data.roll, parts: data.roll.parts.map((r) => ({ side: r.side, rows: i32(r.rows), weights: f64(r.weights) })) };
     this.jaw = { ...data.jaw, rows: i32(data.jaw.rows), weights: f64(data.jaw.weights) };
     this.eyes = data.eyes;
@@ -119,6 +143,99 @@ export class FaceRig {
     }
   }
 
+  /** The fold guard (FoldGuard.relieve): where the skin the narrow weights moved by ``m`` nears a fold,
+   * move the columns around it toward their wide weights, by a share that grows as it nears (in place). */
+  relieve(m) {
+    const f = this.fold, p = this.p, { columns, size, share, moves, steep, indptr, indices, triangles, normal, near } = f;
+    let any = false;
+    for (let k = 0; k < columns.length; k++) {
+      const o = 3 * columns[k], x = m[o], y = m[o + 1], z = m[o + 2];
+      moves[3 * k] = x; moves[3 * k + 1] = y; moves[3 * k + 2] = z;
+      size[k] = Math.sqrt(x * x + y * y + z * z);
+      any ||= size[k] > 0;
+    }
+    if (!any) return;
+    const look = 1 - Math.sqrt(f.start), span = f.start - f.full;
+    let folding = false;
+    share.fill(0);
+    for (let t = 0; t < near.length; t++) {
+      let sum = 0;
+      for (let e = indptr[t]; e < indptr[t + 1]; e++) sum += steep[e] * size[indices[e]];
+      if (!(sum > look)) continue;
+      // facing: the posed triangle's area along its rest normal over its rest area
+      const a = 3 * triangles[3 * t], b = 3 * triangles[3 * t + 1], c = 3 * triangles[3 * t + 2];
+      const ux = p[b] - p[a], uy = p[b + 1] - p[a + 1], uz = p[b + 2] - p[a + 2];
+      const wx = p[c] - p[a], wy = p[c + 1] - p[a + 1], wz = p[c + 2] - p[a + 2];
+      const facing = (uy * wz - uz * wy) * normal[3 * t] + (uz * wx - ux * wz) * normal[3 * t + 1]
+        + (ux * wy - uy * wx) * normal[3 * t + 2];
+      if (!(facing < f.start)) continue;
+      folding = true;
+      const s = 1 - smoothStep((facing - f.full) / span);
+      for (let e = indptr[t]; e < indptr[t + 1]; e++) if (s > share[indices[e]]) share[indices[e]] = s;
+    }
+    if (!folding) return;
+    let sharing = false;
+    for (let k = 0; k < columns.length; k++) {
+      if (!(size[k] > 0)) share[k] = 0;
+      sharing ||= share[k] > 0;
+      for (let i = 0; i < 3; i++) moves[3 * k + i] *= share[k];
+    }
+    if (!sharing) return;
+    const { rows, indptr: sp, indices: sk, data } = f.shift;
+    for (let r = 0; r < rows.length; r++) {
+      let dx = 0, dy = 0, dz = 0;
+      for (let e = sp[r]; e < sp[r + 1]; e++) {
+        const k = 3 * sk[e], w = data[e];
+        dx += w * moves[k]; dy += w * moves[k + 1]; dz += w * moves[k + 2];
+      }
+      const o = 3 * rows[r];
+      p[o] += dx; p[o + 1] += dy; p[o + 2] += dz;
+    }
+  }
+
+  /** Turn one lid sheet (lids.turn_lid) so that its point drops ``drop`` mm on its arc about the eye centre's x axis. */
+  turnLid(lid, drop) {
+    const p = this.p, rest = this.rest, c = 3 * lid.joint, q = 3 * lid.point;
+    const angle = arcAngle(rest[q + 1] - rest[c + 1], rest[q + 2] - rest[c + 2], drop);
+    if (angle === 0) return;
+    for (let k = 0; k < lid.rows.length; k++) {
+      const a = lid.ratios[k] * angle, co = Math.cos(a), si = Math.sin(a), o = 3 * lid.rows[k];
+      const dy = p[o + 1] - rest[c + 1], dz = p[o + 2] - rest[c + 2];
+      p[o + 1] = rest[c + 1] + co * dy - si * dz;
+      p[o + 2] = rest[c + 2] + si * dy + co * dz;
+    }
+  }
+
+  /** How far (mm, + down) a lid point descends as its eye pitches by ``pitch`` rad (lids.follow_drop). */
+  followDrop(lid, side, pitch) {
+    const [share, up, down] = this.gaze.follow[side], rest = this.rest;
+    const angle = ease(share * pitch, up, down, this.gaze.knee);
+    const y = rest[3 * lid.point + 1] - rest[3 * lid.joint + 1], z = rest[3 * lid.point + 2] - rest[3 * lid.joint + 2];
+    return y - (y * Math.cos(angle) - z * Math.sin(angle));
+  }
+
+  /** FAPs 19-22 and the lids' follow of the eyes' pitch (lids.lid_moves, apply_lids): each lid turned by its drop. */
+  turnLids(v) {
+    const rest = this.rest, slit = this.gaze.slit;
+    for (const eye of this.gaze.eyes) {
+      const vp = v[eye.pitch - 1], vu = v[eye.upper - 1], vl = v[eye.lower - 1];
+      if (!(vp || vu || vl)) continue;
+      const up = this.lids.get(eye.upper), low = this.lids.get(eye.lower);
+      if (!up || !low) continue;
+      const pitch = vp * this.angleUnit;
+      let followU = pitch ? this.followDrop(up, "upper", pitch) : 0;
+      const followL = pitch ? this.followDrop(low, "lower", pitch) : 0;
+      const opening = rest[3 * up.point + 1] - rest[3 * low.point + 1];
+      followU = Math.min(followU, followL + (1 - slit) * Math.max(opening, 0));
+      const closeU = vu * this.irisd, closeL = vl * this.irisd;  // mm each FAP closes its lid
+      const tU = opening > 0 ? Math.min(Math.max(closeU / opening, 0), 1) : 0;
+      const tL = opening > 0 ? Math.min(Math.max(closeL / opening, 0), 1) : 0;
+      const moveU = followU + tU * (followL - followU), moveL = followL + tL * (followU - followL);
+      if (closeU || moveU) this.turnLid(up, closeU + moveU);
+      if (closeL || moveL) this.turnLid(low, -closeL + moveL);
+    }
+  }
+
   /** Every vertex (Float64Array, x y z per vertex, mm) posed by one row of 68 shown values. */
   pose(v) {
     const p = this.p, rest = this.rest;
@@ -135,20 +252,9 @@ export class FaceRig {
         const o = 3 * this.moving[j];
         p[o] += dx; p[o + 1] += dy; p[o + 2] += dz;
       }
+      this.relieve(m);
     }
-    for (const lid of this.lids) {  // lids.turn_lid: the sheet turns about the eye centre's x axis
-      const value = v[lid.fap - 1];
-      if (!value) continue;
-      const c = 3 * lid.joint, q = 3 * lid.point;
-      const angle = arcAngle(rest[q + 1] - rest[c + 1], rest[q + 2] - rest[c + 2], lid.down * value * this.irisd);
-      if (angle === 0) continue;
-      for (let k = 0; k < lid.rows.length; k++) {
-        const a = lid.ratios[k] * angle, co = Math.cos(a), si = Math.sin(a), o = 3 * lid.rows[k];
-        const dy = p[o + 1] - rest[c + 1], dz = p[o + 2] - rest[c + 2];
-        p[o + 1] = rest[c + 1] + co * dy - si * dz;
-        p[o + 2] = rest[c + 2] + si * dy + co * dz;
-      }
-    }
+    this.turnLids(v);
     const roll = v[this.roll.fap - 1];
     if (roll && this.roll.axis_fp !== null) {
       const axisY = rest[3 * this.fpVertex[this.roll.axis_fp] + 1];
