@@ -37,10 +37,11 @@ export function arcAngle(y, z, drop) {
   return Math.abs(b) < Math.abs(a) ? b : a;
 }
 
-/** share -> the rotation ``r`` turned by that share of its angle about its own axis (Rodrigues), row-major. */
+/** (share, out) -> the rotation ``r`` turned by that share of its angle about its own axis (Rodrigues),
+ * row-major, written into ``out`` (9 numbers; a new array if not given: the neck's rows reuse one). */
 export function partialRotation(r) {
   const angle = Math.acos(Math.min(1, Math.max(-1, 0.5 * (r[0] + r[4] + r[8] - 1))));
-  if (angle < 1e-12) return () => [1, 0, 0, 0, 1, 0, 0, 0, 1];
+  if (angle < 1e-12) return (share, out = new Float64Array(9)) => { out.set([1, 0, 0, 0, 1, 0, 0, 0, 1]); return out; };
   let axis = [r[7] - r[5], r[2] - r[6], r[3] - r[1]];
   let norm = Math.hypot(...axis);
   if (norm <= 1e-9) {  // a half turn: the column of R + I with the most in it
@@ -51,9 +52,10 @@ export function partialRotation(r) {
   }
   const [x, y, z] = axis.map((a) => a / norm);
   const k = [0, -z, y, z, 0, -x, -y, x, 0], k2 = mul(k, k);
-  return (share) => {
+  return (share, out = new Float64Array(9)) => {
     const a = share * angle, s = Math.sin(a), c1 = 1 - Math.cos(a);
-    return k.map((kv, i) => (i % 4 === 0 ? 1 : 0) + s * kv + c1 * k2[i]);
+    for (let i = 0; i < 9; i++) out[i] = (i % 4 === 0 ? 1 : 0) + s * k[i] + c1 * k2[i];
+    return out;
   };
 }
 
@@ -99,13 +101,19 @@ export class FaceRig {
     };
     const k = this.fold.columns.length, t = this.fold.triangles.length / 3;
     this.fold.size = new Float64Array(k); this.fold.share = new Float64Array(k); this.fold.moves = new Float64Array(3 * k);
-    this.fold.near = new Float64Array(t);
+    // the triangles by their steepness summed over columns, steepest first: a frame sums only those whose
+    // sum times the largest column motion could pass the threshold (the rest cannot: skipping them is exact)
+    const total = new Float64Array(t);
+    for (let i = 0; i < t; i++) for (let e = this.fold.indptr[i]; e < this.fold.indptr[i + 1]; e++) total[i] += this.fold.steep[e];
+    this.fold.order = Int32Array.from({ length: t }, (_, i) => i).sort((a, b) => total[b] - total[a]);
+    this.fold.bound = Float64Array.from(this.fold.order, (i) => total[i]);
     this.roll = { ...data.roll, parts: data.roll.parts.map((r) => ({ side: r.side, rows: i32(r.rows), weights: f64(r.weights) })) };
     this.jaw = { ...data.jaw, rows: i32(data.jaw.rows), weights: f64(data.jaw.weights) };
     this.eyes = data.eyes;
     this.es = data.es;
     this.head = { ...data.head, fadeRows: i32(data.head.fade_rows), fadeWeights: f64(data.head.fade_weights) };
     this.before = new Float64Array(this.head.fadeRows.length * 3);
+    this.neckTurn = new Float64Array(9);
   }
 
   restOf(vertex, c) { return this.rest[3 * vertex + c]; }
@@ -146,19 +154,19 @@ export class FaceRig {
   /** The fold guard (FoldGuard.relieve): where the skin the narrow weights moved by ``m`` nears a fold,
    * move the columns around it toward their wide weights, by a share that grows as it nears (in place). */
   relieve(m) {
-    const f = this.fold, p = this.p, { columns, size, share, moves, steep, indptr, indices, triangles, normal, near } = f;
-    let any = false;
+    const f = this.fold, p = this.p, { columns, size, share, moves, steep, indptr, indices, triangles, normal, order, bound } = f;
+    let largest = 0;
     for (let k = 0; k < columns.length; k++) {
       const o = 3 * columns[k], x = m[o], y = m[o + 1], z = m[o + 2];
       moves[3 * k] = x; moves[3 * k + 1] = y; moves[3 * k + 2] = z;
       size[k] = Math.sqrt(x * x + y * y + z * z);
-      any ||= size[k] > 0;
+      if (size[k] > largest) largest = size[k];
     }
-    if (!any) return;
     const look = 1 - Math.sqrt(f.start), span = f.start - f.full;
     let folding = false;
     share.fill(0);
-    for (let t = 0; t < near.length; t++) {
+    for (let j = 0; j < order.length && bound[j] * largest > look; j++) {
+      const t = order[j];
       let sum = 0;
       for (let e = indptr[t]; e < indptr[t + 1]; e++) sum += steep[e] * size[indices[e]];
       if (!(sum > look)) continue;
@@ -296,9 +304,9 @@ export class FaceRig {
         for (let i = 0; i < 3; i++) p[o + i] = c[i] + r[3 * i] * x + r[3 * i + 1] * y + r[3 * i + 2] * z;
       }
       if (h.neck === "turn") {  // each neck vertex turned by its share of the angle (partial_rotations)
-        const part = partialRotation(r);
+        const part = partialRotation(r), m = this.neckTurn;
         for (let k = 0; k < rows.length; k++) {
-          const m = part(h.fadeWeights[k]);
+          part(h.fadeWeights[k], m);
           const x = before[3 * k] - c[0], y = before[3 * k + 1] - c[1], z = before[3 * k + 2] - c[2];
           for (let i = 0; i < 3; i++) p[3 * rows[k] + i] = c[i] + m[3 * i] * x + m[3 * i + 1] * y + m[3 * i + 2] * z;
         }
