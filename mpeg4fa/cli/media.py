@@ -14,12 +14,45 @@ from .errors import UsageError
 from .progress import ProgressBar
 
 
-def check_video_size(output: Path, size: tuple[int, int]) -> None:
-    """An MP4 needs even sides (H.264 yuv420p): say so before any work, not after the speech and the render."""
-    from ..render.video import VIDEO_SUFFIXES
+NOT_FRAMES: dict[str, tuple[str, ...]] = {
+    "audio": (".wav", ".mp3", ".flac", ".ogg", ".opus", ".m4a", ".aac"),
+    "stream": (".fba", ".fap", ".bap", ".fdp"),
+    "image": (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp"),
+    "text": (".json", ".txt", ".csv"),
+}
+"""Kind -> suffixes that name a file, not a folder of PNG frames: ``say -o s.wav`` would otherwise write a folder
+of PNGs called s.wav (any name that is not a video is a frames folder)."""
 
+_INSTEAD = {  # (command, kind) -> what to run for that file instead ({stem}, {name}: the -o name's)
+    ("say", "audio"): "for the speech alone: mpeg4fa encode TEXT -o {stem}.fba --audio {name}",
+    ("say", "stream"): "for the stream alone: mpeg4fa encode TEXT -o {stem}.fba",
+    ("say", "text"): "for the viseme timings: mpeg4fa encode TEXT -o {stem}.fba --timings {stem}.json",
+    ("play", "image"): "for one frame: mpeg4fa snapshot STREAM -o {name}",
+    ("play", "stream"): "for the stream as text: mpeg4fa decode STREAM -o {stem}.fap",
+}
+
+
+def check_frames_output(command: str, output: Path, size: tuple[int, int]) -> None:
+    """Refuse, before any work, an ``-o`` that ``command`` cannot render to: a name of another kind of file
+    (s.wav, s.fba, s.png, s.json: it would become a folder of PNGs so named; an existing folder is taken as
+    it is), a video container not written (.mkv...), or odd sides for an MP4 (H.264 yuv420p needs even ones)."""
+    from ..render import RenderError
+    from ..render.video import VIDEO_SUFFIXES, writes_folder
+
+    suffix = output.suffix.lower()
+    kind = next((k for k, suffixes in NOT_FRAMES.items() if suffix in suffixes), None)
+    if kind is not None and not output.is_dir():
+        stem = output.with_suffix("")
+        instead = _INSTEAD.get((command, kind), "").format(stem=stem, name=output)
+        raise UsageError(f"-o {output}: {command} renders video, not {'an' if kind[0] in 'aei' else 'a'} {kind} "
+                         f"file ({suffix})", hint=f"use -o {stem}.mp4, or -o {stem}/ for a folder of PNG frames"
+                                                   + (f"; {instead}" if instead else ""))
+    try:
+        writes_folder(output)
+    except RenderError as exc:
+        raise UsageError(f"-o {output}: {exc.message}", hint=exc.hint) from None
     width, height = size
-    if output.suffix.lower() in VIDEO_SUFFIXES and (width % 2 or height % 2):
+    if suffix in VIDEO_SUFFIXES and (width % 2 or height % 2):
         raise UsageError(f"--size {width}x{height} is odd; an MP4 (H.264) needs even sizes",
                          hint=f"use {width + width % 2}x{height + height % 2}, or a folder for PNG frames")
 
@@ -51,18 +84,37 @@ def one_line(message: object) -> str:
     return " ".join(str(message).split())
 
 
-def save_image(image, path: Path) -> None:
-    """Save a PIL image whole or not at all (format from the name); RenderError for a name PIL has no format for
-    (an OS error names the file itself: :func:`mpeg4fa.atomic.atomic_output`)."""
+def image_format(command: str, output: Path) -> str:
+    """The PIL format ``output``'s name asks for; UsageError, before any rendering, for a name no image format
+    has (``snapshot -o f.mp4``: one frame is an image; a video is what play makes)."""
+    from PIL import Image
+
+    suffix = output.suffix.lower()
+    chosen = Image.registered_extensions().get(suffix)
+    if chosen in Image.SAVE:
+        return chosen
+    from ..render.video import OTHER_VIDEO_SUFFIXES, VIDEO_SUFFIXES
+
+    video = suffix in VIDEO_SUFFIXES + OTHER_VIDEO_SUFFIXES
+    named = f"{suffix} is no image format" if suffix else "its name has no image suffix"
+    raise UsageError(f"-o {output}: {command} writes one image, and {named}",
+                     hint=f"name it {output.with_suffix('.png')}, or .jpg, .bmp, .tif"
+                          + ("; for video: mpeg4fa play STREAM -o " + str(output) if video else ""))
+
+
+def save_image(image, path: Path, command: str) -> None:
+    """Save a PIL image whole or not at all, in the format its name asks for (:func:`image_format`); an OS
+    error names the file itself (:func:`mpeg4fa.atomic.atomic_output`)."""
     from ..atomic import atomic_output
     from ..render import RenderError
 
+    chosen = image_format(command, path)
     try:
         with atomic_output(path) as partial:
-            image.save(partial)
-    except ValueError as exc:
-        raise RenderError(f"cannot write the image ({exc})", where=str(path),
-                          hint="name it .png, .jpg, .bmp or .tif") from None
+            image.save(partial, format=chosen)
+    except ValueError as exc:  # the format refuses this image (its mode, its size)
+        raise RenderError(f"cannot write the image as {chosen} ({exc})", where=str(path),
+                          hint=f"name it {path.with_suffix('.png')}") from None
 
 
 AUDIO_SUFFIXES = (".wav", ".WAV", ".Wav")

@@ -10,7 +10,8 @@ from ..render.camera import VIEWS
 from ..render.video import AUDIO_WAV, writes_folder
 from . import options
 from .errors import UsageError
-from .media import audio_beside, check_video_size, render_with_progress, save_image, skin_texture
+from .media import (audio_beside, check_frames_output, image_format, render_with_progress, save_image,
+                    skin_texture)
 from .model import deformer_option, face_options, posed_face
 from .options import Commands
 from .paths import refuse_overlaps
@@ -109,9 +110,9 @@ def run_play(args: argparse.Namespace) -> int:
         inputs = {"stream": args.stream, "--audio": audio, "--fdp": args.fdp, "--texture": args.texture,
                   "--face-mesh": args.face_mesh, "--face-points": args.face_points, "--photo": args.photo}
         refuse_overlaps(inputs, {"-o": args.output})
+        check_frames_output("play", args.output, args.size)
         if audio is not None and writes_folder(args.output):  # PNG frames, and the audio beside them
             refuse_overlaps(inputs, {f"-o {args.output}'s {AUDIO_WAV}": args.output / AUDIO_WAV})
-        check_video_size(args.output, args.size)
     stream, _ = read_stream(args.stream)
     face, photo_texture = _face(args)
     render_options = _renderer_options(args, face, photo_texture)
@@ -145,10 +146,11 @@ def run_snapshot(args: argparse.Namespace) -> int:
 
     refuse_overlaps({"stream": args.stream, "--fdp": args.fdp, "--texture": args.texture, "--photo": args.photo,
                      "--face-mesh": args.face_mesh, "--face-points": args.face_points}, {"-o": args.output})
+    image_format("snapshot", args.output)  # before the render: a name no image format has is refused at once
     stream, _ = read_stream(args.stream)
     face, photo_texture = _face(args)
     image = snapshot(stream, frame=args.frame, seconds=args.time, face=face,
                      **_renderer_options(args, face, photo_texture))
-    save_image(Image.fromarray(image), args.output)
+    save_image(Image.fromarray(image), args.output, "snapshot")
     print(f"{args.output}: {image.shape[1]}x{image.shape[0]}")
     return 0

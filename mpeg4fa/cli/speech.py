@@ -11,7 +11,7 @@ from ..atomic import atomic_outputs
 from . import options, text_input
 from .coding import coding_options
 from .errors import UsageError
-from .media import check_video_size, rendering
+from .media import check_frames_output, rendering
 from .options import Commands
 from .paths import refuse_overlaps
 
@@ -618,7 +618,7 @@ def run_say(args: argparse.Namespace) -> int:
     kept = kept_paths(args.output) if args.keep else {}
     refuse_overlaps({"text file": source.path, "--photo": args.photo}, {"-o": args.output, **{f"--keep ({what})": path
                                                                         for what, path in kept.items()}})
-    check_video_size(args.output, args.size)
+    check_frames_output("say", args.output, args.size)
     text, name = text_input.read_text(source)
     width, height = args.size
     face, texture = _photo_face(args)
@@ -650,7 +650,7 @@ def _say_recording(args: argparse.Namespace) -> int:
     kept = kept_paths(args.output) if args.keep else {}
     outputs = {"-o": args.output, **{f"--keep ({what})": path for what, path in kept.items()}}
     refuse_overlaps({**({"--speech": args.speech} if str(args.speech) != "-" else {}), "--photo": args.photo}, outputs)
-    check_video_size(args.output, args.size)
+    check_frames_output("say", args.output, args.size)
     if args.transcript is None:
         from ..speech.listen import listen
         from ..speech.listen.stream import recording_of

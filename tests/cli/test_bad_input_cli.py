@@ -112,6 +112,36 @@ def test_clashes_exit_2_everywhere(capsys, tmp_path, stream):
     nothing_written(tmp_path, stream)
 
 
+# -- an -o of another kind of file: refused before any work, saying what to run instead -----------------------
+
+@pytest.mark.parametrize("command, name, said", [
+    ("say", "s.wav", "encode TEXT -o {tmp}/s.fba --audio {tmp}/s.wav"),  # was: a folder of PNGs called s.wav
+    ("say", "s.FBA", "encode TEXT -o {tmp}/s.fba"),
+    ("say", "s.json", "--timings {tmp}/s.json"),
+    ("say", "s.png", "-o {tmp}/s/ for a folder of PNG frames"),
+    ("play", "s.png", "snapshot STREAM -o {tmp}/s.png"),
+    ("play", "s.wav", "use -o {tmp}/s.mp4"),
+    ("play", "s.fap", "decode STREAM -o {tmp}/s.fap"),
+    ("play", "s.mkv", ".mkv video is not supported"),
+    ("snapshot", "s.mp4", "play STREAM -o {tmp}/s.mp4"),
+    ("snapshot", "s.wav", "name it {tmp}/s.png"),
+    ("snapshot", "s", "no image suffix"),
+])
+def test_an_output_of_another_kind_is_a_usage_error(capsys, tmp_path, stream, command, name, said):
+    first = {"say": "Hello", "play": stream, "snapshot": stream}[command]
+    err = usage(capsys, command, first, "-o", tmp_path / name, "--size", "32")
+    assert f"-o {tmp_path / name}" in err and said.format(tmp=tmp_path) in err and err.count("\n") == 1
+    nothing_written(tmp_path, stream)
+
+
+def test_an_existing_folder_with_a_suffix_still_takes_png_frames(cli, tmp_path, stream):
+    frames = tmp_path / "take.png"
+    frames.mkdir()
+    code, out, err = cli("play", stream, "-o", frames, "--size", "32", "--no-audio")
+    assert code == 0, err
+    assert len(list(frames.glob("frame_*.png"))) == len(demo_stream())
+
+
 # -- an output that is an input or another output: refused, the input untouched ----------------------------
 
 def test_outputs_that_are_inputs_or_each_other_are_refused(capsys, tmp_path, stream):
