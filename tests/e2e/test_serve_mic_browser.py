@@ -116,7 +116,8 @@ def test_the_mouth_follows_the_microphone(wav):
         page.screenshot(path=str(ARTEFACTS / "02-after.png"))
         mic = page.evaluate("({levels: window.mic.levels, offset: window.mic.offset, faces: window.mic.faces, "
                             "errors: window.mic.errors, ended: window.mic.ended, rate: window.mic.contextRate, "
-                            "frames: window.mic.frames, mostHeld: window.mic.mostHeld, dropped: window.mic.dropped})")
+                            "frames: window.mic.frames, mostHeld: window.mic.mostHeld, dropped: window.mic.dropped, "
+                            "neverShown: window.mic.neverShown(), longestWait: window.mic.longestWait})")
         frames = np.array(page.evaluate("window.rows()"), dtype=np.float64)
         player_errors = page.evaluate("window.player.errors")
         browser.close()
@@ -129,6 +130,13 @@ def test_the_mouth_follows_the_microphone(wav):
     assert behind, statuses[-3:]
     print(f"status: {statuses[len(statuses) // 2]!r}; behind the voice {min(behind)}-{max(behind)} ms")
     assert 100 <= np.median(behind) <= 1000, behind  # the server's latency (180 ms) and the page's margin
+    # frames past their time when they come are shown when they come: no "underruns" on this page; what it
+    # says instead is what a viewer would see go wrong (frames never shown, the face waiting for a message)
+    lines = [text for text in statuses if "behind the voice" in text]
+    assert lines and not any("underrun" in text for text in lines), lines[-1]
+    assert all(re.search(r"\d+ never shown, longest wait \d+ ms", text) for text in lines), lines[-1]
+    print(f"never shown {mic['neverShown']} of {mic['frames']}, longest wait {mic['longestWait'] * 1000:.0f} ms")
+    assert 0 <= mic["neverShown"] < mic["frames"]  # how many depends on how fast this machine draws the page
     t = frames[:, 0] - mic["offset"]  # the session time of the audio each frame shows
     moving = np.abs(frames[:, 1:]).max(axis=1) > 0
     spans = speech_spans(mic["levels"])

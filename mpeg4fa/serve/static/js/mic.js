@@ -6,16 +6,20 @@
 // player's clock at the first one: a frame shows the server's latency plus MARGIN (a little room for the
 // network's jitter) after its audio was sent, however late the first answer came. A session has no end the
 // page knows of, so the player keeps only the frames shown in the last KEEP s (window.player.trim) and what
-// is still to come; the status line says how far the face is behind the voice.
+// is still to come; the status line says how far the face is behind the voice. A frame coming after its time
+// is no fault here (unlike a sentence's, whose whole stream is ahead of the clock): it shows when it comes. What
+// the viewer sees go wrong is a frame that never shows (one after it was due before the next picture) and the
+// face standing still while no frame comes (the longest wait between the server's messages); the status line
+// says those, not the player's underruns.
 const MIC = "MIC1", FBA = "FBA1";
 const RATE = 16000;
 const MARGIN = 0.08;  // s of room for the network on top of the server's latency
 const KEEP = 2;  // s of frames kept behind the one showing
-const DEFAULT_LATENCY = 0.18;  // s, the server's (mpeg4fa.speech.live.LATENCY) until its "started" message says
 
 const state = {  // read by the browser test (window.mic)
   on: false, starting: false, sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null,
   errors: [], offset: null, levels: [], contextRate: null, frames: 0, dropped: 0, mostHeld: 0,
+  shownAtStart: 0, lastFaceAt: null, longestWait: 0,
 };
 window.mic = state;
 
@@ -52,13 +56,17 @@ function onMessage(e) {
   if (kind !== FBA) return;
   const player = window.player;
   const t = view.getFloat64(4, true);
+  const at = performance.now();
+  if (state.lastFaceAt !== null) state.longestWait = Math.max(state.longestWait, (at - state.lastFaceAt) / 1000);
+  state.lastFaceAt = at;
   if (state.offset === null) {
+    // the server says "started" (with its latency: mpeg4fa.speech.live.LATENCY) before the first face
+    if (!state.started) { state.errors.push({ error: "face data before the microphone started", where: "mic" }); return; }
     // the audio sent so far ends about now: a frame of session time t shows at now + (t - sent) + latency +
     // MARGIN, whenever the first answer came (a server slow to start must not leave the face behind the voice
     // for the whole session: the frames it is late with are simply past when they come)
     player.startClock();
-    const latency = state.started ? state.started.latency : DEFAULT_LATENCY;
-    state.offset = player.mediaNow() - state.sent / RATE + latency + MARGIN;
+    state.offset = player.mediaNow() - state.sent / RATE + state.started.latency + MARGIN;
     player.done = null;  // a finished sentence's "back to rest" must not hold the face still
   }
   view.setFloat64(4, t + state.offset, true);
@@ -71,21 +79,33 @@ function onMessage(e) {
   state.mostHeld = Math.max(state.mostHeld, player.frames.length);
 }
 
-/** The status line while the microphone runs: how far the face shown is behind the audio sent, and the
- * frames received and held (null when it does not run: the player's own lines). */
+/** Frames of this session whose time passed without their being shown: received, less those shown, less
+ * those still to come (after the one showing). */
+function neverShown() {
+  const player = window.player;
+  const toCome = player.frames.length - 1 - player.shown;
+  return Math.max(0, state.frames - (player.shownFrames - state.shownAtStart) - toCome);
+}
+state.neverShown = neverShown;
+
+/** The status line while the microphone runs: how far the face shown is behind the audio sent, the frames
+ * received and held, those never shown and the longest the face waited for a message (null when it does not
+ * run: the player's own lines). */
 function statusLines() {
   if (!state.on && !state.starting) return null;
   const player = window.player;
   if (state.offset === null) return [`microphone: listening, ${(state.sent / RATE).toFixed(1)} s sent, no face yet`];
   const behind = state.sent / RATE - (player.mediaNow() - state.offset);
   return [`microphone: listening, the face ${Math.max(0, behind * 1000).toFixed(0)} ms behind the voice`,
-          `${state.frames} frames in ${state.faces} messages, ${player.frames.length} held, underruns ${player.underruns}`];
+          `${state.frames} frames in ${state.faces} messages, ${player.frames.length} held, ${neverShown()} never ` +
+          `shown, longest wait ${(state.longestWait * 1000).toFixed(0)} ms`];
 }
 
 async function start() {
   state.starting = true;
   Object.assign(state, { sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null, offset: null,
-                         levels: [], frames: 0, dropped: 0, mostHeld: 0 });
+                         levels: [], frames: 0, dropped: 0, mostHeld: 0, shownAtStart: window.player.shownFrames,
+                         lastFaceAt: null, longestWait: 0 });
   window.player.statusLines = statusLines;
   button.disabled = true;
   try {
