@@ -23,6 +23,10 @@ louder than -45 dBFS after at least 300 ms quieter), not taken from espeak-ng's 
   return of the ``feed`` that first gave a frame with the lips or jaw moved (a frame within 300 ms
   before the onset or later). Realtime mode: wall-clock; both modes also give it in audio time (the
   audio fed by then, minus the onset), which is what a listener sees when processing keeps up.
+* **rest**: sounds that are not speech, fed in 20 ms chunks (``--rest-seconds`` each, default 8): silence,
+  white noise at -30 dBFS and the synthetic music of :mod:`mpeg4fa.speech.listen.signals` (plucked melody,
+  chords, hi-hat; -18 dBFS); the share of frames with the lips and jaw at rest (all of :data:`LIPS` zero), and
+  when the mouth last moved. ``--mode rest`` runs these rows alone and keeps the JSON's other results.
 """
 from __future__ import annotations
 
@@ -176,6 +180,34 @@ def run(pcm: np.ndarray, realtime: bool, coded: bool = False) -> dict:
             "latency_audio_ms": _stats(lat_audio), "latency_wall_ms": _stats(lat_wall) if realtime else None}
 
 
+def rest(seconds: float) -> list[dict]:
+    """Silence, white noise at -30 dBFS and synthetic music through the live path in 20 ms chunks: the share
+    of frames whose lips and jaw are at rest (the mouth should not move for what is not speech)."""
+    from mpeg4fa.speech.listen.signals import music, white_noise
+
+    sounds = {"silence": np.zeros(int(seconds * RATE)), "noise -30 dBFS": white_noise(seconds, RATE, -30.0),
+              "music -18 dBFS": music(seconds, RATE)}
+    step = int(CHUNK * RATE)
+    rows = []
+    for name, x in sounds.items():
+        pcm = np.clip(np.rint(x * 32767), -32768, 32767).astype(np.int16)
+        live = LiveLipSync(RATE, FPS)
+        frames = [live.feed(pcm[k:k + step]) for k in range(0, len(pcm), step)] + [live.flush()]
+        frames = np.concatenate([f for f in frames if len(f)])
+        moved = np.abs(frames[:, LIPS]).max(axis=1) > 0
+        rows.append({"sound": name, "seconds": len(pcm) / RATE, "frames": len(frames),
+                     "at_rest": float(1 - moved.mean()), "frames_moved": int(moved.sum()),
+                     "last_move_s": float(np.flatnonzero(moved)[-1] / FPS) if moved.any() else None})
+    return rows
+
+
+def print_rest(rows: list[dict]) -> None:
+    print(f"\n{'not speech, 20 ms chunks':<26} {'frames':>6} {'at rest':>8} {'moved':>6} {'last move s':>12}")
+    for r in rows:
+        last = "-" if r["last_move_s"] is None else f"{r['last_move_s']:.2f}"
+        print(f"{r['sound']:<26} {r['frames']:6d} {r['at_rest']:8.1%} {r['frames_moved']:6d} {last:>12}")
+
+
 def _stats(xs: list[float]) -> dict:
     a = 1e3 * np.asarray(xs) if xs else np.zeros(1)
     return {"mean": float(a.mean()), "median": float(np.median(a)), "p95": float(np.percentile(a, 95)),
@@ -185,12 +217,21 @@ def _stats(xs: list[float]) -> dict:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--seconds", type=float, default=300.0)
-    p.add_argument("--mode", choices=("both", "realtime", "fast"), default="both",
+    p.add_argument("--mode", choices=("both", "realtime", "fast", "rest"), default="both",
                    help="fast: as fast as possible, without and with FBA coding; realtime: a real-time clock, "
-                        "with FBA coding as the server does; both: all three")
+                        "with FBA coding as the server does; both: all three; rest: only the rows for silence, "
+                        "noise and music (every mode runs them), the JSON's other results kept")
+    p.add_argument("--rest-seconds", type=float, default=8.0, help="seconds of each sound of the rest rows")
     p.add_argument("--wav", type=Path)
     p.add_argument("--json", type=Path, default=ROOT / "tools" / "bench_live.json")
     args = p.parse_args()
+    rows = rest(args.rest_seconds)
+    print_rest(rows)
+    if args.mode == "rest":
+        out = json.loads(args.json.read_text()) if args.json.exists() else {}
+        args.json.write_text(json.dumps({**out, "rest": rows, "rest_date": time.strftime("%Y-%m-%d")}, indent=1) + "\n")
+        print(f"wrote {args.json} (rest rows; the other results kept)")
+        return
     truth = None
     with tempfile.TemporaryDirectory() as tmp:
         wav = args.wav or Path(tmp) / "live.wav"
@@ -224,7 +265,7 @@ def main() -> None:
             print(f"{name:<26} {q['agreement']:6.1%} {q['closures_within_40ms']:16.1%} "
                   f"{q['closure_mean_error_ms']:12.1f} {q['extra_closures']:6d}   ({q['closures']} closures)")
     out = {"latency_setting_ms": LATENCY * 1e3, "chunk_ms": CHUNK * 1e3, "fps": FPS, "results": results,
-           "quality": scores,
+           "quality": scores, "rest": rows, "rest_date": time.strftime("%Y-%m-%d"),
            "machine": {"python": platform.python_version(), "cpus": __import__("os").cpu_count()}}
     args.json.write_text(json.dumps(out, indent=1) + "\n")
     print(f"wrote {args.json}")
