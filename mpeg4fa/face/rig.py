@@ -48,6 +48,14 @@ from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
 JAW_WEIGHT_FLOOR = 0.03  # jaw weights below this are noise of the face unit: dropped
+CORNER_HOLD_MM = 10.0
+"""Round each outer lip corner the lips share the corner's jaw weight, their difference from it growing
+smoothly to the face unit's own over this surface distance: the face unit's upper and lower lips
+differed by 0.03-0.1 across the corner's 0.3 mm edges, the worst strain of an open jaw (1.57, 2.6 x
+its floor at FAP 3 = 900; 2.3 x with a -40 degree nod, 2.46 x on ARKit). 3 mm left 2.0-2.5 x; 5-8 mm
+keep the feature-point deformer within 2 x but ARKit's blend to its sculpt, further out, folded the
+lower lip under yaw 40 pitch 20; 10 mm (ARKit refitting as far): the jaw alone 1.56 x / 1.67 x,
+every nod and turn with the jaw open 1.27-1.77 x, no fold (tools/crease_check.py)."""
 NECK_TOP = ((0.55, 0.30), (-0.25, 0.70))
 """Where the neck meets the head, front then back, as (depth, height): depth in units of the
 7.1 -> 2.1 depth ahead of 7.1 (0.55: just behind the chin's underside; -0.25: behind the spine),
@@ -313,6 +321,7 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
         w = np.asarray(mesh.info["jaw_weights"], dtype=np.float64).copy()
     else:  # a face without face units (a test head): everything below the lip line
         w = (rest[:, 1] < (mesh.fp("2.2")[1] + mesh.fp("2.3")[1]) / 2).astype(float)
+    w = _hold_corners(mesh, w)
     w = 0.5 * (w + w[mesh.mirror])  # the face unit is slightly asymmetric; the jaw is not
     w = np.clip(w, 0.0, 1.0)
     w[w < JAW_WEIGHT_FLOOR] = 0.0
@@ -322,6 +331,22 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
     w[mesh.fp_vertex[mesh.fp_index("2.1")]] = 1.0
     idx = np.flatnonzero(w)
     return idx, w[idx]
+
+
+def _hold_corners(mesh: HeadMesh, w: np.ndarray) -> np.ndarray:
+    """``w`` with the skin round each outer lip corner (8.3/8.4) drawn toward the corner's own share:
+    the difference from it scaled by a smooth step of the surface distance, 0 at the corner and 1 from
+    :data:`CORNER_HOLD_MM` on (see there)."""
+    if not all(label in mesh.fp_labels for label in ("8.3", "8.4")):
+        return w
+    skin = mesh.part("skin")
+    graph = edge_graph(mesh.vertices[skin], mesh.triangles["skin"] - skin.start)
+    out = w.copy()
+    for label in ("8.3", "8.4"):
+        corner = mesh.fp_vertex[mesh.fp_index(label)]
+        r = dijkstra(graph, indices=corner - skin.start, limit=CORNER_HOLD_MM + 1.0)
+        out[skin] = w[corner] + (out[skin] - w[corner]) * (1.0 - smooth_down(r / CORNER_HOLD_MM))
+    return out
 
 
 def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:

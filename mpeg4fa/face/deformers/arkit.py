@@ -40,7 +40,7 @@ from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import edge_graph, smooth_down
-from mpeg4fa.face.rig import Rig, skin_weights
+from mpeg4fa.face.rig import CORNER_HOLD_MM, Rig, skin_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
 MIN_FULL_SCALE = 1.0  # a unit that moves a FAP's point by less than one FAPU unit does not serve it
@@ -97,12 +97,14 @@ def _shape(mesh: HeadMesh, name: str, x: np.ndarray) -> np.ndarray:
     return shape * (t * t * (3 - 2 * t))[:, None]
 
 
-CORNER_REFIT_MM = (3.0, 9.0)
+CORNER_REFIT_MM = (CORNER_HOLD_MM, CORNER_HOLD_MM + 6.0)
 """Around the outer lip corners (8.3/8.4) the sculpted ``jawOpen`` is replaced, within the first
 distance (surface mm) and fading out by the second, by the rig's own jaw: each vertex turning by its
 share of the rotation the unit gives the chin (:func:`.rig._jaw_weights` reads those shares off this
-unit). The sculpt has a step at the corners (strain 2.7 over 0.3 mm edges at full weight) that a
-40 degree turn with the jaw open made the worst strain of the face, 2.2 x its floor."""
+unit and holds the lips to the corner's share as far as the first distance). The sculpt has a step at
+the corners (strain 2.7 over 0.3 mm edges at full weight) that a 40 degree turn with the jaw open made
+the worst strain of the face, 2.2 x its floor; refitted only to 3 mm (9 mm fade), the blend folded
+the lower lip 4 mm from 8.4 under yaw 40 pitch 20 once the rig held its corners."""
 
 
 def refit_corners(mesh: HeadMesh, rig: Rig, shape: np.ndarray) -> np.ndarray:
