@@ -2,11 +2,12 @@
 MP4, tracked back, compared per group with the issue's thresholds (tools/track_loop.py has the long run).
 
 Jaw, lips, lids and brows are read by the map learned on renders (mpeg4fa.tracking.learned, tools/train_tracker.py;
-the astronaut and this stream are never trained on). tools/track_loop.py, 12 s at 384 pixels, rules -> map: jaw
-0.905/16.7 % -> 0.935/13.0 % (met), lip corners 0.40/39.5 % -> 0.85/21.1 %, outer lip corners 0.45/31.2 % ->
-0.77/15.0 %, inner lips 0.19/20.7 % -> 0.35/10.8 %, brows 0.24/22.9 % -> 0.25/35.6 %, lids 0.875/10.9 % ->
-0.887/9.7 %, blinks 8/8. What is left: the landmark model reads brows and inner lips of a held-out texture poorly
-(on held-out streams of the training textures: brows 0.64, inner lips 0.50)."""
+the astronaut and this stream are never trained on). tools/track_loop.py, 12 s at 384 pixels, map retrained on the
+current face engine (2026-12-05): jaw 0.930/14.3 % (met), lip corners 0.932/13.5 % (met), outer lip corners
+0.768/14.7 %, inner lips 0.408/9.1 %, brows 0.248/35.5 %, lids 0.885/9.8 %, head rotation 0.983/4.3 % (met),
+blinks 8/8. This short loop: lip corners met; outer corners 0.77/18.9 %, inner lips 0.24/10.6 %, brows 0.39/30.3 %,
+lids 0.83/10.6 %. What is left: the tracked brows of the held-out texture rise with the head's yaw (+130 to +220 FAPU near
+30 degrees, whichever way) while held-out streams of the training textures read 0.65; inner lips read 0.48 there."""
 from __future__ import annotations
 
 import importlib.util
@@ -16,8 +17,7 @@ import pytest
 
 TOOL = Path(__file__).resolve().parents[2] / "tools" / "track_loop.py"
 NOT_MET = {  # what the tracker does not reach yet while the head turns (see the report of tools/track_loop.py)
-    "lip corners (12/13)", "outer lip corners (53/54)", "inner lips (4/5)", "brows (31-36)",
-    "lids (19/20)"}
+    "outer lip corners (53/54)", "inner lips (4/5)", "brows (31-36)", "lids (19/20)"}
 ENGINE_CORRELATION, ENGINE_RMS_SHARE = 0.95, 0.05
 """The FAP rules on the face engine's own feature points: all but exact. Measured: correlation >= 0.99 and RMS
 <= 2 % in every group but the inner lips, 0.964 and 2.8 % on this short loop (0.97, 3 % on 12 s), where the jaw's
