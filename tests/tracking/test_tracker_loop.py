@@ -7,7 +7,8 @@ current face engine (2026-12-05): jaw 0.930/14.3 % (met), lip corners 0.932/13.5
 0.768/14.7 %, inner lips 0.408/9.1 %, brows 0.248/35.5 %, lids 0.885/9.8 %, head rotation 0.983/4.3 % (met),
 blinks 8/8. This short loop: lip corners met; outer corners 0.77/18.9 %, inner lips 0.24/10.6 %, brows 0.39/30.3 %,
 lids 0.83/10.6 %. What is left: the tracked brows of the held-out texture rise with the head's yaw (+130 to +220
-FAPU near 30 degrees, whichever way) while held-out streams of the training textures read 0.65; inner lips read 0.48 there."""
+FAPU near 30 degrees, whichever way) while held-out streams of the training textures read 0.65; inner lips read 0.48
+there."""
 from __future__ import annotations
 
 import importlib.util
