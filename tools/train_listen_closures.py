@@ -5,19 +5,21 @@ Data: espeak-ng speech of random pseudo-words (seeded; never the sentences tools
 scores) in English, Spanish, French, German (Latin letters), Mandarin (random characters) and Hindi
 (random Devanagari syllables), with consonant clusters (br, pl, mp, mb, lm...), in every language's
 espeak-ng voices each with one of 36 random variants (pitch, range, formants) at 120-230 words a minute.
-The truth per 10 ms frame: inside a closure (viseme PP) of the transcript path's track, :func:`mpeg4fa.speech.encoder.phones` of
+The truth per 10 ms frame: inside a closure (viseme PP of a phoneme that shuts the lips,
+:func:`mpeg4fa.speech.listen.compare.shuts`: not Spanish [β]) of the transcript path's track, :func:`mpeg4fa.speech.encoder.phones` of
 :func:`mpeg4fa.speech.utterance.speak` (stops from their closure's silence), the very track the benchmark
 compares with. Each utterance is used twice: as spoken, and filtered (a spectral tilt of +-4 dB an octave,
 a low pass at 3.5-8 kHz, half the time a short room), at a random level, over noise, so that colour and
 level do not decide. After training, a grid of the decision's constants on held-out pseudo-words (what
-closures.SURE is chosen by). Model: log mel context (:func:`~mpeg4fa.speech.listen.closures.features`) -> 48 tanh
+closures.SURE, OPEN_VETO and CONFIRM are chosen by; ``--grid-only`` prints it for the weights in place). Model: log mel context (:func:`~mpeg4fa.speech.listen.closures.features`) -> 48 tanh
 units -> logistic; Adam, cross-entropy, a little weight decay.
 
-    .venv/bin/python tools/train_listen_closures.py [--per-language 300] [--epochs 12] [--seed 7]
+    .venv/bin/python tools/train_listen_closures.py [--per-language 300] [--epochs 12] [--seed 7] [--grid-only]
 """
 from __future__ import annotations
 
 import argparse
+import itertools
 import base64
 import random
 import sys
@@ -30,7 +32,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from mpeg4fa.speech.align.recording import resample  # noqa: E402
 from mpeg4fa.speech.encoder import phones  # noqa: E402
-from mpeg4fa.speech.listen.closures import FIRST, HOP, RATE, features, log_mel, predict  # noqa: E402
+from mpeg4fa.speech.listen.closures import FIRST, HOP, RATE, features, log_mel, predict, weights  # noqa: E402
+from mpeg4fa.speech.listen.compare import shuts  # noqa: E402
 from mpeg4fa.speech.markup import parse_markup  # noqa: E402
 from mpeg4fa.speech.tts.espeak import EspeakEngine  # noqa: E402
 from mpeg4fa.speech.utterance import speak  # noqa: E402
@@ -86,7 +89,7 @@ def utterances(per_language: int, seed: int):
             voice = rng.choice(voices) + (f"+{variant}" if variant else "")
             ref = phones(speak(parse_markup(text), engine, lang="en" if lang == "en" else voice.split("+")[0],
                                voice=voice, rate=rng.randint(*RATES)))
-            spans = [(t.start, t.end) for t in ref.timings if t.viseme == "PP" and t.end > t.start]
+            spans = [(t.start, t.end) for t in ref.timings if t.viseme == "PP" and t.end > t.start and shuts(t.phoneme)]
             yield ref.speech.samples / 32768.0, ref.speech.rate, spans
 
 
@@ -150,7 +153,8 @@ def train(x: np.ndarray, y: np.ndarray, epochs: int, seed: int, rate: float = 3e
 def onset_grid(hidden: np.ndarray, out: np.ndarray, per_language: int, seed: int) -> list[dict]:
     """Closure onsets within 40 ms and precision on held-out pseudo-word speech for a grid of the decision's
     constants (:func:`~mpeg4fa.speech.listen.closures.refine_closures`: span threshold, sure peak, shortest
-    unheard span), the phone loop's p, b, m refined as :func:`~mpeg4fa.speech.listen.phones.recognize_phones`
+    unheard span, whether a phone heard open vetoes an unheard closure, whether a heard labial needs a span),
+    the phone loop's p, b, m refined as :func:`~mpeg4fa.speech.listen.phones.recognize_phones`
     does: what the constants in closures.py are chosen by, never the benchmark's sentences."""
     from types import SimpleNamespace
 
@@ -163,25 +167,24 @@ def onset_grid(hidden: np.ndarray, out: np.ndarray, per_language: int, seed: int
     for samples, rate, spans in utterances(per_language, seed):
         rec = Recording(np.clip(np.rint(samples * 32768), -32768, 32767).astype(np.int16), rate)
         levels = log_mel(resample(samples, rate, RATE))
-        ref = [SimpleNamespace(viseme="PP", start=a, end=b) for a, b in spans]
+        ref = [SimpleNamespace(phoneme="p", viseme="PP", start=a, end=b) for a, b in spans]
         cases.append((ref, recognize_phones(rec, closures=False), predict(features(levels), hidden, out)))
     rows = []
-    saved = closures.SURE, closures.LONGEST_UNHEARD
-    for threshold in (0.2, 0.3, 0.4):
-        for sure in (0.5, 0.6, 0.7, 0.8):
-            for longest in (2, 3, 4):
-                closures.SURE, closures.LONGEST_UNHEARD = sure, longest
-                hits = total = found = extra = 0
-                for ref, heard, prob in cases:
-                    got = [SimpleNamespace(viseme="PP", start=p.start, end=p.end)
-                           for p in closures.refine_closures(heard, closures.closure_spans(prob, threshold))
-                           if p.name in closures.LABIALS]
-                    s = onset_score(ref, got)
-                    hits, total, extra = hits + s.hits, total + s.reference, extra + s.extra
-                    found += len(closure_onsets(got))
-                rows.append({"threshold": threshold, "sure": sure, "longest": longest, "within_40ms": hits / total,
-                             "precision": 1 - extra / max(1, found)})
-    closures.SURE, closures.LONGEST_UNHEARD = saved
+    saved = closures.SURE, closures.LONGEST_UNHEARD, closures.OPEN_VETO, closures.CONFIRM
+    for threshold, sure, longest, veto, confirm in itertools.product((0.2, 0.3), (0.5, 0.6, 0.7, 0.8, 0.9), (2, 3, 4),
+                                                                     (True, False), (True, False)):
+        closures.SURE, closures.LONGEST_UNHEARD, closures.OPEN_VETO, closures.CONFIRM = sure, longest, veto, confirm
+        hits = total = found = extra = 0
+        for ref, heard, prob in cases:
+            got = [SimpleNamespace(phoneme=p.name, viseme="PP", start=p.start, end=p.end)
+                   for p in closures.refine_closures(heard, closures.closure_spans(prob, threshold))
+                   if p.name in closures.LABIALS]
+            s = onset_score(ref, got)
+            hits, total, extra = hits + s.hits, total + s.reference, extra + s.extra
+            found += len(closure_onsets(got))
+        rows.append({"threshold": threshold, "sure": sure, "longest": longest, "open_veto": veto,
+                     "confirm": confirm, "within_40ms": hits / total, "precision": 1 - extra / max(1, found)})
+    closures.SURE, closures.LONGEST_UNHEARD, closures.OPEN_VETO, closures.CONFIRM = saved
     return rows
 
 
@@ -195,13 +198,26 @@ def write(hidden: np.ndarray, out: np.ndarray, note: str) -> None:
                    f"SHAPE = {hidden.shape}\nHIDDEN = (\n{b64(hidden)}\n)\nOUTPUT = (\n{b64(out)}\n)\n", encoding="utf-8")
 
 
+def print_grid(hidden: np.ndarray, out: np.ndarray, args: argparse.Namespace) -> None:
+    """:func:`onset_grid` on held-out pseudo-words (seed + 2000), as a table."""
+    print(f"{'thresh':>6} {'sure':>5} {'min':>4} {'veto':>5} {'conf':>5} {'<=40ms':>7} {'prec':>5}   (held-out "
+          f"pseudo-words, seed {args.seed + 2000})")
+    for r in onset_grid(hidden, out, max(5, args.per_language // 10), args.seed + 2000):
+        print(f"{r['threshold']:>6} {r['sure']:>5} {r['longest']:>4} {r['open_veto']!s:>5} {r['confirm']!s:>5} "
+              f"{r['within_40ms']:>7.1%} {r['precision']:>5.1%}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--per-language", type=int, default=300)
     ap.add_argument("--epochs", type=int, default=12)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--grid-only", action="store_true", help="only the held-out grid, for the weights in place")
     args = ap.parse_args()
     started = time.perf_counter()
+    if args.grid_only:
+        print_grid(*weights(), args)
+        return
     x, y = dataset(args.per_language, args.seed)
     print(f"{len(x)} frames, {y.mean():.1%} inside a closure ({time.perf_counter() - started:.0f} s)")
     hidden, out = train(x, y, args.epochs, args.seed)
@@ -211,9 +227,7 @@ def main() -> None:
     note = (f"{args.per_language} sentences a language, seed {args.seed}, {args.epochs} epochs; held-out frames "
             f"(seed {args.seed + 1000}) at 0.5: recall {recall:.2f}, precision {precision:.2f}")
     write(hidden, out, note)
-    print(f"{'thresh':>6} {'sure':>5} {'min':>4} {'<=40ms':>7} {'prec':>5}   (held-out pseudo-words, seed {args.seed + 2000})")
-    for r in onset_grid(hidden, out, max(5, args.per_language // 10), args.seed + 2000):
-        print(f"{r['threshold']:>6} {r['sure']:>5} {r['longest']:>4} {r['within_40ms']:>7.1%} {r['precision']:>5.1%}")
+    print_grid(hidden, out, args)
     print(f"{note} ({time.perf_counter() - started:.0f} s); wrote {OUT.relative_to(OUT.parents[3])}")
 
 

@@ -12,13 +12,15 @@ from mpeg4fa.speech.align import Recording  # noqa: E402
 from mpeg4fa.speech.encoder import encode_utterance, phones  # noqa: E402
 from mpeg4fa.speech.listen import (ENGLISH_DEFAULT, Phone, choose_recognizer, listen, phone_events,  # noqa: E402
                                    phone_timings, recognize_phones, voice_activity)
+from mpeg4fa.speech.listen import closures  # noqa: E402
 from mpeg4fa.speech.listen.closures import (closure_probability, closure_spans,  # noqa: E402
                                             refine_closures)
-from mpeg4fa.speech.listen.compare import agreement, closure_onsets, onset_score, rest_share  # noqa: E402
+from mpeg4fa.speech.listen.compare import agreement, closure_onsets, onset_score, rest_share, shuts  # noqa: E402
+from mpeg4fa.speech.listen.phones import speech_share  # noqa: E402
 from mpeg4fa.speech.listen.signals import music, white_noise  # noqa: E402
 from mpeg4fa.speech.markup import parse_markup  # noqa: E402
 from mpeg4fa.speech.tts.espeak import EspeakEngine  # noqa: E402
-from mpeg4fa.speech.utterance import speak  # noqa: E402
+from mpeg4fa.speech.utterance import Timing, speak  # noqa: E402
 
 EN = ["Please bring the maps back before the boat leaves.",
       "Peter picked a peck of pickled peppers, and my mother baked bread."]
@@ -66,11 +68,28 @@ def test_spanish_frames_follow_the_transcript_path(scores):
     assert share >= 0.45, share  # measured 0.60, 9 of 15 (0.27 before the detector)
 
 
-@pytest.mark.xfail(reason="issue 28's target; measured 0.88 (English, 15 of 17), 0.60 (Spanish, 9 of 15) on espeak-ng "
-                          "voices with the closure detector (0.65 and 0.27 without); tools/bench_lipsync_audio.py's "
-                          "enlarged set: English 81 %, Spanish 62 %", strict=True)
-def test_closure_onsets_reach_the_issue_targets(scores):
-    assert scores["en"][0] >= 0.9 and scores["es"][0] >= 0.75
+TARGET_EN = EN + ["Bring me the blue bucket from the boat, please.", "Pam and Bob swam past the small bamboo pier.",
+                  "My mom put maple butter on both pancakes.", "The puppy jumped up and bumped the lamp."]
+TARGET_ES = ES + ["Mi papá compra pimientos en el mercado.", "Pepe pinta un mapa para Marta."]
+
+
+@pytest.mark.xfail(reason="issue 28's target, on 32 English (two voices) and 4 Spanish sentences; measured English "
+                          "0.87, Spanish 0.89 with the closure detector confirmed (2026-12-05); "
+                          "tools/bench_lipsync_audio.py's enlarged set: English 86 %, Spanish 86 %", strict=True)
+def test_closure_onsets_reach_the_issue_targets():
+    share = {}
+    # en-us last: espeak-ng kept the +f3 variant for later calls that name no voice (seen 2026-12-05: the
+    # voice activity test's sentence came out 72 % active instead of 80 %+)
+    for lang, texts, voices in (("en", TARGET_EN, ("en-gb-x-rp+f3", "en-us")), ("es", TARGET_ES, ("es",))):
+        hits = total = 0
+        for text in texts:
+            for voice in voices:
+                utt = phones(speak(parse_markup(text), EspeakEngine(), lang=lang, voice=voice, rate=160))
+                rec = Recording(utt.speech.samples, utt.speech.rate, text[:20])
+                s = onset_score(utt.timings, phones(listen(rec, recognizer="phonetic", lang=lang).utterance).timings)
+                hits, total = hits + s.hits, total + s.reference
+        share[lang] = (hits / total, hits, total)
+    assert share["en"][0] >= 0.9 and share["es"][0] >= 0.75, share
 
 
 @pytest.mark.parametrize("name, signal", [
@@ -170,18 +189,32 @@ def test_a_long_recording_is_heard_in_blocks_cut_between_words():
     assert starts == sorted(starts) and starts[-1] > len(x) / rate - 3
 
 
-def test_refine_snaps_a_heard_labial_to_the_closure_and_adds_a_sure_one():
+def test_refine_snaps_a_heard_labial_to_the_closure_and_adds_a_sure_one(monkeypatch):
     heard = [Phone("AA", 0.0, 0.20), Phone("M", 0.20, 0.30), Phone("AA", 0.30, 0.50), Phone("G", 0.50, 0.56),
-             Phone("IY", 0.56, 0.80), Phone("AE", 0.80, 1.00)]
+             Phone("IY", 0.56, 0.80), Phone("AE", 0.80, 1.00), Phone("B", 1.00, 1.05), Phone("AA", 1.05, 1.20)]
     spans = [(0.16, 0.26, 0.5),   # 40 ms before the heard M: the M starts there
              (0.49, 0.56, 0.95),  # sure, under a G: shut (B)
-             (0.85, 0.95, 0.95)]  # sure, but under an open vowel: left
+             (0.85, 0.95, 0.95)]  # sure, under an open vowel: shut too, unless the open-phone veto is on
+    # and the B at 1.00 has no closure near it: not shut (read as D)
     out = refine_closures(heard, spans)
     names = [(p.name, round(p.start, 2), round(p.end, 2)) for p in out]
     assert ("M", 0.16, 0.30) in names and ("AA", 0.0, 0.16) in names
     assert ("B", 0.49, 0.56) in names and not any(p.name == "G" for p in out)
-    assert ("AE", 0.80, 1.00) in names
+    assert ("B", 0.85, 0.95) in names and ("AE", 0.80, 0.85) in names
+    assert ("D", 1.00, 1.05) in names
     assert all(a.end <= b.start + 1e-9 for a, b in zip(out, out[1:]))
+    monkeypatch.setattr(closures, "OPEN_VETO", True)
+    monkeypatch.setattr(closures, "CONFIRM", False)
+    names = [(p.name, round(p.start, 2), round(p.end, 2)) for p in refine_closures(heard, spans)]
+    assert ("AE", 0.80, 1.00) in names and ("B", 1.00, 1.05) in names
+
+
+def test_a_closure_is_speech_until_its_release():
+    # a p after s lies in a voiceless stretch: voice activity only at its release still keeps it shut
+    active = np.r_[np.zeros(30, dtype=bool), np.ones(20, dtype=bool)]
+    assert speech_share(0.20, 0.29, active, closure=True) >= 0.5
+    assert speech_share(0.20, 0.29, active) < 0.5
+    assert speech_share(0.05, 0.14, active, closure=True) == 0.0  # no release after it: not speech
 
 
 def test_the_detector_shuts_the_lips_where_the_transcript_path_does():
@@ -205,3 +238,14 @@ def test_the_detector_finds_no_closure_in_noise_or_music():
     for x in (white_noise(5.0, dbfs=-30.0), music(5.0)):
         spans = closure_spans(closure_probability(x, 16000))
         assert sum(b - a for a, b, _ in spans) <= 0.25, spans  # measured 0 s (noise), 0.12 s (music)
+
+
+def test_a_bilabial_approximant_is_no_closure_to_find():
+    # espeak-ng's Spanish b/v between vowels is [β]: the lips near, not shut; shown as PP, found or not
+    assert shuts("p") and shuts("m") and shuts("ph:p") and shuts("bʰ") and not shuts("β")
+    ref = [Timing("a", "AA", 0.0, 0.1), Timing("β", "PP", 0.1, 0.15), Timing("e", "E", 0.15, 0.3),
+           Timing("p", "PP", 0.3, 0.35), Timing("a", "AA", 0.35, 0.5)]
+    s = onset_score(ref, [Timing("b", "PP", 0.1, 0.15), Timing("p", "PP", 0.31, 0.35)])
+    assert (s.reference, s.hits, s.extra) == (1, 1, 0)
+    assert onset_score(ref, [Timing("p", "PP", 0.31, 0.35)]).share == 1.0
+    assert onset_score(ref, [Timing("b", "PP", 0.2, 0.25)]).hits == 0

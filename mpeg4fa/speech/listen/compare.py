@@ -6,7 +6,10 @@ benchmark (tools/bench_lipsync_audio.py) and the tests measure.
 * closure onsets: where the lips shut (viseme ``PP``: p, b, m) in the reference, and whether the
   audio-only track shuts them within a tolerance (40 ms); the mean error of those found within
   :data:`NEAR`; and the closures the audio-only track adds where the reference has none (false
-  closures: what a recogniser that shut the lips everywhere would score badly on);
+  closures: what a recogniser that shut the lips everywhere would score badly on). A ``PP`` of a
+  bilabial fricative or approximant alone (Spanish intervocalic b/v, [β]: the lips near, not shut,
+  and no silence in the sound) is no closure to find (:func:`shuts`), though a closure shown there is
+  not a false one either;
 * rest: the share of frames with the mouth closed or at rest (no viseme shown).
 """
 from __future__ import annotations
@@ -15,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mpeg4fa.speech.ipa import frame_agreement
+from mpeg4fa.speech.ipa import frame_agreement, parse
 from mpeg4fa.speech.visemes import PAUSE
 
 CLOSURE = "PP"
@@ -25,14 +28,35 @@ NEAR = 0.100
 """Onsets farther than this from any in the other track are a miss, not a large error."""
 
 
-def closure_onsets(timings) -> np.ndarray:
-    """Start times of the closures (runs of ``PP`` timings, joined where one follows another)."""
+SHUT = frozenset({"stop", "nasal"})
+"""Manners of a bilabial that shuts the lips (p, b, m); a fricative or approximant ([ɸ], [β]) only narrows them."""
+
+
+def shuts(phoneme: str) -> bool:
+    """Whether a ``PP`` timing's phoneme shuts the lips: not a bilabial fricative or approximant alone (its
+    IPA, the part after ``:`` where the label names the event and the segment, read by
+    :func:`mpeg4fa.speech.ipa.parse`; labels the tables do not read count as shut)."""
+    segments, _ = parse(phoneme.split(":")[-1])
+    bilabial = [s.manner for s in segments if s.place == "bilabial"]
+    return not bilabial or any(m in SHUT for m in bilabial)
+
+
+def closure_onsets(timings, shut_only: bool = False) -> np.ndarray:
+    """Start times of the closures (runs of ``PP`` timings, joined where one follows another); with
+    ``shut_only``, runs where no timing :func:`shuts` the lips left out."""
     out: list[float] = []
     last_end = -1.0
+    shut = False
     for t in sorted((t for t in timings if t.viseme == CLOSURE and t.end > t.start), key=lambda t: t.start):
         if abs(t.start - last_end) > 1e-6:
+            if out and shut_only and not shut:
+                out.pop()
             out.append(t.start)
+            shut = False
+        shut = shut or shuts(t.phoneme)
         last_end = t.end
+    if out and shut_only and not shut:
+        out.pop()
     return np.array(out)
 
 
@@ -56,16 +80,19 @@ class OnsetScore:
 
 
 def onset_score(reference, other, tolerance: float = TOLERANCE) -> OnsetScore:
-    """:class:`OnsetScore` of ``other``'s closures against ``reference``'s (timings: viseme, start, end)."""
-    ref, got = closure_onsets(reference), closure_onsets(other)
+    """:class:`OnsetScore` of ``other``'s closures against ``reference``'s (timings: phoneme, viseme, start,
+    end): the closures to find are those that shut the lips; a closure of ``other`` is extra only where the
+    reference shows none at all (see the module docstring)."""
+    ref, got, shown = closure_onsets(reference, shut_only=True), closure_onsets(other), closure_onsets(reference)
     if not len(ref):
-        return OnsetScore(0, 0, (), len(got))
+        d0 = np.abs(shown[:, None] - got[None, :]) if len(shown) and len(got) else np.full((1, len(got)), np.inf)
+        return OnsetScore(0, 0, (), int((d0.min(axis=0) > NEAR).sum()))
     if not len(got):
         return OnsetScore(len(ref), 0, (), 0)
     d = np.abs(ref[:, None] - got[None, :])
     nearest = d.min(axis=1)
     hits = int((nearest <= tolerance).sum())
-    extra = int((d.min(axis=0) > NEAR).sum())
+    extra = int((np.abs(shown[:, None] - got[None, :]).min(axis=0) > NEAR).sum())
     return OnsetScore(len(ref), hits, tuple(float(e) for e in nearest[nearest <= NEAR]), extra)
 
 

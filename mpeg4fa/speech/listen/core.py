@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mpeg4fa.speech.align.recording import HOP, Recording
-from mpeg4fa.speech.listen.phones import active_share, phone_events, phone_timings, recognize_phones
+from mpeg4fa.speech.listen.compare import CLOSURE
+from mpeg4fa.speech.listen.phones import phone_events, phone_timings, recognize_phones, speech_share
 from mpeg4fa.speech.listen.voice import voice_activity
 from mpeg4fa.speech.listen.words import HeardWord, recognize_words
 from mpeg4fa.speech.markup import Markup
@@ -95,8 +96,9 @@ def expression_cues(expression: tuple[str, int] | None) -> tuple[ExpressionCue, 
 
 
 def _gated(timings: list[Timing], active: np.ndarray) -> list[Timing]:
-    """Timings mostly outside voice activity shown as a pause."""
-    return [t if t.viseme == PAUSE or active_share(t.start, t.end, active) >= 0.5 else
+    """Timings mostly outside voice activity shown as a pause (a closure's silence counts as speech before
+    its release: :func:`~.phones.speech_share`)."""
+    return [t if t.viseme == PAUSE or speech_share(t.start, t.end, active, closure=t.viseme == CLOSURE) >= 0.5 else
             Timing(t.phoneme, PAUSE, t.start, t.end, t.set) for t in timings]
 
 

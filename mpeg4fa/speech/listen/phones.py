@@ -106,14 +106,29 @@ def active_share(start: float, end: float, active: np.ndarray, offset: float = 0
     return float(part.mean()) if len(part) else 0.0
 
 
+RELEASE = 0.05
+"""A closure is silent: a shut-lip phone counts as speech where voice activity comes within this many
+seconds after it (its release into the next sound), however little of it is active itself (a p after s,
+or before k, lies in a voiceless stretch longer than voice activity's reach)."""
+
+
+def speech_share(start: float, end: float, active: np.ndarray, offset: float = 0.0, closure: bool = False) -> float:
+    """:func:`active_share` of [start, end), or for a ``closure`` (lips shut) the larger of it and the share
+    of the :data:`RELEASE` after it."""
+    share = active_share(start, end, active, offset)
+    return max(share, active_share(end, end + RELEASE, active, offset)) if closure else share
+
+
 def phone_events(phones: list[Phone], active: np.ndarray | None = None, offset: float = 0.0) -> list[Event]:
     """Phones as IPA phoneme events; silence, fillers and phones mostly outside voice activity
-    (``active``, frames from ``offset``) become pauses (an empty name)."""
+    (``active``, frames from ``offset``; :func:`speech_share`) become pauses (an empty name)."""
+    from mpeg4fa.speech.listen.closures import LABIALS
+
     table = arpabet_ipa()
     out = []
     for p in phones:
         name = table.get(p.name, "") if p.speech else ""
-        if name and active is not None and active_share(p.start, p.end, active, offset) < 0.5:
+        if name and active is not None and speech_share(p.start, p.end, active, offset, p.name in LABIALS) < 0.5:
             name = ""
         out.append(Event("phoneme", p.start, p.end, name))
     return out
