@@ -113,12 +113,12 @@ class Renderer:
                                           ctx.depth_renderbuffer(size, samples=self.samples))
         lay = self.layout
         self.dynamic = ctx.buffer(reserve=lay.n_vertices * 6 * 4, dynamic=True)
-        static = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail, lay.nose].astype(np.float32)
+        static = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail, lay.nose, lay.neck].astype(np.float32)
         self.static = ctx.buffer(static.tobytes())
         self.index = ctx.buffer(lay.indices.astype(np.uint32).tobytes())
         self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                   (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints",
-                                                    "in_detail", "in_nose")],
+                                                   (self.static, "2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints",
+                                                    "in_detail", "in_nose", "in_neck")],
                                     index_buffer=self.index, index_element_size=4)
         # the eyes' triangles, one block of the index buffer, are drawn by the eye variant
         eye_slots = [PART_MATERIAL["eye_l"], PART_MATERIAL["eye_r"]]
@@ -131,14 +131,14 @@ class Renderer:
             self.eye_range = (a, b - a)
             self.eye_vao = ctx.vertex_array(
                 self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                   (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints", "in_detail",
-                                    "in_nose")],
+                                   (self.static, "2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints", "in_detail",
+                                    "in_nose", "in_neck")],
                 index_buffer=self.index, index_element_size=4)
         else:  # not one block: everything by one variant that has the eyes' code
             self.vao.release()
             self.vao = ctx.vertex_array(self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                           (self.static, "2f 1f 2f 2f 2f", "in_uv", "in_material",
-                                                            "in_tints", "in_detail", "in_nose")],
+                                                           (self.static, "2f 1f 2f 2f 2f 1f", "in_uv", "in_material",
+                                                            "in_tints", "in_detail", "in_nose", "in_neck")],
                                         index_buffer=self.index, index_element_size=4)
         self.lash_vao = self.lash_buffers = None
         if self.lashes is not None:  # a draw of their own: the cards along the lid margins

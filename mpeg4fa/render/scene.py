@@ -7,7 +7,9 @@ gathers positions and normals through one index array.
 The neck's cut is closed by a cap (:func:`mpeg4fa.face.neck.cap_triangles`: triangles over the
 rim's own vertices), drawn as skin with GL vertices of its own whose normal is the cap's, not
 the rim's: the neck's side keeps its shading to the edge, and from below the head is a closed
-bust, never its inside.
+bust, never its inside. So a back face of the neck (:func:`mpeg4fa.face.neck.neck_vertices`) that
+shows is a sliver at its silhouette, where a head turn twists one row of its long triangles over
+the next (a pixel at a time, at any turn): it is drawn as the skin it is, not as the inside.
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ import numpy as np
 from scipy import sparse
 
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.neck import cap_triangles
+from mpeg4fa.face.neck import cap_triangles, neck_vertices
 from mpeg4fa.render.details import brow_coordinates, cavity_weights, nose_coordinates, tooth_coordinates
 from mpeg4fa.render.materials import LIP_OUTLINE, PART_MATERIAL, lip_weights
 
@@ -35,6 +37,7 @@ class SceneLayout:
     cavity: np.ndarray     # (N,) float32 0..1, how deep in the mouth (dark) a skin vertex is
     detail: np.ndarray     # (N, 2) float32: brow coordinates on the skin, tooth coordinates on the teeth
     nose: np.ndarray       # (N, 2) float32: nose wrinkle window and coordinate on the skin (0 elsewhere)
+    neck: np.ndarray       # (N,) float32: 1 on the neck's skin and cap (its back side is drawn as skin), else 0
     indices: np.ndarray    # (T, 3) uint32 GL vertex indices, all drawn parts
     triangles: np.ndarray  # (T, 3) mesh vertex indices (for normals; the cap's are not among them)
     incidence: sparse.csr_matrix  # (V, T): sums face normals onto vertices
@@ -80,6 +83,11 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
     detail[skin] = brow_coordinates(mesh, mesh.vertices[source[skin]])
     nose = np.zeros((len(source), 2), np.float32)
     nose[skin] = nose_coordinates(mesh, mesh.vertices[source[skin]])
+    neck = np.zeros(len(source), np.float32)
+    if len(cap):  # only a capped neck is closed: an open cut shows its true inside
+        on_neck = np.zeros(mesh.n_vertices, bool)
+        on_neck[neck_vertices(mesh)] = True
+        neck[skin] = on_neck[source[skin]]
     for part in ("teeth_upper", "teeth_lower"):
         if part in mesh.part_ranges and len(mesh.triangles.get(part, ())):
             a, b = mesh.part_ranges[part]
@@ -94,6 +102,7 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
         cavity=cavity_weights(mesh)[source].astype(np.float32),
         detail=detail,
         nose=nose,
+        neck=neck,
         indices=inverse.reshape(-1, 3).astype(np.uint32),
         triangles=tri,
         incidence=incidence_matrix(tri, mesh.n_vertices),

@@ -54,6 +54,7 @@ flat in int v_material;
 in vec2 v_tints;
 in vec2 v_detail;
 in vec2 v_nose;
+in float v_neck;
 
 out vec4 colour;
 
@@ -134,7 +135,8 @@ void main() {
     vec3 wet_normal = n;
     float wetness = 0.0;
     if (v_material == 0) {
-        if (gl_FrontFacing) {
+        if (gl_FrontFacing || v_neck > 0.999) {   // the capped neck's back side: a silhouette sliver of skin
+            if (!gl_FrontFacing) n = -n;
             slot = 0;
             if (use_texture) {
                 base = texture(skin_texture, v_uv).rgb;

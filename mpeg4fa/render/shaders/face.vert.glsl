@@ -9,6 +9,7 @@ in float in_material;
 in vec2 in_tints;    // lips, oral cavity (0..1)
 in vec2 in_detail;   // skin: brow coordinates; teeth: tooth coordinates (see render/details.py)
 in vec2 in_nose;     // skin: nose wrinkle window and coordinate (mm)
+in float in_neck;    // 1 on the neck (its back side is skin: render/scene.py)
 
 out vec3 v_position;
 out vec3 v_normal;
@@ -17,6 +18,7 @@ flat out int v_material;
 out vec2 v_tints;
 out vec2 v_detail;
 out vec2 v_nose;
+out float v_neck;
 
 void main() {
     v_position = in_position;
@@ -26,5 +28,6 @@ void main() {
     v_tints = in_tints;
     v_detail = in_detail;
     v_nose = in_nose;
+    v_neck = in_neck;
     gl_Position = world_to_clip * vec4(in_position, 1.0);
 }
