@@ -38,7 +38,9 @@ FULL_RANGE_PASSING_AT_LEAST = 4
 """Skin FAPs alone at their full default I range (+-i_max x quant step) that pass, of 96: most
 move a point 30-110 mm past fixed neighbours (raise_b_midlip 3720 MNS is 59 mm up through the
 upper lip, open_jaw 4320 MNS drops the chin 69 mm); a regression guard, measured 4 (4 +1200,
-16 +1080, 18 +-420)."""
+16 +1080, 18 +-420), 5 since 14 +600 passes at 1.92 x its floor. Why each of the other 91 fails (all by a
+fold, none by strain alone; 58 drive their point past a feature point in its way): tools/crease_check.json,
+written by tools/crease_range_why.py."""
 
 
 @pytest.fixture(scope="module")
