@@ -18,6 +18,7 @@ and writes OUT/train_tracker.json and the map.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import importlib.util
 import json
 import sys
@@ -169,8 +170,9 @@ def runs(cache: Path, seconds: float) -> list[dict]:
     baked = None
     out = []
     for tex, seed, size in plan:
-        path = cache / f"{tex}_{seed}_{size}_{seconds:g}s.npz"
         values = training_values(seed, seconds)
+        digest = hashlib.sha1(values.tobytes()).hexdigest()[:8]  # a changed stream is rendered anew
+        path = cache / f"{tex}_{seed}_{size}_{seconds:g}s_{digest}.npz"
         if path.exists():
             with np.load(path) as data:
                 landmarks = data["landmarks"]
