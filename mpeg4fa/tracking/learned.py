@@ -60,8 +60,9 @@ def angle_terms(angles: np.ndarray) -> np.ndarray:
 
 def design(displacement: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """``(n, 3K + 9)`` regression inputs from ``(n, K, 3)`` displacements over ES0 and ``(n, 3)`` angles. The depth
-    is the landmark model's guess, yet it carries the lips' forward push: with it the held-out loop's outer lip
-    corners read 0.82 -> 0.87 and the lip corners held 0.92 when retrained on the current face engine (0.85 without)."""
+    is the landmark model's guess, yet it carries the lips' forward push: retrained on the same renders, the held-out
+    loop's outer lip corners read 0.77 -> 0.82 (tools/track_loop.py), and unsmoothed the lip corners 0.92 where x, y
+    alone fell to 0.85."""
     d = np.asarray(displacement, dtype=np.float64)
     return np.concatenate([d.reshape(len(d), -1), angle_terms(angles)], axis=1)
 
