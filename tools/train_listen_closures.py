@@ -173,21 +173,19 @@ def onset_grid(hidden: np.ndarray, out: np.ndarray, per_language: int, seed: int
         ref = [SimpleNamespace(phoneme="p", viseme="PP", start=a, end=b) for a, b in spans]
         cases.append((ref, recognize_phones(rec, closures=False), predict(features(levels), hidden, out)))
     rows = []
-    saved = closures.SURE, closures.LONGEST_UNHEARD, closures.OPEN_VETO, closures.CONFIRM
     for threshold, sure, longest, veto, confirm in itertools.product((0.2, 0.3), (0.5, 0.6, 0.7, 0.8, 0.9), (2, 3, 4),
                                                                      (True, False), (True, False)):
-        closures.SURE, closures.LONGEST_UNHEARD, closures.OPEN_VETO, closures.CONFIRM = sure, longest, veto, confirm
         hits = total = found = extra = 0
         for ref, heard, prob in cases:
             got = [SimpleNamespace(phoneme=p.name, viseme="PP", start=p.start, end=p.end)
-                   for p in closures.refine_closures(heard, closures.closure_spans(prob, threshold))
+                   for p in closures.refine_closures(heard, closures.closure_spans(prob, threshold), sure=sure,
+                                                     longest=longest, open_veto=veto, confirm=confirm)
                    if p.name in closures.LABIALS]
             s = onset_score(ref, got)
             hits, total, extra = hits + s.hits, total + s.reference, extra + s.extra
             found += len(closure_onsets(got))
         rows.append({"threshold": threshold, "sure": sure, "longest": longest, "open_veto": veto,
                      "confirm": confirm, "within_40ms": hits / total, "precision": 1 - extra / max(1, found)})
-    closures.SURE, closures.LONGEST_UNHEARD, closures.OPEN_VETO, closures.CONFIRM = saved
     return rows
 
 

@@ -12,7 +12,6 @@ from mpeg4fa.speech.align import Recording  # noqa: E402
 from mpeg4fa.speech.encoder import encode_utterance, phones  # noqa: E402
 from mpeg4fa.speech.listen import (ENGLISH_DEFAULT, Phone, choose_recognizer, listen, phone_events,  # noqa: E402
                                    phone_timings, recognize_phones, voice_activity)
-from mpeg4fa.speech.listen import closures  # noqa: E402
 from mpeg4fa.speech.listen.closures import (closure_probability, closure_spans,  # noqa: E402
                                             refine_closures)
 from mpeg4fa.speech.listen.compare import agreement, closure_onsets, onset_score, rest_share, shuts  # noqa: E402
@@ -191,7 +190,7 @@ def test_a_long_recording_is_heard_in_blocks_cut_between_words():
     assert starts == sorted(starts) and starts[-1] > len(x) / rate - 3
 
 
-def test_refine_snaps_a_heard_labial_to_the_closure_and_adds_a_sure_one(monkeypatch):
+def test_refine_snaps_a_heard_labial_to_the_closure_and_adds_a_sure_one():
     heard = [Phone("AA", 0.0, 0.20), Phone("M", 0.20, 0.30), Phone("AA", 0.30, 0.50), Phone("G", 0.50, 0.56),
              Phone("IY", 0.56, 0.80), Phone("AE", 0.80, 1.00), Phone("B", 1.00, 1.05), Phone("AA", 1.05, 1.20)]
     spans = [(0.16, 0.26, 0.5),   # 40 ms before the heard M: the M starts there
@@ -205,9 +204,8 @@ def test_refine_snaps_a_heard_labial_to_the_closure_and_adds_a_sure_one(monkeypa
     assert ("B", 0.85, 0.95) in names and ("AE", 0.80, 0.85) in names
     assert ("D", 1.00, 1.05) in names
     assert all(a.end <= b.start + 1e-9 for a, b in zip(out, out[1:]))
-    monkeypatch.setattr(closures, "OPEN_VETO", True)
-    monkeypatch.setattr(closures, "CONFIRM", False)
-    names = [(p.name, round(p.start, 2), round(p.end, 2)) for p in refine_closures(heard, spans)]
+    names = [(p.name, round(p.start, 2), round(p.end, 2))
+             for p in refine_closures(heard, spans, open_veto=True, confirm=False)]
     assert ("AE", 0.80, 1.00) in names and ("B", 1.00, 1.05) in names
 
 

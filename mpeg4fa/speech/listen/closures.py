@@ -128,15 +128,18 @@ def closure_spans(probability: np.ndarray, threshold: float = THRESHOLD) -> list
             for a, b in zip(starts, ends) if b - a >= 2]
 
 
-def refine_closures(phones: list, spans: list[tuple[float, float, float]], offset: float = 0.0) -> list:
+def refine_closures(phones: list, spans: list[tuple[float, float, float]], offset: float = 0.0, *,
+                    sure: float = SURE, longest: int = LONGEST_UNHEARD, open_veto: bool = OPEN_VETO,
+                    confirm: bool = CONFIRM) -> list:
     """``phones`` (:class:`~.phones.Phone`) with the detector's closures (``spans``, s from ``offset``)
     applied: a span near a recognised labial, or a sure one, becomes that labial (``B`` where none was
-    heard), cutting the phones it overlaps; a recognised labial near no span is not shut (:data:`CONFIRM`;
-    see the module docstring)."""
+    heard), cutting the phones it overlaps; a recognised labial near no span is not shut (``confirm``;
+    see the module docstring). The keywords default to the chosen constants; the training script's grid
+    tries others."""
     from mpeg4fa.speech.listen.phones import SILENCE, Phone
 
     out = list(phones)
-    if CONFIRM:
+    if confirm:
         starts = np.array([a + offset for a, _, _ in spans])
         out = [Phone(UNSHUT[p.name], p.start, p.end)
                if p.name in UNSHUT and not (np.abs(starts - p.start) <= SNAP).any() else p for p in out]
@@ -145,7 +148,7 @@ def refine_closures(phones: list, spans: list[tuple[float, float, float]], offse
         heard = [p for p in out if p.name in LABIALS and abs(p.start - a) <= SNAP]
         if not heard:
             under = {p.name for p in out if p.end > a + 0.005 and p.start < min(b, a + 0.03)}
-            if peak < SURE or b - a < LONGEST_UNHEARD * HOP / RATE - 1e-9 or not under or (OPEN_VETO and under <= OPEN):
+            if peak < sure or b - a < longest * HOP / RATE - 1e-9 or not under or (open_veto and under <= OPEN):
                 continue
         name = heard[0].name if heard else "B"
         if heard:  # the heard labial keeps its own end where it runs past the span

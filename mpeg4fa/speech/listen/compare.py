@@ -44,20 +44,16 @@ def shuts(phoneme: str) -> bool:
 def closure_onsets(timings, shut_only: bool = False) -> np.ndarray:
     """Start times of the closures (runs of ``PP`` timings, joined where one follows another); with
     ``shut_only``, runs where no timing :func:`shuts` the lips left out."""
-    out: list[float] = []
+    runs: list[tuple[float, bool]] = []  # (start, whether any timing of the run shuts the lips)
     last_end = -1.0
-    shut = False
     for t in sorted((t for t in timings if t.viseme == CLOSURE and t.end > t.start), key=lambda t: t.start):
-        if abs(t.start - last_end) > 1e-6:
-            if out and shut_only and not shut:
-                out.pop()
-            out.append(t.start)
-            shut = False
-        shut = shut or shuts(t.phoneme)
+        shut = not shut_only or shuts(t.phoneme)
+        if runs and abs(t.start - last_end) <= 1e-6:
+            runs[-1] = (runs[-1][0], runs[-1][1] or shut)
+        else:
+            runs.append((t.start, shut))
         last_end = t.end
-    if out and shut_only and not shut:
-        out.pop()
-    return np.array(out)
+    return np.array([start for start, shut in runs if shut])
 
 
 @dataclass(frozen=True)
@@ -84,15 +80,12 @@ def onset_score(reference, other, tolerance: float = TOLERANCE) -> OnsetScore:
     end): the closures to find are those that shut the lips; a closure of ``other`` is extra only where the
     reference shows none at all (see the module docstring)."""
     ref, got, shown = closure_onsets(reference, shut_only=True), closure_onsets(other), closure_onsets(reference)
-    if not len(ref):
-        d0 = np.abs(shown[:, None] - got[None, :]) if len(shown) and len(got) else np.full((1, len(got)), np.inf)
-        return OnsetScore(0, 0, (), int((d0.min(axis=0) > NEAR).sum()))
-    if not len(got):
-        return OnsetScore(len(ref), 0, (), 0)
-    d = np.abs(ref[:, None] - got[None, :])
-    nearest = d.min(axis=1)
+    far = np.abs(shown[:, None] - got[None, :]).min(axis=0) if len(shown) else np.full(len(got), np.inf)
+    extra = int((far > NEAR).sum())
+    if not len(ref) or not len(got):
+        return OnsetScore(len(ref), 0, (), extra)
+    nearest = np.abs(ref[:, None] - got[None, :]).min(axis=1)
     hits = int((nearest <= tolerance).sum())
-    extra = int((np.abs(shown[:, None] - got[None, :]).min(axis=0) > NEAR).sum())
     return OnsetScore(len(ref), hits, tuple(float(e) for e in nearest[nearest <= NEAR]), extra)
 
 
