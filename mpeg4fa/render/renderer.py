@@ -27,6 +27,8 @@ from mpeg4fa.render.scene import build_layout, vertex_data
 
 _EYES = (("eye_l", "l-eye"), ("eye_r", "r-eye"))
 MAX_SIZE = 8192
+STATIC_ATTRIBUTES = ("2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints", "in_detail", "in_nose", "in_neck")
+"""The layout's per-vertex columns (uv, material, lips and cavity tints, detail, nose, neck) as the face programs read them."""
 
 KEY_LIGHT = ((-0.45, 0.45, 0.77), (0.78, 0.76, 0.72))
 FILL_LIGHT = ((0.65, 0.05, 0.75), (0.28, 0.30, 0.34))
@@ -117,8 +119,7 @@ class Renderer:
         self.static = ctx.buffer(static.tobytes())
         self.index = ctx.buffer(lay.indices.astype(np.uint32).tobytes())
         self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                   (self.static, "2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints",
-                                                    "in_detail", "in_nose", "in_neck")],
+                                                   (self.static, *STATIC_ATTRIBUTES)],
                                     index_buffer=self.index, index_element_size=4)
         # the eyes' triangles, one block of the index buffer, are drawn by the eye variant
         eye_slots = [PART_MATERIAL["eye_l"], PART_MATERIAL["eye_r"]]
@@ -131,14 +132,12 @@ class Renderer:
             self.eye_range = (a, b - a)
             self.eye_vao = ctx.vertex_array(
                 self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                   (self.static, "2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints", "in_detail",
-                                    "in_nose", "in_neck")],
+                                   (self.static, *STATIC_ATTRIBUTES)],
                 index_buffer=self.index, index_element_size=4)
         else:  # not one block: everything by one variant that has the eyes' code
             self.vao.release()
             self.vao = ctx.vertex_array(self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                           (self.static, "2f 1f 2f 2f 2f 1f", "in_uv", "in_material",
-                                                            "in_tints", "in_detail", "in_nose", "in_neck")],
+                                                           (self.static, *STATIC_ATTRIBUTES)],
                                         index_buffer=self.index, index_element_size=4)
         self.lash_vao = self.lash_buffers = None
         if self.lashes is not None:  # a draw of their own: the cards along the lid margins
