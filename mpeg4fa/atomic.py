@@ -160,8 +160,7 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM or SIGHUP arrived: raised in the main thread, it unwinds like Ctrl-C's KeyboardInterrupt.
 
     A KeyboardInterrupt so that every ``except KeyboardInterrupt`` and ``except BaseException``
-    clean-up (ours and the libraries') runs for it too; ``signum`` says which signal,
-    ``exit_status`` is the shell's convention for it (128 + the signal's number).
+    clean-up (ours and the libraries') runs for it too; ``signum`` says which signal.
     """
 
     def __init__(self, signum: int) -> None:
@@ -174,10 +173,6 @@ class Terminated(KeyboardInterrupt):
             return signal.Signals(self.signum).name
         except ValueError:
             return f"signal {self.signum}"
-
-    @property
-    def exit_status(self) -> int:
-        return 128 + self.signum
 
     def __reduce__(self):
         return (type(self), (self.signum,))

@@ -5,9 +5,10 @@ parser. The error contract: any layer's error (:class:`mpeg4fa.errors.MpegFaErro
 or an operating-system error becomes one line ``mpeg4fa COMMAND: error: ...`` on
 stderr and exit status 1; options that do not go together (:class:`.UsageError`)
 exit 2, as argparse's own errors do (one line too: no usage dump; ``--help`` has the usage);
-an OS error names its file and what to do. Ctrl-C exits 130; SIGTERM and SIGHUP
-(:func:`mpeg4fa.atomic.clean_up_on_signals`) unwind the same way and exit 128 + the signal
-(143, 129) after one line ``mpeg4fa COMMAND: terminated (SIGTERM)``. No traceback for any of
+an OS error names its file and what to do. Ctrl-C, SIGTERM and SIGHUP
+(:func:`mpeg4fa.atomic.clean_up_on_signals`) unwind the same way and exit 1, as any other
+stop short of the work does, after one line (``mpeg4fa COMMAND: interrupted`` or
+``mpeg4fa COMMAND: terminated (SIGTERM)``). No traceback for any of
 them, and outputs are written under temporary names (:mod:`mpeg4fa.atomic`), so a failed,
 interrupted or killed command leaves no partial file. Every warning, whatever its category
 or origin, is one ``mpeg4fa COMMAND: warning: ...`` line (no source lines).
@@ -167,12 +168,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _stopped(command: str, exc: KeyboardInterrupt) -> int:
-    """One line for an interruption and the shell's exit status for it (130 for Ctrl-C, 128 + signal)."""
+    """One line for an interruption, and exit status 1: the work was not done, and nothing of it was left."""
     if isinstance(exc, Terminated):
         print(f"{command}: terminated ({exc.signal_name})", file=sys.stderr)
-        return exc.exit_status
-    print(f"\n{command}: interrupted", file=sys.stderr)
-    return 130
+    else:
+        print(f"\n{command}: interrupted", file=sys.stderr)
+    return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

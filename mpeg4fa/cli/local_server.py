@@ -5,7 +5,7 @@ Why not ``uvicorn.run``: it swallows KeyboardInterrupt, so a SIGTERM the CLI tur
 and SIGTERM, so a SIGHUP (a closed terminal) cut the event loop mid-step (a traceback from
 the app's lifespan). Here a SIGHUP asks the server to stop as SIGTERM does (connections
 closed, the app's shutdown run), and then the command ends as every command does on a
-signal: one line, exit status 128 + the signal.
+signal: one line, exit status 1.
 """
 from __future__ import annotations
 

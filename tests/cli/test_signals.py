@@ -58,7 +58,7 @@ def _stop(proc: subprocess.Popen, signum: int) -> str:
 
 def _check_stopped(proc: subprocess.Popen, err: str, command: str, signum: int, folder: Path, *earlier: Path) -> None:
     name = signal.Signals(signum).name
-    assert proc.returncode == 128 + signum, err
+    assert proc.returncode == 1, err
     assert "Traceback" not in err and err.strip().splitlines()[-1] == f"mpeg4fa {command}: terminated ({name})", err
     assert _partials(folder) == []
     for path in earlier:
@@ -143,7 +143,7 @@ def test_the_editor_server_stops_cleanly(tmp_path, signum):
             return False
     _wait_for(proc, listening, "server listening")
     err = _stop(proc, signum)
-    assert proc.returncode == 128 + signum, err
+    assert proc.returncode == 1, err
     assert "Traceback" not in err and err.strip().splitlines()[-1] == \
         f"mpeg4fa edit: terminated ({signal.Signals(signum).name})", err
 
