@@ -44,18 +44,22 @@ class Bench:
     what: str
     json_flag: str = "--json"
     small: tuple[str, ...] = ()
+    tool: str = ""
+    """The script that writes the JSON when it is not ``bench_NAME.py`` (one script, several kinds of run)."""
+    required: tuple[str, ...] = ()
+    """Options every run needs, small or plain (what it is compared against)."""
 
     @property
     def script(self) -> Path:
-        return TOOLS / f"bench_{self.name}.py"
+        return TOOLS / f"bench_{self.tool or self.name}.py"
 
     @property
     def json_path(self) -> Path:
         return TOOLS / f"bench_{self.name}.json"
 
     def command(self, extra: tuple[str, ...] | None = None) -> list[str]:
-        args = list(self.small if extra is None else extra)
-        return [".venv/bin/python", f"tools/bench_{self.name}.py", *args, self.json_flag,
+        args = [*self.required, *(self.small if extra is None else extra)]
+        return [".venv/bin/python", f"tools/{self.script.name}", *args, self.json_flag,
                 f"tools/bench_{self.name}.json"]
 
 
@@ -74,6 +78,9 @@ BENCHES: tuple[Bench, ...] = (
           small=("--repeat", "1")),
     Bench("render", "Rendering", "decode + deform + render + readback per frame, MP4/PNG export, memory",
           small=("--repeat", "2")),
+    Bench("render_eyes", "Rendering against the tree before the eyes' shaders",
+          "per-frame stages of this checkout and of an earlier one timed in turns, best of each, and their ratio",
+          tool="render", required=("--against", "OLD_CHECKOUT")),
     Bench("fbajs", "fba.js in Node against the compiled Python decoder", "frames/s of both on the same streams",
           small=("--repeat", "3", "--rounds", "2")),
     Bench("photo", "Photo to FDP", "each step of `mpeg4fa fdp PHOTO` and the whole command", json_flag="--out",
@@ -82,7 +89,10 @@ BENCHES: tuple[Bench, ...] = (
           small=("--seconds", "4", "--repeat", "1")),
     Bench("serve", "Live server", "latency from text to first frame and delivery of a long speech"),
     Bench("live", "Live speech", "a spoken WAV fed live: latency and delivery"),
-    Bench("lipsync_audio", "Lip sync from audio", "the mouth driven by a recording against hand-labelled truth"),
+    Bench("lipsync_audio", "Lip sync from audio alone",
+          "closures and visemes recognised without a transcript against the transcript path's track, on espeak-ng "
+          "speech in six languages (hand-labelled recordings with `--human DIR`); rest on silence, noise and music; "
+          "speed"),
     Bench("batch", "Batch on Dask", "the same streams rendered on 1 and 2 local workers",
           small=("--streams", "4", "--seconds", "2")),
     Bench("bits", "bitstring against the codec's BitReader", "header fields, single bits, whole decodes"),
@@ -282,7 +292,7 @@ def _sibling_records(data: dict) -> list[list[str]]:
 
 
 def bench_markdown(bench: Bench, plotted: set[str]) -> str:
-    head = f"### {bench.title}\n\n`tools/bench_{bench.name}.py`: {bench.what}.\n\n"
+    head = f"### {bench.title}\n\n`tools/{bench.script.name}`: {bench.what}.\n\n"
     try:
         data = load(bench)
     except (OSError, ValueError) as exc:
@@ -313,7 +323,7 @@ def page_markdown(plotted: set[str] | None = None) -> str:
     out += [bench_markdown(b, plotted) for b in present + others]
     if missing:
         out.append("### Not measured yet\n")
-        out += [f"- **{b.title}** (`tools/bench_{b.name}.py`: {b.what}): no JSON committed; make it with "
+        out += [f"- **{b.title}** (`tools/{b.script.name}`: {b.what}): no JSON committed; make it with "
                 f"`{shlex.join(b.command(()))}`" for b in missing]
     return "\n".join(out) + "\n"
 
