@@ -106,8 +106,9 @@ def test_benchmarks_page_states_provenance_or_how_to_measure(bench, tmp_path, mo
     assert "No plot: `bench_render.json` is not in the form" in bench.page_markdown(plotted=set(pngs))
     for other in bench.BENCHES:
         if other.name not in ("codec", "render"):  # no JSON: a line says how to make it
-            assert f"`.venv/bin/python tools/bench_{other.name}.py {other.json_flag} tools/bench_{other.name}.json`" \
-                in page
+            needed = "".join(f"{arg} " for arg in other.required)  # e.g. what a timing is compared against
+            assert f"`.venv/bin/python tools/{other.script.name} {needed}{other.json_flag} " \
+                   f"tools/bench_{other.name}.json`" in page
 
 
 def test_every_committed_benchmark_json_renders_and_plots(bench):
