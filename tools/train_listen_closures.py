@@ -35,7 +35,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from mpeg4fa.speech.align.recording import resample  # noqa: E402
 from mpeg4fa.speech.encoder import phones  # noqa: E402
-from mpeg4fa.speech.listen.closures import FIRST, HOP, RATE, features, log_mel, predict, weights  # noqa: E402
+from mpeg4fa.speech.listen.closures import (FIRST, HOP, RATE, closure_spans, features, log_mel, predict,  # noqa: E402
+                                            span_features, weights)
 from mpeg4fa.speech.listen.compare import shuts  # noqa: E402
 from mpeg4fa.speech.markup import parse_markup  # noqa: E402
 from mpeg4fa.speech.tts.espeak import EspeakEngine  # noqa: E402
@@ -128,12 +129,41 @@ def dataset(per_language: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack(xs), np.concatenate(ys).astype(np.float32)
 
 
+def heard_spans(per_language: int, seed: int, hidden: np.ndarray, out: np.ndarray):
+    """Per utterance (as spoken, and coloured as in :func:`dataset`): the detector's spans on it, what the
+    phone loop heard in it, its levels and closure probability, and the true closures."""
+    from mpeg4fa.speech.align import Recording
+    from mpeg4fa.speech.listen.phones import recognize_phones
+
+    rng = np.random.default_rng(seed)
+    for samples, rate, spans in utterances(per_language, seed):
+        x = resample(samples, rate, RATE)
+        for version in (x, coloured(x, rng)):
+            levels = log_mel(version)
+            prob = predict(features(levels), hidden, out)
+            rec = Recording(np.clip(np.rint(version / max(1.0, np.abs(version).max()) * 32767), -32768, 32767)
+                            .astype(np.int16), RATE)
+            yield closure_spans(prob), recognize_phones(rec, closures=False), levels, prob, spans
+
+
+def span_dataset(per_language: int, seed: int, hidden: np.ndarray, out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Features (:func:`~mpeg4fa.speech.listen.closures.span_features`) of every detector span and its truth:
+    1 where it overlaps a true closure by 10 ms or more."""
+    xs, ys = [], []
+    for found, heard, levels, prob, truth in heard_spans(per_language, seed, hidden, out):
+        if not found:
+            continue
+        xs.append(span_features(levels, prob, heard, found))
+        ys += [float(any(min(b, d) - max(a, c) >= 0.01 for c, d in truth)) for a, b, _ in found]
+    return np.vstack(xs).astype(np.float32), np.array(ys, dtype=np.float32)
+
+
 def train(x: np.ndarray, y: np.ndarray, epochs: int, seed: int, rate: float = 3e-3,
-          batch: int = 512, decay: float = 1e-4) -> tuple[np.ndarray, np.ndarray]:
+          batch: int = 512, decay: float = 1e-4, units: int = HIDDEN) -> tuple[np.ndarray, np.ndarray]:
     """One tanh layer and a logistic output, Adam on cross-entropy."""
     rng = np.random.default_rng(seed)
-    hidden = rng.standard_normal((x.shape[1], HIDDEN)) / np.sqrt(x.shape[1])
-    out = rng.standard_normal(HIDDEN + 1) / np.sqrt(HIDDEN)
+    hidden = rng.standard_normal((x.shape[1], units)) / np.sqrt(x.shape[1])
+    out = rng.standard_normal(units + 1) / np.sqrt(units)
     params = [hidden, out]
     m1, m2 = [np.zeros_like(p) for p in params], [np.zeros_like(p) for p in params]
     step = 0
@@ -189,14 +219,78 @@ def onset_grid(hidden: np.ndarray, out: np.ndarray, per_language: int, seed: int
     return rows
 
 
-def write(hidden: np.ndarray, out: np.ndarray, note: str) -> None:
+def span_grid(hidden: np.ndarray, out: np.ndarray, span: tuple[np.ndarray, np.ndarray], per_language: int,
+              seed: int) -> list[dict]:
+    """Closure onsets within 40 ms and precision on held-out pseudo-word speech, the phone loop's p, b, m
+    refined with the span scorer ``span`` at each ``keep`` (and with the heard/sure rule of the constants in
+    closures.py, ``keep`` None, for comparison): what closures.KEEP is chosen by."""
+    from types import SimpleNamespace
+
+    from mpeg4fa.speech.listen import closures
+    from mpeg4fa.speech.listen.compare import closure_onsets, onset_score
+
+    cases = []
+    for found, heard, levels, prob, truth in heard_spans(per_language, seed, hidden, out):
+        ref = [SimpleNamespace(phoneme="p", viseme="PP", start=a, end=b) for a, b in truth]
+        scores = predict(span_features(levels, prob, heard, found), *span) if found else np.zeros(0)
+        cases.append((ref, heard, found, scores))
+    rows = []
+    for keep, confirm in itertools.product((None, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8), (True, False)):
+        hits = total = got_n = extra = 0
+        for ref, heard, found, scores in cases:
+            got = [SimpleNamespace(phoneme=p.name, viseme="PP", start=p.start, end=p.end)
+                   for p in closures.refine_closures(heard, found, confirm=confirm,
+                                                     scores=None if keep is None else scores, keep=keep or 0.0)
+                   if p.name in closures.LABIALS]
+            s = onset_score(ref, got)
+            hits, total, extra = hits + s.hits, total + s.reference, extra + s.extra
+            got_n += len(closure_onsets(got))
+        rows.append({"keep": keep, "confirm": confirm, "within_40ms": hits / total, "precision": 1 - extra / max(1, got_n)})
+    return rows
+
+
+def write(hidden: np.ndarray, out: np.ndarray, note: str,
+          span: tuple[np.ndarray, np.ndarray, str] | None = None) -> None:
+    """The detector's layers (and the span scorer's, trained on this detector's spans) as Python source."""
     def b64(a):
         text = base64.b64encode(a.astype("<f2").tobytes()).decode()
         return "\n".join(f'    "{text[k:k + 100]}"' for k in range(0, len(text), 100))
 
-    OUT.write_text(f'"""Weights of the closure detector (:mod:`.closures`), float16 little-endian in base64.\n\n'
-                   f"Written by tools/train_listen_closures.py: {note}.\n\"\"\"\n"
-                   f"SHAPE = {hidden.shape}\nHIDDEN = (\n{b64(hidden)}\n)\nOUTPUT = (\n{b64(out)}\n)\n", encoding="utf-8")
+    text = (f'"""Weights of the closure detector (:mod:`.closures`), float16 little-endian in base64.\n\n'
+            f"Written by tools/train_listen_closures.py: {note}.")
+    if span is not None:
+        text += f"\n\nSpan scorer (SPAN_*, :func:`.closures.span_scores`): {span[2]}."
+    text += f"\n\"\"\"\nSHAPE = {hidden.shape}\nHIDDEN = (\n{b64(hidden)}\n)\nOUTPUT = (\n{b64(out)}\n)\n"
+    if span is not None:
+        text += (f"SPAN_SHAPE = {span[0].shape}\nSPAN_HIDDEN = (\n{b64(span[0])}\n)\n"
+                 f"SPAN_OUTPUT = (\n{b64(span[1])}\n)\n")
+    OUT.write_text(text, encoding="utf-8")
+
+
+SPAN_UNITS = 16
+SPAN_EPOCHS = 60
+
+
+def train_spans(args: argparse.Namespace, started: float) -> None:
+    """The span scorer on the detector in place (``--spans``): trained, written beside it, its grid printed."""
+    from mpeg4fa.speech.listen import closure_weights
+
+    hidden, out = weights()
+    x, y = span_dataset(args.per_language, args.seed, hidden, out)
+    print(f"{len(x)} spans, {y.mean():.1%} closures ({time.perf_counter() - started:.0f} s)")
+    span = train(x, y, SPAN_EPOCHS, args.seed, rate=1e-3, batch=64, units=SPAN_UNITS)
+    vx, vy = span_dataset(max(10, args.per_language // 5), args.seed + 1000, hidden, out)
+    p = predict(vx, *span) > 0.5
+    recall, precision = (p & (vy > 0)).sum() / max(1, (vy > 0).sum()), (p & (vy > 0)).sum() / max(1, p.sum())
+    note = (f"{args.per_language} sentences a language (seed {args.seed}), their spans as spoken and coloured, "
+            f"{SPAN_UNITS} units, {SPAN_EPOCHS} epochs; held-out spans (seed {args.seed + 1000}) at 0.5: recall "
+            f"{recall:.2f}, precision {precision:.2f}")
+    old = closure_weights.__doc__.split("Written by tools/train_listen_closures.py: ")[1].split(".\n")[0]
+    write(hidden, out, old, (*span, note))
+    print(f"{'keep':>5} {'conf':>5} {'<=40ms':>7} {'prec':>5}   (held-out pseudo-words, seed {args.seed + 2000})")
+    for r in span_grid(hidden, out, span, max(5, args.per_language // 10), args.seed + 2000):
+        print(f"{r['keep']!s:>5} {r['confirm']!s:>5} {r['within_40ms']:>7.1%} {r['precision']:>5.1%}")
+    print(f"{note} ({time.perf_counter() - started:.0f} s); wrote {OUT.relative_to(OUT.parents[3])}")
 
 
 def print_grid(hidden: np.ndarray, out: np.ndarray, args: argparse.Namespace) -> None:
@@ -214,8 +308,12 @@ def main() -> None:
     ap.add_argument("--epochs", type=int, default=15)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--grid-only", action="store_true", help="only the held-out grid, for the weights in place")
+    ap.add_argument("--spans", action="store_true", help="train only the span scorer, on the detector in place")
     args = ap.parse_args()
     started = time.perf_counter()
+    if args.spans:
+        train_spans(args, started)
+        return
     if args.grid_only:
         print_grid(*weights(), args)
         return

@@ -49,6 +49,8 @@ OPEN = frozenset("AA AE AH AO AW AY EH ER EY IH IY OW OY UH UW HH S Z SH ZH".spl
 recogniser heard only as these is not shut on the detector's word alone (introduced for recordings of people,
 where the detector of the time alone was right 2 times in 29, tools/bench_lipsync_audio.py --human)."""
 OPEN_VETO = False
+KEEP = 0.5
+"""Score (:func:`span_scores`) from which a detector span is shut."""
 SURE = 0.7
 LONGEST_UNHEARD = 3
 """A closure no labial was heard in is shut when its peak probability reaches :data:`SURE` over at least
@@ -128,14 +130,83 @@ def closure_spans(probability: np.ndarray, threshold: float = THRESHOLD) -> list
             for a, b in zip(starts, ends) if b - a >= 2]
 
 
+VOWELS = frozenset("AA AE AH AO AW AY EH ER EY IH IY OW OY UH UW".split())
+OTHER_STOPS = frozenset("T D K G CH JH".split())
+SPAN_LOOKS = ((0, -3), (0, 1), (1, -1), (1, 1))
+"""Frames whose spectrum a span's score sees, (0: from its first frame, 1: from the frame after its last,
+frames): 30 ms before it (the vowel's formants bending into the closure), 10 ms into it, its last frame and
+10 ms after it (the release burst: a labial's is low and diffuse)."""
+
+
+def phone_class(name: str | None) -> int:
+    """The recogniser's phone as one of five: labial, other stop or affricate, silence or filler, vowel, other."""
+    if name is None or name == "SIL" or name.startswith("+"):
+        return 2
+    return 0 if name in LABIALS else 1 if name in OTHER_STOPS else 3 if name in VOWELS else 4
+
+
+def span_features(levels: np.ndarray, probability: np.ndarray, phones: list,
+                  spans: list[tuple[float, float, float]], offset: float = 0.0) -> np.ndarray:
+    """Per detector span (:func:`closure_spans`): what the detector says of it (peak and mean probability,
+    length), the spectrum at :data:`SPAN_LOOKS`, and what the phone loop heard (:func:`phone_class` at its
+    start, its end and after it; a labial heard within :data:`SNAP` of its start; one heard inside it) and a
+    bias input: the detector's frames and the recogniser's phones judged together."""
+    n, step = len(levels), HOP / RATE
+    rows = []
+    starts = np.array([p.start - offset for p in phones])
+    ends = np.array([p.end - offset for p in phones])
+    names = [p.name for p in phones]
+
+    def heard_at(t):
+        k = np.flatnonzero((starts <= t) & (ends > t))
+        return names[k[0]] if len(k) else None
+
+    for a, b, peak in spans:
+        i, j = int(round((a - FIRST) / step)), int(round((b - FIRST) / step))
+        looks = [(j if after else i) + d for after, d in SPAN_LOOKS]
+        spectra = levels[np.clip(looks, 0, n - 1)].ravel()
+        classes = np.zeros(15)
+        for slot, t in enumerate((a + 0.01, b - 0.01, b + 0.02)):
+            classes[slot * 5 + phone_class(heard_at(t))] = 1.0
+        near = any(nm in LABIALS and abs(s0 - a) <= SNAP for nm, s0 in zip(names, starts))
+        inside = any(nm in LABIALS and s0 < b and e0 > a for nm, s0, e0 in zip(names, starts, ends))
+        part = probability[i:max(j, i + 1)]
+        rows.append(np.r_[peak, part.mean(), min(j - i, 20) / 10.0, spectra, classes, near, inside, 1.0])
+    return np.array(rows).reshape(len(rows), -1)
+
+
+def span_scores(levels: np.ndarray, probability: np.ndarray, phones: list,
+                spans: list[tuple[float, float, float]], offset: float = 0.0) -> np.ndarray | None:
+    """Probability that each span is a closure (:func:`span_features` -> :mod:`.closure_weights`' span
+    layers); None where the weights have none (the heard/sure rule then decides)."""
+    layers = span_weights()
+    if layers is None:
+        return None
+    if not spans:
+        return np.zeros(0)
+    return predict(span_features(levels, probability, phones, spans, offset), *layers)
+
+
+@lru_cache(maxsize=1)
+def span_weights() -> tuple[np.ndarray, np.ndarray] | None:
+    """The span scorer's layers (:mod:`.closure_weights` ``SPAN_*``), or None."""
+    from mpeg4fa.speech.listen import closure_weights as w
+
+    if not hasattr(w, "SPAN_HIDDEN"):
+        return None
+    hidden = np.frombuffer(base64.b64decode(w.SPAN_HIDDEN), "<f2").astype(np.float64).reshape(w.SPAN_SHAPE)
+    return hidden, np.frombuffer(base64.b64decode(w.SPAN_OUTPUT), "<f2").astype(np.float64)
+
+
 def refine_closures(phones: list, spans: list[tuple[float, float, float]], offset: float = 0.0, *,
                     sure: float = SURE, longest: int = LONGEST_UNHEARD, open_veto: bool = OPEN_VETO,
-                    confirm: bool = CONFIRM) -> list:
+                    confirm: bool = CONFIRM, scores: np.ndarray | None = None, keep: float = KEEP) -> list:
     """``phones`` (:class:`~.phones.Phone`) with the detector's closures (``spans``, s from ``offset``)
     applied: a span near a recognised labial, or a sure one, becomes that labial (``B`` where none was
     heard), cutting the phones it overlaps; a recognised labial near no span is not shut (``confirm``;
-    see the module docstring). The keywords default to the chosen constants; the training script's grid
-    tries others."""
+    see the module docstring). With ``scores`` (:func:`span_scores`, one a span) a span is applied where its
+    score reaches ``keep``, heard or not, instead. The keywords default to the chosen constants; the
+    training script's grid tries others."""
     from mpeg4fa.speech.listen.phones import SILENCE, Phone
 
     out = list(phones)
@@ -143,10 +214,13 @@ def refine_closures(phones: list, spans: list[tuple[float, float, float]], offse
         starts = np.array([a + offset for a, _, _ in spans])
         out = [Phone(UNSHUT[p.name], p.start, p.end)
                if p.name in UNSHUT and not (np.abs(starts - p.start) <= SNAP).any() else p for p in out]
-    for a, b, peak in spans:
+    for k, (a, b, peak) in enumerate(spans):
         a, b = a + offset, b + offset
         heard = [p for p in out if p.name in LABIALS and abs(p.start - a) <= SNAP]
-        if not heard:
+        if scores is not None:
+            if scores[k] < keep:
+                continue
+        elif not heard:
             under = {p.name for p in out if p.end > a + 0.005 and p.start < min(b, a + 0.03)}
             if peak < sure or b - a < longest * HOP / RATE - 1e-9 or not under or (open_veto and under <= OPEN):
                 continue
@@ -176,4 +250,9 @@ def refined_phones(recording: Recording, phones: list, offset: float = 0.0) -> l
     """:func:`refine_closures` of ``phones`` heard in ``recording`` (times from ``offset``)."""
     if len(recording.samples) == 0:
         return list(phones)
-    return refine_closures(phones, closure_spans(closure_probability(recording.floats(), recording.rate)), offset)
+    levels = log_mel(resample(np.asarray(recording.floats(), dtype=np.float64), recording.rate, RATE))
+    if not len(levels):
+        return list(phones)
+    probability = predict(features(levels), *weights())
+    spans = closure_spans(probability)
+    return refine_closures(phones, spans, offset, scores=span_scores(levels, probability, phones, spans, offset))

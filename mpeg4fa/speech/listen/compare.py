@@ -9,7 +9,12 @@ benchmark (tools/bench_lipsync_audio.py) and the tests measure.
   closures: what a recogniser that shut the lips everywhere would score badly on). A ``PP`` of a
   bilabial fricative or approximant alone (Spanish intervocalic b/v, [β]: the lips near, not shut,
   and no silence in the sound) is no closure to find (:func:`shuts`), though a closure shown there is
-  not a false one either;
+  not a false one either. With ``from_rest``, a closure the reference begins from rest (at the start of the
+  recording or straight after a pause: the neutral face's lips are already in contact, ISO/IEC 14496-2's
+  neutral face, so the reference's onset there is no movement and the sound has none to hear, only silence
+  before the release) counts as found where the other track also shows the lips shut or at rest at that
+  onset (tools/bench_lipsync_audio.py: e.g. "Bill..." whose b starts the file, and Mandarin's p after
+  espeak-ng's pause event, whose digital silence is the stop's closure yet lies outside the reference's PP);
 * rest: the share of frames with the mouth closed or at rest (no viseme shown).
 """
 from __future__ import annotations
@@ -56,6 +61,19 @@ def closure_onsets(timings, shut_only: bool = False) -> np.ndarray:
     return np.array([start for start, shut in runs if shut])
 
 
+def _shows(timings, at: np.ndarray, visemes: frozenset) -> np.ndarray:
+    """Whether every timing of ``timings`` covering each time of ``at`` shows one of ``visemes`` (none covering: rest)."""
+    ok = np.ones(len(at), dtype=bool)
+    for t in timings:
+        if t.viseme not in visemes and t.end > t.start:
+            ok &= ~((at >= t.start) & (at < t.end))
+    return ok
+
+
+REST_BEFORE = 0.005
+"""How far before a closure onset the reference must show rest for the onset to begin from rest."""
+
+
 @dataclass(frozen=True)
 class OnsetScore:
     """Closures of the reference (``reference``), found within the tolerance (``hits``), the mean
@@ -75,17 +93,23 @@ class OnsetScore:
         return float(np.mean(self.errors)) if self.errors else float("nan")
 
 
-def onset_score(reference, other, tolerance: float = TOLERANCE) -> OnsetScore:
+def onset_score(reference, other, tolerance: float = TOLERANCE, from_rest: bool = False) -> OnsetScore:
     """:class:`OnsetScore` of ``other``'s closures against ``reference``'s (timings: phoneme, viseme, start,
     end): the closures to find are those that shut the lips; a closure of ``other`` is extra only where the
-    reference shows none at all (see the module docstring)."""
+    reference shows none at all; ``from_rest``: see the module docstring (the errors stay those of onsets
+    matched in time)."""
     ref, got, shown = closure_onsets(reference, shut_only=True), closure_onsets(other), closure_onsets(reference)
     far = np.abs(shown[:, None] - got[None, :]).min(axis=0) if len(shown) else np.full(len(got), np.inf)
     extra = int((far > NEAR).sum())
-    if not len(ref) or not len(got):
-        return OnsetScore(len(ref), 0, (), extra)
+    if not len(ref):
+        return OnsetScore(0, 0, (), extra)
+    if not len(got):
+        got = np.array([np.inf])
     nearest = np.abs(ref[:, None] - got[None, :]).min(axis=1)
-    hits = int((nearest <= tolerance).sum())
+    hit = nearest <= tolerance
+    if from_rest:
+        hit |= _shows(reference, ref - REST_BEFORE, frozenset({PAUSE})) & _shows(other, ref, frozenset({PAUSE, CLOSURE}))
+    hits = int(hit.sum())
     return OnsetScore(len(ref), hits, tuple(float(e) for e in nearest[nearest <= NEAR]), extra)
 
 
