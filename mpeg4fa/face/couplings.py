@@ -28,6 +28,12 @@ from mpeg4fa.spec import FAPS
 
 PASSIVE_POINTS = ("3.9", "3.10", "3.13", "3.14")
 """Feature points no FAP names that move with the surrounding skin instead of anchoring it."""
+SCALP_POINTS = ("11.1", "11.2", "11.3")
+"""The hairline: no FAP names it and it anchors the skin's own weights (a brow raise stretches the
+forehead below it), but the scalp slides over the skull. Held fixed, brows raised twice their extreme
+(4.3 32 mm up, 32 mm below 11.3) pressed the forehead into it and folded 32 triangles; so where the fold
+guard spreads a brow's raise wide, the hairline goes up with the skin (:attr:`.FoldGuard.scalp`: 11.1-11.3
+about 13 mm at twice the extreme, 8 mm at 400, 0.01 mm or less at +-200, never down)."""
 
 
 @lru_cache(maxsize=1)

@@ -148,9 +148,10 @@ peak (brows raised together came out wavy)."""
 
 
 def wide_weights(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray,
-                 held: list[np.ndarray]) -> np.ndarray:
+                 held: list[np.ndarray], reach: np.ndarray | None = None) -> np.ndarray:
     """``(V, len(points))`` weights over the widest support the held skin leaves: 1 at each point,
-    0 at its ``held`` vertices (the other points, the lid margins) and past :data:`WIDE_REACH_MM`.
+    0 at its ``held`` vertices (the other points, the lid margins) and past its ``reach`` (mm of surface
+    distance, :data:`WIDE_REACH_MM` unless given per point).
 
     Each minimises ``w (L M^-1 L + WIDE_MEMBRANE L) w`` (L the cotangent Laplacian, M the vertex
     areas): the smoothest fall-off from the point to what holds it, so that a displacement larger
@@ -165,10 +166,11 @@ def wide_weights(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray
     lap, mass = cotan_laplacian(vertices, triangles, n)
     mass = np.maximum(mass, 1e-9 * max(float(mass.mean()), 1e-12))
     energy = (lap.T @ sp.diags(1.0 / mass) @ lap + WIDE_MEMBRANE * lap).tocsr()
-    geo = dijkstra(edge_graph(vertices, triangles), indices=np.asarray(points), limit=WIDE_REACH_MM + 1.0)
+    reach = np.full(len(points), WIDE_REACH_MM) if reach is None else np.asarray(reach, float)
+    geo = dijkstra(edge_graph(vertices, triangles), indices=np.asarray(points), limit=float(reach.max()) + 1.0)
     out = np.zeros((n, len(points)))
     for k, point in enumerate(points):
-        fixed = ~(geo[k] < WIDE_REACH_MM)
+        fixed = ~(geo[k] < reach[k])
         fixed[held[k]] = True
         fixed[point] = True
         free = np.flatnonzero(~fixed)

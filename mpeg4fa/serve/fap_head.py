@@ -25,7 +25,7 @@ from mpeg4fa.face.model import FaceModel
 from mpeg4fa.face.rig import CORNER_MARGIN_MM
 from mpeg4fa.spec import ANGLE_UNIT
 
-RIG_VERSION = 2
+RIG_VERSION = 3
 """Bumped when the layout of :func:`rig_data` changes (``static/js/facerig.js`` checks it)."""
 
 
@@ -37,21 +37,26 @@ def _floats(a) -> list[float]:
     return np.asarray(a, dtype=np.float64).ravel().tolist()
 
 
+def _sparse_rows(guard, dense: np.ndarray) -> dict:
+    """A ``(skin vertices, K)`` matrix of the guard as CSR over its nonzero rows (global vertex indices)."""
+    rows = np.flatnonzero(np.any(dense != 0, axis=1))
+    s_rows, s_cols = np.nonzero(dense[rows])
+    return {"rows": _ints(guard.skin.start + rows), "indptr": _ints(np.searchsorted(s_rows, np.arange(len(rows) + 1))),
+            "indices": _ints(s_cols), "data": _floats(dense[rows][s_rows, s_cols])}
+
+
 def _fold_guard(face: FaceModel) -> dict:
     """The feature-point deformer's fold guard as data: its watched triangles, each column's steepness
-    over the triangles it touches (CSR by triangle), and its wide-minus-narrow weights (CSR by skin vertex)."""
+    over the triangles it touches (CSR by triangle), its wide-minus-narrow weights and what the sliding
+    scalp adds to them for upward motion (CSR by skin vertex)."""
     guard = feature_points.skin_guard(face.mesh, face.rig)
     t_rows, t_cols = np.nonzero(guard.touches)  # row-major: CSR order
     steep = guard.steep.toarray()[t_rows, t_cols]  # 0 where a touched triangle is flat in a column: sums the same
-    shift = guard.shift
-    rows = np.flatnonzero(np.any(shift != 0, axis=1))
-    s_rows, s_cols = np.nonzero(shift[rows])
     return {"fold_start": float(feature_points.FOLD_START), "fold_full": float(feature_points.FOLD_FULL),
             "columns": _ints(guard.columns), "triangles": _ints(guard.triangles), "rest_normal": _floats(guard.rest_normal),
             "touches": {"indptr": _ints(np.searchsorted(t_rows, np.arange(len(guard.triangles) + 1))),
                         "indices": _ints(t_cols), "steep": _floats(steep)},
-            "shift": {"rows": _ints(guard.skin.start + rows), "indptr": _ints(np.searchsorted(s_rows, np.arange(len(rows) + 1))),
-                      "indices": _ints(s_cols), "data": _floats(shift[rows][s_rows, s_cols])}}
+            "shift": _sparse_rows(guard, guard.shift), "scalp": _sparse_rows(guard, guard.scalp)}
 
 
 def _gaze(face: FaceModel) -> dict:

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.couplings import PASSIVE_POINTS, coupled_points
+from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS, coupled_points
 from mpeg4fa.face.fapu import DISTANCES
 from mpeg4fa.face.lids import LIDS, lid_drops
 from mpeg4fa.face.model import FaceModel
@@ -186,6 +186,7 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
         errors.append((f"{label} coupled", float(np.linalg.norm(moved[i] - amount * motion.direction(fap))) / abs(value * fapu.unit(record.fapu))))
         coupled.add(i)
     coupled |= {index[label] for label in PASSIVE_POINTS if label in index}  # they ride on the skin
+    coupled |= {index[label] for label in SCALP_POINTS if label in index}  # the scalp slides with a raised forehead
     for inner, outer in CORNERS:  # a lip corner sent across the other one pushes it ahead
         for mine, other, sign in ((inner, outer, 1.0), (outer, inner, -1.0)):
             if mine in record.feature_point and other in index:

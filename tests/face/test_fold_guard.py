@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mpeg4fa.face import creases, quality
-from mpeg4fa.face.couplings import PASSIVE_POINTS
+from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS
 from mpeg4fa.face.deformers import feature_points as fp
 from mpeg4fa.spec.profiles import EXPRESSION_PROFILES, VISEME_PROFILES
 
@@ -70,15 +70,20 @@ def test_brows_fold_at_no_amplitude_on_the_way(generic_face, graph, guard):
 def test_feature_points_stay_where_the_faps_put_them(generic_face, guard):
     """At brows 400 the guard is on in full; every feature point still sits exactly where it
     does without it (value x FAPU along the FAP's direction), the brows 20 mm up; only the
-    points no FAP names, which ride on the skin (:data:`.couplings.PASSIVE_POINTS`), follow it."""
+    points no FAP names, which ride on the skin (:data:`.couplings.PASSIVE_POINTS`), follow it, and
+    the hairline (:data:`.couplings.SCALP_POINTS`) slides up with the forehead, less than the brows."""
     v = _brows(400.0)
     with_guard = fp.deform(generic_face.rig, v, guard)
     without = fp.deform(generic_face.rig, v)
-    named = [i for i, label in enumerate(generic_face.mesh.fp_labels) if label not in PASSIVE_POINTS]
+    labels = generic_face.mesh.fp_labels
+    named = [i for i, label in enumerate(labels) if label not in PASSIVE_POINTS + SCALP_POINTS]
     assert np.allclose(with_guard.feature_points[named], without.feature_points[named], atol=1e-9)
     lift = with_guard.feature_points - generic_face.mesh.feature_points()
     i = generic_face.mesh.fp_index("4.3")
     assert lift[i, 1] == pytest.approx(400.0 * generic_face.fapu.unit("ENS"))
+    scalp = [labels.index(label) for label in SCALP_POINTS]
+    assert np.all(lift[scalp, 1] > 1.0) and np.all(lift[scalp, 1] < 0.6 * lift[i, 1])
+    assert np.allclose(without.feature_points[scalp], generic_face.mesh.feature_points()[scalp])
     # ... and the skin did change: the forehead above follows the brow further up
     assert np.abs(with_guard.vertices - without.vertices).max() > 1.0
 

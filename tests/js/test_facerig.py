@@ -40,6 +40,8 @@ def rows_to_check(rng: np.random.Generator) -> np.ndarray:
     row(f47=3000, f43=100, f44=60)  # tongue roll and tip
     row(f23=20000, f24=-15000, f25=10000, f26=-5000, f27=100, f28=-50)  # eyeballs
     row(f48=15000, f49=-20000, f50=8000)  # head
+    row(f31=724, f32=724, f33=640, f34=640, f35=520, f36=520)  # brows x2 up: the guard lets the scalp slide
+    row(f31=-400, f32=300, f33=-500, f34=600, f35=-300, f36=500)  # one side down, the other up
     for _ in range(6):  # everything at once, random
         r = rng.normal(0, 1, 68) * np.r_[0, 0, np.full(66, 120.0)]
         r[[22, 23, 24, 25, 46, 47, 48, 49]] *= 60  # angles in AU

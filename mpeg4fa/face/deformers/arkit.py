@@ -192,10 +192,11 @@ def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guard: FoldGuard
     p, pupils = pose_in_head_frame(rig, v, lids=False)
     skin = rig.parts["skin"]
     sculpted = rig.rest[skin] + (arkit.deltas @ unit_weights(arkit, v)).reshape(-1, 3)
-    residual = p[arkit.fp_global] - sculpted[arkit.fp_local]
+    p_target = p[arkit.fp_global]
+    residual = p_target - sculpted[arkit.fp_local]
     p[skin] = sculpted + arkit.correction @ residual
     if guard is not None:
-        guard.relieve(p, residual)
+        guard.relieve(p, residual, p_target - rig.rest[arkit.fp_global])
     apply_lids(rig, p, v)  # after sculpting: the lids turn over the eyeball as in the feature-point deformer
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)

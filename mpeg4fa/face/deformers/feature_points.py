@@ -10,8 +10,9 @@ A **fold guard** (:class:`FoldGuard`) watches the skin the translations moved: w
 triangle is about to turn over (brows at 400 lifting 20 mm, brows pulled down twice their
 extreme), the points that move it spread their motion over wide weights
 (:func:`.regions.wide_weights`) instead, by a share that grows as the triangle nears the
-fold. Feature points stay exactly where the FAPs put them; at the amplitudes of visemes
-and expressions nothing changes.
+fold. Feature points stay exactly where the FAPs put them (the hairline, which no FAP names, slides
+up with a forehead raised into it: :attr:`FoldGuard.scalp`); at the amplitudes of visemes and
+expressions nothing changes.
 """
 from __future__ import annotations
 
@@ -21,11 +22,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.couplings import PASSIVE_POINTS
+from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS
 from mpeg4fa.face.lids import lid_drops, turn_lid
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
-from mpeg4fa.face.regions import LID_MARGIN_LOOPS, shortest_loop, wide_weights
+from mpeg4fa.face.regions import LID_MARGIN_LOOPS, WIDE_REACH_MM, shortest_loop, wide_weights
 from mpeg4fa.face.rig import CORNER_MARGIN_MM, Rig
 
 EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
@@ -105,19 +106,24 @@ class FoldGuard:
         grad = (w[0][:, :, None] * g0[:, None] + w[1][:, :, None] * g1[:, None] + w[2][:, :, None] * g2[:, None])
         self.steep = sp.csr_matrix(np.linalg.norm(grad, axis=2) * self.touches)
 
-    @cached_property
-    def shift(self) -> np.ndarray:
-        """``(skin vertices, K)``: wide minus narrow weights, what the guard adds per unit of share."""
+    def _spread(self, scalp_slides: bool) -> np.ndarray:
+        """``(skin vertices, K)``: wide minus narrow weights, the hairline held or (``scalp_slides``) not."""
         mesh, skin = self.mesh, self.skin
         labels = [mesh.fp_labels[c] for c in self.columns]
         points = mesh.fp_vertex[self.columns] - skin.start
+        scalp = SCALP_POINTS if scalp_slides else ()
         anchors = [int(v) - skin.start for i, v in enumerate(mesh.fp_vertex)
-                   if skin.start <= v < skin.stop and mesh.fp_labels[i] not in PASSIVE_POINTS]
-        held = np.unique(np.concatenate([anchors, points]))
+                   if skin.start <= v < skin.stop and mesh.fp_labels[i] not in PASSIVE_POINTS + scalp]
+        held = np.unique(np.concatenate([anchors, [p for p, label in zip(points, labels) if label not in scalp]]))
         margins = np.concatenate([shortest_loop(mesh, loop) for loop in LID_MARGIN_LOOPS]) - skin.start
         with_margins = np.union1d(held, margins)
-        wide = wide_weights(mesh.vertices[skin], mesh.triangles["skin"] - skin.start, points,
-                            [held if label.startswith("3.") else with_margins for label in labels])
+        reach = [SCALP_REACH_MM if scalp_slides and label.startswith("4.") else WIDE_REACH_MM for label in labels]
+        holds = [held if label.startswith("3.") else with_margins for label in labels]
+        if scalp_slides:  # a brow that reaches the scalp leaves the other side's forehead to its own brows
+            side = mesh.lateral()[skin]
+            holds = [np.union1d(h, np.flatnonzero(side * np.sign(side[q]) < -SCALP_MIDLINE_MM))
+                     if r > WIDE_REACH_MM and abs(side[q]) > 1.0 else h for h, q, r in zip(holds, points, reach)]
+        wide = wide_weights(mesh.vertices[skin], mesh.triangles["skin"] - skin.start, points, holds, reach)
         narrow = self.narrow.toarray()
         # where the narrow weights share the skin out whole (along the brow line between 4.1, 4.3
         # and 4.5), so do the wide ones: each point's wide weight alone sags between the points,
@@ -126,6 +132,21 @@ class FoldGuard:
         total = 0.5 * (have + need + np.sqrt((need - have) ** 2 + _SOFT ** 2)) - 0.5 * _SOFT  # a smooth max
         wide *= np.where(have > 0, total / np.maximum(have, 1e-12), 0.0)[:, None]
         return wide - narrow
+
+    @cached_property
+    def shift(self) -> np.ndarray:
+        """``(skin vertices, K)``: wide minus narrow weights, what the guard adds per unit of share."""
+        return self._spread(False)
+
+    @cached_property
+    def scalp(self) -> np.ndarray:
+        """``(skin vertices, K)``: what the guard adds besides, per unit of share and of upward motion,
+        where the hairline slides with the skin (:data:`.couplings.SCALP_POINTS`) and the brows' wide
+        weights reach :data:`SCALP_REACH_MM`: the scalp gives way to a forehead raised into it, not to
+        one pulled down (that stretches the forehead, the hairline stays). The brows' columns only: the
+        correction of the ARKit deformer pulls the hairline itself back onto its target, and that is no raise."""
+        brows = np.array([self.mesh.fp_labels[c].startswith("4.") for c in self.columns])
+        return np.where(brows, self._spread(True) - self.shift, 0.0)
 
     def facing(self, p: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
         """Per watched triangle (or those ``rows`` of them): its posed area along its rest normal,
@@ -137,10 +158,11 @@ class FoldGuard:
         return ((u[:, 1] * w[:, 2] - u[:, 2] * w[:, 1]) * n[:, 0] + (u[:, 2] * w[:, 0] - u[:, 0] * w[:, 2]) * n[:, 1]
                 + (u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]) * n[:, 2])
 
-    def relieve(self, p: np.ndarray, moves: np.ndarray) -> None:
+    def relieve(self, p: np.ndarray, moves: np.ndarray, lift: np.ndarray | None = None) -> None:
         """Where ``p`` (the narrow weights having spread ``moves``, ``(K, 3)``) nears a fold, move the
         columns around it toward their wide weights (in place). Only the triangles some moving
-        column reaches are looked at."""
+        column reaches are looked at. ``lift`` (``(K, 3)``, ``moves`` unless given) is each column's own
+        motion from rest: its upward share lets the scalp slide (:attr:`scalp`)."""
         size = np.sqrt(np.einsum("ij,ij->i", moves, moves))
         moving = size > 0
         rows = np.flatnonzero(self.steep @ size > 1.0 - np.sqrt(FOLD_START))
@@ -154,9 +176,22 @@ class FoldGuard:
         share = (self.touches[rows[near]] * s[:, None]).max(axis=0)
         share[~moving] = 0.0
         if share.any():
-            p[self.skin] += self.shift @ (share[:, None] * moves)
+            spread = share[:, None] * moves
+            p[self.skin] += self.shift @ spread
+            lift = moves if lift is None else lift
+            rise = np.maximum(lift[:, 1], 0.0) / np.maximum(np.linalg.norm(lift, axis=1), 1e-300)  # its upward share
+            if (rise * share).any():
+                p[self.skin] += self.scalp @ (rise[:, None] * spread)
 
 
+SCALP_REACH_MM = 80.0
+"""Where the hairline slides (:attr:`FoldGuard.scalp`), the brows' (4.x) wide weights reach this far (the
+others :data:`.regions.WIDE_REACH_MM`): brows raised twice their extreme (4.1 36 mm up) carry the forehead
+and the scalp above it, the hairline 11.1-11.3 some 13 mm; within 50 mm, 10 triangles still folded between
+4.1 and 11.1 on this deformer and 26 on ARKit; 70 mm left 2 on ARKit."""
+SCALP_MIDLINE_MM = 28.0
+"""... and a brow off the midline holds the skin beyond this distance across it (a left brow raised alone
+moved skin past the right eye's centre line)."""
 _SOFT = 0.05  # width of the smooth max's rounding (a weight sum)
 
 

@@ -9,7 +9,7 @@
 // jaw's frame, the jaw and eyes in the head's). Same steps, same order, same numbers: the page's head is the
 // Python face's to rounding, not an approximation of it.
 
-const RIG_VERSION = 2;
+const RIG_VERSION = 3;
 
 /** Right-handed rotation by ``angle`` about axis 0, 1 or 2, as a row-major 3x3 (motion.rotation_matrix). */
 export function rotation(axis, angle) {
@@ -98,6 +98,7 @@ export class FaceRig {
       start: f.fold_start, full: f.fold_full, columns: i32(f.columns), triangles: i32(f.triangles),
       normal: f64(f.rest_normal), indptr: i32(f.touches.indptr), indices: i32(f.touches.indices), steep: f64(f.touches.steep),
       shift: { rows: i32(f.shift.rows), indptr: i32(f.shift.indptr), indices: i32(f.shift.indices), data: f64(f.shift.data) },
+      scalp: { rows: i32(f.scalp.rows), indptr: i32(f.scalp.indptr), indices: i32(f.scalp.indices), data: f64(f.scalp.data) },
     };
     const k = this.fold.columns.length, t = this.fold.triangles.length / 3;
     this.fold.size = new Float64Array(k); this.fold.share = new Float64Array(k); this.fold.moves = new Float64Array(3 * k);
@@ -152,7 +153,8 @@ export class FaceRig {
   }
 
   /** The fold guard (FoldGuard.relieve): where the skin the narrow weights moved by ``m`` nears a fold,
-   * move the columns around it toward their wide weights, by a share that grows as it nears (in place). */
+   * move the columns around it toward their wide weights, by a share that grows as it nears (in place); the upward
+   * share of each column's motion also lets the scalp slide (FoldGuard.scalp). */
   relieve(m) {
     const f = this.fold, p = this.p, { columns, size, share, moves, steep, indptr, indices, triangles, normal, order, bound } = f;
     let largest = 0;
@@ -189,11 +191,23 @@ export class FaceRig {
       for (let i = 0; i < 3; i++) moves[3 * k + i] *= share[k];
     }
     if (!sharing) return;
-    const { rows, indptr: sp, indices: sk, data } = f.shift;
+    this.addRows(f.shift, moves);
+    let rising = false;
+    for (let k = 0; k < columns.length; k++) {
+      const up = size[k] > 0 ? Math.max(m[3 * columns[k] + 1], 0) / size[k] : 0;
+      rising ||= up * share[k] > 0;
+      for (let i = 0; i < 3; i++) moves[3 * k + i] *= up;
+    }
+    if (rising) this.addRows(f.scalp, moves);
+  }
+
+  /** p[rows] += matrix (CSR over its rows, columns of the guard) x moves (K x 3), in place. */
+  addRows({ rows, indptr, indices, data }, moves) {
+    const p = this.p;
     for (let r = 0; r < rows.length; r++) {
       let dx = 0, dy = 0, dz = 0;
-      for (let e = sp[r]; e < sp[r + 1]; e++) {
-        const k = 3 * sk[e], w = data[e];
+      for (let e = indptr[r]; e < indptr[r + 1]; e++) {
+        const k = 3 * indices[e], w = data[e];
         dx += w * moves[k]; dy += w * moves[k + 1]; dz += w * moves[k + 2];
       }
       const o = 3 * rows[r];
