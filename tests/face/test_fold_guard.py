@@ -104,3 +104,23 @@ def test_nothing_changes_where_nothing_nears_a_fold(generic_face, guard):
         b = fp.deform(generic_face.rig, v, guard).vertices
         assert np.array_equal(a, b), name
     assert quiet >= 10
+
+
+@pytest.mark.parametrize("deformer", ["fap", "arkit"])
+def test_the_hairline_slides_up_never_down(request, generic_face, deformer):
+    """Brows raised twice their extreme carry the hairline (:data:`.couplings.SCALP_POINTS`) well up
+    with the forehead; brows lowered twice their extreme, or one middle brow lowered alone (the ARKit
+    correction then lifts its neighbours back onto their targets: no raise), leave it where it is."""
+    from conftest import face_under
+
+    face = face_under(request, "generic", deformer)
+    poses = creases.crease_poses(generic_face)
+    labels = generic_face.mesh.fp_labels
+    scalp = [labels.index(label) for label in SCALP_POINTS]
+    rest = generic_face.mesh.feature_points()[scalp]
+    up = face.pose_values(poses["brows x2 up"]).feature_points[scalp] - rest
+    assert np.all(up[:, 1] > 8.0), up
+    one = np.zeros(68)
+    one[32] = -400.0
+    for values in (poses["brows x2 down"], one):
+        assert np.array_equal(face.pose_values(values).feature_points[scalp], rest)
