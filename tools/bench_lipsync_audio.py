@@ -255,8 +255,9 @@ def main() -> None:
           f"{'found':>5} {'extra':>5} {'prec':>5} {'agree':>6}")
     for r in speech:
         target = TARGET.get(r["lang"].split()[0], OTHER_TARGET)
-        print(f"{r['lang']:<11} {r['set']:<5} {r['recognizer']:<9} {r['sentences']:>4} {r['closures']:>4} {r['within_40ms']:>7.1%} "
-              f"{r['within_40ms_from_rest']:>6.1%} {target:>6.0%} {r['mean_onset_error_ms']:>6.1f} {r['found']:>5} {r['extra_closures']:>5} "
+        print(f"{r['lang']:<11} {r['set']:<5} {r['recognizer']:<9} {r['sentences']:>4} {r['closures']:>4} "
+              f"{r['within_40ms']:>7.1%} {r['within_40ms_from_rest']:>6.1%} {target:>6.0%} "
+              f"{r['mean_onset_error_ms']:>6.1f} {r['found']:>5} {r['extra_closures']:>5} "
               f"{r['precision']:>5.1%} {r['frame_agreement']:>6.0%}")
     en = {r["recognizer"]: r for r in speech if r["lang"] == "en" and r["set"] == "all"}
     better = max(en, key=lambda k: (en[k]["within_40ms"] + en[k]["frame_agreement"]))

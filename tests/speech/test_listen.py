@@ -56,9 +56,10 @@ def scores():
 def test_english_closures_and_frames_follow_the_transcript_path(scores):
     share, agree, total = scores["en"]
     assert total >= 10
-    assert share >= 0.75, share  # measured 0.94 on these two, 16 of 17 (0.88 before the detector's labials were
-    # confirmed, 0.76 with the detector trained on fewer voices; 52-65 % without it, mpeg4fa.speech.listen.closures)
-    assert agree >= 0.5, agree  # measured 0.62 (0.56 before the detector)
+    assert share >= 0.75, share  # measured 0.94 on these two, 16 of 17, with the span scorer as before it (0.88
+    # before the detector's labials were confirmed, 0.76 with the detector trained on fewer voices; 52-65 % without
+    # it, mpeg4fa.speech.listen.closures)
+    assert agree >= 0.5, agree  # measured 0.63 (0.62 before the span scorer, 0.56 before the detector)
 
 
 def test_spanish_frames_follow_the_transcript_path(scores):
@@ -74,8 +75,10 @@ TARGET_ES = ES + ["Mi papá compra pimientos en el mercado.", "Pepe pinta un map
 
 
 @pytest.mark.xfail(reason="issue 28's English target, on 8 English sentences in two voices (96 closures): measured "
-                          "0.81-0.85 (the phone loop's results vary with what the process heard before), Spanish "
-                          "22 of 24; tools/bench_lipsync_audio.py's enlarged set: English 88 %, Spanish 86 %",
+                          "0.875, 84 of 96 (0.906 counting closures from rest, compare.onset_score from_rest; 0.81-0.85 "
+                          "before the span scorer; the phone loop's results vary with what the process heard before), "
+                          "Spanish 22 of 24; tools/bench_lipsync_audio.py's enlarged set: English 90.4 % (93.5 % from "
+                          "rest), Spanish 86 %: at the target there, not with a margin here",
                    strict=True)
 def test_closure_onsets_reach_the_issue_targets():
     share = {}
@@ -286,4 +289,5 @@ def test_the_span_scorer_tells_closures_from_other_silences():
         for (a, b, _), score in zip(spans, scores):
             (closed if any(min(b, d) - max(a, c) >= 0.01 for c, d in truth) else other).append(score)
     assert len(closed) >= 10 and len(other) >= 3, (len(closed), len(other))
-    assert np.mean(closed) - np.mean(other) >= 0.3, (np.mean(closed), np.mean(other))
+    # measured: 25 closure spans at 0.91 on average, 10 others (t, d, k, pauses) at 0.08
+    assert np.mean(closed) >= 0.7 and np.mean(other) <= 0.3, (len(closed), len(other), np.mean(closed), np.mean(other))

@@ -62,7 +62,7 @@ def closure_onsets(timings, shut_only: bool = False) -> np.ndarray:
 
 
 def _shows(timings, at: np.ndarray, visemes: frozenset) -> np.ndarray:
-    """Whether every timing of ``timings`` covering each time of ``at`` shows one of ``visemes`` (none covering: rest)."""
+    """Whether every timing of ``timings`` covering each time of ``at`` shows one of ``visemes`` (none: rest)."""
     ok = np.ones(len(at), dtype=bool)
     for t in timings:
         if t.viseme not in visemes and t.end > t.start:
@@ -108,7 +108,8 @@ def onset_score(reference, other, tolerance: float = TOLERANCE, from_rest: bool 
     nearest = np.abs(ref[:, None] - got[None, :]).min(axis=1)
     hit = nearest <= tolerance
     if from_rest:
-        hit |= _shows(reference, ref - REST_BEFORE, frozenset({PAUSE})) & _shows(other, ref, frozenset({PAUSE, CLOSURE}))
+        rested = _shows(reference, ref - REST_BEFORE, frozenset({PAUSE}))
+        hit |= rested & _shows(other, ref, frozenset({PAUSE, CLOSURE}))
     hits = int(hit.sum())
     return OnsetScore(len(ref), hits, tuple(float(e) for e in nearest[nearest <= NEAR]), extra)
 
