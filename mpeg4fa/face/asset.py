@@ -13,7 +13,9 @@ What the build does to the source, and why:
   then slid along their mesh edges down onto the plane, so that the neck ends in
   one smooth planar rim (no staircase of quads, no flap of shoulder whose
   inside shows). Decimetres become millimetres. On loading, the rim's outline is
-  smoothed in its plane (:func:`.neck.smooth_rim`: the shoulders' flares left notches).
+  smoothed in its plane (:func:`.neck.smooth_rim`: the shoulders' flares left notches), and
+  the few sub-millimetre creases of the skin are flattened a little
+  (:func:`.fine_creases.flatten_fine_creases`: a brow raised far folded them).
 * **eyeballs**: MakeHuman's eye helpers are 72-vertex fitting spheres of radius
   15 mm that poke through the eyelids. Each is replaced by a generated UV sphere
   at the helper's centre whose radius is just inside the nearest skin vertex, with
@@ -127,9 +129,10 @@ def load_head(*, auto_install: bool = True, log: Log | None = None) -> HeadMesh:
         say = log or (lambda m: print(m, file=sys.stderr))
         say("mpeg4fa: the generic head is not built yet; building it now (one-time, ~10 s)")
         install(log=say)
+    from mpeg4fa.face.fine_creases import flatten_fine_creases
     from mpeg4fa.face.neck import smooth_rim
 
-    return smooth_rim(HeadMesh.load(path))
+    return flatten_fine_creases(smooth_rim(HeadMesh.load(path)))
 
 
 def _sha256(path: Path) -> str:

@@ -29,6 +29,7 @@ from scipy.sparse.csgraph import dijkstra
 from mpeg4fa.face import motion
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.face.quality import SkinGraph, folded_triangles, measure, skin_graph, used_magnitudes
+from mpeg4fa.face.regions import triangle_pairs, unit_normals
 from mpeg4fa.spec import ANGLE_UNIT, FAPS, I_MAX_DEFAULT, N_FAPS, QUANT_STEP
 
 FLOOR_FACTOR = 2.0
@@ -144,18 +145,8 @@ def neck_rim(mesh) -> np.ndarray:
 
 def flipped_pairs(rest: np.ndarray, posed: np.ndarray, triangles: np.ndarray) -> int:
     """Neighbouring triangles that faced the same side at rest and face against each other posed."""
-    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
-    owner = np.tile(np.arange(len(triangles)), 3)
-    order = np.lexsort((edges[:, 1], edges[:, 0]))
-    e, o = edges[order], owner[order]
-    same = np.all(e[1:] == e[:-1], axis=1)
-    a, b = o[:-1][same], o[1:][same]
-
-    def normals(v):
-        p = v[triangles]
-        n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-        return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-    n0, n1 = normals(rest), normals(posed)
+    a, b = triangle_pairs(triangles)
+    n0, n1 = unit_normals(rest, triangles), unit_normals(posed, triangles)
     before = np.einsum("ij,ij->i", n0[a], n0[b])
     after = np.einsum("ij,ij->i", n1[a], n1[b])
     return int(((before > np.cos(np.radians(SAME_SIDE_DEGREES))) & (after < 0)).sum())

@@ -59,6 +59,24 @@ def unique_edges(triangles: np.ndarray) -> np.ndarray:
     return np.unique(e, axis=0)
 
 
+def triangle_pairs(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``(a, b)`` of the triangles that share an edge, one row per shared edge."""
+    t = np.asarray(triangles, dtype=np.int64)
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    owner = np.tile(np.arange(len(t)), 3)
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    e, o = edges[order], owner[order]
+    same = np.all(e[1:] == e[:-1], axis=1)
+    return o[:-1][same], o[1:][same]
+
+
+def unit_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """``(T, 3)`` unit normals of the triangles (0 for a degenerate one)."""
+    p = vertices[triangles]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+
+
 def length_graph(vertices: np.ndarray, edges: np.ndarray) -> sp.csr_matrix:
     """Symmetric graph of ``edges`` weighted by their lengths (mm) in ``vertices``."""
     e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
