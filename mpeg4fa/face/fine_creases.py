@@ -27,9 +27,9 @@ STEPS = 2
 """Half-way umbrella steps (each vertex toward the mean of its neighbours)."""
 
 
-def _creased_pairs(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
-    """``(pairs, 4)`` vertices of the tiny triangle pairs creased at rest, and their angles (degrees),
-    where none touches a feature point or the lip and lid loops (or what they enclose)."""
+def _creased_pairs(mesh: HeadMesh) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """The tiny triangle pairs creased at rest where none touches a feature point or the lip and lid
+    loops (or what they enclose): ``(pairs, 6)`` vertex indices, and the two triangles ``(pairs, 3)`` each."""
     from mpeg4fa.face.quality import skin_graph  # the crease measure's own lip and lid loops
 
     tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
@@ -47,6 +47,7 @@ def _creased_pairs(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _angles(v: np.ndarray, tris: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Degrees between the normals of triangles ``a`` and ``b`` (indices into ``tris``)."""
     n = unit_normals(v, tris)
     return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n[a], n[b]), -1.0, 1.0)))
 
