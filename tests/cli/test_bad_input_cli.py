@@ -1,7 +1,7 @@
 """Bad command lines: one error line, the right exit status, no traceback, and nothing lost or left behind.
 
 Exit status: 1 for bad input (any layer's error, a missing file), 2 for option values and
-options that do not go together (argparse's and UsageError), 130 for Ctrl-C. After a
+options that do not go together (argparse's and UsageError), 1 for Ctrl-C as for any other stop. After a
 failure no output exists (not even a temporary); an input the command refused to
 overwrite is byte-identical.
 """

@@ -47,7 +47,7 @@ def test_serve_command_speaks_to_a_client():
             proc.wait(20)
         except subprocess.TimeoutExpired:
             proc.kill()
-    assert proc.returncode in (0, -signal.SIGINT, 130)
+    assert proc.returncode == 1  # stopped by a signal, as every command: one line, exit 1
 
 
 def test_serve_refuses_a_port_in_use(cli):
