@@ -51,7 +51,11 @@ wide streams of the training textures): with the wide turns the brows read 0.23 
 and the jaw 0.925 -> 0.936 (RMS 12.4 -> 8.3 %) / 0.94 / 0.92 -> 0.95, while the lip corners fell 0.93 -> 0.87 on the
 loop and 0.69 -> 0.45 on wide held-out streams, and the lids moved +0.006 / +0.005 / -0.015 (both kept calm). Tried
 on top without gain: frames weighted by yaw, displacement x |yaw| and x pitch inputs, forehead landmarks for the brows,
-the outer lip corners or inner lips as their own region on the wide mix."""
+the outer lip corners or inner lips as their own region on the wide mix; each lip's FAPs (4, 8, 9, 51, 55, 56 and 5, 10,
+11, 52, 57, 58) sharing 3/4 of their own motion in the calm streams, as speech moves them (25 runs re-rendered,
+2026-12-06): loop inner lips 0.393 -> 0.395, FAP 5's gain 0.21 -> 0.22 (why: tools/lip_reach.py); squared iris
+displacements for the lids (+0.001 on the loop, -0.005 on held-out calm streams). The lids' penalty: held-out calm
+streams read 0.766 at 0.03 and 0.743 at 0.3, held-out wide ones 0.751 and 0.764; the left-out textures choose 0.3."""
 SIZES = (320, 448)
 RIDGES = (0.0003, 0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
 TEXTS = (
