@@ -24,7 +24,8 @@ BANDS = ((0, 3), (3, 8), (8, 13), (13, 18), (18, 24))
 ASKED = {"3": 100, "4": 300, "5": -300, "52": -300}
 """FAP: value added to the open jaw, for the reach."""
 FITTED = (3, 4, 5, 51, 52)
-LANDMARKS = {"13 (upper inner lip)": 13, "14 (lower inner lip)": 14, "0 (upper outer lip)": 0, "17 (lower outer lip)": 17}
+LANDMARKS = {"13 (upper inner lip)": 13, "14 (lower inner lip)": 14, "0 (upper outer lip)": 0,
+             "17 (lower outer lip)": 17}
 
 
 def reach() -> dict[str, list[float]]:
@@ -93,7 +94,8 @@ def main(argv: list[str] | None = None) -> int:
     if report["seen"] is None:
         print(f"seen: no cached runs in {args.cache} (run tools/train_tracker.py first)")
     else:
-        print("seen (landmark's vertical motion per asked motion, calm training runs): FAP " + " ".join(map(str, FITTED)))
+        print("seen (landmark's vertical motion per asked motion, calm training runs): FAP "
+              + " ".join(map(str, FITTED)))
         for name, slopes in report["seen"].items():
             print(f"  {name:22} " + " ".join(f"{s:+5.2f}" for s in slopes.values()))
     args.out.parent.mkdir(parents=True, exist_ok=True)
