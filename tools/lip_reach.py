@@ -64,7 +64,7 @@ def seen(cache: Path) -> dict[str, dict[str, float]] | None:
     spec.loader.exec_module(tool)
     if not cache.is_dir():
         return None
-    runs = [r for r in tool.runs(cache, 20.0) if not r["wide"]] if any(cache.glob("*.npz")) else []
+    runs = [r for r in tool.runs(cache, 20.0, render=False) if not r["wide"]]
     if not runs:
         return None
     for run in runs:

@@ -189,8 +189,9 @@ def record(values: np.ndarray, texture: np.ndarray | None, size: int) -> np.ndar
     return out
 
 
-def runs(cache: Path, seconds: float) -> list[dict]:
-    """Every training and held-out run: name, texture, seed, values, landmarks (rendered once, then cached)."""
+def runs(cache: Path, seconds: float, render: bool = True) -> list[dict]:
+    """Every training and held-out run: name, texture, seed, values, landmarks (rendered once, then cached; without
+    ``render`` only the cached ones)."""
     cache.mkdir(parents=True, exist_ok=True)
     plan = [(tex, seed, SIZES[(i + j) % len(SIZES)]) for i, tex in enumerate(TRAIN_TEXTURES)
             for j, seed in enumerate((*(LFW_SEEDS if tex.startswith("lfw") else TRAIN_SEEDS), HELD_OUT_SEED,
@@ -204,6 +205,8 @@ def runs(cache: Path, seconds: float) -> list[dict]:
         if path.exists():
             with np.load(path) as data:
                 landmarks = data["landmarks"]
+        elif not render:
+            continue
         else:
             baked = baked or textures()
             started = time.perf_counter()
