@@ -12,6 +12,7 @@ unsent FAPs and the high-level visemes and expressions first.
 """
 from __future__ import annotations
 
+import copy
 from functools import cached_property
 from typing import Iterable, Iterator, Mapping
 
@@ -26,6 +27,7 @@ from mpeg4fa.decoded import FapValueError, FrameResolver, check_finite, clamp, r
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.fapu import Fapu, measure_fapu
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face.reach import saturate
 from mpeg4fa.face.rig import Rig, build_rig
 from mpeg4fa.fba.stream import FapStream, Frame
 from mpeg4fa.spec import N_FAPS
@@ -125,8 +127,18 @@ class FaceModel:
             return self.posing.arkit
         return build_arkit_rig(self.mesh, self.rig)
 
+    saturates: bool = True
+    """Whether FAP values ease into this head's reach before posing (:mod:`mpeg4fa.face.reach`)."""
+
+    def unlimited(self) -> "FaceModel":
+        """The same face without its reach limiter (to measure the reach, or what the limiter spares)."""
+        other = copy.copy(self)
+        other.saturates = False
+        return other
+
     def _pose(self, values: np.ndarray) -> Pose:
-        return self.posing(values)
+        """The one place FAP values become the face's pose: each eased into the head's reach first."""
+        return self.posing(saturate(values) if self.saturates else values)
 
     # -- calibration ----------------------------------------------------------------------
 
