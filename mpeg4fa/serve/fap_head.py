@@ -8,7 +8,8 @@ corner inside its outer one (a rule, not a sum), spreads the points' motion to t
 map (``rig.weights``), and turns lids, tongue, jaw, eyes and head by rotations that act on the
 moved vertices; the lids also follow the eyes' pitch (:func:`~mpeg4fa.face.lids.lid_moves`), and a fold
 guard (:class:`~mpeg4fa.face.deformers.feature_points.FoldGuard`) spreads large translations over wide
-weights where skin would turn over. So the head ships with that rig as data (:func:`rig_data`, the guard's
+weights where skin would turn over; before all that each FAP eases into the head's reach
+(:mod:`mpeg4fa.face.reach`). So the head ships with that rig as data (:func:`rig_data`, the guard's
 arrays precomputed), and ``static/js/facerig.js`` runs the same steps in the page (float64, all vertices, a few milliseconds a frame): every vertex is
 where the Python face puts it, to rounding. Numbers of the standard come in already applied (FAPU x
 direction in ``translate``, directions of the jaw and eye FAPs, the angle unit), never retyped.
@@ -22,10 +23,11 @@ import numpy as np
 from mpeg4fa.face import lids, motion
 from mpeg4fa.face.deformers import feature_points
 from mpeg4fa.face.model import FaceModel
+from mpeg4fa.face.reach import load_reach
 from mpeg4fa.face.rig import CORNER_MARGIN_MM
 from mpeg4fa.spec import ANGLE_UNIT
 
-RIG_VERSION = 3
+RIG_VERSION = 4
 """Bumped when the layout of :func:`rig_data` changes (``static/js/facerig.js`` checks it)."""
 
 
@@ -68,6 +70,17 @@ def _gaze(face: FaceModel) -> dict:
             "knee": float(lids.KNEE), "slit": float(lids.SLIT)}
 
 
+def _reach() -> dict:
+    """The head's reach (:mod:`mpeg4fa.face.reach`): [positive, negative] knee and limit per FAP, null where
+    the limiter leaves a FAP alone (JSON has no infinity)."""
+    table = load_reach()
+
+    def rows(a: np.ndarray) -> list[list[float | None]]:
+        return [[float(x) if np.isfinite(x) else None for x in side] for side in a]
+
+    return {"knee": rows(table.knee), "limit": rows(table.limit)}
+
+
 def rig_data(face: FaceModel) -> dict:
     """The feature-point deformer's rig of ``face`` as JSON-ready data (millimetres, vertex indices of
     the face's mesh): what ``facerig.js`` needs to pose every vertex as :func:`~mpeg4fa.face.deformers.
@@ -98,7 +111,7 @@ def rig_data(face: FaceModel) -> dict:
         "irisd": float(fapu.unit("IRISD")),
         "lids": [{"fap": int(fap), "rows": _ints(s.rows), "ratios": _floats(s.ratios), "joint": int(s.joint),
                   "point": int(s.point)} for fap, s in rig.lids.items()],
-        "gaze": _gaze(face), "fold": _fold_guard(face),
+        "gaze": _gaze(face), "fold": _fold_guard(face), "reach": _reach(),
         "roll": {"fap": motion.TONGUE_ROLL, "axis_fp": None if roll_first is None else int(roll_first),
                  "parts": [{"rows": _ints(r), "weights": _floats(wt), "side": float(side)}
                            for r, wt, side in rig.roll_rows.values()]},

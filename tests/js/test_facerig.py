@@ -1,7 +1,7 @@
 """facerig.js poses every vertex as the Python face's feature-point deformer does (issue 31: the player's lips).
 
 The rig is :func:`mpeg4fa.serve.fap_head.rig_data` of the test face; the rows exercise each layer of the
-deformer alone and together: the lip corner rule (inner and outer corners sent against each other), lids,
+deformer alone and together: the reach limiter (FAPs at their full I range), the lip corner rule (inner and outer corners sent against each other), lids,
 tongue roll, jaw open/thrust/shift, eyeballs, head turns, and decoded speech from a real stream.
 """
 from __future__ import annotations
@@ -42,6 +42,8 @@ def rows_to_check(rng: np.random.Generator) -> np.ndarray:
     row(f48=15000, f49=-20000, f50=8000)  # head
     row(f31=724, f32=724, f33=640, f34=640, f35=520, f36=520)  # brows x2 up: the guard lets the scalp slide
     row(f31=-400, f32=300, f33=-500, f34=600, f35=-300, f36=500)  # one side down, the other up
+    row(f5=3720, f6=1200, f8=-1200, f14=600, f17=-1080)  # full I ranges: eased into the head's reach
+    row(f5=-3720, f10=3000, f11=-2000, f15=1080, f16=-1080)
     for _ in range(6):  # everything at once, random
         r = rng.normal(0, 1, 68) * np.r_[0, 0, np.full(66, 120.0)]
         r[[22, 23, 24, 25, 46, 47, 48, 49]] *= 60  # angles in AU

@@ -6,10 +6,11 @@
 // corner rule, the sparse map feature point motion -> skin and its fold guard (wide weights where skin
 // would turn over), the lid sheets (their FAPs and their follow of the eyes' pitch), the tongue roll,
 // the jaw, the eyes and the head turn with its fade down the neck, in that order (lips move in the
-// jaw's frame, the jaw and eyes in the head's). Same steps, same order, same numbers: the page's head is the
+// jaw's frame, the jaw and eyes in the head's), after each FAP is eased into the head's reach (face/reach.py:
+// identity up to a knee, then knee + span x tanh(excess / span) below the limit). Same steps, same order, same numbers: the page's head is the
 // Python face's to rounding, not an approximation of it.
 
-const RIG_VERSION = 3;
+const RIG_VERSION = 4;
 
 /** Right-handed rotation by ``angle`` about axis 0, 1 or 2, as a row-major 3x3 (motion.rotation_matrix). */
 export function rotation(axis, angle) {
@@ -72,6 +73,13 @@ function smoothStep(x) {
   return t * t * (3 - 2 * t);
 }
 
+/** ``magnitude`` past ``knee`` eased below ``limit`` (reach.ease): C1 at the knee, rising, never at the limit. */
+export function easeReach(magnitude, knee, limit) {
+  if (magnitude <= knee) return magnitude;
+  const span = limit - knee;
+  return knee + span * Math.tanh((magnitude - knee) / span);
+}
+
 const i32 = (a) => Int32Array.from(a);
 const f64 = (a) => Float64Array.from(a);
 
@@ -80,6 +88,9 @@ export class FaceRig {
   constructor(data) {
     if (data.version !== RIG_VERSION) throw new Error(`face rig version ${data.version}, this page reads ${RIG_VERSION}`);
     this.n = data.n_vertices;
+    // the head's reach per FAP: [positive, negative] knee and limit magnitudes, null where not limited
+    this.reach = data.reach;
+    this.shown = new Float64Array(68);
     this.rest = f64(data.rest);
     this.p = new Float64Array(this.rest.length);
     this.fpVertex = i32(data.fp_vertex);
@@ -118,6 +129,16 @@ export class FaceRig {
   }
 
   restOf(vertex, c) { return this.rest[3 * vertex + c]; }
+
+  /** The values this head shows (reach.saturate): each FAP past its knee eased into its limit. */
+  saturate(v) {
+    const out = this.shown, { knee, limit } = this.reach;
+    for (let i = 0; i < 68; i++) {
+      const x = v[i], side = x < 0 ? 1 : 0, lim = limit[side][i];
+      out[i] = lim === null ? x : Math.sign(x) * easeReach(Math.abs(x), knee[side][i], lim);
+    }
+    return out;
+  }
 
   /** Feature point motion (point_motion): the linear map, then the lip corners kept around the opening. */
   pointMotion(v) {
@@ -259,8 +280,8 @@ export class FaceRig {
   }
 
   /** Every vertex (Float64Array, x y z per vertex, mm) posed by one row of 68 shown values. */
-  pose(v) {
-    const p = this.p, rest = this.rest;
+  pose(shown) {
+    const p = this.p, rest = this.rest, v = this.saturate(shown);
     p.set(rest);
     const m = this.pointMotion(v);
     if (m.some((x) => x !== 0)) {
