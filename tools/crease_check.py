@@ -10,8 +10,11 @@ neighbour it agreed with at rest), the worst edge strain, the geometric floor
 (:func:`mpeg4fa.face.quality.strain_floor`) and their ratio; ``--pictures DIR`` renders the named
 poses front, three-quarter and from below (PNG) for looking at.
 
+The face eases each FAP into its reach (:mod:`mpeg4fa.face.reach`); ``--unlimited`` measures it without.
+
     .venv/bin/python tools/crease_check.py [--deformer fap --deformer arkit ...] [--head generic|adult]
                                            [--only named|range] [--json out.json] [--pictures out/creases]
+                                           [--unlimited]
 """
 from __future__ import annotations
 
@@ -63,7 +66,8 @@ def pictures(face: FaceModel, poses: dict[str, np.ndarray], out: Path, size: int
             board = Image.new("RGB", (size * len(tiles), size))
             for i, t in enumerate(tiles):
                 board.paste(t, (i * size, 0))
-            written.append(out / f"{face.deformer}-{label.replace(' ', '_').replace('/', '-')}.png")
+            tag = "-unlimited" if not face.saturates else ""
+            written.append(out / f"{face.deformer}{tag}-{label.replace(' ', '_').replace('/', '-')}.png")
             board.save(written[-1])
     finally:
         for r in renderers.values():
@@ -79,6 +83,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", choices=["named", "range"])
     parser.add_argument("--json", type=Path)
     parser.add_argument("--pictures", type=Path, help="render the named poses into this folder")
+    parser.add_argument("--unlimited", action="store_true", help="without the reach limiter")
+    parser.add_argument("--poses", help="only these poses (comma-separated labels), e.g. for --pictures")
     args = parser.parse_args(argv)
     base = face_for(args.head)
     graph = skin_graph(base.mesh)
@@ -88,10 +94,15 @@ def main(argv: list[str] | None = None) -> int:
         cases.update(named)
     if args.only in (None, "range"):
         cases.update(full_range_poses())
+    if args.poses:
+        wanted = [p.strip() for p in args.poses.split(",")]
+        cases = {k: v for k, v in {**named, **full_range_poses()}.items() if k in wanted}
+        named = cases
     rows = []
     print(f"{'deformer':9} {'pose':26} {'folded':>6} {'flipped':>7} {'strain':>7} {'floor':>7} {'ratio':>6}  worst near")
     for deformer in args.deformer or FaceModel.DEFORMERS:
         face = base if deformer == "fap" else base.with_deformer(deformer)
+        face = face.unlimited() if args.unlimited else face
         for label, values in cases.items():
             m = measure_pose(face, values, graph)
             rows.append({"deformer": deformer, "pose": label, **m.as_dict()})
@@ -104,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     bad = [r for r in rows if not r["ok"]]
     print(f"{len(rows) - len(bad)}/{len(rows)} poses without folds and within {2:g} x the floor")
     if args.json:
-        args.json.write_text(json.dumps({"head": args.head, "rows": rows}, indent=1))
+        args.json.write_text(json.dumps({"head": args.head, "limiter": not args.unlimited, "rows": rows}, indent=1))
     return 0
 
 

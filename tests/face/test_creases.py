@@ -11,7 +11,9 @@ with the forehead, :data:`~mpeg4fa.face.couplings.SCALP_POINTS`; the rest skin's
 outer eye corners are flattened on loading, :mod:`mpeg4fa.face.fine_creases`). What does not pass is marked with its measured figure; the cheeks
 at 600 cannot pass on this head at all: FAP 41 at 600 ENS lifts 5.3 30 mm, past the outer eye
 corner 3.7 that no FAP moves, so the skin between must turn over
-(:func:`test_cheeks_at_600_must_fold_on_this_head`).
+(:func:`test_cheeks_at_600_must_fold_on_this_head`; the reach limiter leaves the cheeks alone, since their folds
+start at 227 ENS and joy at 63 x 2 lifts them 400). Every FAP alone at its full I range that the limiter
+eases (:mod:`mpeg4fa.face.reach`) folds nothing, and does without the limiter.
 """
 from __future__ import annotations
 
@@ -19,7 +21,7 @@ import numpy as np
 import pytest
 
 from conftest import face_under
-from mpeg4fa.face import creases, quality
+from mpeg4fa.face import creases, quality, reach
 from mpeg4fa.face.deformers.feature_points import partial_rotations
 from mpeg4fa.face.motion import head_rotation
 
@@ -36,13 +38,16 @@ NOT_YET = {
     ("arkit", "pitch +40 jaw open"): "42 folded, 16 fold lines at the throat (cannot pass, as on fap)",
 }
 DEFORMERS = ("fap", "arkit")
-FULL_RANGE_PASSING_AT_LEAST = 4
-"""Skin FAPs alone at their full default I range (+-i_max x quant step) that pass, of 96: most
+FULL_RANGE_PASSING_AT_LEAST = 46
+"""Skin FAPs alone at their full default I range (+-i_max x quant step) that pass, of 96. Unlimited, most
 move a point 30-110 mm past fixed neighbours (raise_b_midlip 3720 MNS is 59 mm up through the
-upper lip, open_jaw 4320 MNS drops the chin 69 mm); a regression guard, measured 4 (4 +1200,
-16 +1080, 18 +-420), 5 since 14 +600 passes at 1.92 x its floor. Why each of the other 91 fails (all by a
-fold, none by strain alone; 58 drive their point past a feature point in its way): tools/crease_check.json,
-written by tools/crease_range_why.py."""
+upper lip, open_jaw 4320 MNS drops the chin 69 mm) and only 5 passed; with each FAP eased into the
+head's reach (:mod:`mpeg4fa.face.reach`) 46 pass. The 50 others, measured: 45 fold where the limiter
+leaves them (their folds start within ordinary use: the jaw past 1383 MNS where the tracker's streams reach
+1568, the lids, the brows, the lip corners raised, the cheeks, the nose; see ``face/data/reach.csv``), 5 are
+eased short of any fold but keep the strain over its floor that they have from the smallest value
+(raise_b_midlip and raise_b_lip_lm/rm up: 2.5 x from 101 MNS; close_b_l/r_eyelid down).
+tools/crease_check.json, written by tools/crease_range_why.py, says why each fails."""
 
 
 @pytest.fixture(scope="module")
@@ -98,6 +103,48 @@ def test_cheeks_at_600_must_fold_on_this_head(generic_face, graph, poses):
     rest = face.feature_points()
     assert rest["5.3"][1] < rest["3.7"][1] - 10 and fp["5.3"][1] > fp["3.7"][1] + 10
     assert creases.measure_pose(face, poses["cheek l 600"], graph).folded > 0
+
+
+def _eased_full_range() -> dict[str, tuple[np.ndarray, bool, dict, str]]:
+    """Full-range poses whose FAP and sign the limiter eases: pose -> (values, whether its limit keeps the
+    whole crease criterion (else the reach without folds: the strain outgrows the floor from the start),
+    its row of the reach table, its sign)."""
+    rows = {int(r["fap"]): r for r in reach.table()}
+    limited = reach.load_reach().limited()
+    out = {}
+    for name, values in creases.full_range_poses().items():
+        fap = int(name.split()[1])
+        side = "pos" if values[fap - 1] > 0 else "neg"
+        if limited[0 if side == "pos" else 1, fap - 1]:
+            r = rows[fap]
+            ok = min(r[f"ok_fap_{side}"], r[f"ok_arkit_{side}"]) * (1 - reach.MARGIN) > r[f"used_{side}"]
+            out[name] = (values, ok, r, side)
+    return out
+
+
+@pytest.mark.parametrize("deformer", DEFORMERS)
+def test_full_range_eased_into_the_reach_folds_nothing(request, graph, deformer):
+    """Every FAP the limiter eases, alone at its full I range: no fold, no fold line (and within the floor
+    rule where its reach was measured by it); without the limiter the face folds there, or (ARKit's push_t_lip
+    folds in a band, 468-~1000 MNS, not at 1080) just past its measured fold onset, wherever this deformer's own
+    onset lies inside the full range (FAP 14 +600 folds only on ARKit)."""
+    face = face_under(request, "generic", deformer)
+    poses = _eased_full_range()
+    assert len(poses) >= 45
+    failing_unlimited = 0
+    for name, (values, whole, row, side) in poses.items():
+        m = creases.measure_pose(face, values, graph)
+        assert m.folded == 0 and m.flipped == 0, f"{name}: {m}"
+        assert not whole or m.ok(), f"{name}: {m}"
+        if np.isfinite(row[f"fold_{deformer}_{side}"]):
+            free = creases.measure_pose(face.unlimited(), values, graph)
+            if not (free.folded or free.flipped):
+                fap = int(name.split()[1])
+                past = row[f"fold_{deformer}_{side}"] + 0.01 * row["full_range"]
+                free = creases.measure_pose(face.unlimited(), values * past / abs(values[fap - 1]), graph)
+            assert free.folded or free.flipped, f"{name} folds nothing unlimited: {free}"
+            failing_unlimited += 1
+    assert failing_unlimited >= 35
 
 
 def test_full_range_does_not_regress(generic_face, graph):
