@@ -21,6 +21,7 @@ import argparse
 import csv
 import importlib.util
 import io
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -53,8 +54,8 @@ def ordinary_use() -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """(2, 68) largest positive / negative magnitude ordinary use asks of each FAP, and each source's own:
     real streams and profiles (``data/fap_magnitudes.csv``), the visemes of both sets, the six expressions
     with both FAP 2 slots at intensity 63, the named brow poses (x2 up and down, 400, squeeze x2), blinks
-    to full close, the tracker's training and held-out streams (tools/train_tracker.py), and the conformance
-    suite's semantics vectors (each FAP alone at about 200 units, its feature point compared with value x FAPU)."""
+    to full close, and the tracker's training and held-out streams (tools/train_tracker.py). (The knee is
+    at least :data:`mpeg4fa.face.reach.EXACT_UP_TO` besides: the conformance suite's exact range.)"""
     from mpeg4fa.spec.profiles import EXPRESSION_PROFILES, VISEME_PROFILES, expression_blend
 
     sources: dict[str, list[np.ndarray]] = {}
@@ -73,10 +74,6 @@ def ordinary_use() -> tuple[np.ndarray, dict[str, np.ndarray]]:
     train = _tool("train_tracker")
     seeds = (*train.TRAIN_SEEDS, *train.LFW_SEEDS, train.HELD_OUT_SEED, *train.WIDE_SEEDS, train.WIDE_HELD_OUT_SEED)
     sources["tracker streams"] = [train.training_values(seed, 20.0) for seed in seeds]
-    from mpeg4fa.conformance.vectors import semantic_value  # each FAP alone, compared with value x FAPU
-
-    sources["conformance semantics"] = [np.array([semantic_value(f) for f in range(1, N_FAPS + 1)], float)]
-    sources["conformance semantics"].append(-sources["conformance semantics"][0])
     per = {}
     for name, rows in sources.items():
         v = np.vstack([np.atleast_2d(r) for r in rows])[:, :N_FAPS]
@@ -150,14 +147,31 @@ def measure(faps: list[int]) -> list[dict]:
     return rows
 
 
+def relimit(path: Path) -> list[dict]:
+    """The rows of ``path`` with ``used``, ``knee`` and ``limit`` recomputed (ordinary use or the rule changed)."""
+    with path.open(encoding="utf-8") as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    used, _ = ordinary_use()
+    num = {"": np.inf}
+    for row in rows:
+        fap = int(row["fap"])
+        for side, k in (("pos", 0), ("neg", 1)):
+            ok, fold = (min(float(num.get(row[f"{c}_{d}_{side}"], row[f"{c}_{d}_{side}"])) for d in DEFORMERS)
+                        for c in CRITERIA)
+            knee, limit = reach.limits(ok, fold, used[k, fap - 1])
+            row.update({f"used_{side}": _fmt(used[k, fap - 1]), f"knee_{side}": _fmt(knee),
+                        f"limit_{side}": _fmt(limit)})
+    return rows
+
+
 HEADER = """# The face's reach (mpeg4fa.face.reach), written by tools/measure_reach.py at {commit}: per skin FAP and sign,
 # the largest value (FAPU units) that passes the crease criterion (creases.Crease.ok: no folded triangle, no fold
 # line, strain within 2 x its floor) on the generic head without its limiter, FAP alone, full default I range
 # scanned in {scan} steps then bisected to {tol:g} of it; fap_* and arkit_* per deformer (empty: the whole range
 # passes); ok_*: the whole criterion, fold_*: no fold (strain aside). used_*: the largest magnitude ordinary use
-# asks (streams, profiles, visemes, expressions 63 x 2, brows x2, blinks, the tracker's training streams, the
-# conformance semantics vectors' +-200). knee = used; limit = min over deformers of ok (fold where ok x (1 - {margin:g})
-# <= used) x (1 - {margin:g}); empty where nothing is limited (the range passes, or folds start within ordinary use).
+# asks (streams, profiles, visemes, expressions 63 x 2, brows x2, blinks, the tracker's training streams).
+# knee = max(used, {exact:g}: exact for conformance); limit = min over deformers of ok (fold where ok x (1 - {margin:g})
+# <= knee) x (1 - {margin:g}); empty where nothing is limited (the range passes, or folds start within the knee).
 """
 
 
@@ -165,20 +179,24 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "mpeg4fa" / "face" / "data" / "reach.csv")
     parser.add_argument("--only", help="comma-separated FAPs (prints, writes nothing)")
+    parser.add_argument("--relimit", action="store_true",
+                        help="keep the measured reaches of --out, recompute ordinary use, knee and limit")
     args = parser.parse_args(argv)
     faps = [int(f) for f in args.only.split(",")] if args.only else creases.full_range_faps()
-    rows = measure(faps)
+    rows = relimit(args.out) if args.relimit else measure(faps)
     if args.only:
         return 0
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip() or "unknown"
+    if args.relimit:  # the reaches stay those measured at the commit the file names
+        commit = re.search(r" at (\S+):", args.out.read_text(encoding="utf-8")).group(1)
     out = io.StringIO()
-    out.write(HEADER.format(commit=commit, scan=SCAN, tol=TOLERANCE, margin=reach.MARGIN))
+    out.write(HEADER.format(commit=commit, scan=SCAN, tol=TOLERANCE, margin=reach.MARGIN, exact=reach.EXACT_UP_TO))
     writer = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
     args.out.write_text(out.getvalue(), encoding="utf-8")
-    folds_in_use = [(r["fap"], s) for r in rows for s in ("pos", "neg")  # a reach found, yet not limited
+    folds_in_use = [(int(r["fap"]), s) for r in rows for s in ("pos", "neg")  # a reach found, yet not limited
                     if r[f"limit_{s}"] == "" and any(r[f"fold_{d}_{s}"] != "" for d in DEFORMERS)]
     print(f"wrote {args.out}; limited {sum(r[f'limit_{s}'] != '' for r in rows for s in ('pos', 'neg'))} "
           f"FAP-signs; folding at or below ordinary use (left): {folds_in_use}")

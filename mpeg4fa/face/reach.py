@@ -6,7 +6,7 @@ follows such motion, so this head saturates, as a rig clamps its blend weights a
 each FAP and sign has a **reach** (the largest value that still passes the crease criterion,
 :meth:`.creases.Crease.ok`, measured by ``tools/measure_reach.py`` into ``data/reach.csv``), and past a
 **knee** (the largest value ordinary use asks for: visemes, expressions, blinks, the named brow
-poses, real streams, the tracker's training streams) the shown value eases toward the **limit**
+poses, real streams, the tracker's training streams; at least :data:`EXACT_UP_TO`) the shown value eases toward the **limit**
 (the reach less :data:`MARGIN`) without ever reaching it. Up to the knee values pass unchanged.
 
 This is the face layer's choice, not the stream's: decoded values, their clamp
@@ -25,6 +25,10 @@ from mpeg4fa.spec import N_FAPS
 
 MARGIN = 0.05
 """The limit is the measured reach less this share of it: a value the limiter gives never sits on a fold's edge."""
+EXACT_UP_TO = 300.0
+"""Every FAP shows value x FAPU exactly up to at least this magnitude, however little ordinary use asks of it:
+the conformance suite's semantics vectors pose each FAP alone at about 200 units, and its reference model is
+checked against this face engine at 300 (tests/conformance/test_reference.py)."""
 
 
 @dataclass(frozen=True)
@@ -44,9 +48,10 @@ def limits(ok: float, fold: float, used: float) -> tuple[float, float]:
     """``(knee, limit)`` for one FAP and sign from its measured reaches and ordinary use (``inf``: the
     whole range passes). The limit is the reach of the whole crease criterion (``ok``) less the margin;
     where that is within ordinary use (a FAP whose strain outgrows its floor from the start, at a
-    constant ratio), the reach without folds (``fold``) instead. No limit (``inf, inf``) where the range
-    passes or where folds start at or below ordinary use: saturating there would change what the face
-    shows every day."""
+    constant ratio), the reach without folds (``fold``) instead. The knee is ordinary use, at least
+    :data:`EXACT_UP_TO`. No limit (``inf, inf``) where the range passes or where folds start at or below
+    the knee: saturating there would change what the face shows every day."""
+    used = max(used, EXACT_UP_TO)
     for reach in (ok, fold):
         limit = reach * (1.0 - MARGIN)
         if not np.isfinite(reach):

@@ -38,15 +38,15 @@ NOT_YET = {
     ("arkit", "pitch +40 jaw open"): "42 folded, 16 fold lines at the throat (cannot pass, as on fap)",
 }
 DEFORMERS = ("fap", "arkit")
-FULL_RANGE_PASSING_AT_LEAST = 46
+FULL_RANGE_PASSING_AT_LEAST = 42
 """Skin FAPs alone at their full default I range (+-i_max x quant step) that pass, of 96. Unlimited, most
 move a point 30-110 mm past fixed neighbours (raise_b_midlip 3720 MNS is 59 mm up through the
 upper lip, open_jaw 4320 MNS drops the chin 69 mm) and only 5 passed; with each FAP eased into the
-head's reach (:mod:`mpeg4fa.face.reach`) 46 pass. The 50 others, measured: 45 fold where the limiter
-leaves them (their folds start within ordinary use: the jaw past 1383 MNS where the tracker's streams reach
-1568, the lids, the brows, the lip corners raised, the cheeks, the nose; see ``face/data/reach.csv``), 5 are
-eased short of any fold but keep the strain over its floor that they have from the smallest value
-(raise_b_midlip and raise_b_lip_lm/rm up: 2.5 x from 101 MNS; close_b_l/r_eyelid down).
+head's reach (:mod:`mpeg4fa.face.reach`) 42 pass. The 54 others, measured: 51 fold where the limiter
+leaves them (their folds start below the knee, ordinary use or the conformance suite's exact 300: the jaw
+past 1383 MNS where the tracker's streams reach 1568, the lids, the brows, the lip corners raised, the
+cheeks, the nose; see ``face/data/reach.csv``), 3 are eased short of any fold but keep the strain over its
+floor that they have from the smallest value (raise_b_midlip and raise_b_lip_lm/rm up: 2.5 x from 101 MNS).
 tools/crease_check.json, written by tools/crease_range_why.py, says why each fails."""
 
 
@@ -130,7 +130,7 @@ def test_full_range_eased_into_the_reach_folds_nothing(request, graph, deformer)
     onset lies inside the full range (FAP 14 +600 folds only on ARKit)."""
     face = face_under(request, "generic", deformer)
     poses = _eased_full_range()
-    assert len(poses) >= 45
+    assert len(poses) >= 40
     failing_unlimited = 0
     for name, (values, whole, row, side) in poses.items():
         m = creases.measure_pose(face, values, graph)
