@@ -164,8 +164,8 @@ def relimit(path: Path) -> list[dict]:
     return rows
 
 
-HEADER = """# The face's reach (mpeg4fa.face.reach), written by tools/measure_reach.py at {commit}: per skin FAP and sign,
-# the largest value (FAPU units) that passes the crease criterion (creases.Crease.ok: no folded triangle, no fold
+HEADER = """# The face's reach (mpeg4fa.face.reach), written by tools/measure_reach.py at {commit}: per skin FAP and
+# sign, the largest value (FAPU units) that passes the crease criterion (creases.Crease.ok: no folded triangle, no fold
 # line, strain within 2 x its floor) on the generic head without its limiter, FAP alone, full default I range
 # scanned in {scan} steps then bisected to {tol:g} of it; fap_* and arkit_* per deformer (empty: the whole range
 # passes); ok_*: the whole criterion, fold_*: no fold (strain aside). used_*: the largest magnitude ordinary use

@@ -6,8 +6,8 @@ follows such motion, so this head saturates, as a rig clamps its blend weights a
 each FAP and sign has a **reach** (the largest value that still passes the crease criterion,
 :meth:`.creases.Crease.ok`, measured by ``tools/measure_reach.py`` into ``data/reach.csv``), and past a
 **knee** (the largest value ordinary use asks for: visemes, expressions, blinks, the named brow
-poses, real streams, the tracker's training streams; at least :data:`EXACT_UP_TO`) the shown value eases toward the **limit**
-(the reach less :data:`MARGIN`) without ever reaching it. Up to the knee values pass unchanged.
+poses, real streams, the tracker's training streams; at least :data:`EXACT_UP_TO`) the shown value eases
+toward the **limit** (the reach less :data:`MARGIN`) never past it. Up to the knee values pass unchanged.
 
 This is the face layer's choice, not the stream's: decoded values, their clamp
 (:mod:`mpeg4fa.decoded`) and the FAPU semantics are untouched; only what this head shows saturates.
