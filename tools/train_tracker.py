@@ -4,19 +4,20 @@
 
 Why: see :mod:`mpeg4fa.tracking.learned`. The data: the generic head wearing training textures (Grace Hopper's
 photo from matplotlib's sample data, the same photo mirrored and darkened, three tinted faces of scikit-image's
-Labeled Faces in the Wild subset, and the head's own untextured skin) plays random FAP streams (speech visemes and expression tags from other texts than tools/track_loop.py's,
-blinks and half blinks, gaze, smooth random motion of every learned FAP on its own, and head turns up to
-30 degrees yaw, 15 pitch, 12 roll; in the wide-turn streams, :data:`WIDE_SEEDS`, turns and gaze sweep their whole
-range as the loop's do), rendered at 320 and 448 pixels and tracked frame by frame by the same
-landmark model and tracker (:class:`mpeg4fa.tracking.FaceTracker`, ``keep_inputs``) as a video is. Frames
-are cached in OUT/cache, so a second run only fits.
+Labeled Faces in the Wild subset, and the head's own untextured skin) plays random FAP streams (speech visemes and
+expression tags from other texts than tools/track_loop.py's, blinks and half blinks, gaze, smooth random motion of
+every learned FAP on its own, and head turns up to 30 degrees yaw, 15 pitch, 12 roll; every calm stream is played
+twice, the second time with its gaze and head pitch swept over their whole range (:data:`SWEPT`); in the wide-turn
+streams, :data:`WIDE_SEEDS`, turns and gaze sweep their whole range as the loop's do), rendered at 320 and 448 pixels
+and tracked frame by frame by the same landmark model and tracker (:class:`mpeg4fa.tracking.FaceTracker`,
+``keep_inputs``) as a video is. Frames are cached in OUT/cache, so a second run only fits.
 
 Each region learns from its own mix of streams (:data:`REGION_STREAMS`) at a ridge penalty chosen by leaving each
-family of training textures out in turn. Held out, never trained on: one calm and one wide-turn stream per training
-texture (``held-out stream``, ``held-out wide stream``), and tools/track_loop.py's own closed loop (its stream and
-the astronaut's texture: ``held-out texture``). Per group: correlation and RMS share of the range
-(tools/track_loop.py's compare, unsmoothed). Deterministic (fixed seeds); prints a table and writes
-OUT/train_tracker.json and the map.
+family of training textures out in turn. Held out, never trained on: one calm stream (and its swept twin) and one
+wide-turn stream per training texture (``held-out stream``, ``held-out swept stream``, ``held-out wide stream``), and
+tools/track_loop.py's own closed loop (its stream and the astronaut's texture: ``held-out texture``). Per group:
+correlation and RMS share of the range (tools/track_loop.py's compare, unsmoothed). Deterministic (fixed seeds);
+prints a table and writes OUT/train_tracker.json and the map.
 """
 from __future__ import annotations
 
@@ -44,18 +45,27 @@ WIDE_SEEDS = (21, 22)
 WIDE_HELD_OUT_SEED = 29
 """Wide-turn streams: head turns and gaze as one sine each, so that they spend as long near 30 degrees as the loop's
 (40 % of the frames past 20 degrees yaw, where the sum of three sines spends 10 %); seeds below 20 use that sum."""
-REGION_STREAMS = {"jaw": "all", "lips": "calm", "lids": "calm", "brows": "all"}
-"""Which training streams each region learns from: "calm" (the sum-of-sines turns only) or "all" (with the wide-turn
-streams), as each region gains (2026-12-05, the shipped map on renders of 4a9f6bc; 12 s loop / held-out calm / held-out
-wide streams of the training textures): with the wide turns the brows read 0.23 -> 0.53 / 0.65 -> 0.73 / 0.58 -> 0.68
-and the jaw 0.925 -> 0.936 (RMS 12.4 -> 8.3 %) / 0.94 / 0.92 -> 0.95, while the lip corners fell 0.93 -> 0.87 on the
-loop and 0.69 -> 0.45 on wide held-out streams, and the lids moved +0.006 / +0.005 / -0.015 (both kept calm). Tried
-on top without gain: frames weighted by yaw, displacement x |yaw| and x pitch inputs, forehead landmarks for the brows,
-the outer lip corners or inner lips as their own region on the wide mix; each lip's FAPs (4, 8, 9, 51, 55, 56 and 5, 10,
-11, 52, 57, 58) sharing 3/4 of their own motion in the calm streams, as speech moves them (25 runs re-rendered,
-2026-12-06): loop inner lips 0.393 -> 0.395, FAP 5's gain 0.21 -> 0.22 (why: tools/lip_reach.py); squared iris
-displacements for the lids (+0.001 on the loop, -0.005 on held-out calm streams). The lids' penalty: held-out calm
-streams read 0.766 at 0.03 and 0.743 at 0.3, held-out wide ones 0.751 and 0.764; the left-out textures choose 0.3."""
+SWEPT = (False, True)
+"""Each calm stream is played twice, the same speech, expressions, blinks and other motion: with its gaze and head pitch
+as the sum of three sines (mostly near the middle: 16 % of the frames past 0.6 of the gaze range) and swept, one sine
+each over the whole range (58 %), so that the lids learn what the gaze does to them and the outer lip corners what the
+head's pitch does (a tracker reads gaze and lids anywhere in their range)."""
+REGION_STREAMS = {"jaw": "all", "lips": "calm", "lids": "all", "brows": "all"}
+"""Which training streams each region learns from: "calm" (the sum-of-sines turns only, both :data:`SWEPT` twins) or
+"all" (with the wide-turn streams), as each region gains on held-out streams of the training textures. With the swept
+twins (2026-12-06, renders of cb9e6e3 beside the wide ones of 4a9f6bc; held-out swept / wide / calm streams) the lids
+read 0.749 / 0.729 / 0.767 on the calm mix and 0.781 / 0.767 / 0.789 on all (the shipped map before: 0.718 / 0.764 /
+0.743), so they take all, at the penalty 0.0003 the left-out textures choose; the lip corners 0.821 / 0.691 / 0.827 ->
+0.854 / 0.733 / 0.846, the outer ones 0.855 / 0.687 / 0.842 -> 0.864 / 0.713 / 0.852, the inner lips 0.264 / 0.206 /
+0.492 -> 0.314 / 0.239 / 0.436. Before the twins (2026-12-05, renders of 4a9f6bc; 12 s loop / held-out calm /
+held-out wide streams): with the wide turns the brows read 0.23 -> 0.53 / 0.65 -> 0.73 / 0.58 -> 0.68 and the jaw
+0.925 -> 0.936 (RMS 12.4 -> 8.3 %) / 0.94 / 0.92 -> 0.95, while the lip corners fell 0.93 -> 0.87 on the loop and
+0.69 -> 0.45 on wide held-out streams (kept calm). Tried on top without gain: frames weighted by yaw, displacement x
+|yaw| and x pitch inputs, forehead landmarks for the brows, the outer lip corners or inner lips as their own region on
+the wide mix; each lip's FAPs (4, 8, 9, 51, 55, 56 and 5, 10, 11, 52, 57, 58) sharing 3/4 of their own motion in the
+calm streams, as speech moves them (25 runs re-rendered, 2026-12-06): loop inner lips 0.393 -> 0.395, FAP 5's gain
+0.21 -> 0.22 (why: tools/lip_reach.py); squared iris displacements for the lids (+0.001 on the loop, -0.005 on
+held-out calm streams)."""
 SIZES = (320, 448)
 RIDGES = (0.0003, 0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
 TEXTS = (
@@ -97,9 +107,10 @@ def _sweep(rng: np.random.Generator, n: int, hz: float) -> np.ndarray:
     return np.sin(2 * np.pi * rng.uniform(0.7, 1.3) * hz * t + rng.uniform(0, 2 * np.pi))
 
 
-def training_values(seed: int, seconds: float) -> np.ndarray:
+def training_values(seed: int, seconds: float, swept: bool = False) -> np.ndarray:
     """(n, 68) FAP values of one training stream: a still first second (the neutral), then everything; seeds of
-    :data:`WIDE_SEEDS` and :data:`WIDE_HELD_OUT_SEED` turn the head and eyes as :func:`_sweep` does."""
+    :data:`WIDE_SEEDS` and :data:`WIDE_HELD_OUT_SEED` turn the head and eyes as :func:`_sweep` does; ``swept``: the
+    gaze and the head's pitch only (:data:`SWEPT`)."""
     from mpeg4fa.decoded.limits import clamp
     from mpeg4fa.speech.encoder import encode_text
 
@@ -129,10 +140,11 @@ def training_values(seed: int, seconds: float) -> np.ndarray:
         for j, share in enumerate(tool.BLINK_SHAPE):
             values[k + j, 18:20] = np.maximum(values[k + j, 18:20], share * peak)
         k += int(rng.uniform(0.8, 2.5) * FPS)
-    curve = _sweep if seed in (*WIDE_SEEDS, WIDE_HELD_OUT_SEED) else _smooth
+    turn = _sweep if seed in (*WIDE_SEEDS, WIDE_HELD_OUT_SEED) else _smooth
+    look = _sweep if swept else turn
     for col, amp in ((22, 12000), (23, 12000), (24, 8000), (25, 8000)):  # gaze
-        values[:, col] = amp * curve(rng, n, 0.25) * ramp
-    for col, degrees in ((47, 15), (48, 30), (49, 12)):  # head pitch, yaw, roll
+        values[:, col] = amp * look(rng, n, 0.25) * ramp
+    for col, degrees, curve in ((47, 15, look), (48, 30, turn), (49, 12, turn)):  # head pitch, yaw, roll
         values[:, col] = np.radians(degrees) / 1e-5 * curve(rng, n, 0.12) * ramp
     values[:still] = 0.0
     return np.rint(clamp(values)[0])
@@ -193,13 +205,14 @@ def runs(cache: Path, seconds: float, render: bool = True) -> list[dict]:
     """Every training and held-out run: name, texture, seed, values, landmarks (rendered once, then cached; without
     ``render`` only the cached ones)."""
     cache.mkdir(parents=True, exist_ok=True)
-    plan = [(tex, seed, SIZES[(i + j) % len(SIZES)]) for i, tex in enumerate(TRAIN_TEXTURES)
+    plan = [(tex, seed, SIZES[(i + j) % len(SIZES)], swept) for i, tex in enumerate(TRAIN_TEXTURES)
             for j, seed in enumerate((*(LFW_SEEDS if tex.startswith("lfw") else TRAIN_SEEDS), HELD_OUT_SEED,
-                                      *WIDE_SEEDS, WIDE_HELD_OUT_SEED))]
+                                      *WIDE_SEEDS, WIDE_HELD_OUT_SEED))
+            for swept in ((False,) if seed in (*WIDE_SEEDS, WIDE_HELD_OUT_SEED) else SWEPT)]
     baked = None
     out = []
-    for tex, seed, size in plan:
-        values = training_values(seed, seconds)
+    for tex, seed, size, swept in plan:
+        values = training_values(seed, seconds, swept)
         digest = hashlib.sha1(values.tobytes()).hexdigest()[:8]  # a changed stream is rendered anew
         path = cache / f"{tex}_{seed}_{size}_{seconds:g}s_{digest}.npz"
         if path.exists():
@@ -215,7 +228,7 @@ def runs(cache: Path, seconds: float, render: bool = True) -> list[dict]:
             print(f"  rendered and tracked {path.name}: {len(values)} frames in "
                   f"{time.perf_counter() - started:.0f} s", file=sys.stderr)
         out.append({"texture": tex, "seed": seed, "size": size, "values": values, "landmarks": landmarks,
-                    "held_out": seed in (HELD_OUT_SEED, WIDE_HELD_OUT_SEED), "wide": seed >= 20})
+                    "held_out": seed in (HELD_OUT_SEED, WIDE_HELD_OUT_SEED), "wide": seed >= 20, "swept": swept})
     return out
 
 
@@ -308,13 +321,15 @@ def main(argv: list[str] | None = None) -> int:
         run["moved"], run["angles"], run["fapu"] = inputs(run["landmarks"])
         run["moved"] = run["moved"].astype(np.float32)
     train = [r for r in all_runs if not r["held_out"]]
-    held = [r for r in all_runs if r["held_out"] and not r["wide"]]
+    held = [r for r in all_runs if r["held_out"] and not r["wide"] and not r["swept"]]
+    held_swept = [r for r in all_runs if r["held_out"] and r["swept"]]
     held_wide = [r for r in all_runs if r["held_out"] and r["wide"]]
     fap_map, chosen, frames = fit(train, [args.ridge] if args.ridge is not None else list(RIDGES))
     report = {"regions": chosen, "frames_trained": frames, "faps": [int(f) for f in fap_map.faps],
               "textures_trained": list(TRAIN_TEXTURES), "held_out_texture": HELD_OUT_TEXTURE,
               "seconds_per_stream": args.seconds, "train": evaluate(fap_map, train),
-              "held_out_stream": evaluate(fap_map, held), "held_out_wide_stream": evaluate(fap_map, held_wide)}
+              "held_out_stream": evaluate(fap_map, held), "held_out_swept_stream": evaluate(fap_map, held_swept),
+              "held_out_wide_stream": evaluate(fap_map, held_wide)}
     if not args.no_write:
         learned.DATA.parent.mkdir(parents=True, exist_ok=True)
         fap_map.save(learned.DATA, frames=frames)
@@ -325,11 +340,12 @@ def main(argv: list[str] | None = None) -> int:
                                            for name, g in loop["groups"].items()}
         report["held_out_texture_blinks"] = loop["blinks"]
     report["seconds"] = round(time.perf_counter() - started, 1)
-    print(f"{'group':28} " + " ".join(f"{k:>24}" for k in ("train", "held-out stream", "held-out wide stream",
-                                                             "held-out texture (loop)")))
+    print(f"{'group':28} " + " ".join(f"{k:>24}" for k in ("train", "held-out stream", "held-out swept stream",
+                                                             "held-out wide stream", "held-out texture (loop)")))
     for name in report["train"]:
         cells = []
-        for key in ("train", "held_out_stream", "held_out_wide_stream", "held_out_texture_loop"):
+        for key in ("train", "held_out_stream", "held_out_swept_stream", "held_out_wide_stream",
+                    "held_out_texture_loop"):
             g = report.get(key, {}).get(name)
             cells.append(f"{g['correlation']:.3f} / {100 * (g['rms_share'] or 0):5.1f} %" if g else "-")
         print(f"{name:28} " + " ".join(f"{c:>24}" for c in cells))
