@@ -57,7 +57,8 @@ twins (2026-12-06, renders of cb9e6e3 beside the wide ones of 4a9f6bc; held-out 
 read 0.749 / 0.729 / 0.767 on the calm mix and 0.781 / 0.767 / 0.789 on all (the shipped map before: 0.718 / 0.764 /
 0.743), so they take all, at the penalty 0.0003 the left-out textures choose; the lip corners 0.821 / 0.691 / 0.827 ->
 0.854 / 0.733 / 0.846, the outer ones 0.855 / 0.687 / 0.842 -> 0.864 / 0.713 / 0.852, the inner lips 0.264 / 0.206 /
-0.492 -> 0.314 / 0.239 / 0.436. Before the twins (2026-12-05, renders of 4a9f6bc; 12 s loop / held-out calm /
+0.492 -> 0.314 / 0.239 / 0.436. The lips on all would read the outer corners 0.886 / 0.757 / 0.882 but the lip
+corners 0.629 on wide streams (kept calm). Before the twins (2026-12-05, renders of 4a9f6bc; 12 s loop / held-out calm /
 held-out wide streams): with the wide turns the brows read 0.23 -> 0.53 / 0.65 -> 0.73 / 0.58 -> 0.68 and the jaw
 0.925 -> 0.936 (RMS 12.4 -> 8.3 %) / 0.94 / 0.92 -> 0.95, while the lip corners fell 0.93 -> 0.87 on the loop and
 0.69 -> 0.45 on wide held-out streams (kept calm). Tried on top without gain: frames weighted by yaw, displacement x
