@@ -75,10 +75,12 @@ TARGET_ES = ES + ["Mi papá compra pimientos en el mercado.", "Pepe pinta un map
 
 
 @pytest.mark.xfail(reason="issue 28's English target, on 8 English sentences in two voices (96 closures): measured "
-                          "0.875, 84 of 96 (0.906 counting closures from rest, compare.onset_score from_rest; 0.81-0.85 "
-                          "before the span scorer; the phone loop's results vary with what the process heard before), "
-                          "Spanish 22 of 24; tools/bench_lipsync_audio.py's enlarged set: English 91.7 % (94.8 % from "
-                          "rest), Spanish 90.7 % (2026-12-06): at the target there, not with a margin here",
+                          "0.875-0.896, 84-86 of 96 (0.906-0.927 counting closures from rest, compare.onset_score "
+                          "from_rest; 0.81-0.85 before the span scorer; the phone loop's results vary with what the "
+                          "process heard before), Spanish 22 of 24; tools/bench_lipsync_audio.py's enlarged set: "
+                          "English 91.7 % (94.8 % from rest), Spanish 90.7 % (2026-12-06): at the target there, not "
+                          "with a margin here. Weights retrained on the breath-corrected closures gave 88 of 96 here "
+                          "but less on the bench (tools/train_listen_closures.py): not kept",
                    strict=True)
 def test_closure_onsets_reach_the_issue_targets():
     share = {}
