@@ -91,8 +91,13 @@ BENCHES: tuple[Bench, ...] = (
     Bench("live", "Live speech", "a spoken WAV fed live: latency and delivery"),
     Bench("lipsync_audio", "Lip sync from audio alone",
           "closures and visemes recognised without a transcript against the transcript path's track, on espeak-ng "
-          "speech in six languages (hand-labelled recordings with `--human DIR`); rest on silence, noise and music; "
-          "speed"),
+          "speech in six languages (recordings of people with `--human DIR`, against their transcript's forced "
+          "alignment); rest on silence, noise and music; speed"),
+    Bench("lipsync_festival", "Lip sync from audio alone, on festival's voices",
+          "English closures recognised without a transcript against festival's own segment times (a second "
+          "synthesiser: an HTS voice and two diphone voices, none in the closure detector's training); "
+          "needs `apt install festival festvox-kallpc16k festvox-kdlpc16k festvox-us-slt-hts`",
+          small=("--voices", "slt")),
     Bench("batch", "Batch on Dask", "the same streams rendered on 1 and 2 local workers",
           small=("--streams", "4", "--seconds", "2")),
     Bench("bits", "bitstring against the codec's BitReader", "header fields, single bits, whole decodes"),
