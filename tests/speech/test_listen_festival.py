@@ -52,7 +52,8 @@ def scored():
         rec = Recording(np.clip(np.rint(samples * 32768), -32768, 32767).astype(np.int16), rate, text)
         heard = phones(listen(rec, recognizer="phonetic", lang="en").utterance).timings
         s = onset_score(truth_timings(segments), heard)
-        hits, total, extra, found = hits + s.hits, total + s.reference, extra + s.extra, found + len(closure_onsets(heard))
+        hits, total, extra = hits + s.hits, total + s.reference, extra + s.extra
+        found += len(closure_onsets(heard))
     return hits, total, found, extra
 
 
