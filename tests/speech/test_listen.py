@@ -80,8 +80,9 @@ TARGET_ES = ES + ["Mi papá compra pimientos en el mercado.", "Pepe pinta un map
                           "process heard before), Spanish 22 of 24; tools/bench_lipsync_audio.py's enlarged set: "
                           "English 91.7 % (94.8 % from rest), Spanish 90.7 % (2026-12-06): at the target there, not "
                           "with a margin here. Weights retrained on the breath-corrected closures gave 88 of 96 here "
-                          "but less on the bench (tools/train_listen_closures.py): not kept",
-                   strict=True)
+                          "but less on the bench (tools/train_listen_closures.py): not kept. Not strict: 87 of 96 "
+                          "would pass, one closure from what some runs give, so a strict mark would make CI flaky",
+                   strict=False)
 def test_closure_onsets_reach_the_issue_targets():
     share = {}
     # en-us last: espeak-ng kept the +f3 variant for later calls that name no voice (seen 2026-12-05: the
