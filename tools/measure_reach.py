@@ -72,8 +72,8 @@ def ordinary_use() -> tuple[np.ndarray, dict[str, np.ndarray]]:
     blink[18:20] = loop.BLINK_PEAK
     sources["blinks"] = [blink]
     train = _tool("train_tracker")
-    seeds = (*train.TRAIN_SEEDS, *train.LFW_SEEDS, train.HELD_OUT_SEED, *train.WIDE_SEEDS, train.WIDE_HELD_OUT_SEED)
-    sources["tracker streams"] = [train.training_values(seed, 20.0) for seed in seeds]
+    streams = sorted({(seed, swept) for _, seed, _, swept in train.stream_plan()})
+    sources["tracker streams"] = [train.training_values(seed, 20.0, swept) for seed, swept in streams]
     per = {}
     for name, rows in sources.items():
         v = np.vstack([np.atleast_2d(r) for r in rows])[:, :N_FAPS]

@@ -45,6 +45,7 @@ WIDE_SEEDS = (21, 22)
 WIDE_HELD_OUT_SEED = 29
 """Wide-turn streams: head turns and gaze as one sine each, so that they spend as long near 30 degrees as the loop's
 (40 % of the frames past 20 degrees yaw, where the sum of three sines spends 10 %); seeds below 20 use that sum."""
+WIDE = (*WIDE_SEEDS, WIDE_HELD_OUT_SEED)
 SWEPT = (False, True)
 """Each calm stream is played twice, the same speech, expressions, blinks and other motion: with its gaze and head pitch
 as the sum of three sines (mostly near the middle: 16 % of the frames past 0.6 of the gaze range) and swept, one sine
@@ -141,7 +142,7 @@ def training_values(seed: int, seconds: float, swept: bool = False) -> np.ndarra
         for j, share in enumerate(tool.BLINK_SHAPE):
             values[k + j, 18:20] = np.maximum(values[k + j, 18:20], share * peak)
         k += int(rng.uniform(0.8, 2.5) * FPS)
-    turn = _sweep if seed in (*WIDE_SEEDS, WIDE_HELD_OUT_SEED) else _smooth
+    turn = _sweep if seed in WIDE else _smooth
     look = _sweep if swept else turn
     for col, amp in ((22, 12000), (23, 12000), (24, 8000), (25, 8000)):  # gaze
         values[:, col] = amp * look(rng, n, 0.25) * ramp
@@ -202,17 +203,21 @@ def record(values: np.ndarray, texture: np.ndarray | None, size: int) -> np.ndar
     return out
 
 
+def stream_plan() -> list[tuple[str, int, int, bool]]:
+    """(texture, seed, size, swept) of every training and held-out run: each texture's seeds, the calm ones also as
+    :data:`SWEPT` twins."""
+    return [(tex, seed, SIZES[(i + j) % len(SIZES)], swept) for i, tex in enumerate(TRAIN_TEXTURES)
+            for j, seed in enumerate((*(LFW_SEEDS if tex.startswith("lfw") else TRAIN_SEEDS), HELD_OUT_SEED, *WIDE))
+            for swept in ((False,) if seed in WIDE else SWEPT)]
+
+
 def runs(cache: Path, seconds: float, render: bool = True) -> list[dict]:
     """Every training and held-out run: name, texture, seed, values, landmarks (rendered once, then cached; without
     ``render`` only the cached ones)."""
     cache.mkdir(parents=True, exist_ok=True)
-    plan = [(tex, seed, SIZES[(i + j) % len(SIZES)], swept) for i, tex in enumerate(TRAIN_TEXTURES)
-            for j, seed in enumerate((*(LFW_SEEDS if tex.startswith("lfw") else TRAIN_SEEDS), HELD_OUT_SEED,
-                                      *WIDE_SEEDS, WIDE_HELD_OUT_SEED))
-            for swept in ((False,) if seed in (*WIDE_SEEDS, WIDE_HELD_OUT_SEED) else SWEPT)]
     baked = None
     out = []
-    for tex, seed, size, swept in plan:
+    for tex, seed, size, swept in stream_plan():
         values = training_values(seed, seconds, swept)
         digest = hashlib.sha1(values.tobytes()).hexdigest()[:8]  # a changed stream is rendered anew
         path = cache / f"{tex}_{seed}_{size}_{seconds:g}s_{digest}.npz"
@@ -229,7 +234,7 @@ def runs(cache: Path, seconds: float, render: bool = True) -> list[dict]:
             print(f"  rendered and tracked {path.name}: {len(values)} frames in "
                   f"{time.perf_counter() - started:.0f} s", file=sys.stderr)
         out.append({"texture": tex, "seed": seed, "size": size, "values": values, "landmarks": landmarks,
-                    "held_out": seed in (HELD_OUT_SEED, WIDE_HELD_OUT_SEED), "wide": seed >= 20, "swept": swept})
+                    "held_out": seed in (HELD_OUT_SEED, WIDE_HELD_OUT_SEED), "wide": seed in WIDE, "swept": swept})
     return out
 
 
