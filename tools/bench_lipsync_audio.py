@@ -1,7 +1,7 @@
 """Lip sync from a recording alone (issue 28): how close the audio-only viseme track comes to the transcript
 path's, how still the mouth stays through noise and music, and how fast it runs.
 
-Speech: espeak-ng sentences in English, Spanish, French, German, Mandarin and Hindi, whose phone times are
+Speech: espeak-ng sentences (each spoken by a fresh process, tools/espeak_fresh.py: the same audio every run) in English, Spanish, French, German, Mandarin and Hindi, whose phone times are
 known (espeak-ng's own events): the ``old`` set (:data:`SPEECH`: 5 English, 3 a language) and ``all``, which
 adds :data:`MORE` (12 English sentences in two voices, 6 a language in two or three voices; 45-230 closures a
 language in all). The transcript path's track is the utterance the text path makes of
@@ -51,6 +51,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from espeak_fresh import spoken  # noqa: E402
 
 from mpeg4fa.speech.align import Recording, align_recording, read_recording  # noqa: E402
 from mpeg4fa.speech.encoder import encode_utterance, phones  # noqa: E402
@@ -58,9 +61,6 @@ from mpeg4fa.speech.listen import listen  # noqa: E402
 from mpeg4fa.speech.listen.compare import agreement, closure_onsets, onset_score, rest_share  # noqa: E402
 from mpeg4fa.speech.listen.signals import music, white_noise  # noqa: E402
 from mpeg4fa.speech.listen.stream import Source, stream_listened  # noqa: E402
-from mpeg4fa.speech.markup import parse_markup  # noqa: E402
-from mpeg4fa.speech.tts.espeak import EspeakEngine  # noqa: E402
-from mpeg4fa.speech.utterance import speak  # noqa: E402
 
 SPEECH = {
     "en": [("en-us", "Please bring the maps back before the boat leaves."),
@@ -153,14 +153,13 @@ def _sum(rows: list[dict]) -> dict:
 
 def run_speech(quick: bool) -> list[dict]:
     """Rows per language and recogniser for the ``old`` set (:data:`SPEECH`) and ``all`` (with :data:`MORE`)."""
-    engine = EspeakEngine()
     rows = []
     for lang in SPEECH:
         per = {("old", "phonetic"): [], ("old", "words"): [], ("new", "phonetic"): [], ("new", "words"): []}
         for which, items in (("old", SPEECH[lang]), ("new", MORE[lang])):
             for voice, text in items[:2] if quick else items:
                 code = voice.split("+")[0] if lang != "en" else "en"
-                ref = phones(speak(parse_markup(text), engine, lang=code, voice=voice, rate=RATE))
+                ref = phones(spoken(text, lang=code, voice=voice, rate=RATE))
                 rec = Recording(ref.speech.samples, ref.speech.rate, text)
                 for how in (("phonetic", "words") if lang == "en" else ("phonetic",)):
                     heard = listen(rec, recognizer=how, lang=code)
@@ -209,11 +208,11 @@ def run_rest(seconds: float) -> list[dict]:
 
 
 def run_speed(seconds: float) -> list[dict]:
-    engine = EspeakEngine()
     texts = [t for _, t in SPEECH["en"]]
+    said = [spoken(t, lang="en", voice="en-us", rate=RATE).speech for t in texts]
     parts, total = [], 0.0
     while total < seconds:
-        s = engine.synthesize(texts[len(parts) % len(texts)], voice="en-us", rate=RATE)
+        s = said[len(parts) % len(texts)]
         parts.append(s.samples)
         total += s.duration
     x = np.concatenate(parts)
