@@ -16,7 +16,10 @@ built from the margin itself:
    **ratio** (1 at 3.1, falling to 0 at the corners);
 3. the **lid sheet**: skin on the lid's side of the margin, within the orbit,
    turns with the margin's ratio at its x, fading to 0 over
-   :data:`LID_HEIGHT_MM` of surface distance from the margin.
+   :data:`LID_HEIGHT_MM` of surface distance from the margin;
+4. near the corners the ratios are **evened out** where a closing lid would fold the
+   skin (:mod:`.lid_folds`: the margin there climbs steeply in x, so its vertices pass the
+   fixed corner as they close).
 
 A frame turns the lid point by the angle that lowers it by exactly value x IRISD
 (:func:`mpeg4fa.face.motion.arc_angle`) and every sheet vertex by its ratio
@@ -43,6 +46,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS
+from mpeg4fa.face.lid_folds import CORNER_FREE_MM, even_out
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import LID_MARGIN_LOOPS, edge_graph, path_through, smooth_down
 
@@ -104,7 +108,7 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
     rest = mesh.vertices
     skin = mesh.part("skin")
     graph = edge_graph(rest, mesh.triangles["skin"])
-    sheets = {}
+    raw = {}
     for fap, (eye, joint_name, point, opposite, lateral, medial, side) in LIDS.items():
         joint = mesh.joints[joint_name]
         centre = rest[joint]
@@ -142,9 +146,20 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         ratios = np.concatenate([ratio, sheet_ratio])
         anchors = [v for label, v in zip(mesh.fp_labels, mesh.fp_vertex) if label not in PASSIVE_POINTS]
         ratios[np.isin(rows, anchors) & (rows != fp_vertex)] = 0.0  # other feature points stay put
-        good = ratios > 1e-4
-        sheets[fap] = LidSheet(rows=rows[good], ratios=ratios[good], joint=joint, point=fp_vertex)
-    return sheets
+        field = np.zeros(mesh.n_vertices)
+        field[rows] = ratios
+        # the margin keeps its closure (the eye shuts) but for its last vertices at each corner
+        corners = rest[[int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]]
+        closes = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
+        raw[fap] = (field, joint, fp_vertex, np.concatenate([anchors, other, closes]).astype(np.int64))
+    sheets = {}
+    for upper, lower in ((19, 21), (20, 22)):  # one eye's two lids at a time: they close together
+        (fu, joint, pu, held_u), (fl, _, pl, held_l) = raw[upper], raw[lower]
+        fields = even_out(mesh, [fu, fl], joint, [pu, pl], float(rest[pu, 1] - rest[pl, 1]), [held_u, held_l])
+        for fap, field, point in ((upper, fields[0], pu), (lower, fields[1], pl)):
+            rows = np.flatnonzero(field > 1e-4)
+            sheets[fap] = LidSheet(rows=rows, ratios=field[rows], joint=joint, point=point)
+    return dict(sorted(sheets.items()))
 
 
 def turn_lid(points: np.ndarray, sheet: LidSheet, rest: np.ndarray, drop: float) -> None:
