@@ -9,9 +9,8 @@ turned over, 42 triangles and 32 fold lines in a blink at 1000 IRISD (from about
 the lower lids at 300 (from about 215, so joy at 63 folded at its lower lids 260).
 
 A triangle whose vertices share one angle turns rigidly and cannot fold, so where a closing lid
-(the stages of :data:`UPPER_STAGES`, :data:`LOWER_STAGES` and both together, :data:`BOTH`) turns a
-triangle (or a pair of neighbours that were one smooth sheet) by more than :data:`GUARD_DEGREES`,
-each of its vertices' shares moves halfway to the triangle's mean, until none does. Feature points
+(the stages of :data:`UPPER_STAGES`, :data:`LOWER_STAGES` and both together, :data:`BOTH`) would fold
+the skin, the shares are evened out (:func:`.fold_relief.even_out`). Feature points
 keep theirs (the lid point its 1, every other point 0, the other lid's margin 0), so each lid point
 still moves value x IRISD, and so does the margin but within :data:`CORNER_FREE_MM` of a corner (a shut
 eye stays shut); the skin round the corners, some outside the sheet before, follows a little.
@@ -26,7 +25,7 @@ import numpy as np
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.regions import triangle_pairs, unit_normals
+from mpeg4fa.face.fold_relief import even_out
 
 UPPER_STAGES = (0.25, 0.5, 0.75, 1.0)
 """Shares of the eye's opening an upper lid closes in the check: a blink goes all the way (1000 IRISD of 1024)."""
@@ -34,18 +33,11 @@ LOWER_STAGES = (0.125, 0.25, 0.375, 0.5)
 """Shares of the opening a lower lid rises: joy at 63 asks 260 IRISD, twice that 520, about half the opening."""
 BOTH = ((0.5, 0.25), (0.5, 0.5), (1.0, 0.25), (1.0, 0.5))
 """(upper, lower) shares together: a blink over the lower lids of a smile."""
-GUARD_DEGREES = 78.0
-"""A triangle turned by more than this (or a pair of neighbours this far from facing one way) is evened out:
-some room below the 90 degrees that count as a fold."""
-SAME_SHEET_DEGREES = 60.0
-"""Neighbours this close at rest are one smooth sheet (as :data:`.creases.SAME_SIDE_DEGREES`)."""
 CORNER_FREE_MM = 1.0
 """Margin vertices this close to a corner (straight line) may be evened out; the others keep the share that shuts
 the eye on the other lid (freed all along, the evening out reached 3-5 mm in from the corners and a shut eye
 showed 76 eyeball pixels at 320 x 160, tests/render/test_lid_pixels.py; freed within 2 mm, 2 with the lower lids
 closed; within 1 mm, none)."""
-MAX_ROUNDS = 200
-"""Rounds of evening out at most (where held margins leave folds it cannot remove, it stops there)."""
 
 
 def _turned(rest: np.ndarray, fields: list[np.ndarray], joint: int, points: list[int],
@@ -65,47 +57,16 @@ def _turned(rest: np.ndarray, fields: list[np.ndarray], joint: int, points: list
     return p
 
 
-def even_out(mesh: HeadMesh, fields: list[np.ndarray], joint: int, points: list[int], opening: float,
-             held: list[np.ndarray]) -> list[np.ndarray]:
+def even_out_lids(mesh: HeadMesh, fields: list[np.ndarray], joint: int, points: list[int], opening: float,
+                  held: list[np.ndarray]) -> list[np.ndarray]:
     """The upper and lower lid shares of one eye (per vertex, ``fields``), evened out where their closing
-    folds the skin (module docstring). ``points``: the lid points; ``opening``: 3.1 to 3.3 (mm, as the
-    lids close by it); ``held``: per field, the vertices whose share stays."""
+    folds the skin (module docstring, :func:`.fold_relief.even_out`). ``points``: the lid points; ``opening``:
+    3.1 to 3.3 (mm, as the lids close by it); ``held``: per field, the vertices whose share stays."""
     from mpeg4fa.face.quality import skin_graph
-    rest = mesh.vertices
     tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
     inside = np.zeros(mesh.n_vertices, bool)
     inside[skin_graph(mesh).inside] = True
-    tris = tris[~inside[tris].any(axis=1)]
     cases = ([(u * opening, 0.0) for u in UPPER_STAGES] + [(0.0, -low * opening) for low in LOWER_STAGES]
              + [(u * opening, -low * opening) for u, low in BOTH])
-    fields = [f.copy() for f in fields]
-    limit = np.cos(np.radians(GUARD_DEGREES))
-    for _ in range(MAX_ROUNDS):
-        moving = np.zeros(mesh.n_vertices, bool)
-        for f in fields:
-            moving |= f > 0
-        near = tris[moving[tris].any(axis=1)]
-        a, b = triangle_pairs(near)
-        n0 = unit_normals(rest, near)
-        sheet = np.einsum("ij,ij->i", n0[a], n0[b]) > np.cos(np.radians(SAME_SHEET_DEGREES))
-        a, b = a[sheet], b[sheet]
-        hit = np.zeros(len(near), bool)
-        for drops in cases:
-            n1 = unit_normals(_turned(rest, fields, joint, points, drops), near)
-            hit |= np.einsum("ij,ij->i", n0, n1) < limit
-            apart = np.einsum("ij,ij->i", n1[a], n1[b]) < limit
-            hit[a[apart]] = hit[b[apart]] = True
-        if not hit.any():
-            break
-        t = near[hit]
-        for f, keep in zip(fields, held):
-            mean = f[t].mean(axis=1, keepdims=True)
-            step = np.zeros(mesh.n_vertices)
-            count = np.zeros(mesh.n_vertices)
-            np.add.at(step, t.ravel(), (mean - f[t]).ravel())
-            np.add.at(count, t.ravel(), 1.0)
-            step = np.divide(step, count, out=np.zeros_like(step), where=count > 0)
-            step[keep] = 0.0
-            f += 0.5 * step
-            f[f < 1e-4] = 0.0
-    return fields
+    return even_out(mesh.vertices, tris[~inside[tris].any(axis=1)], fields,
+                    lambda f: (_turned(mesh.vertices, f, joint, points, drops) for drops in cases), held)

@@ -46,7 +46,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS
-from mpeg4fa.face.lid_folds import CORNER_FREE_MM, even_out
+from mpeg4fa.face.lid_folds import CORNER_FREE_MM, even_out_lids
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import LID_MARGIN_LOOPS, edge_graph, path_through, smooth_down
 
@@ -155,7 +155,7 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
     sheets = {}
     for upper, lower in ((19, 21), (20, 22)):  # one eye's two lids at a time: they close together
         (fu, joint, pu, held_u), (fl, _, pl, held_l) = raw[upper], raw[lower]
-        fields = even_out(mesh, [fu, fl], joint, [pu, pl], float(rest[pu, 1] - rest[pl, 1]), [held_u, held_l])
+        fields = even_out_lids(mesh, [fu, fl], joint, [pu, pl], float(rest[pu, 1] - rest[pl, 1]), [held_u, held_l])
         for fap, field, point in ((upper, fields[0], pu), (lower, fields[1], pl)):
             rows = np.flatnonzero(field > 1e-4)
             sheets[fap] = LidSheet(rows=rows, ratios=field[rows], joint=joint, point=point)
