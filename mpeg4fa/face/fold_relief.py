@@ -6,7 +6,8 @@ from rest, or turns two neighbours that were one smooth sheet (:data:`SAME_SHEET
 apart, each of its vertices' values moves halfway to the triangle's mean, round after round, until no
 pose does. Held vertices (feature points, whose motion the standard fixes) keep theirs; the field may
 spread to vertices that did not move before. Used by :mod:`.lid_folds` (the lids' angle shares at the
-eye corners) and :mod:`.deformers.arkit` (sculpted face units that fold at full weight).
+eye corners), :mod:`.rig` (the cheek points' skin weights, :data:`.rig.RELIEVED`) and :mod:`.deformers.arkit`
+(sculpted face units that fold at full weight).
 """
 from __future__ import annotations
 
@@ -25,6 +26,15 @@ MAX_ROUNDS = 200
 """Rounds at most (where held vertices leave folds that evening out cannot remove, it stops there)."""
 TINY = 1e-4
 """A scalar share below this is none (the field's support stays where it matters)."""
+
+
+def skin_triangles(mesh) -> np.ndarray:
+    """The skin triangles a fold counts on (:func:`.creases.measure_pose`): none inside the lip or lid loops."""
+    from mpeg4fa.face.quality import skin_graph
+    tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
+    inside = np.zeros(mesh.n_vertices, bool)
+    inside[skin_graph(mesh).inside] = True
+    return tris[~inside[tris].any(axis=1)]
 
 
 def even_out(rest: np.ndarray, triangles: np.ndarray, fields: list[np.ndarray],

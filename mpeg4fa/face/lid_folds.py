@@ -25,7 +25,7 @@ import numpy as np
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.mesh import HeadMesh
-from mpeg4fa.face.fold_relief import even_out
+from mpeg4fa.face.fold_relief import even_out, skin_triangles
 
 UPPER_STAGES = (0.25, 0.5, 0.75, 1.0)
 """Shares of the eye's opening an upper lid closes in the check: a blink goes all the way (1000 IRISD of 1024)."""
@@ -62,11 +62,7 @@ def even_out_lids(mesh: HeadMesh, fields: list[np.ndarray], joint: int, points: 
     """The upper and lower lid shares of one eye (per vertex, ``fields``), evened out where their closing
     folds the skin (module docstring, :func:`.fold_relief.even_out`). ``points``: the lid points; ``opening``:
     3.1 to 3.3 (mm, as the lids close by it); ``held``: per field, the vertices whose share stays."""
-    from mpeg4fa.face.quality import skin_graph
-    tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
-    inside = np.zeros(mesh.n_vertices, bool)
-    inside[skin_graph(mesh).inside] = True
     cases = ([(u * opening, 0.0) for u in UPPER_STAGES] + [(0.0, -low * opening) for low in LOWER_STAGES]
              + [(u * opening, -low * opening) for u, low in BOTH])
-    return even_out(mesh.vertices, tris[~inside[tris].any(axis=1)], fields,
+    return even_out(mesh.vertices, skin_triangles(mesh), fields,
                     lambda f: (_turned(mesh.vertices, f, joint, points, drops) for drops in cases), held)

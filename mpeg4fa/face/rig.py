@@ -84,6 +84,13 @@ WEIGHT_FLOOR = 0.01  # skin weights are soft-thresholded by this (a 1 % weight m
 LID_CLEAR_MM = 24.0  # brow, cheek and nose weights fade to 0 over this surface distance before a lid margin
 # (or over the point's own distance to it, if less)
 # (6 mm left the whole stretch of a brow raise in a band just over the lid: brows at 400 folded there)
+RELIEVED = {41: (100.0, 200.0), 42: (100.0, 200.0)}
+"""FAP -> values at which the skin weights of its point are evened out where the FAP alone folds the skin
+(:func:`.fold_relief.even_out`, every feature point held): the cheek lifts of joy at 63 (200 ENS, 10 mm on the
+generic head) drew a fold line 3-9 mm above each cheek point 5.3/5.4, where the weight falls from 0.73 to 0.31
+across a ridge already creased 40 degrees at rest; evened out (8 vertices, by at most 0.12 of weight) none.
+Evened out up to joy at 63 x 2 (400) the weights spread to the lid margins and the strain rose to 15 x its
+floor at 200, while 400 folds anyway (5.3 rises past the outer eye corner 3.7 that no FAP moves)."""
 CORNERS = (("2.4", "8.3"), ("2.5", "8.4"))  # (inner, outer) lip corner, left then right
 CORNER_MARGIN_MM = 1.0  # the outer lip corner stays at least this far outside the inner one
 
@@ -143,7 +150,7 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
             mesh, tongue, tongue_fps, driven, extra_controls=_tongue_root(rest, tongue), reach=_tongue_reach(mesh, tongue))))
     else:
         columns.append(sp.csr_matrix((mesh.n_vertices, len(labels))))
-    weights = (columns[0] + columns[1]).tocsr()
+    weights = relieve(mesh, (columns[0] + columns[1]).tocsr(), translate, index)
     weights.eliminate_zeros()
     moving = np.unique(weights.nonzero()[0])
 
@@ -163,6 +170,24 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
         chin_fp=index["2.1"], head_fp=index["7.1"],
         corners=tuple((index[a], index[b]) for a, b in CORNERS if a in index and b in index),
     )
+
+
+def relieve(mesh: HeadMesh, weights: sp.csr_matrix, translate: np.ndarray, index: dict[str, int]) -> sp.csr_matrix:
+    """``weights`` with the columns of the :data:`RELIEVED` FAPs' points evened out where the FAP alone folds the skin."""
+    from mpeg4fa.face.fold_relief import even_out, skin_triangles
+    todo = [(fap, index[FAPS[fap - 1].feature_point[0]]) for fap in RELIEVED
+            if FAPS[fap - 1].feature_point[0] in index]
+    if not todo:
+        return weights
+    rest, tris, held = mesh.vertices, skin_triangles(mesh), [np.asarray(mesh.fp_vertex, dtype=np.int64)]
+    out = weights.tolil()
+    for fap, j in todo:
+        step = translate[3 * j:3 * j + 3, fap - 1]  # mm per unit of the FAP at its point
+        column = weights[:, j].toarray().ravel()
+        column = even_out(rest, tris, [column], lambda f: (rest + np.outer(f[0], value * step)
+                                                           for value in RELIEVED[fap]), held)[0]
+        out[:, j] = column[:, None]
+    return out.tocsr()
 
 
 def _in(v: int, s: slice) -> bool:

@@ -141,12 +141,8 @@ def relieve_units(mesh: HeadMesh, dense: dict[str, np.ndarray]) -> dict[str, np.
     feature points held (their motion gives the gains). ``cheekSquint*`` is sculpted with the crow's feet bunched:
     at full weight it alone folded 6 triangles and 9 fold lines beside the outer eye corner, and under a cheek
     lift of 200 ENS (joy at 63), with the correction lifting 5.3 the rest of the way, 16 and 18."""
-    from mpeg4fa.face.fold_relief import even_out
-    from mpeg4fa.face.quality import skin_graph
-    tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
-    inside = np.zeros(mesh.n_vertices, bool)
-    inside[skin_graph(mesh).inside] = True
-    tris = tris[~inside[tris].any(axis=1)]
+    from mpeg4fa.face.fold_relief import even_out, skin_triangles
+    tris = skin_triangles(mesh)
     rest, held = mesh.vertices, [np.asarray(mesh.fp_vertex, dtype=np.int64)]
     out = {}
     for name, d in dense.items():
