@@ -173,7 +173,8 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
 
 
 def relieve(mesh: HeadMesh, weights: sp.csr_matrix, translate: np.ndarray, index: dict[str, int]) -> sp.csr_matrix:
-    """``weights`` with the columns of the :data:`RELIEVED` FAPs' points evened out where the FAP alone folds the skin."""
+    """``weights`` with the columns of the :data:`RELIEVED` FAPs' points evened out where the FAP alone folds
+    the skin."""
     from mpeg4fa.face.fold_relief import even_out, skin_triangles
     todo = [(fap, index[FAPS[fap - 1].feature_point[0]]) for fap in RELIEVED
             if FAPS[fap - 1].feature_point[0] in index]

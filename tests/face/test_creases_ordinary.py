@@ -1,0 +1,129 @@
+"""No creases or folds in what a talking head does every second (issue 29 item 3): joy at its profile's 63,
+its cheek lifts, a blink at every stage and the lower lids of a smile, on the feature-point and ARKit
+deformers (:mod:`mpeg4fa.face.creases`: no folded triangle, no fold line; the strain against its floor
+where it is reached).
+
+Measured on the generic head before the fixes (folded / fold lines, the same on both deformers but where
+named): joy at 63 6 / 14 (ARKit 22 / 30), its cheeks 41/42 at 200 0 / 2 (ARKit 16 / 18), the lower lids at
+260 6 / 12 and at 300 8 / 14, a blink at 400 4 / 2, 600 20 / 10, 1000 42 / 32. Fixed by evening out the lid
+sheets' angle shares at the eye corners (:mod:`mpeg4fa.face.lid_folds`), the cheek points' skin weights
+(:data:`mpeg4fa.face.rig.RELIEVED`) and ARKit's sculpted cheekSquint (:data:`.deformers.arkit.RELIEVED`),
+all by :func:`mpeg4fa.face.fold_relief.even_out`. What is not met is marked with its measured figure.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import face_under
+from mpeg4fa.face import creases, lids, quality
+from mpeg4fa.face.lid_folds import CORNER_FREE_MM
+from mpeg4fa.face.regions import edge_graph
+from mpeg4fa.spec.profiles import expression_blend
+
+DEFORMERS = ("fap", "arkit")
+BLINK_STAGES = tuple(range(100, 1001, 100))  # FAP 19/20 (IRISD) up to a blink's peak (tools/track_loop.BLINK_PEAK)
+LOWER_STAGES = (100, 200, 260, 300, 400, 520)  # FAP 21/22: joy at 63 asks 260, at 63 x 2 520
+CORNER = ("where the margin, held to its closure so that the eye shuts, climbs the corner more steeply "
+          "than the lid can turn past it")
+NOT_YET = {
+    ("arkit", "joy 63"): "2 folded, a triangle a side at the lower lid margin 1.8 mm from the outer corner 3.7/3.12 ("
+                         + CORNER + "); "
+                         "was 22 folded / 30 fold lines",
+    **{(d, f"blink {s}"): f"{fig} at the eye corners ({CORNER})" for d in DEFORMERS for s, fig in (
+        (400, "2 folded / 2 fold lines, was 4 / 2"), (500, "2 / 2, was 10 / 6"), (600, "2 / 4, was 20 / 10"),
+        (700, "6 / 8, was 28 / 22"), (800, "8 / 10, was 32 / 28"), (900, "8 / 14, was 34 / 30"),
+        (1000, "14 / 14, was 42 / 32"))},
+    **{(d, f"lower {s}"): f"2 folded, a triangle a side at the outer corners ({CORNER}), was {fig}" for d in DEFORMERS
+       for s, fig in ((300, "8 / 14"), (400, "10 / 18"), (520, "12 / 22"))},
+    **{(d, f"blink {u} over lower {s}"): f"{fig} at the eye corners" for d in DEFORMERS for u, s, fig in (
+        (500, 260, "4 folded / 2 fold lines, was 16 / 18"), (1000, 260, "18 / 18, was 48 / 44"))},
+}
+
+
+def _values(**faps: float) -> np.ndarray:
+    v = np.zeros(68)
+    for key, value in faps.items():
+        v[int(key[1:]) - 1] = value
+    return v
+
+
+def joy() -> np.ndarray:
+    """Joy at its profile's intensity, alone (the profile's own 63)."""
+    v = np.asarray(expression_blend("joy", 63, "joy", 0), float)[:68].copy()
+    v[:2] = 0
+    return v
+
+
+def ordinary_poses() -> dict[str, np.ndarray]:
+    poses = {"joy 63": joy(), "joy cheeks 200": _values(f41=200, f42=200)}
+    poses.update({f"blink {s}": _values(f19=s, f20=s) for s in BLINK_STAGES})
+    poses.update({f"lower {s}": _values(f21=s, f22=s) for s in LOWER_STAGES})
+    poses.update({f"blink {u} over lower {s}": _values(f19=u, f20=u, f21=s, f22=s)
+                  for u, s in ((500, 260), (1000, 260))})
+    return poses
+
+
+POSES = ordinary_poses()
+
+
+@pytest.fixture(scope="module")
+def graph(generic_face):
+    return quality.skin_graph(generic_face.mesh)
+
+
+def _cases():
+    for deformer in DEFORMERS:
+        for name in POSES:
+            why = NOT_YET.get((deformer, name))
+            marks = [pytest.mark.xfail(reason=why, strict=False)] if why else []
+            yield pytest.param(deformer, name, marks=marks, id=f"{deformer}-{name.replace(' ', '_')}")
+
+
+@pytest.mark.parametrize("deformer,name", list(_cases()))
+def test_ordinary_pose_folds_nothing(request, graph, deformer, name):
+    face = face_under(request, "generic", deformer)
+    m = creases.measure_pose(face, POSES[name], graph)
+    assert m.folded == 0 and m.flipped == 0, f"{name}: {m}"
+
+
+@pytest.mark.parametrize("deformer,name", [
+    ("fap", "joy 63"), ("arkit", "joy 63"), ("fap", "joy cheeks 200"),
+    pytest.param("arkit", "joy cheeks 200", marks=pytest.mark.xfail(
+        reason="2.09 x the floor beside the outer eye corner 3.7 (ARKit's sculpted cheekSquint), was 2.35",
+        strict=False))])
+def test_joy_keeps_to_the_floor(request, graph, deformer, name):
+    """Joy at 63 within 2 x its floor (1.47 on fap, 1.59 on ARKit), its cheek lifts too (1.86 on fap, was 1.94)."""
+    face = face_under(request, "generic", deformer)
+    m = creases.measure_pose(face, POSES[name], graph)
+    assert m.ratio <= creases.FLOOR_FACTOR, f"{name}: {m}"
+
+
+@pytest.mark.xfail(reason="the lids' strain is 3.2-3.6 x its floor at every value (3.21 at a blink of 100-1000, 3.61 "
+                          "for the lower lids; was 3.36 / 4.86): the margin turns to the other lid within 1 mm of a "
+                          "fixed corner", strict=False)
+@pytest.mark.parametrize("name", ["blink 1000", "lower 260"])
+def test_lids_keep_to_the_floor(generic_face, graph, name):
+    assert creases.measure_pose(generic_face, POSES[name], graph).ratio <= creases.FLOOR_FACTOR
+
+
+def test_evened_lids_still_shut_the_eye(generic_face):
+    """The evening out leaves each lid point its whole turn (value x IRISD), moves no other feature point, and keeps
+    every margin vertex further than CORNER_FREE_MM from a corner closing onto the other lid: at the closing value
+    each sits at or past the other margin's height at its x."""
+    face = generic_face
+    mesh, rest = face.mesh, face.mesh.vertices
+    graph = edge_graph(rest, mesh.triangles["skin"])
+    anchors = {int(v) for label, v in zip(mesh.fp_labels, mesh.fp_vertex) if label not in lids.PASSIVE_POINTS}
+    for fap, (_eye, _joint, point, opposite, lateral, medial, side) in lids.LIDS.items():
+        sheet = face.rig.lids[fap]
+        assert sheet.ratios[list(sheet.rows).index(sheet.point)] == 1.0
+        assert not (set(sheet.rows.tolist()) & anchors) - {sheet.point}
+        own, other = (lids._margin(graph, mesh, lateral, label, medial) for label in (point, opposite))
+        closing = abs(mesh.fp(point)[1] - mesh.fp(opposite)[1]) / face.fapu.unit("IRISD")
+        posed = face.unlimited().deform({fap: closing}).vertices
+        corners = rest[[mesh.fp_vertex[mesh.fp_index(label)] for label in (lateral, medial)]]
+        far = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
+        target = lids._height_at(other, rest, rest[far, 0])
+        gap = (posed[far, 1] - target) if side == "upper" else (target - posed[far, 1])
+        assert gap.max() < 0.05, f"FAP {fap}: a margin vertex stops {gap.max():.2f} mm short of the other lid"
