@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import festival_speech  # noqa: E402
-from bench_lipsync_audio import MORE, SPEECH, _score, _sum  # noqa: E402
+from bench_lipsync_audio import ENGLISH, MORE, SPEECH, _score, _sum  # noqa: E402
 
 from mpeg4fa.speech.align import Recording  # noqa: E402
 from mpeg4fa.speech.encoder import phones  # noqa: E402
@@ -63,7 +63,7 @@ def run(voices: list[str]) -> list[dict]:
     texts = [t for _, t in SPEECH["en"]] + list(dict.fromkeys(t for _, t in MORE["en"]))
     rows = []
     for voice in voices:
-        per: dict[str, list[dict]] = {"phonetic": [], "words": []}
+        per: dict[str, list[dict]] = {how: [] for how in ENGLISH}
         for text in texts:
             samples, rate, segments = festival_speech.speak(text, voice)
             rec = Recording(np.clip(np.rint(samples * 32768), -32768, 32767).astype(np.int16), rate, text)

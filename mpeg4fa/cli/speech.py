@@ -228,7 +228,7 @@ def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
     """``--speech``, ``--transcript``, ``--aligner``, ``--no-fit-check``, and without a transcript
     ``--recognizer``, ``--expression``, ``--pcm-rate``: a recording to animate instead of text to speak."""
     from ..speech.align import METHODS
-    from ..speech.listen import RECOGNIZERS
+    from ..speech.listen import ENGLISH_DEFAULT, RECOGNIZERS
     from ..speech.listen.stream import RAW_FORMAT, RAW_RATE
 
     g = p.add_argument_group("recorded speech: lip sync to a recording",
@@ -251,9 +251,11 @@ def recording_options(p: argparse.ArgumentParser) -> list[argparse.Action]:
                             "recording says (its acoustic fit below the limit)"),
         g.add_argument("--recognizer", choices=RECOGNIZERS, default="auto",
                        help="without --transcript: words (English words heard by pocketsphinx, then aligned as a "
-                            "transcript; written into --timings), phonetic (phones heard, any language, mapped by "
-                            "their IPA features) or auto (default: phonetic, what matched the transcript path "
-                            "best on English too, tools/bench_lipsync_audio.py)"),
+                            "transcript; written into --timings: best on recordings of people), phonetic (phones "
+                            "heard, any language, mapped by their IPA features: best on synthetic voices), either "
+                            "(English: both listen, and the words are taken where they explain the audio nearly as "
+                            "well as the phones do, else the phones; slower) or auto (default: "
+                            f"{ENGLISH_DEFAULT} for English, phonetic for other languages)"),
         g.add_argument("--expression", metavar="NAME=INTENSITY", type=_expression,
                        help="without --transcript: one expression for the whole clip, e.g. joy=30 (intensity 0-63; "
                             "with a transcript, tags in it say when)"),

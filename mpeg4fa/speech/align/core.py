@@ -179,12 +179,12 @@ def _monotone(ref: np.ndarray, rec: np.ndarray, ref_end: float, rec_end: float) 
     return uniq, np.maximum.accumulate(out)
 
 
-def _sphinx_anchors(rec: Recording, ref: Utterance) -> tuple[np.ndarray, np.ndarray, float]:
+def _sphinx_anchors(rec: Recording, ref: Utterance, fit: bool = True) -> tuple[np.ndarray, np.ndarray, float]:
     from mpeg4fa.speech.align.sphinx import ESPEAK_ARPABET, STOPS, align_words
 
     text = ref.markup.text
     tokens = word_tokens(text)
-    aligned, fit = align_words(rec, [w.lower() for _, _, w in tokens])
+    aligned, fit = align_words(rec, [w.lower() for _, _, w in tokens], fit=fit)
     phones = [e for e in ref.speech.phonemes() if not e.text.startswith("_")]
     words = sorted(ref.speech.words(), key=lambda e: e.start)
     first = snap_to_tokens([w.position for w in words], tokens)
@@ -258,11 +258,12 @@ def check_fit(method: str, fit: float, rec: Recording, name: str) -> None:
 
 def align_recording(recording: Recording | str | os.PathLike, transcript: str | Markup, *, lang: str = "auto",
                     voice: str | None = None, rate: int | None = None, method: str = "auto",
-                    name: str = "<transcript>", fit_check: bool = True) -> Alignment:
+                    name: str = "<transcript>", fit_check: bool = True, measure_fit: bool = True) -> Alignment:
     """Time ``transcript`` (tagged text or a parsed :class:`Markup`) on ``recording`` (a WAV path or a
     :class:`Recording`); see the module docstring. ``voice``/``rate``: espeak-ng's reference (default
     the language's voice at 175 wpm; DTW picks its own rate unless ``rate`` is given). ``fit_check``:
-    refuse a transcript whose words are not what the recording says (:func:`check_fit`).
+    refuse a transcript whose words are not what the recording says (:func:`check_fit`). ``measure_fit`` off
+    (and ``fit_check`` off): no fit measured (``Alignment.fit`` NaN), a quarter less time for pocketsphinx.
 
     Raises :class:`AlignError` for a missing, unreadable or silent recording and a transcript that
     does not fit it, :class:`~mpeg4fa.speech.errors.TTSError` for an unknown language,
@@ -290,7 +291,8 @@ def align_recording(recording: Recording | str | os.PathLike, transcript: str | 
         wpm = int(np.clip(round(DEFAULT_RATE / ratio), *RATE_RANGE))
         if abs(wpm - DEFAULT_RATE) > 5:
             ref = speak(markup, engine, lang=lang, voice=voice, rate=wpm)
-    *anchors, fit = _sphinx_anchors(rec, ref) if how == "pocketsphinx" else _dtw_anchors(rec, ref)
+    *anchors, fit = (_sphinx_anchors(rec, ref, fit=measure_fit or fit_check) if how == "pocketsphinx" else
+                     _dtw_anchors(rec, ref))
     if fit_check:
         check_fit(how, fit, rec, name)
     anchors = _monotone(*anchors, ref.speech.duration, rec.duration)

@@ -1,6 +1,6 @@
 """A recording alone -> the :class:`~mpeg4fa.speech.utterance.Utterance` of a face saying it.
 
-Two recognisers (``recognizer=``):
+Three recognisers (``recognizer=``):
 
 * ``words`` (English): the words pocketsphinx hears (:func:`.words.recognize_words`) become the
   transcript, aligned to the recording as a given transcript is (:func:`mpeg4fa.speech.align.align_recording`,
@@ -8,6 +8,10 @@ Two recognisers (``recognizer=``):
   block falls back to phones, and says so.
 * ``phonetic`` (any language): the phones pocketsphinx's phone loop hears (:func:`.phones.recognize_phones`),
   read as IPA and mapped by their features (:mod:`mpeg4fa.speech.ipa`).
+* ``either`` (English): both hear the block; the words path where the words explain the audio nearly as well
+  as the free phone loop does (:func:`word_confidence` at least :data:`WORDS_CONFIDENT`: speech like a
+  person's, which the word recogniser was trained on), else the phones path (a synthetic voice such as
+  espeak-ng's, whose words it misreads and whose closures the detector learned). Other languages: phonetic.
 
 ``auto`` takes :data:`ENGLISH_DEFAULT` for English (``lang`` ``en``, ``en-*`` or ``auto``: with no text there
 is no script to tell the language by) and ``phonetic`` for every other language.
@@ -24,19 +28,28 @@ import numpy as np
 
 from mpeg4fa.speech.align.recording import HOP, Recording
 from mpeg4fa.speech.listen.compare import CLOSURE
-from mpeg4fa.speech.listen.phones import phone_events, phone_timings, recognize_phones, speech_share
+from mpeg4fa.speech.listen.closures import refined_phones
+from mpeg4fa.speech.listen.phones import (Phone, phone_decoder, phone_events, phone_timings, recognize_phones,
+                                          speech_share)
 from mpeg4fa.speech.listen.voice import voice_activity
-from mpeg4fa.speech.listen.words import HeardWord, recognize_words
+from mpeg4fa.speech.listen.words import HeardWord, recognize_words, word_decoder
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.timeline import ExpressionCue
 from mpeg4fa.speech.tts.base import Event, Speech
 from mpeg4fa.speech.utterance import Timing, Utterance
 from mpeg4fa.speech.visemes import PAUSE
 
-RECOGNIZERS = ("auto", "words", "phonetic")
+RECOGNIZERS = ("auto", "words", "phonetic", "either")
 ENGLISH_DEFAULT = "phonetic"
 """What ``auto`` uses for English: the one that matched the transcript path better in
 tools/bench_lipsync_audio.py (closure onsets and frame agreement on English speech)."""
+WORDS_CONFIDENT = -23.0
+"""``either`` takes the words path where :func:`word_confidence` is at least this (pocketsphinx's log units,
+base 1.0001, per 10 ms of words). Measured 2026-12-06 per sentence (tools/bench_lipsync_audio.py's English
+texts): espeak-ng's voices -72 to -27.1, festival's HTS voice slt -19.1 to -12.0, the LibriVox recordings
+-19.5 to -15.8 (festival's diphone voices kal -28.5 to -18.6, ked -30.7 to -20.0, between): the middle of
+the gap between espeak-ng's and the natural speech's. Chosen on those same sentences (no held-out set);
+closures within 40 ms were alike from -27 to -20."""
 EXPRESSION_SECONDS = 0.5
 """How long the whole-clip expression takes to come in."""
 ENGINE = "recording"
@@ -67,19 +80,23 @@ def choose_recognizer(recognizer: str, lang: str) -> str:
         raise ValueError(f"recognizer {recognizer!r}: one of {', '.join(RECOGNIZERS)}")
     if recognizer == "auto":
         return ENGLISH_DEFAULT if is_english(lang) else "phonetic"
+    if recognizer == "either" and not is_english(lang):
+        return "phonetic"
     return recognizer
 
 
 @dataclass(frozen=True)
 class Listened:
-    """What :func:`listen` made of a recording: the utterance on it, the recogniser used, the words heard
-    (``words`` only), seconds of voice activity, and a note when a block fell back to phones."""
+    """What :func:`listen` made of a recording: the utterance on it, the recogniser used (``either``: the one it
+    took), the words heard (``words`` only), seconds of voice activity, a note when a block fell back to phones,
+    and ``either``'s :func:`word_confidence` (NaN for the others)."""
 
     utterance: Utterance
     recognizer: str
     words: tuple[HeardWord, ...] = ()
     voiced: float = 0.0
     notes: tuple[str, ...] = field(default=())
+    confidence: float = float("nan")
 
     @property
     def silent(self) -> bool:
@@ -102,28 +119,59 @@ def _gated(timings: list[Timing], active: np.ndarray) -> list[Timing]:
             Timing(t.phoneme, PAUSE, t.start, t.end, t.set) for t in timings]
 
 
-def _phonetic(rec: Recording, active: np.ndarray) -> tuple[list[Timing], list[Event]]:
-    events = phone_events(recognize_phones(rec), active)
+def _phonetic(rec: Recording, active: np.ndarray, loop: list[Phone] | None = None) -> tuple[list[Timing], list[Event]]:
+    """The phones path; ``loop``: the phone loop's phones already heard (closures not yet placed)."""
+    events = phone_events(recognize_phones(rec) if loop is None else refined_phones(rec, loop), active)
     return phone_timings(events), events
 
 
-def _words(rec: Recording, active: np.ndarray, lang: str) -> tuple[list[Timing], list[Event], list[HeardWord], str]:
-    """The words path; on an alignment failure the phones path, with the reason."""
+def word_confidence(words: tuple[float, int], loop: tuple[float, int]) -> float:
+    """How well the words heard explain the audio: the word decoder's acoustic log-likelihood minus the free
+    phone loop's (:func:`~mpeg4fa.speech.align.sphinx.acoustic_score` of each over the same audio), per 10 ms
+    of words. Near 0 when the words say what the phones do; far below on speech the word recogniser's language
+    model has to bend into words (espeak-ng's voices)."""
+    return (words[0] - loop[0]) / max(words[1], 1)
+
+
+def _words(rec: Recording, active: np.ndarray, lang: str, heard: list[HeardWord] | None = None,
+           loop: list[Phone] | None = None) -> tuple[list[Timing], list[Event], list[HeardWord], str]:
+    """The words path (``heard``: the words already recognised); on an alignment failure the phones path (on
+    ``loop``, the phone loop's phones, when already heard), with the reason."""
     from mpeg4fa.speech.align import AlignError, align_recording
 
-    heard = recognize_words(rec, active=active)
+    heard = recognize_words(rec, active=active) if heard is None else heard
     if not heard:
         return [], [], [], ""
     text = " ".join(w.word for w in heard)
     try:
         aligned = align_recording(rec, text, lang=lang if lang.lower().startswith("en") else "en",
-                                  method="pocketsphinx", fit_check=False, name="<recognised words>")
+                                  method="pocketsphinx", fit_check=False, measure_fit=False,
+                                  name="<recognised words>")
     except AlignError as exc:
-        timings, events = _phonetic(rec, active)
+        timings, events = _phonetic(rec, active, loop)
         return timings, events, heard, f"the words heard could not be aligned ({exc.message}); phones used"
     utt = aligned.utterance
     events = [e for e in utt.speech.events if e.kind in ("phoneme", "word")]
     return list(utt.timings), events, heard, ""
+
+
+def _either(rec: Recording, active: np.ndarray, lang: str,
+            ) -> tuple[list[Timing], list[Event], list[HeardWord], str, str, float]:
+    """``either`` (module docstring): the phone loop and the word decoder on the block, then the words path
+    (its alignment) or the phones path (the closure detector) by :func:`word_confidence`; each pass once."""
+    from mpeg4fa.speech.align.sphinx import acoustic_score
+
+    loop = recognize_phones(rec, closures=False)
+    loop_score = acoustic_score(phone_decoder())
+    heard = recognize_words(rec, active=active)
+    confidence = word_confidence(acoustic_score(word_decoder()), loop_score) if heard else float("-inf")
+    if confidence >= WORDS_CONFIDENT:
+        timings, events, heard, note = _words(rec, active, lang, heard, loop)
+        if not note:
+            return timings, events, heard, "", "words", confidence
+        return timings, events, heard, note, "phonetic", confidence
+    timings, events = _phonetic(rec, active, loop)
+    return timings, events, [], "", "phonetic", confidence
 
 
 def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto",
@@ -137,8 +185,12 @@ def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto"
         active = voice_activity(recording.floats(), recording.rate)
     heard: list[HeardWord] = []
     notes: list[str] = []
+    confidence = float("nan")
     if not active.any():
         timings, events = [], []
+    elif how == "either":
+        timings, events, heard, note, how, confidence = _either(recording, active, lang)
+        notes += [note] if note else []
     elif how == "words":
         timings, events, heard, note = _words(recording, active, lang)
         notes += [note] if note else []
@@ -149,4 +201,4 @@ def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto"
     speech = Speech(recording.samples, recording.rate, tuple(sorted(events, key=lambda e: e.start)), ENGINE,
                     f"recognised:{how}")
     utterance = Utterance(speech, tuple(timings), expression_cues(expression), markup)
-    return Listened(utterance, how, tuple(heard), float(active.sum() * HOP), tuple(notes))
+    return Listened(utterance, how, tuple(heard), float(active.sum() * HOP), tuple(notes), confidence)
