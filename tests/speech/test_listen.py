@@ -175,6 +175,19 @@ def test_either_takes_the_phones_on_espeak_ngs_voice():
     assert np.isnan(listen(rec, recognizer="phonetic").confidence)
 
 
+def test_either_settles_a_recordings_recogniser_on_the_first_block_it_judges():
+    from mpeg4fa.speech.listen.core import WORDS_CONFIDENT, Listened, settled
+
+    def block(confidence):
+        return Listened(None, "phonetic", confidence=confidence)
+
+    assert settled("either", block(WORDS_CONFIDENT + 1)) == "words"
+    assert settled("either", block(WORDS_CONFIDENT - 1)) == "phonetic"
+    assert settled("either", block(float("nan"))) == "either"  # a silent block judged nothing
+    assert settled("either", block(float("-inf"))) == "either"  # speech, but no word heard in it: not judged
+    assert settled("phonetic", block(WORDS_CONFIDENT + 1)) == "phonetic"  # only either is settled
+
+
 def test_an_empty_recording_is_silent():
     heard = listen(Recording(np.zeros(0, np.int16), 16000, "empty"))
     assert heard.silent and heard.utterance.timings == ()
@@ -209,6 +222,18 @@ def test_a_long_recording_is_heard_in_blocks_cut_between_words():
 
     starts = [t["start"] for t in json.loads(timings.getvalue())]
     assert starts == sorted(starts) and starts[-1] > len(x) / rate - 3
+
+
+def test_either_hears_a_long_recording_of_espeak_ngs_voice_by_its_phones():
+    import io
+
+    from mpeg4fa.speech.listen.stream import Source, stream_listened
+
+    x = np.concatenate([spoken(t, "en")[1].samples for t in EN * 2])
+    rate = 22050
+    heard = stream_listened(Source("long", rate, len(x) / rate, iter([x])), io.BytesIO(), recognizer="either",
+                            block_seconds=4.0, two_cores=False)
+    assert heard.blocks >= 3 and heard.recognizer == "phonetic" and heard.words == 0
 
 
 def test_refine_snaps_a_heard_labial_to_the_closure_and_adds_a_sure_one():

@@ -12,6 +12,8 @@ Three recognisers (``recognizer=``):
   as the free phone loop does (:func:`word_confidence` at least :data:`WORDS_CONFIDENT`: speech like a
   person's, which the word recogniser was trained on), else the phones path (a synthetic voice such as
   espeak-ng's, whose words it misreads and whose closures the detector learned). Other languages: phonetic.
+  A recording heard block by block (:mod:`.stream`) is one kind of voice: the first block judged settles the
+  recogniser of the rest (:func:`settled`), so both decoders run on the first blocks only.
 
 ``auto`` takes :data:`ENGLISH_DEFAULT` for English (``lang`` ``en``, ``en-*`` or ``auto``: with no text there
 is no script to tell the language by) and ``phonetic`` for every other language.
@@ -172,6 +174,14 @@ def _either(rec: Recording, active: np.ndarray, lang: str,
         return timings, events, heard, note, "phonetic", confidence
     timings, events = _phonetic(rec, active, loop)
     return timings, events, [], "", "phonetic", confidence
+
+
+def settled(how: str, heard: Listened) -> str:
+    """The recogniser for the rest of a recording once ``either`` has judged the words of a block (``heard``):
+    the one it took. A recording is one kind of voice, so later blocks need not run both decoders."""
+    if how == "either" and np.isfinite(heard.confidence):
+        return "words" if heard.confidence >= WORDS_CONFIDENT else "phonetic"
+    return how
 
 
 def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto",

@@ -21,7 +21,8 @@ import numpy as np
 
 from mpeg4fa.speech.align.errors import AlignError
 from mpeg4fa.speech.align.recording import HOP, Recording, frame_levels
-from mpeg4fa.speech.listen.core import Listened, check_language, expression_cues, listen
+from mpeg4fa.speech.listen.core import (Listened, check_language, choose_recognizer, expression_cues, listen,
+                                        settled)
 from mpeg4fa.speech.utterance import viseme_spans
 from mpeg4fa.speech.visemes import PAUSE
 
@@ -212,25 +213,30 @@ def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: st
     once, one in the helper process: pocketsphinx holds the GIL while it decodes (over 90 % of the time),
     so only a second process puts a second core to work. A block waits for the next before it is heard
     (one block alone is heard here, with no process started); ``fallbacks``: the
-    :class:`~mpeg4fa.speech.ipa.FallbackLog` the helper's guessed phonemes join."""
+    :class:`~mpeg4fa.speech.ipa.FallbackLog` the helper's guessed phonemes join. ``either``: the first block it
+    judges settles the recogniser of the blocks after it (:func:`.core.settled`)."""
     held = None
+    how = choose_recognizer(recognizer, lang)
     for offset, rec in blocks(source, block_seconds):
         if not helper:
-            yield offset, rec, listen(rec, recognizer=recognizer, lang=lang)
+            heard = listen(rec, recognizer=how, lang=lang)
+            how = settled(how, heard)
+            yield offset, rec, heard
             continue
         if held is None:
             held = offset, rec
             continue
-        job = helper[0]().apply_async(_listen_block, (held[1], recognizer, lang))
-        here = listen(rec, recognizer=recognizer, lang=lang)
+        job = helper[0]().apply_async(_listen_block, (held[1], how, lang))
+        here = listen(rec, recognizer=how, lang=lang)
         there, guessed = job.get()
         for phoneme, (n, what, read_as) in guessed.items():
             fallbacks.seen.setdefault(phoneme, [0, what, read_as])[0] += n
+        how = settled(settled(how, there), here)
         yield held[0], held[1], there
         yield offset, rec, here
         held = None
     if held is not None:
-        yield held[0], held[1], listen(held[1], recognizer=recognizer, lang=lang)
+        yield held[0], held[1], listen(held[1], recognizer=how, lang=lang)
 
 
 def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer: str = "auto", lang: str = "auto",
