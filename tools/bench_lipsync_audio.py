@@ -1,17 +1,17 @@
 """Lip sync from a recording alone (issue 28): how close the audio-only viseme track comes to the transcript
 path's, how still the mouth stays through noise and music, and how fast it runs.
 
-Speech: espeak-ng sentences (each spoken by a fresh process, tools/espeak_fresh.py: the same audio every run) in English, Spanish, French, German, Mandarin and Hindi, whose phone times are
-known (espeak-ng's own events): the ``old`` set (:data:`SPEECH`: 5 English, 3 a language) and ``all``, which
-adds :data:`MORE` (12 English sentences in two voices, 6 a language in two or three voices; 45-230 closures a
-language in all). The transcript path's track is the utterance the text path makes of
-the same text (:func:`mpeg4fa.speech.utterance.speak`, stops moved to their closures): the track a perfect
-aligner would give. Mandarin is spoken through espeak-ng's ``cmn`` voice on the IPA route, so that both tracks
-use the 14 MPEG-4 visemes (the pinyin route's Chinese visemes have no PP to compare). The audio-only track is
-:func:`mpeg4fa.speech.listen.listen` of the audio alone, recogniser ``phonetic`` (all), ``words`` and ``either``
-(English);
-the phonetic one's p, b and m placed by the closure detector (:mod:`mpeg4fa.speech.listen.closures`), which
-tools/train_listen_closures.py trains on espeak-ng pseudo-words, never these sentences.
+Speech: espeak-ng sentences (each spoken by a fresh process, tools/espeak_fresh.py: the same audio every run) in
+English, Spanish, French, German, Mandarin and Hindi, whose phone times are known (espeak-ng's own events): the
+``old`` set (:data:`SPEECH`: 5 English, 3 a language) and ``all``, which adds :data:`MORE` (12 English sentences
+in two voices, 6 a language in two or three voices; 45-230 closures a language in all). The transcript path's
+track is the utterance the text path makes of the same text (:func:`mpeg4fa.speech.utterance.speak`, stops
+moved to their closures): the track a perfect aligner would give. Mandarin is spoken through espeak-ng's ``cmn``
+voice on the IPA route, so that both tracks use the 14 MPEG-4 visemes (the pinyin route's Chinese visemes have
+no PP to compare). The audio-only track is :func:`mpeg4fa.speech.listen.listen` of the audio alone, recogniser
+``phonetic`` (all), ``words`` and ``either`` (English); the phonetic one's p, b and m placed by the closure
+detector (:mod:`mpeg4fa.speech.listen.closures`), which tools/train_listen_closures.py trains on espeak-ng
+pseudo-words, never these sentences.
 
 Measured (:mod:`mpeg4fa.speech.listen.compare`): closure onsets (viseme PP: p, b, m) found within 40 ms; the
 reference's closures are those that shut the lips (:func:`~mpeg4fa.speech.listen.compare.shuts`): espeak-ng
@@ -300,9 +300,9 @@ def main() -> None:
     if args.human is not None:
         clips["human"] = human_clip(args.human, 20.0 if args.quick else 60.0)
     speed = run_speed(clips)
-    print(f"\n{'clip':<10} {'recogniser':<10} {'used':<9} {'audio s':>8} {'wall s':>7} {'x real time':>11} {'CPU s':>6} "
-          f"{'x per CPU s':>11} {'cpus':>5} {'load':>5}   (target >= 10x on 2 cores; 'x per CPU s': one process "
-          f"doing all, what one idle core gives)")
+    print(f"\n{'clip':<10} {'recogniser':<10} {'used':<9} {'audio s':>8} {'wall s':>7} {'x real time':>11} "
+          f"{'CPU s':>6} {'x per CPU s':>11} {'cpus':>5} {'load':>5}   (target >= 10x on 2 cores; 'x per CPU s': "
+          f"one process doing all, what one idle core gives)")
     for r in speed:
         print(f"{r['clip']:<10} {r['recognizer']:<10} {r['used']:<9} {r['seconds']:>8.1f} {r['wall_s']:>7.2f} "
               f"{r['x_real_time']:>11.1f} {r['cpu_s']:>6.2f} {r['x_real_time_cpu']:>11.1f} {r['cpus']:>5} "

@@ -32,7 +32,8 @@ def register(commands: Commands) -> None:
                     "recording instead: the transcript is phonemised, aligned to the recording (pocketsphinx for "
                     "English, DTW against espeak-ng's rendering for other languages) and the video plays the "
                     "recording's audio. With --speech REC.wav alone the speech is recognised from the audio "
-                    "(--recognizer phonetic or words), in any language; silence, noise and music keep the mouth "
+                    "(--recognizer: English words, phones in any language, or either), in any language; silence, "
+                    "noise and music keep the mouth "
                     "at rest.",
         epilog='examples:\n  mpeg4fa say "(joy, 40, 0.5) Hello there! (sadness, 30, 1) Goodbye." -o hello.mp4\n'
                '  mpeg4fa say "(joy, 30, 0.5)你好，世界！" -o nihao.mp4 --keep\n'

@@ -80,11 +80,12 @@ TARGET_ES = ES + ["Mi papá compra pimientos en el mercado.", "Pepe pinta un map
 
 
 @pytest.mark.xfail(reason="issue 28's English target, on 8 English sentences in two voices (96 closures): measured "
-                          "86 of 96, 0.896, every run since each sentence is spoken by a fresh process "
-                          "(tools/espeak_fresh.py; 84-86 before, espeak-ng's audio changing with what it spoke "
-                          "before); Spanish 22 of 24; tools/bench_lipsync_audio.py's enlarged set: English 92.2 % "
-                          "(2026-12-06): at the target there, not here. Strict: the figure no longer varies, so a "
-                          "pass means the recogniser got better and this mark should go",
+                          "86 of 96, 0.896, every run since each sentence is spoken by a fresh process with "
+                          "espeak-ng's random seed set (tools/espeak_fresh.py; 84-86 before: espeak-ng's audio "
+                          "changed with what it spoke before and, in its +f voices, with the time); Spanish 22 of "
+                          "24; tools/bench_lipsync_audio.py's enlarged set: English 92.2 % (2026-12-06): at the "
+                          "target there, not here. Strict: the figure no longer varies, so a pass means the "
+                          "recogniser got better and this mark should go",
                    strict=True)
 def test_closure_onsets_reach_the_issue_targets():
     share = {}
