@@ -4,15 +4,15 @@ MP4, tracked back, compared per group with the issue's thresholds (tools/track_l
 Jaw, lips, lids and brows are read by the map learned on renders (mpeg4fa.tracking.learned, tools/train_tracker.py;
 the astronaut and this stream are never trained on). tools/track_loop.py, 12 s at 384 pixels, map reading x, y, z, each
 region trained on its own streams (brows, jaw and lids with wide-turn ones; every calm stream also with its gaze and
-head pitch swept over their whole range), renders of cb9e6e3 and 4a9f6bc (2026-12-06): jaw 0.942/8.0 % (met), lip
-corners 0.951/11.1 % (met), lids 0.913/8.8 % (met; 0.887 before the swept streams), head rotation 0.983/4.3 % (met),
-blinks 8/8; outer lip corners 0.791/13.9 %, inner lips 0.465/8.5 %, brows 0.469/30.9 %. This short loop: jaw and lip
-corners met; lids 0.899/8.0 % (0.84/10.1 % before), outer corners 0.86/14.4 %, inner lips 0.43/8.1 %, brows
-0.79/22.4 %. What is left: the tracked brows of the held-out texture rise with the head's yaw (about +90 to +140 FAPU
-past 20 degrees, whichever way, where the training textures' own rise is -10 to +70) while held-out streams of the
-training textures read 0.73 (0.68 with wide turns); the lids still follow the gaze's pitch (12 s loop, off blinks: +70
-FAPU at gaze pitch +5000 to +9000 AU, -91 at -5000 to -9000), the outer corners the head's pitch (-47 FAPU at +6 to
-+13 degrees)."""
+head pitch swept over their whole range; the brows also on every run's mirror image), renders of cb9e6e3 and 4a9f6bc
+(2026-12-06): jaw 0.944/7.8 % (met), lip corners 0.950/11.4 % (met), lids 0.915/8.6 % (met; 0.887 before the swept
+streams), head rotation 0.983/4.2 % (met), blinks 8/8; outer lip corners 0.789/14.0 %, inner lips 0.455/8.5 %, brows
+0.539/24.2 % (0.469/30.9 % before the mirror images). This short loop: jaw, lip corners and lids met (lids 0.919/7.3 %);
+outer corners 0.86/14.5 %, inner lips 0.45/8.1 %, brows 0.90/12.7 % (0.79/22.4 % before the mirror images). What is
+left: the tracked brows of the held-out texture rise with the head's yaw, more at negative yaw (12 s loop, mean error
++120 FAPU past 20 degrees there, +36 past 20 degrees the other way; before the mirror images +90 to +140 either way)
+while held-out streams of the training textures read 0.72 (0.68 with wide turns); the lids still follow the gaze's
+pitch, the outer corners the head's pitch (-47 FAPU at +6 to +13 degrees)."""
 from __future__ import annotations
 
 import importlib.util
