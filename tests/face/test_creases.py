@@ -117,7 +117,7 @@ def _eased_full_range() -> dict[str, tuple[np.ndarray, bool, dict, str]]:
         side = "pos" if values[fap - 1] > 0 else "neg"
         if limited[0 if side == "pos" else 1, fap - 1]:
             r = rows[fap]
-            ok = min(r[f"ok_fap_{side}"], r[f"ok_arkit_{side}"]) * (1 - reach.MARGIN) > r[f"used_{side}"]
+            ok = min(r[f"ok_fap_{side}"], r[f"ok_arkit_{side}"]) * (1 - reach.MARGIN) > max(r[f"used_{side}"], reach.EXACT_UP_TO)
             out[name] = (values, ok, r, side)
     return out
 
