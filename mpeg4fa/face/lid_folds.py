@@ -40,29 +40,41 @@ showed 76 eyeball pixels at 320 x 160, tests/render/test_lid_pixels.py; freed wi
 closed; within 1 mm, none)."""
 
 
-def _turned(rest: np.ndarray, fields: list[np.ndarray], joint: int, points: list[int],
-            drops: tuple[float, ...]) -> np.ndarray:
-    """``rest`` with each lid field turned so that its point drops by its drop (as :func:`.lids.turn_lid`)."""
-    p = rest.copy()
-    centre = rest[joint]
-    for field, point, drop in zip(fields, points, drops):
-        rows = np.flatnonzero(field)
-        if not len(rows) or drop == 0.0:
+def _turned(rest: np.ndarray, fields: list[np.ndarray], joints: list[int], angles: np.ndarray) -> np.ndarray:
+    """``(C, V, 3)``: ``rest`` turned once per case, each vertex about its lid's eye centre (``joints``, per field)
+    by its share times the lid point's angle in the case (``angles``, ``(C, len(fields))``); turns about one
+    eye's axis add up (as :func:`.lids.turn_lid` one lid after the other), the eyes are turned one after the other."""
+    stack = np.repeat(rest[None], len(angles), axis=0)
+    for joint in dict.fromkeys(joints):
+        k = [i for i, j in enumerate(joints) if j == joint]
+        rows = np.flatnonzero(np.any([fields[i] != 0 for i in k], axis=0))
+        if not len(rows):
             continue
-        a = field[rows] * motion.arc_angle(rest[point, 1:] - centre[1:], drop)
+        a = angles[:, k] @ np.stack([fields[i][rows] for i in k])  # (C, R)
         c, s = np.cos(a), np.sin(a)
-        dy, dz = p[rows, 1] - centre[1], p[rows, 2] - centre[2]
-        p[rows, 1] = centre[1] + c * dy - s * dz
-        p[rows, 2] = centre[2] + s * dy + c * dz
-    return p
+        centre = rest[joint]
+        dy, dz = stack[:, rows, 1] - centre[1], stack[:, rows, 2] - centre[2]
+        stack[:, rows, 1] = centre[1] + c * dy - s * dz
+        stack[:, rows, 2] = centre[2] + s * dy + c * dz
+    return stack
 
 
-def even_out_lids(mesh: HeadMesh, fields: list[np.ndarray], joint: int, points: list[int], opening: float,
+def even_out_lids(mesh: HeadMesh, eyes: list[tuple[int, int, int]], fields: list[np.ndarray],
                   held: list[np.ndarray]) -> list[np.ndarray]:
-    """The upper and lower lid shares of one eye (per vertex, ``fields``), evened out where their closing
-    folds the skin (module docstring, :func:`.fold_relief.even_out`). ``points``: the lid points; ``opening``:
-    3.1 to 3.3 (mm, as the lids close by it); ``held``: per field, the vertices whose share stays."""
-    cases = ([(u * opening, 0.0) for u in UPPER_STAGES] + [(0.0, -low * opening) for low in LOWER_STAGES]
-             + [(u * opening, -low * opening) for u, low in BOTH])
-    return even_out(mesh.vertices, skin_triangles(mesh), fields,
-                    lambda f: (_turned(mesh.vertices, f, joint, points, drops) for drops in cases), held)
+    """The lid shares (per vertex), evened out where their closing folds the skin (module docstring,
+    :func:`.fold_relief.even_out`), every eye in one go (they blink together, and a round costs what one eye's did).
+    ``eyes``: per eye (its centre joint, its upper lid point, its lower lid point); ``fields`` and ``held`` (the
+    vertices whose share stays): per eye its upper lid's then its lower lid's."""
+    rest = mesh.vertices
+    cases = [(u, 0.0) for u in UPPER_STAGES] + [(0.0, low) for low in LOWER_STAGES] + list(BOTH)
+    joints = [joint for joint, _, _ in eyes for _ in range(2)]
+    angles = []
+    for u, low in cases:  # each lid closes by its share of its eye's opening (3.1 to 3.3): the upper down, lower up
+        row = []
+        for joint, pu, pl in eyes:
+            opening = float(rest[pu, 1] - rest[pl, 1])
+            row += [motion.arc_angle(rest[p, 1:] - rest[joint, 1:], d * opening) if d else 0.0
+                    for p, d in ((pu, u), (pl, -low))]
+        angles.append(row)
+    angles = np.array(angles)
+    return even_out(rest, skin_triangles(mesh), fields, lambda f: _turned(rest, f, joints, angles), held)

@@ -152,13 +152,14 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         corners = rest[[int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]]
         closes = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
         raw[fap] = (field, joint, fp_vertex, np.concatenate([anchors, other, closes]).astype(np.int64))
+    pairs = ((19, 21), (20, 22))  # one eye's two lids (they close together), both eyes at once
+    eyes = [(raw[upper][1], raw[upper][2], raw[lower][2]) for upper, lower in pairs]
+    faps = [fap for pair in pairs for fap in pair]
+    fields = even_out_lids(mesh, eyes, [raw[fap][0] for fap in faps], [raw[fap][3] for fap in faps])
     sheets = {}
-    for upper, lower in ((19, 21), (20, 22)):  # one eye's two lids at a time: they close together
-        (fu, joint, pu, held_u), (fl, _, pl, held_l) = raw[upper], raw[lower]
-        fields = even_out_lids(mesh, [fu, fl], joint, [pu, pl], float(rest[pu, 1] - rest[pl, 1]), [held_u, held_l])
-        for fap, field, point in ((upper, fields[0], pu), (lower, fields[1], pl)):
-            rows = np.flatnonzero(field > 1e-4)
-            sheets[fap] = LidSheet(rows=rows, ratios=field[rows], joint=joint, point=point)
+    for fap, field in zip(faps, fields):
+        rows = np.flatnonzero(field > 1e-4)
+        sheets[fap] = LidSheet(rows=rows, ratios=field[rows], joint=raw[fap][1], point=raw[fap][2])
     return dict(sorted(sheets.items()))
 
 
