@@ -91,6 +91,14 @@ generic head) drew a fold line 3-9 mm above each cheek point 5.3/5.4, where the 
 across a ridge already creased 40 degrees at rest; evened out (8 vertices, by at most 0.12 of weight) none.
 Evened out up to joy at 63 x 2 (400) the weights spread to the lid margins and the strain rose to 15 x its
 floor at 200, while 400 folds anyway (5.3 rises past the outer eye corner 3.7 that no FAP moves)."""
+JAW_RELIEVED = (1568.0, 1800.0)
+"""open_jaw values (MNS) at which the jaw shares are evened out where the jaw alone folds the skin
+(:func:`_relieve_jaw`). The jawOpen face unit leaves stray shares of 0.031-0.032 (just over
+:data:`JAW_WEIGHT_FLOOR`) on single vertices round the nostrils, whose 1 mm triangles turned into 8 fold lines
+from 1383 (26 degrees of jaw at 1568, the tracker's streams; 1568 alone evened out left folds under the chin
+from 1592); evened out at 1568 and 1800 (188 vertices, by at most 0.22, the most under the chin and inside the
+mouth's floor) the jaw alone passes up to 1848 (33.5 degrees at 1800), its strain 1.56 x the floor as before.
+Evened out to 1900 or 2000 (46 degrees, the jaw's end) the shares moved up to 0.47 and folded the lips."""
 CORNERS = (("2.4", "8.3"), ("2.5", "8.4"))  # (inner, outer) lip corner, left then right
 CORNER_MARGIN_MM = 1.0  # the outer lip corner stays at least this far outside the inner one
 
@@ -165,7 +173,7 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     return Rig(
         rest=rest, fapu=fapu, translate=translate, weights=weights, moving=moving,
         weights_moving=weights[moving], lid_fp=lid_fp, lids=build_lids(mesh),
-        jaw_rows=_jaw_weights(mesh), head_fade=_head_weights(mesh), roll_rows=roll_rows,
+        jaw_rows=_jaw_weights(mesh, fapu), head_fade=_head_weights(mesh), roll_rows=roll_rows,
         parts={p: mesh.part(p) for p in mesh.part_ranges}, joints=dict(mesh.joints), fp_vertex=fp_vertex,
         chin_fp=index["2.1"], head_fp=index["7.1"],
         corners=tuple((index[a], index[b]) for a, b in CORNERS if a in index and b in index),
@@ -327,8 +335,9 @@ def _tongue_root(rest: np.ndarray, tongue: slice) -> np.ndarray:
                      [mid[0], hi[1], mid[2]]])
 
 
-def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
-    """Fraction of the jaw rotation each vertex follows, from the jawOpen face unit."""
+def _jaw_weights(mesh: HeadMesh, fapu: Fapu | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Fraction of the jaw rotation each vertex follows, from the jawOpen face unit, evened out where the jaw
+    alone folds the skin (:func:`_relieve_jaw`, given the face's units)."""
     rest = mesh.vertices
     pivot = mesh.joint("mouth")
     chin = mesh.fp("2.1")
@@ -355,8 +364,32 @@ def _jaw_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
         w[mesh.part(part)] = 0.0
     w[mesh.part("teeth_lower")] = 1.0
     w[mesh.fp_vertex[mesh.fp_index("2.1")]] = 1.0
+    if fapu is not None:
+        w = _relieve_jaw(mesh, fapu, w)
     idx = np.flatnonzero(w)
     return idx, w[idx]
+
+
+def _relieve_jaw(mesh: HeadMesh, fapu: Fapu, w: np.ndarray) -> np.ndarray:
+    """``w`` evened out (:func:`.fold_relief.even_out`, every feature point held) where the jaw opened alone to a
+    :data:`JAW_RELIEVED` value folds the skin, as the deformer turns it (each vertex blended toward its rotated
+    position by its share), on the skin triangles further than :data:`CORNER_HOLD_MM` from the outer lip corners
+    (their shares are the corner hold's, :func:`_hold_corners`)."""
+    from mpeg4fa.face.fold_relief import even_out, skin_triangles
+    if not JAW_RELIEVED or not all(label in mesh.fp_labels for label in ("8.3", "8.4")):
+        return w
+    rest, skin = mesh.vertices, mesh.part("skin")
+    pivot, chin = mesh.joint("mouth"), mesh.fp("2.1")
+    steps = [(rest - pivot) @ (motion.rotation_matrix(0, motion.arc_angle((chin - pivot)[1:], value * fapu.unit("MNS")))
+                               - np.eye(3)).T for value in JAW_RELIEVED]
+    graph = edge_graph(rest[skin], mesh.triangles["skin"] - skin.start)
+    corners = [mesh.fp_vertex[mesh.fp_index(label)] - skin.start for label in ("8.3", "8.4")]
+    to_corner = np.full(mesh.n_vertices, np.inf)
+    to_corner[skin] = dijkstra(graph, indices=corners, min_only=True, limit=CORNER_HOLD_MM + 1.0)
+    tris = skin_triangles(mesh)
+    tris = tris[to_corner[tris].min(axis=1) > CORNER_HOLD_MM]
+    held = np.asarray(mesh.fp_vertex, dtype=np.int64)
+    return even_out(rest, tris, [w], lambda f: (rest + f[0][:, None] * step for step in steps), [held])[0]
 
 
 def _hold_corners(mesh: HeadMesh, w: np.ndarray) -> np.ndarray:
