@@ -37,7 +37,7 @@ LibriVox files of pocketsphinx's source package, test/data/librivox, as tools/be
 the transcript path is then :func:`~mpeg4fa.speech.align.align_recording` of the transcript.
 
     .venv/bin/python tools/bench_lipsync_audio.py [--json tools/bench_lipsync_audio.json] [--human DIR] [--quick]
-        [--without-detector]
+        [--without-detector] [--speed-only] [--lengths 5,10,25,60,600] [--repeat 3] [--hour 60]
 """
 from __future__ import annotations
 
@@ -233,29 +233,114 @@ def human_clip(folder: Path, seconds: float) -> tuple[np.ndarray, int]:
     return np.concatenate(parts), recs[0].rate
 
 
-def run_speed(clips: dict[str, tuple[np.ndarray, int]]) -> list[dict]:
-    """Each clip through :func:`stream_listened` by each English recogniser: wall time with two blocks at once
-    (``two_cores``, the default; the load average printed: the machine is shared), and CPU time with one
-    process doing all (``two_cores`` off: the process's CPU time is then all the work, what one idle core
-    gives)."""
+def _forked(x: np.ndarray, rate: int, how: str, two_cores: bool) -> bytes:
+    """The stream and timings :func:`stream_listened` writes for ``x``, heard in a process forked from this one:
+    pocketsphinx's decoders carry state (their cepstral means) from one utterance to the next, so two runs in one
+    process differ a little; forked, each starts from the same state."""
+    import pickle
+
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: hear, send, leave without the parent's exit handlers
+        os.close(read)
+        try:
+            out, timings = io.BytesIO(), io.StringIO()
+            stream_listened(Source("same", rate, len(x) / rate, iter([x])), out, timings=timings, recognizer=how,
+                            lang="en", two_cores=two_cores)
+            data = pickle.dumps((out.getvalue(), timings.getvalue()))
+        except BaseException as exc:  # noqa: BLE001 - reported by the parent
+            data = pickle.dumps(repr(exc))
+        with os.fdopen(write, "wb") as fh:
+            fh.write(data)
+        os._exit(0)
+    os.close(write)
+    with os.fdopen(read, "rb") as fh:
+        data = fh.read()
+    os.waitpid(pid, 0)
+    got = pickle.loads(data)
+    if isinstance(got, str):
+        raise SystemExit(f"the forked run failed: {got}")
+    return got[0] + got[1].encode()
+
+
+def run_speed(clips: dict[str, tuple[np.ndarray, int]], lengths: tuple[float, ...] = (60.0,), repeat: int = 1,
+              recognizers: tuple[str, ...] = ENGLISH) -> list[dict]:
+    """Each clip, cut to each of ``lengths`` seconds, through :func:`stream_listened` by each recogniser: wall
+    time with both cores (``two_cores``, the default: two blocks at once, or a lone block's phone loop beside its
+    word decoding under ``either``; the load average printed: the machine is shared), the best of ``repeat``
+    runs, and CPU time with one process doing all (``two_cores`` off: the process's CPU time is then all the work,
+    what one idle core gives). ``same`` (clips up to 2 min): the two give the same stream and timings, byte for byte
+    (:func:`_forked`)."""
     rows = []
-    for clip, (x, rate) in clips.items():
-        seconds = len(x) / rate
-        for how in ENGLISH:
-            listen(Recording(x[:rate], rate), recognizer=how)  # models loaded before the clock starts
-            load = os.getloadavg()[0]
-            started = time.perf_counter()
-            heard = stream_listened(Source("speed", rate, seconds, iter([x])), io.BytesIO(), recognizer=how,
-                                    lang="en")
-            wall = time.perf_counter() - started
-            cpu = time.process_time()
-            stream_listened(Source("speed", rate, seconds, iter([x])), io.BytesIO(), recognizer=how, lang="en",
-                            two_cores=False)
-            cpu = time.process_time() - cpu
-            rows.append({"clip": clip, "recognizer": how, "used": heard.recognizer, "seconds": seconds,
-                         "wall_s": wall, "x_real_time": seconds / wall, "cpu_s": cpu, "x_real_time_cpu": seconds / cpu,
-                         "cpus": os.cpu_count(), "load_average": load, "frames": heard.frames})
+    for clip, (whole, rate) in clips.items():
+        stream_listened(Source("warm", rate, 3.0, iter([whole[:3 * rate]])), io.BytesIO(), lang="en",
+                        two_cores=False)  # the models loaded and the encoder compiled before the clock starts
+        for length in lengths:
+            x = whole[:int(length * rate)]
+            seconds = len(x) / rate
+            for how in recognizers:
+                walls, loads = [], []
+                for _ in range(repeat):
+                    loads.append(os.getloadavg()[0])
+                    started = time.perf_counter()
+                    two = io.BytesIO()
+                    heard = stream_listened(Source("speed", rate, seconds, iter([x])), two, recognizer=how, lang="en")
+                    walls.append(time.perf_counter() - started)
+                cpu = time.process_time()
+                stream_listened(Source("speed", rate, seconds, iter([x])), io.BytesIO(), recognizer=how, lang="en",
+                                two_cores=False)
+                cpu = time.process_time() - cpu
+                same = (_forked(x, rate, how, True) == _forked(x, rate, how, False)) if seconds <= 120 else None
+                wall = min(walls)
+                rows.append({"clip": clip, "recognizer": how, "used": heard.recognizer, "seconds": seconds,
+                             "wall_s": wall, "x_real_time": seconds / wall, "walls_s": walls, "cpu_s": cpu,
+                             "x_real_time_cpu": seconds / cpu, "cpus": os.cpu_count(),
+                             "load_average": loads[walls.index(wall)], "frames": heard.frames,
+                             "same": same})
     return rows
+
+
+def print_speed(speed: list[dict]) -> None:
+    print(f"\n{'clip':<10} {'recogniser':<10} {'used':<9} {'audio s':>8} {'wall s':>7} {'x real time':>11} "
+          f"{'CPU s':>6} {'x per CPU s':>11} {'cpus':>5} {'load':>5} {'same':>5}   (target >= 10x on 2 cores; "
+          f"'x per CPU s': one process doing all, what one idle core gives)")
+    for r in speed:
+        print(f"{r['clip']:<10} {r['recognizer']:<10} {r['used']:<9} {r['seconds']:>8.1f} {r['wall_s']:>7.2f} "
+              f"{r['x_real_time']:>11.1f} {r['cpu_s']:>6.2f} {r['x_real_time_cpu']:>11.1f} {r['cpus']:>5} "
+              f"{r['load_average']:>5.1f} {str(r.get('same', '')):>5}")
+
+
+def run_hour(x: np.ndarray, rate: int, seconds: float, recognizer: str) -> dict:
+    """``mpeg4fa encode --speech`` (a process of its own) of ``x`` repeated to ``seconds``, written as a WAV
+    file: its speed and the peak memory (resident set) of the largest of its processes, a helper included
+    (the memory of a block: it should not grow with the length)."""
+    import resource
+    import subprocess
+    import tempfile
+    import wave
+
+    with tempfile.TemporaryDirectory() as tmp:
+        wav = Path(tmp) / "long.wav"
+        with wave.open(str(wav), "wb") as w:
+            w.setnchannels(1)
+            w.setsampwidth(2)
+            w.setframerate(rate)
+            left = int(seconds * rate)
+            while left > 0:
+                w.writeframes(x[:left].tobytes())
+                left -= len(x[:left])
+        load = os.getloadavg()[0]
+        started = time.perf_counter()
+        done = subprocess.run([sys.executable, "-m", "mpeg4fa", "encode", "--speech", str(wav), "--recognizer",
+                               recognizer, "--lang", "en", "-o", str(Path(tmp) / "long.fba")],
+                              capture_output=True, text=True)
+        wall = time.perf_counter() - started
+        if done.returncode:
+            raise SystemExit(done.stderr)
+        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+        said = [line for line in done.stderr.splitlines() if "recognised" in line or "heard" in line]
+    return {"seconds": seconds, "recognizer": recognizer, "wall_s": wall, "x_real_time": seconds / wall,
+            "peak_mb": peak, "load_average": load, "said": said}
 
 
 def main() -> None:
@@ -266,7 +351,33 @@ def main() -> None:
                                                            "speed test")
     ap.add_argument("--without-detector", action="store_true",
                     help="the phone loop's own p, b, m (the closure detector off): the figures before it")
+    ap.add_argument("--speed-only", action="store_true",
+                    help="only the speed (with --json: its figures replace those of the file's 'speed', the rest kept)")
+    ap.add_argument("--lengths", default=None, help="seconds of each speed clip, comma separated (default 60; "
+                                                      "--quick 20)")
+    ap.add_argument("--repeat", type=int, default=1, help="speed: the best wall time of this many runs")
+    ap.add_argument("--hour", type=float, metavar="MIN", help="also MIN minutes of the clip(s) through "
+                                                                 "'mpeg4fa encode --speech' (auto): speed, peak memory")
     args = ap.parse_args()
+    lengths = tuple(float(v) for v in args.lengths.split(",")) if args.lengths else ((20.0,) if args.quick else (60.0,))
+    if args.speed_only:
+        clips = {"espeak-ng": espeak_clip(max(lengths))}
+        if args.human is not None:
+            clips["human"] = human_clip(args.human, max(lengths))
+        speed = run_speed(clips, lengths, args.repeat, ("either",) if len(lengths) > 1 else ENGLISH)
+        print_speed(speed)
+        hour = [run_hour(*clips[c], args.hour * 60, "auto") | {"clip": c} for c in clips] if args.hour else []
+        for r in hour:
+            print(f"{r['clip']}: {r['seconds'] / 60:.0f} min through encode --speech: {r['x_real_time']:.1f}x real time "
+                  f"(load {r['load_average']:.1f}), peak memory {r['peak_mb']:.0f} MB; {' / '.join(r['said'])}")
+        if args.json is not None:
+            figures = json.loads(args.json.read_text(encoding="utf-8")) if args.json.exists() else {}
+            figures["speed"] = speed
+            if hour:
+                figures["hour"] = hour
+            args.json.write_text(json.dumps(figures, indent=1) + "\n", encoding="utf-8")
+            print(f"wrote {args.json}")
+        return
     if args.without_detector:
         from functools import partial
 
@@ -296,17 +407,11 @@ def main() -> None:
     print(f"\n{'clip':<26} {'rest frames':>11} {'mouth neutral':>13}   (target >= 95 %)")
     for r in rest:
         print(f"{r['clip']:<26} {r['rest_frames']:>11.1%} {r['mouth_neutral_frames']:>13.1%}")
-    clips = {"espeak-ng": espeak_clip(20.0 if args.quick else 60.0)}
+    clips = {"espeak-ng": espeak_clip(max(lengths))}
     if args.human is not None:
-        clips["human"] = human_clip(args.human, 20.0 if args.quick else 60.0)
-    speed = run_speed(clips)
-    print(f"\n{'clip':<10} {'recogniser':<10} {'used':<9} {'audio s':>8} {'wall s':>7} {'x real time':>11} "
-          f"{'CPU s':>6} {'x per CPU s':>11} {'cpus':>5} {'load':>5}   (target >= 10x on 2 cores; 'x per CPU s': "
-          f"one process doing all, what one idle core gives)")
-    for r in speed:
-        print(f"{r['clip']:<10} {r['recognizer']:<10} {r['used']:<9} {r['seconds']:>8.1f} {r['wall_s']:>7.2f} "
-              f"{r['x_real_time']:>11.1f} {r['cpu_s']:>6.2f} {r['x_real_time_cpu']:>11.1f} {r['cpus']:>5} "
-              f"{r['load_average']:>5.1f}")
+        clips["human"] = human_clip(args.human, max(lengths))
+    speed = run_speed(clips, lengths, args.repeat)
+    print_speed(speed)
     if args.json is not None:
         args.json.write_text(json.dumps({"speech": speech, "english_better": better, "rest": rest, "speed": speed},
                                         indent=1) + "\n", encoding="utf-8")

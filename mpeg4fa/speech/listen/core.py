@@ -24,6 +24,7 @@ closed mouth at rest, never chatter. The utterance plays the recording's own aud
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,22 +160,38 @@ def _words(rec: Recording, active: np.ndarray, lang: str, heard: list[HeardWord]
     return list(utt.timings), events, heard, ""
 
 
-def _either(rec: Recording, active: np.ndarray, lang: str,
-            ) -> tuple[list[Timing], list[Event], list[HeardWord], str, str, float]:
-    """``either`` (module docstring): the phone loop and the word decoder on the block, then the words path
-    (its alignment) or the phones path (the closure detector) by :func:`word_confidence`; each pass once."""
+PhoneLoop = tuple[list[Phone], tuple[float, int]]
+"""What the free phone loop heard in a block: its phones (closures not yet placed) and its
+:func:`~mpeg4fa.speech.align.sphinx.acoustic_score`."""
+
+
+def phone_loop(rec: Recording) -> PhoneLoop:
+    """``either``'s phone-loop pass over ``rec`` (:data:`PhoneLoop`); a function of its own so that another
+    process can run it while this one decodes the words (:func:`.stream.heard_blocks`)."""
     from mpeg4fa.speech.align.sphinx import acoustic_score
 
-    loop = recognize_phones(rec, closures=False)
-    loop_score = acoustic_score(phone_decoder())
+    return recognize_phones(rec, closures=False), acoustic_score(phone_decoder())
+
+
+def _either(rec: Recording, active: np.ndarray, lang: str, loop: Callable[[], PhoneLoop] | None = None,
+            ) -> tuple[list[Timing], list[Event], list[HeardWord], str, str, float]:
+    """``either`` (module docstring): the phone loop and the word decoder on the block, then the words path
+    (its alignment) or the phones path (the closure detector) by :func:`word_confidence`; each pass once.
+    ``loop``: the phone loop's pass started elsewhere (a helper process), called for its result once the words
+    are decoded here; the two decoders are independent, so the result is the one of both run here."""
+    from mpeg4fa.speech.align.sphinx import acoustic_score
+
+    here = phone_loop(rec) if loop is None else None
     heard = recognize_words(rec, active=active)
-    confidence = word_confidence(acoustic_score(word_decoder()), loop_score) if heard else float("-inf")
+    words_score = acoustic_score(word_decoder())
+    phones, loop_score = loop() if here is None else here
+    confidence = word_confidence(words_score, loop_score) if heard else float("-inf")
     if confidence >= WORDS_CONFIDENT:
-        timings, events, heard, note = _words(rec, active, lang, heard, loop)
+        timings, events, heard, note = _words(rec, active, lang, heard, phones)
         if not note:
             return timings, events, heard, "", "words", confidence
         return timings, events, heard, note, "phonetic", confidence
-    timings, events = _phonetic(rec, active, loop)
+    timings, events = _phonetic(rec, active, phones)
     return timings, events, [], "", "phonetic", confidence
 
 
@@ -187,10 +204,12 @@ def settled(how: str, heard: Listened) -> str:
 
 
 def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto",
-           expression: tuple[str, int] | None = None, active: np.ndarray | None = None) -> Listened:
+           expression: tuple[str, int] | None = None, active: np.ndarray | None = None,
+           loop: Callable[[], PhoneLoop] | None = None) -> Listened:
     """The face's utterance for ``recording`` (see the module docstring): visemes timed on it, its audio,
     ``expression`` (name, intensity 0-63) for the whole clip. ``active``: its voice activity per 10 ms
-    frame, when already known (:func:`~.voice.voice_activity`)."""
+    frame, when already known (:func:`~.voice.voice_activity`). ``loop``: ``either``'s phone-loop pass, started
+    elsewhere (:func:`_either`)."""
     how = choose_recognizer(recognizer, lang)
     check_language(how, lang)
     if active is None:
@@ -201,7 +220,7 @@ def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto"
     if not active.any():
         timings, events = [], []
     elif how == "either":
-        timings, events, heard, note, how, confidence = _either(recording, active, lang)
+        timings, events, heard, note, how, confidence = _either(recording, active, lang, loop)
         notes += [note] if note else []
     elif how == "words":
         timings, events, heard, note = _words(recording, active, lang)

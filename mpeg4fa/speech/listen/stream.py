@@ -22,7 +22,8 @@ import numpy as np
 from mpeg4fa.speech.align.errors import AlignError
 from mpeg4fa.speech.align.recording import HOP, Recording, frame_levels
 from mpeg4fa.speech.listen.core import (Listened, check_language, choose_recognizer, expression_cues, listen,
-                                        settled)
+                                        phone_loop, settled)
+from mpeg4fa.speech.listen.voice import voice_activity
 from mpeg4fa.speech.utterance import viseme_spans
 from mpeg4fa.speech.visemes import PAUSE
 
@@ -207,12 +208,26 @@ def _helper(wanted: bool) -> Iterator[list]:
             pool.join()
 
 
+def _listen_alone(rec: Recording, how: str, lang: str, helper: list) -> Listened:
+    """A block heard with no other block beside it (a clip of one block, a last odd one): with a ``helper`` and
+    ``either`` still unsettled, the helper runs the phone loop (:func:`.core.phone_loop`) while this process
+    decodes the words, so that a short clip too has both cores (the same result: the decoders are independent)."""
+    if not helper or choose_recognizer(how, lang) != "either":
+        return listen(rec, recognizer=how, lang=lang)
+    active = voice_activity(rec.floats(), rec.rate)
+    if not active.any():
+        return listen(rec, recognizer=how, lang=lang, active=active)
+    job = helper[0]().apply_async(phone_loop, (rec,))
+    return listen(rec, recognizer=how, lang=lang, active=active, loop=job.get)
+
+
 def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: str, helper: list,
                  fallbacks) -> Iterator[tuple[float, Recording, Listened]]:
     """``(offset, block, Listened)`` in order. With a ``helper`` (:func:`_helper`) two blocks are heard at
     once, one in the helper process: pocketsphinx holds the GIL while it decodes (over 90 % of the time),
-    so only a second process puts a second core to work. A block waits for the next before it is heard
-    (one block alone is heard here, with no process started); ``fallbacks``: the
+    so only a second process puts a second core to work. A block waits for the next before it is heard;
+    one alone is heard here (:func:`_listen_alone`: with ``either`` unsettled, its phone loop in the helper,
+    else with no process started); ``fallbacks``: the
     :class:`~mpeg4fa.speech.ipa.FallbackLog` the helper's guessed phonemes join. ``either``: the first block it
     judges settles the recogniser of the blocks after it (:func:`.core.settled`)."""
     held = None
@@ -236,7 +251,7 @@ def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: st
         yield offset, rec, here
         held = None
     if held is not None:
-        yield held[0], held[1], listen(held[1], recognizer=how, lang=lang)
+        yield held[0], held[1], _listen_alone(held[1], how, lang, helper)
 
 
 def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer: str = "auto", lang: str = "auto",
