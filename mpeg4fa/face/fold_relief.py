@@ -11,6 +11,7 @@ eye corners), :mod:`.rig` (the cheek points' skin weights, :data:`.rig.RELIEVED`
 """
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable, Iterable
 
 import numpy as np
@@ -28,13 +29,26 @@ TINY = 1e-4
 """A scalar share below this is none (the field's support stays where it matters)."""
 
 
+_SKIN_TRIANGLES: dict[bytes, np.ndarray] = {}
+""":func:`skin_triangles` per head (a digest of its shape, skin and feature points): the rig asks three times."""
+
+
 def skin_triangles(mesh) -> np.ndarray:
     """The skin triangles a fold counts on (:func:`.creases.measure_pose`): none inside the lip or lid loops."""
     from mpeg4fa.face.quality import skin_graph
     tris = np.asarray(mesh.triangles["skin"], dtype=np.int64)
-    inside = np.zeros(mesh.n_vertices, bool)
-    inside[skin_graph(mesh).inside] = True
-    return tris[~inside[tris].any(axis=1)]
+    h = hashlib.sha256()
+    for a in (np.asarray(mesh.vertices, np.float64), tris, np.asarray(mesh.fp_vertex, np.int64)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    h.update(repr((tuple(mesh.fp_labels), tuple(mesh.part_ranges["skin"]))).encode())
+    key = h.digest()
+    if key not in _SKIN_TRIANGLES:
+        inside = np.zeros(mesh.n_vertices, bool)
+        inside[skin_graph(mesh).inside] = True
+        if len(_SKIN_TRIANGLES) >= 8:
+            _SKIN_TRIANGLES.pop(next(iter(_SKIN_TRIANGLES)))
+        _SKIN_TRIANGLES[key] = tris[~inside[tris].any(axis=1)]
+    return _SKIN_TRIANGLES[key].copy()
 
 
 def _stacked_normals(stack: np.ndarray, tris: np.ndarray) -> np.ndarray:
