@@ -18,6 +18,14 @@ Measured on the generic head (folded / fold lines, both deformers): a blink at 1
 the lower lids at 300 8 / 14 -> 2 / 0, joy at 63 (lower lids 260) 6 / 14 -> 0 / 2 on the feature-point
 deformer (the 2 left are the cheeks'). The folds left sit at the corners, where the margin must still
 reach the other lid; with the whole margin free there were none, but the eye no longer shut.
+Seen along the turn's axis the folds are the corner's sideways walls turned inside out: a margin vertex
+0.5 mm above the fixed corner 3.7, at its distance from the axis, turns 2.8 deg past it. Capping every share
+near a corner so that no vertex turns past the corner's own polar angle (fading out between R0 and R1 mm)
+trades the folds for eyeball: R0 5 mm, blink 1000 0 folded / 8 fold lines but 48 eyeball pixels shut (the
+lower margin lies below the corners); 3 mm, 14 / 14 and 2-16 pixels. Projecting the shares onto "no wall
+inverted" constraints (per triangle, linear in the shares) did not converge: held margin vertices leave them
+infeasible. Evening out never settles here and runs all :data:`.fold_relief.MAX_ROUNDS` (stopping at the
+round that folded least gave more folds at a blink), so its result is kept in the user cache (:func:`_kept_at`).
 """
 from __future__ import annotations
 
