@@ -4,9 +4,7 @@ The standard moves exactly one point per FAP, but some FAPs cannot read as
 meant when their neighbours stay put: ``push_b_lip`` / ``push_t_lip`` (16/17)
 move only the inner lip midpoints 2.3/2.2 forward, so rounded visemes (ou, oh,
 Chinese o, u, uv) would bulge the inner edge of the lip while its outer border
-(8.x) stays where it was; the inner and outer lip corners (2.4/8.3, 2.5/8.4) lie 1.5 mm apart, so
-one raised or lowered alone (12/13, 59/60) passed through the other and folded the corner.
-``data/couplings.csv`` lists, per FAP, the extra
+(8.x) stays where it was. ``data/couplings.csv`` lists, per FAP, the extra
 points and the fraction of the FAP's motion each follows, with the reason. The
 FAP's own points still move exactly value x FAPU; the coupled ones are the
 documented exceptions to "no other feature point moves".

@@ -4,11 +4,8 @@ folded triangle, no fold line), on the feature-point and ARKit deformers.
 
 Before the fixes (fap deformer, unlimited): the jaw at 1568 MNS (the tracker's streams and real use) drew 8 fold
 lines round the nostrils, where the jawOpen face unit leaves stray shares of 0.031-0.032 on single vertices
-(folds from 1383); evened out (:data:`mpeg4fa.face.rig.JAW_RELIEVED`) none up to 1848. The inner lip corner 2.4
-sits 1.5 mm from the outer one 8.3 at rest, so FAP 12 alone (2.4 up) folded the corner from 103 MNS up and 291
-down, and FAP 59 alone (8.3) from 319 up and 108 down; each corner now carries a share of the other
-(face/data/couplings.csv: 12 -> 8.3 at 0.3, 59 -> 2.4 at 0.1): 12 passes to 141 up and 394 down, 59 to 361 and
-122 (ARKit: 141 / 394, 398 / 159). What is not met is marked with its measured figure.
+(folds from 1383); evened out (:data:`mpeg4fa.face.rig.JAW_RELIEVED`) none up to 1848. What is not met is marked
+with its measured figure.
 """
 from __future__ import annotations
 
@@ -22,10 +19,6 @@ from mpeg4fa.face.rig import CORNER_HOLD_MM, JAW_RELIEVED
 JAW_USED = 1568.0
 """open_jaw as far as the tracker's streams and real use take it (face/data/reach.csv used_pos)."""
 NOT_YET = {
-    **{(d, f"FAP {fap} +200"): "folds the corner from 141 (was 103): 2.4 rises past 8.3, which follows 0.3 of it"
-       for d in ("fap", "arkit") for fap in (12, 13)},
-    **{(d, f"FAP {fap} -200"): f"folds the corner from {fig}: 8.3 lowered past 2.4, which follows 0.1"
-       for d, fig in (("fap", "122 down, was 108"), ("arkit", "159 down, was 136")) for fap in (59, 60)},
     ("arkit", "jaw 1568"): "2 folded under the chin 21 mm from 2.1: the sculpted jawOpen is at its full weight from "
                            "1228 and the feature-point correction carries the rest (folds from 1535, as before)",
 }
@@ -38,11 +31,7 @@ def _values(**faps: float) -> np.ndarray:
     return v
 
 
-POSES = {"jaw 1383": _values(f3=1383), "jaw 1568": _values(f3=JAW_USED), "jaw 1800": _values(f3=1800),
-         # the lip corners alone: past where they folded before, within where they pass now, and as far as the
-         # conformance suite poses a FAP (about 200)
-         **{f"FAP {fap} {value:+g}": _values(**{f"f{fap}": value}) for fap in (12, 13) for value in (130.0, -350.0, 200.0)},
-         **{f"FAP {fap} {value:+g}": _values(**{f"f{fap}": value}) for fap in (59, 60) for value in (340.0, -115.0, -200.0)}}
+POSES = {"jaw 1383": _values(f3=1383), "jaw 1568": _values(f3=JAW_USED), "jaw 1800": _values(f3=1800)}
 
 
 @pytest.fixture(scope="module")

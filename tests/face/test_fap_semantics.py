@@ -193,8 +193,7 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
                 i, o = index[mine], index[other]
                 side = np.sign(rest[index[outer], 0] - rest[index[inner], 0]) * sign  # from mine toward other
                 want = side * max(side * rest[o, 0], side * pose.feature_points[i, 0] + CORNER_MARGIN_MM)
-                expected = np.array([want - rest[o, 0], 0.0, 0.0])  # and what a coupling adds (couplings.csv)
-                expected += coupled_points(fap).get(other, 0.0) * value * fapu.unit(record.fapu) * motion.direction(fap)
+                expected = np.array([want - rest[o, 0], 0.0, 0.0])
                 errors.append((f"{other} kept across {mine}",
                                float(np.linalg.norm(moved[o] - expected)) / abs(value * fapu.unit(record.fapu))))
                 coupled.add(o)
