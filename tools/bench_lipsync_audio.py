@@ -263,14 +263,25 @@ def _forked(x: np.ndarray, rate: int, how: str, two_cores: bool) -> bytes:
     return got[0] + got[1].encode()
 
 
+def _children_cpu() -> float:
+    """CPU seconds of this process's ended children (the helper process of :func:`stream_listened`)."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def run_speed(clips: dict[str, tuple[np.ndarray, int]], lengths: tuple[float, ...] = (60.0,), repeat: int = 1,
               recognizers: tuple[str, ...] = ENGLISH) -> list[dict]:
     """Each clip, cut to each of ``lengths`` seconds, through :func:`stream_listened` by each recogniser: wall
     time with both cores (``two_cores``, the default: two blocks at once, or a lone block's phone loop beside its
     word decoding under ``either``; the load average printed: the machine is shared), the best of ``repeat``
     runs, and CPU time with one process doing all (``two_cores`` off: the process's CPU time is then all the work,
-    what one idle core gives). ``same`` (clips up to 2 min): the two give the same stream and timings, byte for byte
-    (:func:`_forked`)."""
+    what one idle core gives). ``x_real_time_idle``: the audio's seconds over the larger CPU time of the two processes
+    of the best run (this one, ``cpu_here_s``, and its helper, ``cpu_helper_s``): the speed two idle cores would give,
+    the two working at once, whatever else loads a shared machine. ``same`` (clips up to 2 min): the two give the
+    same stream and timings, byte for byte (:func:`_forked`); expected of one block only: two blocks heard at
+    once start from the same decoder state, one after the other from the state the first left."""
     rows = []
     for clip, (whole, rate) in clips.items():
         stream_listened(Source("warm", rate, 3.0, iter([whole[:3 * rate]])), io.BytesIO(), lang="en",
@@ -279,22 +290,26 @@ def run_speed(clips: dict[str, tuple[np.ndarray, int]], lengths: tuple[float, ..
             x = whole[:int(length * rate)]
             seconds = len(x) / rate
             for how in recognizers:
-                walls, loads = [], []
+                walls, loads, cpus = [], [], []
                 for _ in range(repeat):
                     loads.append(os.getloadavg()[0])
+                    here, helper = time.process_time(), _children_cpu()
                     started = time.perf_counter()
-                    two = io.BytesIO()
-                    heard = stream_listened(Source("speed", rate, seconds, iter([x])), two, recognizer=how, lang="en")
+                    heard = stream_listened(Source("speed", rate, seconds, iter([x])), io.BytesIO(), recognizer=how,
+                                            lang="en")
                     walls.append(time.perf_counter() - started)
+                    cpus.append((time.process_time() - here, _children_cpu() - helper))
                 cpu = time.process_time()
                 stream_listened(Source("speed", rate, seconds, iter([x])), io.BytesIO(), recognizer=how, lang="en",
                                 two_cores=False)
                 cpu = time.process_time() - cpu
                 same = (_forked(x, rate, how, True) == _forked(x, rate, how, False)) if seconds <= 120 else None
                 wall = min(walls)
+                here, helper = cpus[walls.index(wall)]
                 rows.append({"clip": clip, "recognizer": how, "used": heard.recognizer, "seconds": seconds,
                              "wall_s": wall, "x_real_time": seconds / wall, "walls_s": walls, "cpu_s": cpu,
-                             "x_real_time_cpu": seconds / cpu, "cpus": os.cpu_count(),
+                             "x_real_time_cpu": seconds / cpu, "cpu_here_s": here, "cpu_helper_s": helper,
+                             "x_real_time_idle": seconds / max(here, helper, 1e-9), "cpus": os.cpu_count(),
                              "load_average": loads[walls.index(wall)], "frames": heard.frames,
                              "same": same})
     return rows
@@ -302,19 +317,26 @@ def run_speed(clips: dict[str, tuple[np.ndarray, int]], lengths: tuple[float, ..
 
 def print_speed(speed: list[dict]) -> None:
     print(f"\n{'clip':<10} {'recogniser':<10} {'used':<9} {'audio s':>8} {'wall s':>7} {'x real time':>11} "
-          f"{'CPU s':>6} {'x per CPU s':>11} {'cpus':>5} {'load':>5} {'same':>5}   (target >= 10x on 2 cores; "
-          f"'x per CPU s': one process doing all, what one idle core gives)")
+          f"{'CPU s':>6} {'x per CPU s':>11} {'x idle':>6} {'cpus':>5} {'load':>5} {'same':>5}   (target >= 10x on 2 "
+          f"cores; 'x per CPU s': one process doing all, what one idle core gives; 'x idle': over the busier process's "
+          f"CPU time, what two idle cores give)")
     for r in speed:
         print(f"{r['clip']:<10} {r['recognizer']:<10} {r['used']:<9} {r['seconds']:>8.1f} {r['wall_s']:>7.2f} "
-              f"{r['x_real_time']:>11.1f} {r['cpu_s']:>6.2f} {r['x_real_time_cpu']:>11.1f} {r['cpus']:>5} "
+              f"{r['x_real_time']:>11.1f} {r['cpu_s']:>6.2f} {r['x_real_time_cpu']:>11.1f} "
+              f"{r.get('x_real_time_idle', float('nan')):>6.1f} {r['cpus']:>5} "
               f"{r['load_average']:>5.1f} {str(r.get('same', '')):>5}")
+
+
+_PEAK = ("import resource, subprocess, sys; rc = subprocess.run(sys.argv[1:]).returncode; "
+         "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss); sys.exit(rc)")
+"""Runs a command and prints the peak resident set (kB) of the largest of its processes: a process of its own,
+so that the benchmark's own children (its forks, its helpers) are not counted."""
 
 
 def run_hour(x: np.ndarray, rate: int, seconds: float, recognizer: str) -> dict:
     """``mpeg4fa encode --speech`` (a process of its own) of ``x`` repeated to ``seconds``, written as a WAV
     file: its speed and the peak memory (resident set) of the largest of its processes, a helper included
     (the memory of a block: it should not grow with the length)."""
-    import resource
     import subprocess
     import tempfile
     import wave
@@ -331,13 +353,14 @@ def run_hour(x: np.ndarray, rate: int, seconds: float, recognizer: str) -> dict:
                 left -= len(x[:left])
         load = os.getloadavg()[0]
         started = time.perf_counter()
-        done = subprocess.run([sys.executable, "-m", "mpeg4fa", "encode", "--speech", str(wav), "--recognizer",
+        cli = str(Path(sys.executable).parent / "mpeg4fa")
+        done = subprocess.run([sys.executable, "-c", _PEAK, cli, "encode", "--speech", str(wav), "--recognizer",
                                recognizer, "--lang", "en", "-o", str(Path(tmp) / "long.fba")],
                               capture_output=True, text=True)
         wall = time.perf_counter() - started
         if done.returncode:
             raise SystemExit(done.stderr)
-        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+        peak = int(done.stdout.split()[-1]) / 1024
         said = [line for line in done.stderr.splitlines() if "recognised" in line or "heard" in line]
     return {"seconds": seconds, "recognizer": recognizer, "wall_s": wall, "x_real_time": seconds / wall,
             "peak_mb": peak, "load_average": load, "said": said}
@@ -352,7 +375,8 @@ def main() -> None:
     ap.add_argument("--without-detector", action="store_true",
                     help="the phone loop's own p, b, m (the closure detector off): the figures before it")
     ap.add_argument("--speed-only", action="store_true",
-                    help="only the speed (with --json: its figures replace those of the file's 'speed', the rest kept)")
+                    help="only the speed (with --json: its rows replace the file's rows of the same clip, "
+                         "recogniser and length, the rest kept)")
     ap.add_argument("--lengths", default=None, help="seconds of each speed clip, comma separated (default 60; "
                                                       "--quick 20)")
     ap.add_argument("--repeat", type=int, default=1, help="speed: the best wall time of this many runs")
@@ -368,11 +392,14 @@ def main() -> None:
         print_speed(speed)
         hour = [run_hour(*clips[c], args.hour * 60, "auto") | {"clip": c} for c in clips] if args.hour else []
         for r in hour:
-            print(f"{r['clip']}: {r['seconds'] / 60:.0f} min through encode --speech: {r['x_real_time']:.1f}x real time "
-                  f"(load {r['load_average']:.1f}), peak memory {r['peak_mb']:.0f} MB; {' / '.join(r['said'])}")
+            print(f"{r['clip']}: {r['seconds'] / 60:.0f} min through encode --speech: "
+                  f"{r['x_real_time']:.1f}x real time (load {r['load_average']:.1f}), peak memory "
+                  f"{r['peak_mb']:.0f} MB; {' / '.join(r['said'])}")
         if args.json is not None:
             figures = json.loads(args.json.read_text(encoding="utf-8")) if args.json.exists() else {}
-            figures["speed"] = speed
+            new = {(r["clip"], r["recognizer"], round(r["seconds"])) for r in speed}
+            figures["speed"] = [r for r in figures.get("speed", [])
+                                if (r["clip"], r["recognizer"], round(r["seconds"])) not in new] + speed
             if hour:
                 figures["hour"] = hour
             args.json.write_text(json.dumps(figures, indent=1) + "\n", encoding="utf-8")

@@ -183,9 +183,9 @@ def _either(rec: Recording, active: np.ndarray, lang: str, loop: Callable[[], Ph
 
     here = phone_loop(rec) if loop is None else None
     heard = recognize_words(rec, active=active)
-    words_score = acoustic_score(word_decoder())
+    words_score = acoustic_score(word_decoder()) if heard else None
     phones, loop_score = loop() if here is None else here
-    confidence = word_confidence(words_score, loop_score) if heard else float("-inf")
+    confidence = word_confidence(words_score, loop_score) if words_score is not None else float("-inf")
     if confidence >= WORDS_CONFIDENT:
         timings, events, heard, note = _words(rec, active, lang, heard, phones)
         if not note:
