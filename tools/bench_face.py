@@ -12,6 +12,7 @@ import json
 import resource
 import sys
 import time
+import timeit
 import tracemalloc
 import zipfile
 from pathlib import Path
@@ -37,12 +38,8 @@ class Stand:
 
 
 def best_of(fn, repeat: int = 3) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
+    """Best wall seconds of ``repeat`` calls (the least disturbed by other work)."""
+    return min(timeit.repeat(fn, number=1, repeat=repeat))
 
 
 def target_points(face: FaceModel) -> Stand:

@@ -15,6 +15,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import timeit
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -34,12 +35,8 @@ print(time.perf_counter() - t)
 
 
 def best_of(fn, repeat: int = 3) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
+    """Best wall seconds of ``repeat`` calls (the least disturbed by other work)."""
+    return min(timeit.repeat(fn, number=1, repeat=repeat))
 
 
 def first_pose(repeat: int) -> float:

@@ -17,7 +17,7 @@ import re
 import subprocess
 import sys
 import tempfile
-import time
+import timeit
 from pathlib import Path
 
 import numpy as np
@@ -27,12 +27,8 @@ sys.path.insert(0, str(ROOT))
 
 
 def best(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
+    """Best wall seconds of ``repeat`` calls (the least disturbed by other work)."""
+    return min(timeit.repeat(fn, number=1, repeat=repeat))
 
 
 def command(argv: list[str]) -> dict:
