@@ -96,16 +96,16 @@ def cap_triangles(mesh: HeadMesh) -> np.ndarray:
 
 
 def neck_vertices(mesh: HeadMesh) -> np.ndarray:
-    """The vertices that turn only partly with the head (:func:`.rig._head_weights`: the neck, from
+    """The vertices that turn only partly with the head (:func:`.rig.head_weights`: the neck, from
     the cut up to where it meets the head), and the ring of skin joined to them (the triangles that
     bridge to the head). With the cap the neck is closed, so its back side never shows except as a
     silhouette sliver where a turn twists a row of its long triangles over the next (under the chin
     too, where the neck meets the head: a profile view turned 5 degrees showed one there)."""
-    from mpeg4fa.face.rig import _head_weights
+    from mpeg4fa.face.rig import head_weights
 
     skin = mesh.part("skin")
     on = np.zeros(skin.stop - skin.start, bool)
-    idx = _head_weights(mesh)[0]
+    idx = head_weights(mesh)[0]
     on[idx[(idx >= skin.start) & (idx < skin.stop)] - skin.start] = True
     graph = adjacency(mesh.triangles["skin"] - skin.start, skin.stop - skin.start)
     ring = np.asarray(graph @ on.astype(np.float64)).ravel() > 0

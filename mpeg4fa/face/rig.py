@@ -24,7 +24,7 @@
 * **Head**: 1 on the whole head, fading to 0 down the neck: a neck vertex turns by a share
   of the head's rotation that grows from 0 at the cut to 1 where the neck meets the head (the
   jaw line at the front, so the skin under the chin takes part; the skull's base at the back:
-  :func:`_head_weights`), evenly in the angle seen from 7.1, so a turn twists the neck along its
+  :func:`head_weights`), evenly in the angle seen from 7.1, so a turn twists the neck along its
   length instead of folding it in one band, and a nod spreads over the whole throat.
 * **Lids**: sheets of skin turning about the eye centres (:mod:`.lids`).
 * **Eyes, upper teeth**: rigid.
@@ -173,7 +173,7 @@ def build_rig(mesh: HeadMesh, fapu: Fapu) -> Rig:
     return Rig(
         rest=rest, fapu=fapu, translate=translate, weights=weights, moving=moving,
         weights_moving=weights[moving], lid_fp=lid_fp, lids=build_lids(mesh),
-        jaw_rows=_jaw_weights(mesh, fapu), head_fade=_head_weights(mesh), roll_rows=roll_rows,
+        jaw_rows=_jaw_weights(mesh, fapu), head_fade=head_weights(mesh), roll_rows=roll_rows,
         parts={p: mesh.part(p) for p in mesh.part_ranges}, joints=dict(mesh.joints), fp_vertex=fp_vertex,
         chin_fp=index["2.1"], head_fp=index["7.1"],
         corners=tuple((index[a], index[b]) for a, b in CORNERS if a in index and b in index),
@@ -408,7 +408,7 @@ def _hold_corners(mesh: HeadMesh, w: np.ndarray) -> np.ndarray:
     return out
 
 
-def _head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
+def head_weights(mesh: HeadMesh) -> tuple[np.ndarray, np.ndarray]:
     """The vertices that turn only partly with the head, and their share of its rotation.
 
     A neck vertex's share grows from 0 at the cut to 1 at the line where the neck meets the head:
