@@ -140,7 +140,7 @@ def test_drawn_feature_points_are_the_python_faces(app, page):
 
 def test_picture_and_clock_in_step_at_ten_seconds(page):
     """Played from the server over 10 s: the frame drawn is the last one whose media time has come (within a
-    frame of the clock that also schedules the audio)."""
+    frame of the clock that also schedules the audio, or held where the stream skips frames)."""
     say(page, LONG)
     page.wait_for_function("window.player.mediaTime > 10.0", timeout=60_000)
     ticks = []
@@ -153,7 +153,11 @@ def test_picture_and_clock_in_step_at_ten_seconds(page):
     for tick in ticks:
         assert tick["t"] > 10.0
         assert tick["at"] <= tick["t"] + 1e-9 and (tick["next"] is None or tick["next"] > tick["t"]), tick
-        assert tick["t"] - tick["at"] < 1 / tick["fps"] + 1e-6 or tick["next"] is None, tick  # no frame held too long
+        # no frame held past a period, except where the stream itself skips frames (the encoder leaves out
+        # frames that change nothing: the decoded segment's times have gaps of 2-3 periods in silence)
+        period = 1 / tick["fps"] + 1e-6
+        skipped = tick["next"] is None or tick["next"] - tick["at"] > period
+        assert tick["t"] - tick["at"] < period or skipped, tick
     print(ticks[-1])
 
 
