@@ -14,10 +14,18 @@ built from the margin itself:
    that brings it to the height of the opposite margin at its x, and
    :data:`OVERLAP_MM` past it (the closed eye is the two margins meeting); divided by the lid point's own closure, a
    **ratio** (1 at 3.1, falling to 0 at the corners);
-3. the **lid sheet**: skin on the lid's side of the margin, within the orbit,
-   turns with the margin's ratio at its x, fading to 0 over
-   :data:`LID_HEIGHT_MM` of surface distance from the margin;
-4. near the corners the ratios are **evened out** where a closing lid would fold the
+3. the upper lid's **front edge** (:func:`front_edges`: where the lashes grow, in front of the margin by
+   the lid's thickness: 4.3 mm at the generic head's upper lid point): its own closure, the rotation that
+   brings it to the lower front edge's height (:data:`FRONT_OVERLAP_MM` past it), so that a shut eye
+   is the two front edges meeting, handed over to the margin's toward the corners (:data:`FRONT_TAPER_MM`).
+   With the margin's ratio alone the front edge turned about half as far as the margin (the sheet faded
+   from the margin), and the strip between them, which faces down into the opening, turned to face the
+   viewer: a dark band 3.3 mm tall across every shut eye (tests/render/test_lid_pixels.py: 2.35 mm of
+   rows under 0.7 of the skin's brightness at the middle columns, front; now none);
+4. the **lid sheet**: skin on the lid's side of the margin, within the orbit: across the strip from
+   the margin to the front edge its ratio goes from the margin's to the front edge's (at its x), then
+   fades to 0 over the rest of :data:`LID_HEIGHT_MM` of surface distance from the margin;
+5. near the corners the ratios are **evened out** where a closing lid would fold the
    skin (:mod:`.lid_folds`: the margin there climbs steeply in x, so its vertices pass the
    fixed corner as they close).
 
@@ -53,16 +61,32 @@ from mpeg4fa.face.regions import LID_MARGIN_LOOPS, edge_graph, path_through, smo
 LID_HEIGHT_MM = 9.0  # the lid sheet fades out over this surface distance from the margin (to the crease)
 ORBIT_MARGIN_MM = 9.0  # the sheet reaches this far beyond the eyeball's radius from its centre
 OVERLAP_MM = 0.3  # a closed margin reaches this far past the opposite one (but at the lid point)
+FRONT_OVERLAP_MM = 0.0
+"""A closed lid's front edge reaches the opposite one's height: the upper lid's lies in front of the lower's
+(0.6 mm at the generic head's lid points) and the margins overlap behind, so no sliver shows; further, the
+front edge, 4.3 mm in front of the margin, covered two thirds of it at half closure from the three-quarter
+view's 5 degrees above (the parabolic lids 0.346 of it left at 0.3 mm)."""
+FRONT_TAPER_MM = (1.0, 8.0)
+"""Within the first of these mm (in x) of a corner the lid closes by its margin alone, past the second by its front
+edge, smoothly between (generic head, folded / fold lines at a blink of 1000 as before the front edges, 14 / 14;
+(1, 5) left the skin beside the medial corner 2 more, (3, 12) closed the lid as a V, the strip showing at both
+sides; with the front edges held in the evening out, 32 / 26)."""
+RAY_RADIUS_MM = 1.2  # skin this close to a margin vertex's forward ray is the lid's thickness in front of it
+MAX_THICKNESS_MM = 8.0  # the farthest in front of its margin a lid's front edge may be
 
-FOLLOW = {"upper": (1.0, 25.0, 60.0), "lower": (0.35, 8.0, 15.0)}
+FOLLOW = {"upper": (0.9, 25.0, 60.0), "lower": (0.35, 8.0, 15.0)}
 """Per lid: (share of the eyeball's pitch the lid point turns by, most degrees it turns up, most
 degrees it turns down). The generic head's open upper margin sits at the top of the iris (its
-opening is IRISD0), so a share under 1 bares sclera above the iris when the eye looks down and
-hides the iris under the lid when it looks up (tests/render/test_gaze_lid_pixels.py's measure at
-20 deg, front: sclera px per column above the iris / upper lid's share of the iris, straight
-0.8 / 0.02; share 0: 17.3 / 0.48, 1/2: 8.6 / 0.20, 2/3: 5.6 / 0.14, 1: 0.1 / 0.04). The upper lid
-rises 25 deg at most (further and the lid sheet bunches under the brow) and follows down to 60;
-the lower one moves little."""
+opening is IRISD0). What the viewer sees of the lid is its front edge, 4.3 mm in front of the margin,
+which turns by its own share (0.88 of the lid point's at the middle: :func:`build_lids`), so the lid
+point turns by a little less than the eye: tests/render/test_gaze_lid_pixels.py's measure at 20 deg
+(sclera px per column above the iris / upper lid's share of the iris; straight 0.75 / 0.024 front,
+0.026 three-quarter): share 1: looking down 0.06 / 0.051 front, 0.119 of the iris hidden at
+three-quarter (from 5 deg above, the front edge hides the iris top as the eye turns down under it);
+0.875: 1.50 px of sclera front; 0.9: at most 1.12 px (10 deg), three-quarter 0.060, looking up
+0.035 / 0.88. (Before the front edges closed onto each other, the margin was what showed: share 0:
+17.3 / 0.48, 1/2: 8.6 / 0.20, 2/3: 5.6 / 0.14, 1: 0.1 / 0.04.) The upper lid rises 25 deg at most
+(further and the lid sheet bunches under the brow) and follows down to 60; the lower one moves little."""
 KNEE = 0.6  # the follow is linear up to this share of its limit, then eases into the limit
 SLIT = 0.1  # share of the opening that a gaze alone leaves between the lid points (far down, the eye is a slit)
 
@@ -103,6 +127,73 @@ def _height_at(margin: np.ndarray, vertices: np.ndarray, x: np.ndarray) -> np.nd
     return np.interp(x, p[order, 0], p[order, 1])
 
 
+def front_edges(rest: np.ndarray, skin: slice, rows: np.ndarray) -> np.ndarray:
+    """The skin vertex furthest in front of each margin vertex (head +z) within the lid's thickness: the
+    margin path runs along the rim that touches the eyeball, the lid's front edge (where lashes grow) is
+    in front of it. Where that is a stray (the nose beside the medial corner), the margin vertex itself."""
+    p = rest[skin]
+    forward = np.array([0.0, 0.0, 1.0])
+    depth, found = np.zeros(len(rows)), np.asarray(rows).copy()
+    for k, row in enumerate(rows):
+        d = p - rest[row]
+        t = d @ forward
+        near = (t > 0) & (t < MAX_THICKNESS_MM) & (np.linalg.norm(d - t[:, None] * forward, axis=1) < RAY_RADIUS_MM)
+        if near.any():
+            best = np.flatnonzero(near)[np.argmax(t[near])]
+            depth[k], found[k] = t[best], skin.start + best
+    typical = np.median(depth)
+    stray = (depth < 0.6 * typical) | (depth > 1.3 * typical)
+    return np.where(stray, rows, found)
+
+
+def closing_edges(rest: np.ndarray, skin: slice, margin: np.ndarray, side: str) -> np.ndarray:
+    """The edge a lid closes by, per vertex of its ``margin``: an upper lid's front edge (:func:`front_edges`:
+    the strip behind it faces down into the opening, dark, and showed across a shut eye); a lower lid's margin
+    itself (its strip faces up, to the light, and its front edge turned with the margin folded the outer corners:
+    the lower lids at 200 IRISD 2 triangles, FAP 21 eased to -600 18)."""
+    return front_edges(rest, skin, margin) if side == "upper" else np.asarray(margin)
+
+
+def _closures(rest: np.ndarray, centre: np.ndarray, rows: np.ndarray, towards: np.ndarray,
+              exact: int | None = None, overlap: float = OVERLAP_MM) -> np.ndarray:
+    """The angle (rad) turning each of ``rows`` about the eye centre's x axis to the height of the path
+    ``towards`` at its x, and ``overlap`` mm past it (but for the vertex ``exact``)."""
+    drop = rest[rows, 1] - _height_at(towards, rest, rest[rows, 0])
+    drop += np.sign(drop) * np.where(rows == exact, 0.0, overlap)
+    return np.array([motion.arc_angle(rest[i, 1:] - centre[1:], d) for i, d in zip(rows, drop)])
+
+
+def across_the_lid(rest: np.ndarray, from_margin: np.ndarray, margin: np.ndarray, front: np.ndarray,
+                   rows: np.ndarray, at_margin: np.ndarray, at_front: np.ndarray) -> np.ndarray:
+    """A lid's motion over its sheet (``rows``), from its value on the margin (``at_margin``, per ``margin``
+    vertex) and on the front edge (``at_front``, per vertex of ``front``, :func:`front_edges` of the margin):
+    across the strip between them it goes from the one to the other (at its x), then fades to 0 over the rest
+    of :data:`LID_HEIGHT_MM`; ``from_margin``: surface distances from the margin (per vertex of the mesh)."""
+    x, dist = rest[rows, 0], from_margin[rows]
+    order, front_order = np.argsort(rest[margin, 0]), np.argsort(rest[front, 0])
+    # the strip's width (surface distance) where the front edge was found, carried on past the strays (a
+    # stray's front edge is the margin itself: a width of 0 there folded the skin beside the medial corner)
+    found = (front != margin)[front_order]
+    if found.any():
+        width = np.nan_to_num(from_margin[front[front_order]][found], posinf=0.0)
+        width = np.minimum(np.interp(x, rest[front[front_order][found], 0], width), 0.5 * LID_HEIGHT_MM)
+    else:
+        width = np.zeros(len(rows))
+    on_margin = np.interp(x, rest[margin[order], 0], at_margin[order])
+    on_front = np.interp(x, rest[front[front_order], 0], at_front[front_order])
+    # toward the corners the front edge hands over to the margin (the sheet then fades from the margin, as the
+    # lid closes there onto a fixed corner: the front edge's own closure folded the skin beside it)
+    ends = rest[margin, 0].min(), rest[margin, 0].max()
+    inward = np.minimum(x - ends[0], ends[1] - x)
+    kept = 1.0 - smooth_down((inward - FRONT_TAPER_MM[0]) / (FRONT_TAPER_MM[1] - FRONT_TAPER_MM[0]))
+    width = width * kept
+    on_front = kept * on_front + (1.0 - kept) * on_margin
+    across = np.where(width > 0, np.clip(dist / np.where(width > 0, width, 1.0), 0.0, 1.0), 1.0)
+    value = (1.0 - across) * on_margin + across * on_front
+    beyond = np.nan_to_num(np.maximum(dist - width, 0.0), posinf=LID_HEIGHT_MM)
+    return value * smooth_down(beyond / (LID_HEIGHT_MM - width))
+
+
 def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
     """The lid sheet of each lid FAP (19-22) on a neutral face."""
     rest = mesh.vertices
@@ -114,15 +205,17 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         centre = rest[joint]
         own = _margin(graph, mesh, lateral, point, medial)
         other = _margin(graph, mesh, lateral, opposite, medial)
-        # closure of each margin vertex: turn to the opposite margin's height at its x
+        # closure of each margin vertex: turn to the opposite margin's height at its x, a little past it so
+        # that the two close without slivers (the lid point itself is exact); the front edges likewise
         fp_vertex = int(mesh.fp_vertex[mesh.fp_index(point)])
-        drop = rest[own, 1] - _height_at(other, rest, rest[own, 0])
-        # a little past the other margin, so the two close without slivers (the lid point itself is exact)
-        drop += np.sign(drop) * np.where(own == fp_vertex, 0.0, OVERLAP_MM)
-        closure = np.array([motion.arc_angle(rest[i, 1:] - centre[1:], d) for i, d in zip(own, drop)])
+        closure = _closures(rest, centre, own, other, exact=fp_vertex)
         lid_closure = closure[list(own).index(fp_vertex)]
+        front, other_front = closing_edges(rest, skin, own, side), front_edges(rest, skin, other)
+        front_closure = np.where(front == own, closure,
+                                 _closures(rest, centre, front, other_front, overlap=FRONT_OVERLAP_MM))
         # a lid already on the other margin (an eye modelled shut) closes by nothing: no share to divide out
         ratio = closure / lid_closure if lid_closure != 0 else np.zeros_like(closure)
+        front_ratio = front_closure / lid_closure if lid_closure != 0 else np.zeros_like(closure)
 
         # the sheet: skin on this lid's side of the margins, within the orbit
         ball = rest[mesh.part(eye)]  # no eyeball part: the margin's nearest vertex bounds the eye
@@ -137,19 +230,17 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         in_front = p[:, 2] > centre[2]
         near = np.linalg.norm(p - centre, axis=1) < radius + ORBIT_MARGIN_MM
         candidates = np.setdiff1d(idx[inside_x & beyond & in_front & near], np.concatenate([own, other]))
-        dist = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)[candidates]
-        keep = np.isfinite(dist)
-        rows = np.concatenate([own, candidates[keep]])
-        fade = smooth_down(dist[keep] / LID_HEIGHT_MM)
-        order = np.argsort(rest[own, 0])
-        sheet_ratio = np.interp(rest[candidates[keep], 0], rest[own[order], 0], ratio[order]) * fade
-        ratios = np.concatenate([ratio, sheet_ratio])
+        from_margin = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)
+        candidates = candidates[np.isfinite(from_margin[candidates])]
+        rows = np.concatenate([own, candidates])
+        ratios = np.concatenate([ratio, across_the_lid(rest, from_margin, own, front, candidates, ratio, front_ratio)])
         anchors = [v for label, v in zip(mesh.fp_labels, mesh.fp_vertex) if label not in PASSIVE_POINTS]
         ratios[np.isin(rows, anchors) & (rows != fp_vertex)] = 0.0  # other feature points stay put
         field = np.zeros(mesh.n_vertices)
         field[rows] = ratios
         # the margin keeps its closure (the eye shuts) but for its last vertices at each corner
         corners = rest[[int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]]
+        # (the front edges are not held: held, the evening out could not relax them at the medial end)
         closes = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
         raw[fap] = (field, joint, fp_vertex, np.concatenate([anchors, other, closes]).astype(np.int64))
     pairs = ((19, 21), (20, 22))  # one eye's two lids (they close together), both eyes at once

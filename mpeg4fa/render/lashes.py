@@ -22,14 +22,12 @@ import numpy as np
 
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import eye_looks
-from mpeg4fa.face.lids import lid_margins
+from mpeg4fa.face.lids import front_edges, lid_margins
 from mpeg4fa.face.mesh import HeadMesh
 
 LASH_MATERIAL = 6.0
 """The shader's material slot of the lash cards."""
 ROOT_OFFSET_MM = 0.15  # roots sit this far out of the lid's front edge, so the skin does not hide them
-RAY_RADIUS_MM = 1.2    # skin this close to a margin vertex's outward ray is the lid's thickness in front of it
-MAX_THICKNESS_MM = 8.0
 
 
 @dataclass(frozen=True)
@@ -76,25 +74,6 @@ def _frames(vertices: np.ndarray, rows, before, after, joint, sign) -> np.ndarra
     return np.stack([radial, tangent, np.cross(radial, tangent)], axis=1)
 
 
-def _front_edge(rest: np.ndarray, skin: slice, rows: np.ndarray) -> np.ndarray:
-    """The skin vertex furthest in front of each margin vertex (head +z) within the lid's thickness: the
-    margin path runs along the rim that touches the eyeball, lashes grow from the lid's front edge.
-    Where that is a stray (the nose beside the medial corner), the margin vertex itself."""
-    p = rest[skin]
-    forward = np.array([0.0, 0.0, 1.0])
-    depth, found = np.zeros(len(rows)), rows.copy()
-    for k, row in enumerate(rows):
-        d = p - rest[row]
-        t = d @ forward
-        near = (t > 0) & (t < MAX_THICKNESS_MM) & (np.linalg.norm(d - t[:, None] * forward, axis=1) < RAY_RADIUS_MM)
-        if near.any():
-            best = np.flatnonzero(near)[np.argmax(t[near])]
-            depth[k], found[k] = t[best], skin.start + best
-    typical = np.median(depth)
-    stray = (depth < 0.6 * typical) | (depth > 1.3 * typical)
-    return np.where(stray, rows, found)
-
-
 def build_lashes(mesh: HeadMesh) -> LashLayout | None:
     """The lash cards of a face, or None where its mesh has no lid margins to grow them on."""
     try:
@@ -129,7 +108,7 @@ def build_lashes(mesh: HeadMesh) -> LashLayout | None:
         parts["after"].append(after)
         parts["joint"].append(np.full(n, m.joint))
         parts["sign"].append(np.full(n, sign))
-        parts["roots"].append(_front_edge(rest, skin, rows))
+        parts["roots"].append(front_edges(rest, skin, rows))
         parts["length"].append(longest * _taper(s / s[-1], looks.lash_peak))
         parts["lift"].append(np.full(n, lift))
         parts["bend"].append(np.full(n, lift + curl))

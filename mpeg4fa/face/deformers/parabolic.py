@@ -36,8 +36,11 @@ point's height (the closing value x IRISD) and ``T(x)`` the opposite margin's he
 The lid point itself has ``L = 1`` and ``T = `` the opposite point's height, so it moves by
 exactly ``s d`` in every range (FAPU semantics). The lid skin beyond the margin (the vertices of
 the feature-point deformer's lid sheets, :mod:`.lids`: on the lid's side of the margin, inside
-the orbit) moves by the same rule with the margin's rates at its x, scaled by a fall-off from 1
-at the margin to 0 at :data:`.lids.LID_HEIGHT_MM` of surface distance (toward brow or cheek).
+the orbit) moves by the same rule: the lid's front edge (:func:`.lids.front_edges`, where the lashes
+grow) closes onto the opposite front edge as the margin does onto the opposite margin, the strip
+between them goes from the margin's rate to the front edge's, and the skin beyond falls off to 0
+over the rest of :data:`.lids.LID_HEIGHT_MM` of surface distance (toward brow or cheek)
+(:func:`.lids.across_the_lid`).
 
 The lids ride on the eye's pitch (FAPs 25/26) as in the feature-point deformer: the share
 :func:`.lids.lid_moves` gives the gaze turns the lid sheet about the eye centre
@@ -60,10 +63,11 @@ from mpeg4fa.face import motion
 from mpeg4fa.face.deformers.feature_points import FoldGuard, apply_head_rotation, pose_in_head_frame, skin_guard
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import EyeFrame, Parabola, Sphere, closed_by, fit_sphere, lid_parabola, middle_share
-from mpeg4fa.face.lids import LID_HEIGHT_MM, LIDS, OVERLAP_MM, lid_moves, turn_lid
+from mpeg4fa.face.lids import (FRONT_OVERLAP_MM, LID_HEIGHT_MM, LIDS, OVERLAP_MM, across_the_lid, closing_edges,
+                               front_edges, lid_moves, turn_lid)
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
-from mpeg4fa.face.regions import edge_graph, path_through, smooth_down
+from mpeg4fa.face.regions import edge_graph, path_through
 from mpeg4fa.face.rig import Rig
 
 LID_CLEARANCE_MM = 0.05  # a moved lid vertex stays at least this far outside the eyeball sphere
@@ -121,12 +125,6 @@ def _height_at(vertices: np.ndarray, margin: np.ndarray, x: np.ndarray) -> np.nd
     return np.interp(x, p[order, 0], p[order, 1])
 
 
-def _rate_at(vertices: np.ndarray, margin: np.ndarray, rate: np.ndarray, x: np.ndarray) -> np.ndarray:
-    p = vertices[margin, 0]
-    order = np.argsort(p)
-    return np.interp(x, p[order], rate[order])
-
-
 def build_eyes(mesh: HeadMesh) -> dict[str, EyeBall]:
     """Each eye part's fitted sphere and FAPs; a part that is no sphere is refused."""
     eyes = {}
@@ -147,6 +145,7 @@ def build_eyes(mesh: HeadMesh) -> dict[str, EyeBall]:
 def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> dict[int, LidContour]:
     """The four lids' parabolas and per-vertex rates (see the module docstring)."""
     rest = mesh.vertices
+    skin = mesh.part("skin")
     graph = edge_graph(rest, mesh.triangles["skin"])
     vid = {label: int(mesh.fp_vertex[mesh.fp_index(label)]) for label in mesh.fp_labels}
     out = {}
@@ -174,11 +173,15 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
         open_m[corner] = close_m[corner] = 0.0
 
         rows = rig.lids[fap].rows  # the lid sheet: margin and lid skin, other feature points excluded
-        dist = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)[rows]
-        fade = np.where(np.isfinite(dist), smooth_down(dist / LID_HEIGHT_MM), 0.0)
-        xr = rest[rows, 0]
-        open_r = sign * np.clip(middle_share(xr - frame.origin[0], corners_x, middle_x), 0.0, None) * fade
-        close_r = _rate_at(rest, own, close_m, xr) * fade
+        # the front edges close onto each other as the margins do (lids.py: a shut eye shows no strip)
+        front, other_front = closing_edges(rest, skin, own, side), front_edges(rest, skin, other)
+        xf = rest[front, 0]
+        close_f = np.where(front == own, close_m,
+                           (_height_at(rest, other_front, xf) + sign * FRONT_OVERLAP_MM - rest[front, 1]) / full)
+        open_f = sign * np.clip(middle_share(xf - frame.origin[0], corners_x, middle_x), 0.0, None)
+        from_margin = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)
+        open_r = across_the_lid(rest, from_margin, own, front, rows, open_m, np.where(front == own, open_m, open_f))
+        close_r = across_the_lid(rest, from_margin, own, front, rows, close_m, close_f)
         on_margin = np.flatnonzero(np.isin(rows, own))
         where = {v: k for k, v in enumerate(own)}
         k = np.array([where[v] for v in rows[on_margin]], dtype=int)
