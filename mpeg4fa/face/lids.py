@@ -20,7 +20,7 @@ built from the margin itself:
    is the two front edges meeting, handed over to the margin's toward the corners (:data:`FRONT_TAPER_MM`).
    With the margin's ratio alone the front edge turned about half as far as the margin (the sheet faded
    from the margin), and the strip between them, which faces down into the opening, turned to face the
-   viewer: a dark band 3.3 mm tall across every shut eye (tests/render/test_lid_pixels.py: 2.35 mm of
+   viewer: a band 3.3 mm tall across every shut eye, dark for 2.35 mm of it (tests/render/test_lid_pixels.py:
    rows under 0.7 of the skin's brightness at the middle columns, front; now none);
 4. the **lid sheet**: skin on the lid's side of the margin, within the orbit: across the strip from
    the margin to the front edge its ratio goes from the margin's to the front edge's (at its x), then
@@ -40,7 +40,7 @@ lid keeps its margin near the top of the iris as the eye looks up or down, and t
 lid follows less. Each lid point turns about the eye centre by a share of the eyeball's
 pitch (:data:`FOLLOW`), eased into a limit at the ends of the range, and its own FAP closes
 it from there toward the opposite lid where that one now is (so a blink in any gaze still
-shuts the eye, margin on margin). With the eyes straight ahead the lids move by their FAPs
+shuts the eye, the upper front edge on the lower lid). With the eyes straight ahead the lids move by their FAPs
 alone, value x IRISD.
 """
 from __future__ import annotations
@@ -84,7 +84,7 @@ point turns by a little less than the eye: tests/render/test_gaze_lid_pixels.py'
 0.026 three-quarter): share 1: looking down 0.06 / 0.051 front, 0.119 of the iris hidden at
 three-quarter (from 5 deg above, the front edge hides the iris top as the eye turns down under it);
 0.875: 1.50 px of sclera front; 0.9: at most 1.12 px (10 deg), three-quarter 0.060, looking up
-0.035 / 0.88. (Before the front edges closed onto each other, the margin was what showed: share 0:
+0.88 / 0.035. (Before the front edges closed onto each other, the margin was what showed: share 0:
 17.3 / 0.48, 1/2: 8.6 / 0.20, 2/3: 5.6 / 0.14, 1: 0.1 / 0.04.) The upper lid rises 25 deg at most
 (further and the lid sheet bunches under the brow) and follows down to 60; the lower one moves little."""
 KNEE = 0.6  # the follow is linear up to this share of its limit, then eases into the limit
@@ -120,7 +120,7 @@ def _margin(graph: sp.csr_matrix, mesh: HeadMesh, lateral: str, middle: str, med
     return path_through(graph, [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, middle, medial)])
 
 
-def _height_at(margin: np.ndarray, vertices: np.ndarray, x: np.ndarray) -> np.ndarray:
+def height_at(margin: np.ndarray, vertices: np.ndarray, x: np.ndarray) -> np.ndarray:
     """The margin's height (y) at each x, linear between its vertices."""
     p = vertices[margin]
     order = np.argsort(p[:, 0])
@@ -154,29 +154,39 @@ def closing_edges(rest: np.ndarray, skin: slice, margin: np.ndarray, side: str) 
     return front_edges(rest, skin, margin) if side == "upper" else np.asarray(margin)
 
 
+def closing_drops(rest: np.ndarray, rows: np.ndarray, towards: np.ndarray, overlap: float = OVERLAP_MM,
+                  exact: int | None = None) -> np.ndarray:
+    """How far (mm, + down) each of ``rows`` goes to close onto the path ``towards``: to its height at the row's x
+    and ``overlap`` mm past it (but for the vertex ``exact``). The one closing rule of both lid deformers."""
+    drop = rest[rows, 1] - height_at(towards, rest, rest[rows, 0])
+    drop += np.sign(drop) * np.where(rows == exact, 0.0, overlap)
+    return drop
+
+
 def _closures(rest: np.ndarray, centre: np.ndarray, rows: np.ndarray, towards: np.ndarray,
               exact: int | None = None, overlap: float = OVERLAP_MM) -> np.ndarray:
-    """The angle (rad) turning each of ``rows`` about the eye centre's x axis to the height of the path
-    ``towards`` at its x, and ``overlap`` mm past it (but for the vertex ``exact``)."""
-    drop = rest[rows, 1] - _height_at(towards, rest, rest[rows, 0])
-    drop += np.sign(drop) * np.where(rows == exact, 0.0, overlap)
+    """The angle (rad) turning each of ``rows`` about the eye centre's x axis by its :func:`closing_drops`."""
+    drop = closing_drops(rest, rows, towards, overlap, exact)
     return np.array([motion.arc_angle(rest[i, 1:] - centre[1:], d) for i, d in zip(rows, drop)])
 
 
 def across_the_lid(rest: np.ndarray, from_margin: np.ndarray, margin: np.ndarray, front: np.ndarray,
                    rows: np.ndarray, at_margin: np.ndarray, at_front: np.ndarray) -> np.ndarray:
     """A lid's motion over its sheet (``rows``), from its value on the margin (``at_margin``, per ``margin``
-    vertex) and on the front edge (``at_front``, per vertex of ``front``, :func:`front_edges` of the margin):
-    across the strip between them it goes from the one to the other (at its x), then fades to 0 over the rest
-    of :data:`LID_HEIGHT_MM`; ``from_margin``: surface distances from the margin (per vertex of the mesh)."""
+    vertex) and on the front edge (``at_front``, per vertex of ``front``, :func:`closing_edges` of the margin; a
+    stray's, the margin vertex itself, is the margin's): across the strip between them it goes from the one to
+    the other (at its x), then fades to 0 over the rest of :data:`LID_HEIGHT_MM`; ``from_margin``: surface
+    distances from the margin (per vertex of the mesh). The strip is at most half :data:`LID_HEIGHT_MM` wide
+    (4.2-5.6 mm on the generic head's upper lids: a front edge past 4.5 mm closes 0.97 of its way)."""
     x, dist = rest[rows, 0], from_margin[rows]
     order, front_order = np.argsort(rest[margin, 0]), np.argsort(rest[front, 0])
-    # the strip's width (surface distance) where the front edge was found, carried on past the strays (a
-    # stray's front edge is the margin itself: a width of 0 there folded the skin beside the medial corner)
-    found = (front != margin)[front_order]
+    at_front = np.where(front == margin, at_margin, at_front)
+    # the strip's width (surface distance) where the front edge was found (and reached), carried on past the
+    # strays (a width of 0 there folded the skin beside the medial corner)
+    found = ((front != margin) & np.isfinite(from_margin[front]))[front_order]
     if found.any():
-        width = np.nan_to_num(from_margin[front[front_order]][found], posinf=0.0)
-        width = np.minimum(np.interp(x, rest[front[front_order][found], 0], width), 0.5 * LID_HEIGHT_MM)
+        width = np.minimum(np.interp(x, rest[front[front_order][found], 0], from_margin[front[front_order][found]]),
+                           0.5 * LID_HEIGHT_MM)
     else:
         width = np.zeros(len(rows))
     on_margin = np.interp(x, rest[margin[order], 0], at_margin[order])
@@ -210,9 +220,9 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         fp_vertex = int(mesh.fp_vertex[mesh.fp_index(point)])
         closure = _closures(rest, centre, own, other, exact=fp_vertex)
         lid_closure = closure[list(own).index(fp_vertex)]
-        front, other_front = closing_edges(rest, skin, own, side), front_edges(rest, skin, other)
-        front_closure = np.where(front == own, closure,
-                                 _closures(rest, centre, front, other_front, overlap=FRONT_OVERLAP_MM))
+        front = closing_edges(rest, skin, own, side)
+        front_closure = (closure if np.array_equal(front, own) else
+                         _closures(rest, centre, front, front_edges(rest, skin, other), overlap=FRONT_OVERLAP_MM))
         # a lid already on the other margin (an eye modelled shut) closes by nothing: no share to divide out
         ratio = closure / lid_closure if lid_closure != 0 else np.zeros_like(closure)
         front_ratio = front_closure / lid_closure if lid_closure != 0 else np.zeros_like(closure)
@@ -225,7 +235,7 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         idx = np.arange(skin.start, skin.stop)
         x_lo, x_hi = rest[own, 0].min(), rest[own, 0].max()
         inside_x = (p[:, 0] > x_lo) & (p[:, 0] < x_hi)
-        own_y = _height_at(own, rest, p[:, 0])
+        own_y = height_at(own, rest, p[:, 0])
         beyond = p[:, 1] > own_y if side == "upper" else p[:, 1] < own_y
         in_front = p[:, 2] > centre[2]
         near = np.linalg.norm(p - centre, axis=1) < radius + ORBIT_MARGIN_MM

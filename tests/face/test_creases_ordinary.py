@@ -125,6 +125,6 @@ def test_evened_lids_still_shut_the_eye(generic_face):
         posed = face.unlimited().deform({fap: closing}).vertices
         corners = rest[[mesh.fp_vertex[mesh.fp_index(label)] for label in (lateral, medial)]]
         far = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
-        target = lids._height_at(other, rest, rest[far, 0])
+        target = lids.height_at(other, rest, rest[far, 0])
         gap = (posed[far, 1] - target) if side == "upper" else (target - posed[far, 1])
         assert gap.max() < 0.05, f"FAP {fap}: a margin vertex stops {gap.max():.2f} mm short of the other lid"

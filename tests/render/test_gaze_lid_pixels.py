@@ -7,9 +7,10 @@ Drawn unlit with colour-coded materials (skin red, sclera blue, iris green, pupi
 * the **sclera above the iris**: in the middle half of the iris's columns, sclera pixels above the topmost
   iris pixel, per column (a band of white between the upper lid and the iris).
 
-The generic head's open upper lid sits at the top of the iris (2 % of it covered, 0.8 px of sclera above,
+The generic head's open upper lid sits at the top of the iris (2 % of it covered, 0.75 px of sclera above,
 front). Before the lids rode on the pitch, looking up 20 deg hid 48 % of the iris under the upper lid and
-looking down 20 deg bared 17.3 px of sclera per column above it; now 4 % and 0.1 px.
+looking down 20 deg bared 17.3 px of sclera per column above it; then 4 % and 0.1 px, and since the upper lid
+closes by its front edge (mpeg4fa/face/lids.py, FOLLOW) 3.5 % and at most 1.1 px (looking down 10 deg).
 """
 from __future__ import annotations
 
@@ -35,7 +36,7 @@ high at the top of the 11.5 mm iris (a lid margin within about a lash's thicknes
 the follow the share moved by 0.45 looking up."""
 SCLERA_ROWS = 1.5
 """Sclera above the iris, px per column, allowed when looking down: the rim where the lid's edge and the
-iris's top share pixels (0.8 at straight gaze); before the follow, 17.3 at 20 deg down."""
+iris's top share pixels (0.75 at straight gaze); before the follow, 17.3 at 20 deg down."""
 
 
 @pytest.fixture(scope="module", params=[(view, d) for d in EXACT_DEFORMERS for view in ("front", "three-quarter")],

@@ -64,7 +64,7 @@ def test_upper_lids_close_the_eyes(eyes):
 def test_half_closed_lids_cover_half_the_iris(eyes):
     """The lid itself, without its lash cards: at half closure the upper lashes' first half points forward
     and a little down, and from the three-quarter view's 5 degrees above they hide another tenth of the iris
-    (0.37 -> 0.27 of it left; front 0.47 -> 0.41), as real lashes do."""
+    (measured, feature-point lids: 0.38 -> 0.31 of it left; front 0.45 -> 0.42), as real lashes do."""
     face, r = eyes
     with Renderer(face, width=r.width, height=r.height, lighting=False, materials=CODED, camera=r.camera,
                   lashes=False) as lid:
@@ -146,12 +146,16 @@ def test_eyeball_only_inside_the_lid_opening_in_every_gaze(eyes):
 # -- a shut eye: the lids meet at their front edges ---------------------------------------------------
 
 DARK = 0.7
-ACROSS = (0.35, 0.5, 0.65)
 """A row darker than this share of the lid skin above it is part of a band (lit, lashes left out)."""
+ACROSS = (0.35, 0.5, 0.65)
+"""Columns measured, as shares of the way from one corner to the other: the middle of the lid, where it closes by
+its front edge (toward the corners it hands over to its margin, and from three-quarter a dark wedge up to 1.9 mm
+tall is left beside the corner, 0.2 of the way in, as before)."""
 BAND_MM = 1.0
-"""The most of it a shut eye may show at a lid point's column: the line where the two lids meet. Before the
-front edges closed onto each other (the lid's strip from margin to front edge, which faces down into the
-opening, turned toward the viewer) it was a band 2-3 mm tall, 0.33 of the skin at its darkest."""
+"""The most of it a shut eye may show in one column: the line where the two lids meet (measured: 0 front, 0.44-0.75
+three-quarter, on all four deformers). Before the front edges closed onto each other (the lid's strip from margin to
+front edge, which faces down into the opening, turned toward the viewer) 2.35 mm front (parabolic 3.13), 1.49
+three-quarter, 0.33 of the skin at its darkest."""
 
 
 def dark_band_mm(face, camera, width: int, height: int, pose) -> list[float]:

@@ -63,7 +63,7 @@ from mpeg4fa.face import motion
 from mpeg4fa.face.deformers.feature_points import FoldGuard, apply_head_rotation, pose_in_head_frame, skin_guard
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import EyeFrame, Parabola, Sphere, closed_by, fit_sphere, lid_parabola, middle_share
-from mpeg4fa.face.lids import (FRONT_OVERLAP_MM, LID_HEIGHT_MM, LIDS, OVERLAP_MM, across_the_lid, closing_edges,
+from mpeg4fa.face.lids import (FRONT_OVERLAP_MM, LID_HEIGHT_MM, LIDS, across_the_lid, closing_drops, closing_edges,
                                front_edges, lid_moves, turn_lid)
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
@@ -102,7 +102,7 @@ class LidContour:
     margin: np.ndarray  # margin vertices, lateral corner to medial corner
     point: int  # the lid point's vertex
     rows: np.ndarray  # vertices moved (margin without corners, and the lid skin)
-    open_rate: np.ndarray  # dy per mm of closure outside 0..full (the parabola times the fall-off)
+    open_rate: np.ndarray  # dy per mm of closure outside 0..full (the parabola, across the lid and its fall-off)
     close_rate: np.ndarray  # dy per mm of closure inside 0..full
     centre: np.ndarray  # eyeball centre (the lid sphere's)
     min_radius: float  # eyeball radius + LID_CLEARANCE_MM
@@ -116,13 +116,6 @@ class LidContour:
         inside = min(max(d, 0.0), self.full)
         outside = d - inside
         return self.close_rate * inside + self.open_rate * outside
-
-
-def _height_at(vertices: np.ndarray, margin: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """A margin's height at each x, linear between its vertices."""
-    p = vertices[margin]
-    order = np.argsort(p[:, 0])
-    return np.interp(x, p[order, 0], p[order, 1])
 
 
 def build_eyes(mesh: HeadMesh) -> dict[str, EyeBall]:
@@ -162,11 +155,10 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
 
         own = path_through(graph, [vid[lateral], vid[point], vid[medial]])
         other = path_through(graph, [vid[lateral], vid[opposite], vid[medial]])
-        x, y = rest[own, 0], rest[own, 1]
+        x = rest[own, 0]
         share = np.clip(middle_share(x - frame.origin[0], corners_x, middle_x), 0.0, None)
-        target = _height_at(rest, other, x) + sign * OVERLAP_MM
         open_m = sign * share
-        close_m = (target - y) / full
+        close_m = -closing_drops(rest, own, other) / full
         at_point = own == vid[point]
         open_m[at_point] = close_m[at_point] = sign  # exactly value x IRISD
         corner = np.isin(own, [vid[lateral], vid[medial]])
@@ -174,13 +166,11 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
 
         rows = rig.lids[fap].rows  # the lid sheet: margin and lid skin, other feature points excluded
         # the front edges close onto each other as the margins do (lids.py: a shut eye shows no strip)
-        front, other_front = closing_edges(rest, skin, own, side), front_edges(rest, skin, other)
-        xf = rest[front, 0]
-        close_f = np.where(front == own, close_m,
-                           (_height_at(rest, other_front, xf) + sign * FRONT_OVERLAP_MM - rest[front, 1]) / full)
-        open_f = sign * np.clip(middle_share(xf - frame.origin[0], corners_x, middle_x), 0.0, None)
+        front = closing_edges(rest, skin, own, side)
+        close_f = -closing_drops(rest, front, front_edges(rest, skin, other), FRONT_OVERLAP_MM) / full
+        open_f = sign * np.clip(middle_share(rest[front, 0] - frame.origin[0], corners_x, middle_x), 0.0, None)
         from_margin = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)
-        open_r = across_the_lid(rest, from_margin, own, front, rows, open_m, np.where(front == own, open_m, open_f))
+        open_r = across_the_lid(rest, from_margin, own, front, rows, open_m, open_f)
         close_r = across_the_lid(rest, from_margin, own, front, rows, close_m, close_f)
         on_margin = np.flatnonzero(np.isin(rows, own))
         where = {v: k for k, v in enumerate(own)}
