@@ -68,7 +68,11 @@ held-out wide streams): with the wide turns the brows read 0.23 -> 0.53 / 0.65 -
 the wide mix; each lip's FAPs (4, 8, 9, 51, 55, 56 and 5, 10, 11, 52, 57, 58) sharing 3/4 of their own motion in the
 calm streams, as speech moves them (25 runs re-rendered, 2026-12-06): loop inner lips 0.393 -> 0.395, FAP 5's gain
 0.21 -> 0.22 (why: tools/lip_reach.py); squared iris displacements for the lids (+0.001 on the loop, -0.005 on
-held-out calm streams)."""
+held-out calm streams). Retrained on renders of 786321f (2026-12-06: the upper lids close by their front edges, so
+a shut eye shows no dark band): the same mixes and penalties chosen (lids 0.0003: 0.813 on left-out textures, 0.819
+with mirror images, under :data:`MIRROR_GAIN`); held-out swept / wide / calm streams: lids 0.806 / 0.789 / 0.800, jaw
+0.948 / 0.955 / 0.944, lip corners 0.854 / 0.734 / 0.845, brows 0.740 / 0.684 / 0.729; the 12 s loop's lids 0.891 (the
+old map on the new lids 0.879, on the old lids 0.915)."""
 MIRROR_GAIN = 0.01
 """A region learns from its runs' mirror images too (:func:`mirrored`) only where that reads the left-out textures this
 much better (pooled correlation). On the renders of cb9e6e3 / 4a9f6bc the brows gain 0.718 -> 0.751 (held-out streams
