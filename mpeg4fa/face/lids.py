@@ -131,16 +131,22 @@ def front_edges(rest: np.ndarray, skin: slice, rows: np.ndarray) -> np.ndarray:
     """The skin vertex furthest in front of each margin vertex (head +z) within the lid's thickness: the
     margin path runs along the rim that touches the eyeball, the lid's front edge (where lashes grow) is
     in front of it. Where that is a stray (the nose beside the medial corner), the margin vertex itself."""
-    p = rest[skin]
-    forward = np.array([0.0, 0.0, 1.0])
-    depth, found = np.zeros(len(rows)), np.asarray(rows).copy()
-    for k, row in enumerate(rows):
-        d = p - rest[row]
-        t = d @ forward
-        near = (t > 0) & (t < MAX_THICKNESS_MM) & (np.linalg.norm(d - t[:, None] * forward, axis=1) < RAY_RADIUS_MM)
-        if near.any():
-            best = np.flatnonzero(near)[np.argmax(t[near])]
-            depth[k], found[k] = t[best], skin.start + best
+    rows = np.asarray(rows)
+    depth, found = np.zeros(len(rows)), rows.copy()
+    if not len(rows):
+        return found
+    # only skin in the box the rays can reach (a few hundred vertices, not the head's thousands)
+    lo = rest[rows].min(axis=0) - [RAY_RADIUS_MM, RAY_RADIUS_MM, 0.0]
+    hi = rest[rows].max(axis=0) + [RAY_RADIUS_MM, RAY_RADIUS_MM, MAX_THICKNESS_MM]
+    index = np.arange(skin.start, skin.stop)
+    index = index[np.all((rest[index] >= lo) & (rest[index] <= hi), axis=1)]
+    d = rest[index][None] - rest[rows][:, None]  # (rows, candidates, 3)
+    t = d[..., 2]  # in front of the margin (head +z)
+    near = (t > 0) & (t < MAX_THICKNESS_MM) & (np.hypot(d[..., 0], d[..., 1]) < RAY_RADIUS_MM)
+    reach = np.where(near, t, -np.inf)
+    best = np.argmax(reach, axis=1)
+    hit = near.any(axis=1)
+    depth[hit], found[hit] = t[hit, best[hit]], index[best[hit]]
     typical = np.median(depth)
     stray = (depth < 0.6 * typical) | (depth > 1.3 * typical)
     return np.where(stray, rows, found)
