@@ -169,11 +169,21 @@ def closing_drops(rest: np.ndarray, rows: np.ndarray, towards: np.ndarray, overl
     return drop
 
 
-def _closures(rest: np.ndarray, centre: np.ndarray, rows: np.ndarray, towards: np.ndarray,
-              exact: int | None = None, overlap: float = OVERLAP_MM) -> np.ndarray:
-    """The angle (rad) turning each of ``rows`` about the eye centre's x axis by its :func:`closing_drops`."""
-    drop = closing_drops(rest, rows, towards, overlap, exact)
-    return np.array([motion.arc_angle(rest[i, 1:] - centre[1:], d) for i, d in zip(rows, drop)])
+def front_closing_drops(rest: np.ndarray, skin: slice, front: np.ndarray, margin: np.ndarray,
+                        other: np.ndarray) -> np.ndarray:
+    """:func:`closing_drops` of each of a lid's ``front`` edges (:func:`closing_edges` of its ``margin``) onto the
+    opposite lid's front edges (``other``: that lid's margin), :data:`FRONT_OVERLAP_MM` past them; 0 where the
+    front edge is the margin itself (:func:`across_the_lid` takes the margin's value there)."""
+    drops = np.zeros(len(front))
+    moved = front != margin
+    if moved.any():
+        drops[moved] = closing_drops(rest, front[moved], front_edges(rest, skin, other), FRONT_OVERLAP_MM)
+    return drops
+
+
+def _turns(rest: np.ndarray, centre: np.ndarray, rows: np.ndarray, drops: np.ndarray) -> np.ndarray:
+    """The angle (rad) turning each of ``rows`` about the eye centre's x axis down by its drop (mm, on its arc)."""
+    return np.array([motion.arc_angle(rest[i, 1:] - centre[1:], d) for i, d in zip(rows, drops)])
 
 
 def across_the_lid(rest: np.ndarray, from_margin: np.ndarray, margin: np.ndarray, front: np.ndarray,
@@ -224,11 +234,10 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         # closure of each margin vertex: turn to the opposite margin's height at its x, a little past it so
         # that the two close without slivers (the lid point itself is exact); the front edges likewise
         fp_vertex = int(mesh.fp_vertex[mesh.fp_index(point)])
-        closure = _closures(rest, centre, own, other, exact=fp_vertex)
+        closure = _turns(rest, centre, own, closing_drops(rest, own, other, exact=fp_vertex))
         lid_closure = closure[list(own).index(fp_vertex)]
         front = closing_edges(rest, skin, own, side)
-        front_closure = (closure if np.array_equal(front, own) else
-                         _closures(rest, centre, front, front_edges(rest, skin, other), overlap=FRONT_OVERLAP_MM))
+        front_closure = _turns(rest, centre, front, front_closing_drops(rest, skin, front, own, other))
         # a lid already on the other margin (an eye modelled shut) closes by nothing: no share to divide out
         ratio = closure / lid_closure if lid_closure != 0 else np.zeros_like(closure)
         front_ratio = front_closure / lid_closure if lid_closure != 0 else np.zeros_like(closure)

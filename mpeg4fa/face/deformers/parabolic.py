@@ -63,8 +63,8 @@ from mpeg4fa.face import motion
 from mpeg4fa.face.deformers.feature_points import FoldGuard, apply_head_rotation, pose_in_head_frame, skin_guard
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import EyeFrame, Parabola, Sphere, closed_by, fit_sphere, lid_parabola, middle_share
-from mpeg4fa.face.lids import (FRONT_OVERLAP_MM, LID_HEIGHT_MM, LIDS, across_the_lid, closing_drops, closing_edges,
-                               front_edges, lid_moves, turn_lid)
+from mpeg4fa.face.lids import (LID_HEIGHT_MM, LIDS, across_the_lid, closing_drops, closing_edges,
+                               front_closing_drops, lid_moves, turn_lid)
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.regions import edge_graph, path_through
@@ -167,7 +167,7 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
         rows = rig.lids[fap].rows  # the lid sheet: margin and lid skin, other feature points excluded
         # the front edges close onto each other as the margins do (lids.py: a shut eye shows no strip)
         front = closing_edges(rest, skin, own, side)
-        close_f = -closing_drops(rest, front, front_edges(rest, skin, other), FRONT_OVERLAP_MM) / full
+        close_f = -front_closing_drops(rest, skin, front, own, other) / full
         open_f = sign * np.clip(middle_share(rest[front, 0] - frame.origin[0], corners_x, middle_x), 0.0, None)
         from_margin = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)
         open_r = across_the_lid(rest, from_margin, own, front, rows, open_m, open_f)
