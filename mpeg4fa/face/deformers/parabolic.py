@@ -155,9 +155,11 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
 
         own = path_through(graph, [vid[lateral], vid[point], vid[medial]])
         other = path_through(graph, [vid[lateral], vid[opposite], vid[medial]])
-        x = rest[own, 0]
-        share = np.clip(middle_share(x - frame.origin[0], corners_x, middle_x), 0.0, None)
-        open_m = sign * share
+
+        def opening(vertices: np.ndarray) -> np.ndarray:  # dy per mm of opening: the parabola's share at their x
+            return sign * np.clip(middle_share(rest[vertices, 0] - frame.origin[0], corners_x, middle_x), 0.0, None)
+
+        open_m = opening(own)
         close_m = -closing_drops(rest, own, other) / full
         at_point = own == vid[point]
         open_m[at_point] = close_m[at_point] = sign  # exactly value x IRISD
@@ -168,7 +170,7 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
         # the front edges close onto each other as the margins do (lids.py: a shut eye shows no strip)
         front = closing_edges(rest, skin, own, side)
         close_f = -front_closing_drops(rest, skin, front, own, other) / full
-        open_f = sign * np.clip(middle_share(rest[front, 0] - frame.origin[0], corners_x, middle_x), 0.0, None)
+        open_f = opening(front)
         from_margin = dijkstra(graph, indices=own, min_only=True, limit=LID_HEIGHT_MM)
         open_r = across_the_lid(rest, from_margin, own, front, rows, open_m, open_f)
         close_r = across_the_lid(rest, from_margin, own, front, rows, close_m, close_f)
