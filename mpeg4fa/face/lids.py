@@ -160,6 +160,19 @@ def closing_edges(rest: np.ndarray, skin: slice, margin: np.ndarray, side: str) 
     return front_edges(rest, skin, margin) if side == "upper" else np.asarray(margin)
 
 
+def lid_strips(mesh: HeadMesh) -> np.ndarray:
+    """Skin vertex indices (of the whole mesh) of the four lid margins and the upper lids' front edges
+    (:func:`closing_edges`): the strips the lids carry, which a brow raise's spread leaves in place
+    (:class:`~mpeg4fa.face.deformers.feature_points.FoldGuard`)."""
+    rest, skin = mesh.vertices, mesh.part("skin")
+    graph = edge_graph(rest, mesh.triangles["skin"])
+    out = []
+    for _eye, _joint, point, _opposite, lateral, medial, side in LIDS.values():
+        own = _margin(graph, mesh, lateral, point, medial)
+        out += [own, closing_edges(rest, skin, own, side)]
+    return np.unique(np.concatenate(out))
+
+
 def closing_drops(rest: np.ndarray, rows: np.ndarray, towards: np.ndarray, overlap: float = OVERLAP_MM,
                   exact: int | None = None) -> np.ndarray:
     """How far (mm, + down) each of ``rows`` goes to close onto the path ``towards``: to its height at the row's x

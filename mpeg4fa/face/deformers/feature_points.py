@@ -23,7 +23,7 @@ import scipy.sparse as sp
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS
-from mpeg4fa.face.lids import lid_drops, turn_lid
+from mpeg4fa.face.lids import lid_drops, lid_strips, turn_lid
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.regions import LID_MARGIN_LOOPS, WIDE_REACH_MM, shortest_loop, wide_weights
@@ -107,7 +107,10 @@ class FoldGuard:
         self.steep = sp.csr_matrix(np.linalg.norm(grad, axis=2) * self.touches)
 
     def _spread(self, scalp_slides: bool) -> np.ndarray:
-        """``(skin vertices, K)``: wide minus narrow weights, the hairline held or (``scalp_slides``) not."""
+        """``(skin vertices, K)``: wide minus narrow weights, the hairline held or (``scalp_slides``: a raise) not,
+        and in a raise the upper lids' front edges held with the margins (:func:`.lids.lid_strips`: a brow raise
+        that lifted them 3-5 mm over the held margins turned the strip between to face the viewer, a dark band
+        over each eye; a lowered brow pushed down onto them folded the lid skin, so only in a raise)."""
         mesh, skin = self.mesh, self.skin
         labels = [mesh.fp_labels[c] for c in self.columns]
         points = mesh.fp_vertex[self.columns] - skin.start
@@ -116,6 +119,8 @@ class FoldGuard:
                    if skin.start <= v < skin.stop and mesh.fp_labels[i] not in PASSIVE_POINTS + scalp]
         held = np.unique(np.concatenate([anchors, [p for p, label in zip(points, labels) if label not in scalp]]))
         margins = np.concatenate([shortest_loop(mesh, loop) for loop in LID_MARGIN_LOOPS]) - skin.start
+        if scalp_slides:
+            margins = np.union1d(margins, lid_strips(mesh) - skin.start)
         with_margins = np.union1d(held, margins)
         reach = [SCALP_REACH_MM if scalp_slides and label.startswith("4.") else WIDE_REACH_MM for label in labels]
         holds = [held if label.startswith("3.") else with_margins for label in labels]
