@@ -165,12 +165,8 @@ def lid_strips(mesh: HeadMesh) -> np.ndarray:
     (:func:`closing_edges`): the strips the lids carry, which a brow raise's spread leaves in place
     (:class:`~mpeg4fa.face.deformers.feature_points.FoldGuard`)."""
     rest, skin = mesh.vertices, mesh.part("skin")
-    graph = edge_graph(rest, mesh.triangles["skin"])
-    out = []
-    for _eye, _joint, point, _opposite, lateral, medial, side in LIDS.values():
-        own = _margin(graph, mesh, lateral, point, medial)
-        out += [own, closing_edges(rest, skin, own, side)]
-    return np.unique(np.concatenate(out))
+    return np.unique(np.concatenate([edges for m in lid_margins(mesh)
+                                     for edges in (m.rows, closing_edges(rest, skin, m.rows, m.side))]))
 
 
 def closing_drops(rest: np.ndarray, rows: np.ndarray, towards: np.ndarray, overlap: float = OVERLAP_MM,
