@@ -62,6 +62,13 @@ NECK_TOP = ((0.55, 0.30), (-0.25, 0.70))
 height as the share of the height from the neck's cut up to 7.1 (0.30: under the chin; 0.70:
 the skull's base). The head's rotation fades in over the neck below the line through them
 (and below the jaw line, :data:`JAW_LINE_MARGIN_MM`, where that is higher)."""
+THROAT_BOW_DEGREES = 20.0
+"""The deepest bow (head pitch down, FAP 48 > 0) the throat takes alone; past it the whole neck, its cut
+included, turns by the excess about 7.1 and shares out the rest as before (``feature_points.neck_bow``).
+With the cut held, a bow about 7.1 drives the chin into the neck's column (at 40 degrees it lands 18 mm
+below the cut): with the widest viseme's jaw the throat drew fold lines from 22 degrees and folded from
+32 (36 triangles at 40). Looking up, turning and tilting stretch the throat instead and pass at 40
+degrees; the real streams bow at most 15.8 degrees."""
 JAW_LINE_MARGIN_MM = 6.0
 """At the front the head's share reaches 1 this far below the jaw line (the plane through the chin
 2.1 and the jaw angles 2.13/2.14), so the skin under the chin blends between the head and the neck:

@@ -24,10 +24,10 @@ from mpeg4fa.face import lids, motion
 from mpeg4fa.face.deformers import feature_points
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.face.reach import load_reach
-from mpeg4fa.face.rig import CORNER_MARGIN_MM
+from mpeg4fa.face.rig import CORNER_MARGIN_MM, THROAT_BOW_DEGREES
 from mpeg4fa.spec import ANGLE_UNIT
 
-RIG_VERSION = 4
+RIG_VERSION = 5
 """Bumped when the layout of :func:`rig_data` changes (``static/js/facerig.js`` checks it)."""
 
 
@@ -122,7 +122,8 @@ def rig_data(face: FaceModel) -> dict:
         "eyes": eyes, "es": float(fapu.unit("ES")),
         "head": {"pitch": head["pitch"], "yaw": head["yaw"], "roll": head["roll"], "fp": int(rig.head_fp),
                  "neck": "turn" if hasattr(feature_points, "partial_rotations") else "blend",
-                 "fade_rows": _ints(fade_rows), "fade_weights": _floats(fade_w)},
+                 "fade_rows": _ints(fade_rows), "fade_weights": _floats(fade_w),
+                 "throat_bow": float(THROAT_BOW_DEGREES)},
     }
 
 

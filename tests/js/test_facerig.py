@@ -40,6 +40,7 @@ def rows_to_check(rng: np.random.Generator) -> np.ndarray:
     row(f47=3000, f43=100, f44=60)  # tongue roll and tip
     row(f23=20000, f24=-15000, f25=10000, f26=-5000, f27=100, f28=-50)  # eyeballs
     row(f48=15000, f49=-20000, f50=8000)  # head
+    row(f3=900, f48=69813, f49=30000, f50=-9000)  # a 40 degree bow, turned: the whole neck takes its excess
     row(f31=724, f32=724, f33=640, f34=640, f35=520, f36=520)  # brows x2 up: the guard lets the scalp slide
     row(f31=-400, f32=300, f33=-500, f34=600, f35=-300, f36=500)  # one side down, the other up
     row(f5=3720, f6=1200, f8=-1200, f14=600, f17=-1080)  # full I ranges: eased into the head's reach

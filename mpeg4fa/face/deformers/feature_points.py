@@ -27,7 +27,7 @@ from mpeg4fa.face.lids import lid_drops, lid_strips, turn_lid
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.regions import LID_MARGIN_LOOPS, WIDE_REACH_MM, shortest_loop, wide_weights
-from mpeg4fa.face.rig import CORNER_MARGIN_MM, Rig
+from mpeg4fa.face.rig import CORNER_MARGIN_MM, THROAT_BOW_DEGREES, Rig
 
 EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
 FOLD_START = 0.15
@@ -293,8 +293,20 @@ def partial_rotations(rotation: np.ndarray, shares: np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(a) * k + (1.0 - np.cos(a)) * (k @ k)
 
 
+def neck_bow(pitch: float, yaw: float) -> np.ndarray:
+    """The part of a head rotation the whole neck takes, its cut included: the bow (pitch down) past
+    :data:`~mpeg4fa.face.rig.THROAT_BOW_DEGREES`, about the yawed head's left-right axis (identity within it).
+    The head's rotation is this times the rest, ``yaw @ (pitch - bow) @ roll``, which the neck shares out."""
+    bow = pitch - np.radians(THROAT_BOW_DEGREES)
+    if bow <= 0.0:
+        return np.eye(3)
+    yawed = motion.rotation_matrix(1, yaw)
+    return yawed @ motion.rotation_matrix(0, bow) @ yawed.T
+
+
 def apply_head_rotation(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
-    """FAPs 48-50: turn the head, and the neck by its share of the turn (in place)."""
+    """FAPs 48-50: turn the head, and the neck by its share of the turn (in place); a deep bow
+    turns the whole neck by its excess (:func:`neck_bow`)."""
     rest = rig.rest
     head = {kind: fap for fap, kind in motion.HEAD.items()}
     pitch, yaw, roll_h = (v[head[k] - 1] * motion.ANGLE_UNIT_RAD for k in ("pitch", "yaw", "roll"))
@@ -302,10 +314,11 @@ def apply_head_rotation(rig: Rig, p: np.ndarray, v: np.ndarray) -> None:
         rows, w = rig.head_fade
         centre = rest[rig.fp_vertex[rig.head_fp]]
         rotation = motion.head_rotation(pitch, yaw, roll_h)
+        whole = neck_bow(pitch, yaw)
         before = p[rows] - centre
         # turn everything (one product over the whole array), then the neck by its share
         p[:] = centre + (p - centre) @ rotation.T
-        p[rows] = centre + np.einsum("nij,nj->ni", partial_rotations(rotation, w), before)
+        p[rows] = centre + np.einsum("nij,nj->ni", whole @ partial_rotations(whole.T @ rotation, w), before)
 
 
 def deform(rig: Rig, values: np.ndarray, guard: FoldGuard | None = None) -> Pose:

@@ -10,7 +10,7 @@
 // identity up to a knee, then knee + span x tanh(excess / span) below the limit). Same steps, same order, same numbers: the page's head is the
 // Python face's to rounding, not an approximation of it.
 
-const RIG_VERSION = 4;
+const RIG_VERSION = 5;
 
 /** Right-handed rotation by ``angle`` about axis 0, 1 or 2, as a row-major 3x3 (motion.rotation_matrix). */
 export function rotation(axis, angle) {
@@ -25,6 +25,19 @@ function mul(a, b) {
   const r = new Array(9).fill(0);
   for (let i = 0; i < 3; i++) for (let j = 0; j < 3; j++) for (let k = 0; k < 3; k++) r[3 * i + j] += a[3 * i + k] * b[3 * k + j];
   return r;
+}
+
+function transpose(a) {
+  return [a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]];
+}
+
+/** The part of a head rotation the whole neck takes, its cut included (feature_points.neck_bow): the bow
+ * (pitch down, rad) past ``throat`` degrees, about the yawed head's left-right axis; null within it. */
+export function neckBow(pitch, yaw, throat) {
+  const bow = pitch - throat * (Math.PI / 180);
+  if (bow <= 0) return null;
+  const yawed = rotation(1, yaw);
+  return mul(mul(yawed, rotation(0, bow)), transpose(yawed));
 }
 
 /** Angle about +x that lowers a point at (y, z) from the pivot by ``drop`` (motion.arc_angle): the root nearest 0. */
@@ -339,9 +352,11 @@ export class FaceRig {
         for (let i = 0; i < 3; i++) p[o + i] = c[i] + r[3 * i] * x + r[3 * i + 1] * y + r[3 * i + 2] * z;
       }
       if (h.neck === "turn") {  // each neck vertex turned by its share of the angle (partial_rotations)
-        const part = partialRotation(r), m = this.neckTurn;
+        const whole = neckBow(pitch, yaw, h.throat_bow);  // a deep bow: the whole neck turns by its excess
+        const part = partialRotation(whole ? mul(transpose(whole), r) : r), m = this.neckTurn;
         for (let k = 0; k < rows.length; k++) {
           part(h.fadeWeights[k], m);
+          if (whole) m.set(mul(whole, m));
           const x = before[3 * k] - c[0], y = before[3 * k + 1] - c[1], z = before[3 * k + 2] - c[2];
           for (let i = 0; i < 3; i++) p[3 * rows[k] + i] = c[i] + m[3 * i] * x + m[3 * i + 1] * y + m[3 * i + 2] * z;
         }
