@@ -103,6 +103,7 @@ def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | N
     order = sorted(photo3, key=_LABEL_ORDER.__getitem__)
     points = {label: scale * (rot @ photo3[label]) + shift for label in order}
     _lips_in_contact(points, head, set(given or ()))
+    _lips_level(points, head, set(given or ()))
     return {label: pixels[label] for label in order}, points, float(1.0 / scale)
 
 
@@ -122,6 +123,45 @@ def _lips_in_contact(points: dict[str, np.ndarray], head: Mapping[str, np.ndarra
             if points[upper][1] - points[lower][1] > gap:   # apart (y up)
                 middle = (points[upper][1] + points[lower][1]) / 2.0
                 points[upper][1], points[lower][1] = middle + gap / 2.0, middle - gap / 2.0
+
+
+LIP_CORNERS = {"left": ("8.3", "2.4"), "right": ("8.4", "2.5")}
+"""The outer and inner lip corners of each side of the face."""
+LIP_POINTS = ("2.2", "2.3", "2.4", "2.5", "2.6", "2.7", "2.8", "2.9",
+              "8.1", "8.2", "8.3", "8.4", "8.5", "8.6", "8.7", "8.8", "8.9", "8.10")
+"""The points of the lips' contours, which a smile bends."""
+
+
+def _lips_level(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]) -> None:
+    """In the neutral face the line of the lips is horizontal, at the height of the lip corners (the facts
+    file's neutral face definition, item 7, [S]); a smiling photo has its corners raised (the astronaut's
+    6.6-8.0 mm over the line of her lips), and a head calibrated to them smiles in every expression. Each side's
+    corners are brought to the line's height at the midline (inner lips 2.2/2.3, as the head's own corners sit
+    against its own line), and the lip points between follow by the square of their share of the way out
+    from the midline to the corner, which takes the bend of a smile out of the contours (an upper and lower inner
+    lip pair by their mean share, so they stay in contact). Points given (a user's)
+    stay, and a corner given keeps its side as found. The texture coordinates stay on the photo's lips, so the
+    receiver paints the photo's lips onto the level ones."""
+    if not {"2.2", "2.3"} <= points.keys() or not {"2.2", "2.3"} <= head.keys():
+        return
+    line = (points["2.2"][1] + points["2.3"][1]) / 2.0
+    head_line = (head["2.2"][1] + head["2.3"][1]) / 2.0
+    middle = (points["2.2"][0] + points["2.3"][0]) / 2.0
+    for side, corners in LIP_CORNERS.items():
+        seen = [c for c in corners if c in points and c in head]
+        if not seen or set(corners) & given:
+            continue
+        drop = float(np.mean([line + (head[c][1] - head_line) - points[c][1] for c in seen]))
+        reach = float(np.mean([points[c][0] for c in seen])) - middle
+        if abs(reach) < 1e-6:
+            continue
+        share = {label: (points[label][0] - middle) / reach for label in LIP_POINTS if label in points}
+        for pair in INNER_LIP_PAIRS:  # a pair moves as one, so the contact _lips_in_contact made stays
+            if set(pair) <= share.keys():
+                share.update(dict.fromkeys(pair, (share[pair[0]] + share[pair[1]]) / 2.0))
+        for label, t in share.items():
+            if t > 0.0 and label not in given:
+                points[label][1] += drop * min(t, 1.0) ** 2
 
 
 def _generic_points() -> dict[str, np.ndarray]:

@@ -46,13 +46,15 @@ def test_points_found_on_a_rendered_head_where_they_are(made, textured, view):
     """The head calibrated to the astronaut wears her photo (the FDP's texture, baked as a receiver does);
     rendered, its face is found again and each point lies where the head's own point projects. The
     issue's bar (every point within 3 % of the face's width, median under 1.5 %) holds from the front;
-    turned 15 degrees the inner lips and corners reach 3.6 %: the FDP closes her smiling lips (the
-    neutral face's lips touch) while the texture keeps them where the photo shows them (measured:
-    front median 1.0 %, max 2.7 %; 15 degrees median 1.2 %, max 3.6 %)."""
+    turned 15 degrees the inner lower lip reaches 5.1 %: the FDP closes her smiling lips (the neutral face's
+    lips touch) and levels them (the corners at the line of the lips) while the texture keeps the photo's lips,
+    and the landmark model reads the inner lower lip of the closed mouth below where it is (measured: front
+    median 0.9 %, max 2.8 %, 15 degrees median 1.3 %, max 5.1 %; before the lips were levelled 1.0 / 2.7 and
+    1.2 / 3.6 %, the corners the worst)."""
     errors = _loop_errors(made, textured, view)
     assert len(errors) == len(SEEN_LABELS)
     worst = max(errors, key=errors.get)
-    assert errors[worst] < (3.0 if view == "front" else 4.0), (worst, errors[worst])
+    assert errors[worst] < (3.0 if view == "front" else 5.5), (worst, errors[worst])
     assert np.median(list(errors.values())) < 1.5
 
 
@@ -173,6 +175,45 @@ def test_fdp_lips_are_in_contact_though_the_photo_smiles(made):
         assert (found[lower][1] - found[upper][1]) * made.scale > 3.0         # apart in the photo (y down), mm
         gap = made.points[upper][1] - made.points[lower][1]
         assert gap == pytest.approx(max(head[upper][1] - head[lower][1], 0.0), abs=1e-9)
+
+
+def _corner_heights(points) -> dict[str, float]:
+    """Each lip corner's height over the line of the lips at the midline (mm, y up)."""
+    line = (points["2.2"][1] + points["2.3"][1]) / 2.0
+    return {label: float(points[label][1] - line) for label in ("8.3", "8.4", "2.4", "2.5")}
+
+
+def test_fdp_lips_are_level_though_the_photo_smiles(made):
+    """In the neutral face the line of the lips is horizontal at the corners' height (item 7): the astronaut's
+    corners sit 3.6-5.1 mm over the line of her lips in the photo (6.6-8.0 mm once her pose is taken out); the
+    FDP's within 0.5 mm of where the generic head's own sit over its line (0.5 mm; measured 0.14-0.33), so a head
+    calibrated to her does not smile in every expression."""
+    from mpeg4fa.face import FaceModel
+
+    head = _corner_heights(FaceModel.default().feature_points())
+    found = feature_points(made.landmarks)
+    photo = {k: -v * made.scale for k, v in _corner_heights({k: p[:2] for k, p in found.items()}).items()}
+    assert min(photo.values()) > 3.0                                  # raised in the photo (y down there)
+    sent = _corner_heights(made.points)
+    assert max(abs(sent[k] - head[k]) for k in head) < 0.5, sent
+
+
+def test_a_smile_rendered_gives_the_heads_neutral_lips(made, textured):
+    """Closed loop: the head calibrated to the astronaut, smiling (joy at 63) in a front render, gives an FDP
+    whose lip corners sit over the line of the lips as the head's own neutral ones do, within 0.5 mm (measured
+    0.08-0.21; 5.5-7.4 mm with the corners taken as found)."""
+    from mpeg4fa.render import Renderer
+    from mpeg4fa.spec.profiles import EXPRESSION_PROFILES
+    from mpeg4fa.tracking.photo import fdp_from_photo
+
+    face, texture = textured
+    values = np.asarray(EXPRESSION_PROFILES["joy"], float).copy()
+    values[:2] = 0
+    with Renderer(face, width=512, height=512, samples=4, view="front", texture=texture) as renderer:
+        frame = renderer.render(face.pose_values(values))
+    got = _corner_heights(fdp_from_photo(frame, where="render", texture=False).points)
+    own = _corner_heights(face.feature_points())
+    assert max(abs(got[k] - own[k]) for k in own) < 0.5, (got, own)
 
 
 def test_texture_and_encode_find_the_points_themselves(cli, photos, tmp_path):
