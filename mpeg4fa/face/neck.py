@@ -4,8 +4,9 @@ The head ends in a planar cut across the neck (:data:`.asset.NECK_CUT_Y` on the 
 Seen from below, or from a three-quarter view a little below, an open cut shows the inside of
 the head; the cap closes it with triangles over the rim's own vertices (no new vertices, so a
 pose moves it with the rim, which only a deep bow moves: the neck's share of a head turn is 0 at
-the cut, and a bow past :data:`.rig.THROAT_BOW_DEGREES` turns the whole neck by its excess). The rim is triangulated by ear clipping in the cut's plane, so a rim that is
-not convex (the neck's sides flare into the shoulders) is still covered exactly once.
+the cut, and a bow past :data:`.rig.THROAT_BOW_DEGREES` turns the whole neck by its excess). The
+rim is triangulated by ear clipping in the cut's plane, so a rim that is not convex (the neck's
+sides flare into the shoulders) is still covered exactly once.
 """
 from __future__ import annotations
 

@@ -139,15 +139,15 @@ def _lips_level(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], g
     corners are brought to the line's height at the midline (inner lips 2.2/2.3, as the head's own corners sit
     against its own line), and the lip points between follow by the square of their share of the way out
     from the midline to the corner, which takes the bend of a smile out of the contours (an upper and lower inner
-    lip pair by their mean share, so they stay in contact). Points given (a user's)
-    stay, and a corner given keeps its side as found. The texture coordinates stay on the photo's lips, so the
-    receiver paints the photo's lips onto the level ones."""
+    lip pair by their mean share, so they stay in contact). Points given (a user's) stay, and a corner given keeps
+    its side as found. The texture coordinates stay on the photo's lips, so the receiver paints the photo's lips
+    onto the level ones."""
     if not {"2.2", "2.3"} <= points.keys() or not {"2.2", "2.3"} <= head.keys():
         return
     line = (points["2.2"][1] + points["2.3"][1]) / 2.0
     head_line = (head["2.2"][1] + head["2.3"][1]) / 2.0
     middle = (points["2.2"][0] + points["2.3"][0]) / 2.0
-    for side, corners in LIP_CORNERS.items():
+    for corners in LIP_CORNERS.values():
         seen = [c for c in corners if c in points and c in head]
         if not seen or set(corners) & given:
             continue
