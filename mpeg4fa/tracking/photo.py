@@ -102,9 +102,55 @@ def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | N
         photo3[label] = np.array([x, -y, z])
     order = sorted(photo3, key=_LABEL_ORDER.__getitem__)
     points = {label: scale * (rot @ photo3[label]) + shift for label in order}
+    marks = landmarks.points.astype(np.float64)
+    marks3 = scale * (np.c_[marks[:, 0], -marks[:, 1], -marks[:, 2]] @ rot.T) + shift
+    _lip_midpoints_slid(points, pixels, marks3, marks[:, :2], head, set(given or ()))
     _lips_in_contact(points, head, set(given or ()))
     _lips_level(points, head, set(given or ()))
     return {label: pixels[label] for label in order}, points, float(1.0 / scale)
+
+
+INNER_LIP_MIDPOINTS = {"2.6": ("2.2", "2.4"), "2.7": ("2.2", "2.5"), "2.8": ("2.3", "2.4"), "2.9": ("2.3", "2.5")}
+"""The inner lip points the standard places midway along a contour, and the contour's ends."""
+
+
+def _ring_path(ring: Sequence[int], start: int, end: int) -> list[int]:
+    """The landmarks of ``ring`` from ``start`` to ``end`` the shorter way round (both included)."""
+    i, j, n = ring.index(start), ring.index(end), len(ring)
+    forward = [ring[(i + k) % n] for k in range((j - i) % n + 1)]
+    backward = [ring[(i - k) % n] for k in range((i - j) % n + 1)]
+    return forward if len(forward) <= len(backward) else backward
+
+
+def _lip_midpoints_slid(points: dict[str, np.ndarray], pixels: dict[str, np.ndarray], marks3: np.ndarray,
+                        marks2: np.ndarray, head: Mapping[str, np.ndarray], given: set[str]) -> None:
+    """Each inner lip midpoint (:data:`INNER_LIP_MIDPOINTS`) moved along the photo's own inner lip contour (the
+    landmark model's ring, in 3D and in pixels alike) to the share of the way from the midline to the corner, across
+    the face, that the receiving head's point has. "Midway" is read differently by the landmark model (its contour's
+    middle landmark: 0.50-0.54 of the way on the astronaut) and by the head (half the arc: 0.64 on the upper lip,
+    0.45 on the lower), and a calibration that slid the head's upper and lower contours apart, 0.7 mm from each other,
+    sheared the lips where they meet: the bilabials' pressed lips showed a notched seal line. Where the point sits on
+    its contour is the head's; the contour's shape, and so the lips' shape, stays the photo's."""
+    from mpeg4fa.spec.landmark_points import LANDMARK_POINTS
+    from mpeg4fa.tracking.landmarks import OPENING_RINGS
+
+    ring = list(OPENING_RINGS["mouth"])
+    for label, (middle, corner) in INNER_LIP_MIDPOINTS.items():
+        if label in given or label not in points or not {label, middle, corner} <= head.keys():
+            continue
+        ends = [LANDMARK_POINTS[end].indices for end in (middle, corner)]
+        if any(len(e) != 1 or e[0] not in ring for e in ends):
+            continue
+        path = _ring_path(ring, ends[0][0], ends[1][0])
+        x = marks3[path, 0]
+        along = np.maximum.accumulate((x - x[0]) / (x[-1] - x[0])) if abs(x[-1] - x[0]) > 1e-9 else None
+        if along is None or along[-1] <= along[0]:
+            continue
+        share = (head[label][0] - head[middle][0]) / (head[corner][0] - head[middle][0])
+        k = int(np.clip(np.searchsorted(along, share, side="right") - 1, 0, len(path) - 2))
+        t = float(np.clip((share - along[k]) / max(along[k + 1] - along[k], 1e-12), 0.0, 1.0))
+        points[label] = marks3[path[k]] + t * (marks3[path[k + 1]] - marks3[path[k]])
+        pixels[label] = marks2[path[k]] + t * (marks2[path[k + 1]] - marks2[path[k]])
 
 
 INNER_LIP_PAIRS = (("2.2", "2.3"), ("2.6", "2.8"), ("2.7", "2.9"))

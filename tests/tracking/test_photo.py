@@ -9,7 +9,7 @@ from conftest import require_generic
 from mpeg4fa.fdp import load_fdp
 from mpeg4fa.fdp.build import fdp_from_front
 from mpeg4fa.fdp.model import FdpValueError
-from mpeg4fa.tracking import SEEN_LABELS, feature_points, find_landmarks
+from mpeg4fa.tracking import SEEN_LABELS, feature_points, find_landmarks, photo_points
 
 
 @pytest.fixture(scope="module")
@@ -37,24 +37,23 @@ def _loop_errors(made, textured, view):
     true = camera.project(np.array([face.mesh.fp(label) for label in labels]), 512, 512)[:, :2]
     ears = camera.project(np.array([face.mesh.fp("10.7"), face.mesh.fp("10.8")]), 512, 512)
     width = float(np.ptp(ears[:, 0]))                  # the face's width at the ear lobes
-    found = feature_points(find_landmarks(frame, "render"))
-    return {label: float(np.linalg.norm(found[label][:2] - true[i])) / width * 100 for i, label in enumerate(labels)}
+    found, _, _ = photo_points(find_landmarks(frame, "render"))   # where the FDP puts them on the render
+    return {label: float(np.linalg.norm(found[label] - true[i])) / width * 100 for i, label in enumerate(labels)}
 
 
 @pytest.mark.parametrize("view", ["front", (15.0, 0.0)], ids=["front", "yaw15"])
 def test_points_found_on_a_rendered_head_where_they_are(made, textured, view):
     """The head calibrated to the astronaut wears her photo (the FDP's texture, baked as a receiver does);
-    rendered, its face is found again and each point lies where the head's own point projects. The
-    issue's bar (every point within 3 % of the face's width, median under 1.5 %) holds from the front;
-    turned 15 degrees the inner lower lip reaches 5.1 %: the FDP closes her smiling lips (the neutral face's
-    lips touch) and levels them (the corners at the line of the lips) while the texture keeps the photo's lips,
-    and the landmark model reads the inner lower lip of the closed mouth below where it is (measured: front
-    median 0.9 %, max 2.8 %, 15 degrees median 1.3 %, max 5.1 %; before the lips were levelled 1.0 / 2.7 and
-    1.2 / 3.6 %, the corners the worst)."""
+    rendered, its face is found again and each point the FDP would send lies where the head's own point
+    projects. The issue's bar (every point within 3 % of the face's width, median under 1.5 %) holds from the
+    front, and turned 15 degrees within 3.5 % (the FDP closes and levels her smiling lips, the neutral face's,
+    while the texture keeps the photo's lips: measured front median 1.0 %, max 2.9 %; 15 degrees median 1.3 %,
+    max 3.4 %; the table's own points, as this measured before the inner lip midpoints slid to the head's share of
+    their contour: 0.9 / 2.8 and 1.3 / 5.1 %, and before the lips were levelled 1.0 / 2.7 and 1.2 / 3.6 %)."""
     errors = _loop_errors(made, textured, view)
     assert len(errors) == len(SEEN_LABELS)
     worst = max(errors, key=errors.get)
-    assert errors[worst] < (3.0 if view == "front" else 5.5), (worst, errors[worst])
+    assert errors[worst] < (3.0 if view == "front" else 3.5), (worst, errors[worst])
     assert np.median(list(errors.values())) < 1.5
 
 
@@ -214,6 +213,40 @@ def test_a_smile_rendered_gives_the_heads_neutral_lips(made, textured):
     got = _corner_heights(fdp_from_photo(frame, where="render", texture=False).points)
     own = _corner_heights(face.feature_points())
     assert max(abs(got[k] - own[k]) for k in own) < 0.5, (got, own)
+
+
+def _seal_line_steps(face, values: np.ndarray, view) -> int:
+    """Steps of 2 px or more, column to column, in the bottom edge of the dark line where the lips meet (a lit
+    300 px render of the mouth, between the inner corners less a tenth each side): a notched seal line has them."""
+    from mpeg4fa.render import Renderer, frame_points
+
+    pts = np.array([face.mesh.fp(label) for label in ("8.1", "8.2", "8.3", "8.4")])
+    with Renderer(face, width=300, height=300, camera=frame_points(pts, 300, 300, view=view, margin=0.25)) as r:
+        pose = face.deform(values)
+        grey = r.render(pose).astype(float).mean(axis=2)
+        idx = [face.mesh.fp_index(label) for label in ("2.4", "2.5", "2.2", "2.3")]
+        (lx, _), (rx, _), (_, top), (_, bottom) = r.camera.project(pose.feature_points[idx], 300, 300)[:, :2]
+    lo, hi = sorted((lx, rx))
+    middle = int((top + bottom) / 2)
+    band = grey[middle - 12:middle + 13]
+    dark = band < 0.55 * np.median(band)
+    edge = [np.flatnonzero(dark[:, c]).max() for c in range(int(np.ceil(lo + 0.1 * (hi - lo))), int(hi - 0.1 * (hi - lo)))
+            if dark[:, c].any()]
+    return int((np.abs(np.diff(edge)) >= 2).sum())
+
+
+@pytest.mark.parametrize("set_name,name", [("mpeg4", "PP"), ("zh", "bpm")])
+def test_bilabials_seal_in_a_smooth_line_on_the_photo_head(made, set_name, name):
+    """The head calibrated to the astronaut presses its lips for p, b, m in one smooth line, front and
+    three-quarter, as the generic head does (0 steps): the FDP's inner lip midpoints sit at the head's own share
+    of the way along their contour (measured 1 and 0 steps; 6 and 1 with the landmark table's own midpoints,
+    which sheared the lips where they meet and notched the line)."""
+    from mpeg4fa.spec.profiles import VISEME_PROFILES
+
+    face = made.calibrated()
+    values = np.asarray(VISEME_PROFILES[set_name][name], float)
+    for view in ((0.0, 0.0), (30.0, 5.0)):
+        assert _seal_line_steps(face, values, view) <= 2, view
 
 
 def test_texture_and_encode_find_the_points_themselves(cli, photos, tmp_path):
