@@ -82,6 +82,8 @@ def run_fdp(args: argparse.Namespace) -> int:
           + (f"; {made.side[0]} shows the face's {made.side[1]} side: {made.side[2]} points from both photos"
              if made.side else "")
           + (f"; {len(given)} points from {args.points}" if given else ""), file=sys.stderr)
+    for note in made.notes:
+        print(f"{args.photo}: {note}", file=sys.stderr)
     print(f"wrote {args.output} ({len(made.fdp.labels)} feature points{texture})"
           + (f", {args.preview} (preview, calibrated with {args.deformer})" if args.preview else ""))
     return 0
@@ -111,4 +113,6 @@ def photo_face(args: argparse.Namespace, method: str = "dffd"):
         texture = bake_fdp_texture(face.mesh, made.fdp, source=str(args.photo)).baked.image
     print(f"face: {args.photo} ({len(made.fdp.labels)} feature points found; the head calibrated to them"
           f"{', wearing the photo' if texture is not None else ''})", file=sys.stderr)
+    for note in made.notes:
+        print(f"face: {note}", file=sys.stderr)
     return face, texture

@@ -588,7 +588,10 @@ def _photo_fdp(args: argparse.Namespace):
 
     given = photo_points_file(args.front_points) if args.front_points is not None else None
     with _located(str(args.front_points or args.front)):
-        return fdp_from_photo(args.front, side=args.side, points=given).fdp
+        made = fdp_from_photo(args.front, side=args.side, points=given)
+    for note in made.notes:
+        print(f"{args.front}: {note}", file=sys.stderr)
+    return made.fdp
 
 
 @contextlib.contextmanager

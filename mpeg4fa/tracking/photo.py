@@ -30,7 +30,7 @@ from mpeg4fa.fdp.model import LABEL_INDEX as _LABEL_ORDER, Fdp, TextureImage
 from mpeg4fa.tracking.landmarks import Landmarks, find_landmarks
 from mpeg4fa.tracking.points import feature_points
 
-__all__ = ["PhotoFdp", "fdp_from_photo", "photo_points", "read_photo"]
+__all__ = ["PhotoFdp", "fdp_from_photo", "not_neutral", "photo_points", "read_photo"]
 
 PhotoSource = str | os.PathLike | np.ndarray
 
@@ -51,6 +51,8 @@ class PhotoFdp:
     """Head millimetres per photo pixel."""
     side: tuple[str, str, int] | None = None
     """With a side photo: its name, the side of the face it shows, and how many points it refined."""
+    notes: tuple[str, ...] = ()
+    """What of the photo's face was not neutral and was made so in the FDP (:func:`not_neutral`), one line each."""
     _faces: dict = field(default_factory=dict, repr=False)
 
     def calibrated(self, method: str = "dffd"):
@@ -81,6 +83,13 @@ def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | N
     annotation) win over the found ones; a given point the model does not see takes its depth from
     the head's point, brought into the photo by the same similarity.
     """
+    return _photo_points(landmarks, head_points, given=given)[:3]
+
+
+def _photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | None = None, *,
+                  given: Mapping[str, Sequence[float]] | None = None
+                  ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], float, list[str]]:
+    """:func:`photo_points`, and the lines of :func:`not_neutral` on the points as found."""
     from mpeg4fa.face.calibrate import similarity_fit
 
     head = dict(head_points) if head_points is not None else _generic_points()
@@ -104,10 +113,11 @@ def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | N
     points = {label: scale * (rot @ photo3[label]) + shift for label in order}
     marks = landmarks.points.astype(np.float64)
     marks3 = scale * (np.c_[marks[:, 0], -marks[:, 1], -marks[:, 2]] @ rot.T) + shift
+    notes = not_neutral(points, head, set(given or ()))
     _lip_midpoints_slid(points, pixels, marks3, marks[:, :2], head, set(given or ()))
     _lips_in_contact(points, head, set(given or ()))
     _lips_level(points, head, set(given or ()))
-    return {label: pixels[label] for label in order}, points, float(1.0 / scale)
+    return {label: pixels[label] for label in order}, points, float(scale), notes
 
 
 INNER_LIP_MIDPOINTS = {"2.6": ("2.2", "2.4"), "2.7": ("2.2", "2.5"), "2.8": ("2.3", "2.4"), "2.9": ("2.3", "2.5")}
@@ -210,6 +220,33 @@ def _lips_level(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], g
                 points[label][1] += drop * min(t, 1.0) ** 2
 
 
+NOTE_MM = 2.0
+"""Lips apart, or corners over the line of the lips, by less than this (beyond the head's own) are not worth a
+note: the landmark model reads the generic head's own rendered corners up to 1 mm high."""
+
+
+def not_neutral(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str] = frozenset()
+                ) -> list[str]:
+    """One line for each way the face found in a photo (``points``: as found, in the head's frame, mm) is not the
+    neutral face, which the FDP is then made (:func:`_lips_in_contact`, :func:`_lips_level`), with the figure, so a
+    user knows why the head does not smile or part its lips as the photo does."""
+    out = []
+    gaps = [(points[u][1] - points[lo][1]) - max(float(head[u][1] - head[lo][1]), 0.0) for u, lo in INNER_LIP_PAIRS
+            if {u, lo} <= points.keys() and {u, lo} <= head.keys() and not {u, lo} & given]
+    if gaps and max(gaps) >= NOTE_MM:
+        out.append(f"the lips are {max(gaps):.0f} mm apart in the photo; closed in the FDP, as the neutral face's are")
+    if {"2.2", "2.3"} <= points.keys() and {"2.2", "2.3"} <= head.keys():
+        line, head_line = ((p["2.2"][1] + p["2.3"][1]) / 2.0 for p in (points, head))
+        lifts = [(points[c][1] - line) - (head[c][1] - head_line) for corners in LIP_CORNERS.values()
+                 if not set(corners) & given for c in corners if c in points and c in head]
+        lift = float(np.mean(lifts)) if lifts else 0.0
+        if abs(lift) >= NOTE_MM:
+            way = "over" if lift > 0 else "under"
+            out.append(f"the lip corners sit {abs(lift):.0f} mm {way} the line of the lips in the photo "
+                       f"({'a smile' if lift > 0 else 'turned down'}); level in the FDP, as the neutral face's are")
+    return out
+
+
 def _generic_points() -> dict[str, np.ndarray]:
     from mpeg4fa.face import FaceModel
     return FaceModel.default().feature_points()
@@ -287,7 +324,7 @@ def fdp_from_photo(photo: PhotoSource, *, side: PhotoSource | None = None,
     """
     image, label = read_photo(photo, where)
     landmarks = find_landmarks(image, label)
-    pixels, points3, mm_per_pixel = photo_points(landmarks, given=points)
+    pixels, points3, mm_per_pixel, notes = _photo_points(landmarks, given=points)
     side_info = None
     if side is not None:
         side_image, side_label = read_photo(side, side_where)
@@ -299,7 +336,7 @@ def fdp_from_photo(photo: PhotoSource, *, side: PhotoSource | None = None,
     stem = name if name is not None else Path(label).stem
     fdp = fdp_from_front(points3, pixels, front_size=(width, height), texture=tex, name=stem)
     return PhotoFdp(fdp=fdp, image=image, landmarks=landmarks, pixels=pixels, points=points3, scale=mm_per_pixel,
-                    side=side_info)
+                    side=side_info, notes=tuple(notes))
 
 PREVIEW_VIEWS = ("front", "three-quarter")
 
