@@ -154,17 +154,19 @@ def guess(head_mesh, sizes: Mapping[str, tuple[int, int]], side_view: str, boxes
 
 
 def find_points(head_mesh, image: np.ndarray, view: str, where: str) -> tuple[dict[str, list[float]], list[float]]:
-    """(points, box): the feature points the landmark model finds on a photo (those ``view`` shows), and the
-    head's box fitted to them (least squares per axis), so that the points it does not find (ears,
-    hairline, tongue...) follow the found face. EditError when there is no face or no model."""
-    from mpeg4fa.tracking import TrackingError, feature_points, find_landmarks
+    """(points, box): the feature points the landmark model finds on a photo (those ``view`` shows), where an FDP
+    made from the photo puts them (:func:`mpeg4fa.tracking.photo_points`: the inner lip midpoints at the head's own
+    share of their contour), and the head's box fitted to them (least squares per axis), so that the points it
+    does not find (ears, hairline, tongue...) follow the found face. EditError when there is no face or no model."""
+    from mpeg4fa.tracking import TrackingError, find_landmarks, photo_points
 
     try:
-        found = feature_points(find_landmarks(image, f"{where} photo"))
+        landmarks = find_landmarks(image, f"{where} photo")
     except TrackingError as exc:
         hint = exc.hint if view == "front" else ("the landmark model finds faces turned up to about 60 degrees, "
                                                  "not a profile: place the side points by hand")
         raise EditError(exc.message, where=where, hint=hint) from None
+    found, _, _ = photo_points(landmarks, {label: head_mesh.fp(label) for label in head_mesh.fp_labels})
     outline_points, outline = head_outline(head_mesh, view)
     labels = [label for label in found if label in outline_points]
     head = np.array([outline_points[label] for label in labels])

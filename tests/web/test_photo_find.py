@@ -11,7 +11,7 @@ skdata = pytest.importorskip("skimage.data", reason="scikit-image (test extra) g
 
 from PIL import Image  # noqa: E402
 
-from mpeg4fa.tracking import feature_points, find_landmarks  # noqa: E402
+from mpeg4fa.tracking import find_landmarks, photo_points  # noqa: E402
 from web.test_photos import client, synth  # noqa: E402,F401  (fixtures)
 
 
@@ -29,10 +29,10 @@ def test_find_the_face_places_the_front_points(client, synth):  # noqa: F811
     answer = client.post("/api/photos/find", json={"view": "front"})
     assert answer.status_code == 200, answer.text
     found, guess = answer.json()["found"], answer.json()["guess"]
-    truth = feature_points(find_landmarks(astronaut, "astronaut"))
+    truth, _, _ = photo_points(find_landmarks(astronaut, "astronaut"))   # as an FDP from the photo has them
     assert len(found) == 59 and set(found) == set(guess["dragged"]["front"])
     for label in found:
-        assert np.allclose(guess["front"][label], truth[label][:2], atol=0.01), label
+        assert np.allclose(guess["front"][label], truth[label][:2], atol=0.05), label   # the editor's head: 0.02 px
     # the box moved onto her face, so the points not found (the ears' tops, the hairline) follow it
     x0, y0, x1, y1 = guess["box"]["front"]
     assert 140 < x0 < truth["3.6"][0] and truth["3.5"][0] < x1 < 330 and y1 > truth["2.1"][1]
