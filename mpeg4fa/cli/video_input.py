@@ -110,4 +110,7 @@ def _neutral_fdp(args: argparse.Namespace, frame: int):
     from ..tracking.video import frame_at
 
     rgb = frame_at(args.video, frame)
-    return fdp_from_photo(rgb, where=f"{args.video}: frame {frame}", name=args.video.stem).fdp
+    made = fdp_from_photo(rgb, where=f"{args.video}: frame {frame}", name=args.video.stem)
+    for note in made.notes:
+        print(f"{args.video}: frame {frame}: {note}", file=sys.stderr)
+    return made.fdp
