@@ -55,11 +55,12 @@ def _points(path: Path) -> dict[str, tuple[float, float]]:
     return points  # type: ignore[return-value]
 
 
-def _found(image: np.ndarray, path: Path) -> dict[str, tuple[float, float]]:
-    """The feature points the landmark model finds on the photo (one error naming it when there is no face)."""
-    from ..tracking import feature_points, find_landmarks
+def _found(image: np.ndarray, path: Path, face) -> dict[str, tuple[float, float]]:
+    """The feature points the landmark model finds on the photo, where an FDP from it has them on ``face``
+    (:func:`mpeg4fa.tracking.photo_points`; one error naming the photo when there is no face)."""
+    from ..tracking import find_landmarks, photo_points
 
-    found = feature_points(find_landmarks(image, str(path)))
+    found, _, _ = photo_points(find_landmarks(image, str(path)), face.feature_points())
     print(f"{path}: face found, {len(found)} feature points", file=sys.stderr)
     return {label: (float(p[0]), float(p[1])) for label, p in found.items()}
 
@@ -77,7 +78,8 @@ def run_texture(args: argparse.Namespace) -> int:
                     {"-o": args.output, "--preview": args.preview})
     face = face_from_args(args)
     image = read_image(args.front, "photo")
-    front = PhotoView(image, _points(args.points) if args.points is not None else _found(image, args.front), "front")
+    points = _points(args.points) if args.points is not None else _found(image, args.front, face)
+    front = PhotoView(image, points, "front")
     side = PhotoView(read_image(args.side, "photo"), _points(args.side_points), args.side_view) if args.side else None
     baked = bake_texture(face.mesh, front, side, size=args.size)
     preview = None

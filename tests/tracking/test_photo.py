@@ -252,8 +252,8 @@ def _seal_line_steps(face, values: np.ndarray, view) -> int:
     middle = int((top + bottom) / 2)
     band = grey[middle - 12:middle + 13]
     dark = band < 0.55 * np.median(band)
-    edge = [np.flatnonzero(dark[:, c]).max() for c in range(int(np.ceil(lo + 0.1 * (hi - lo))), int(hi - 0.1 * (hi - lo)))
-            if dark[:, c].any()]
+    inset = 0.1 * (hi - lo)
+    edge = [np.flatnonzero(dark[:, c]).max() for c in range(int(np.ceil(lo + inset)), int(hi - inset)) if dark[:, c].any()]
     return int((np.abs(np.diff(edge)) >= 2).sum())
 
 
