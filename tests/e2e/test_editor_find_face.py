@@ -21,7 +21,7 @@ skdata = pytest.importorskip("skimage.data", reason="scikit-image (test extra) g
 from PIL import Image  # noqa: E402
 
 from e2e.test_editor_photos import drag, guess, idle, point_at, server  # noqa: E402,F401  (server: fixture)
-from mpeg4fa.tracking import feature_points, find_landmarks  # noqa: E402
+from mpeg4fa.tracking import find_landmarks, photo_points  # noqa: E402
 from web.test_photos import Synthetic  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -41,7 +41,7 @@ def test_find_the_face_fills_the_front_points(server, page, procedural_face, tmp
     front, side = tmp_path / "astronaut.png", tmp_path / "side.png"
     Image.fromarray(astronaut).save(front)
     side.write_bytes(Synthetic(procedural_face).png["side"])
-    truth = feature_points(find_landmarks(astronaut, "astronaut"))
+    truth, _, _ = photo_points(find_landmarks(astronaut, "astronaut"))   # as an FDP from the photo has them
 
     page.click("[data-testid=photos-toggle]")
     page.wait_for_selector("#panel-photos[data-open='1'] .photos-body", state="visible")
@@ -63,7 +63,7 @@ def test_find_the_face_fills_the_front_points(server, page, procedural_face, tmp
     assert len(after["dragged"]["front"]) == 59
     assert page.locator("#svg-front circle.fp.dragged").count() == 59
     for label in after["dragged"]["front"]:
-        assert np.allclose(after["front"][label], truth[label][:2], atol=0.01), label
+        assert np.allclose(after["front"][label], truth[label][:2], atol=0.05), label   # the editor's head: 0.02 px
     assert after["box"]["front"] != before["box"]["front"] and after["side"] == before["side"]
     assert "face found: 59 points" in page.locator("[data-testid=status]").inner_text()
 
