@@ -19,9 +19,11 @@ def register(commands: Commands) -> None:
                     "map its landmarks to the MPEG-4 feature points a photo shows (59 of 84, table "
                     "spec/landmark_points.csv; tongue, teeth, ears and skull come from the receiver's head), take "
                     "their depth from the landmark model, turn them upright into the generic head's frame (mm), and "
-                    "write the FDP with the photo as its texture (each point's texture coordinate into it). "
-                    "'mpeg4fa play --fdp' then shows that face, wearing the photo. Several faces: the largest, "
-                    "said in a warning.",
+                    "write the FDP with the photo as its texture (each point's texture coordinate into it). An FDP "
+                    "is the neutral face: a smile or open lips in the photo are closed and levelled in the points "
+                    "(the photo's lips painted onto them), said in one line each; a neutral face, mouth closed, "
+                    "gives the truest head. 'mpeg4fa play --fdp' then shows that face, wearing the photo. Several "
+                    "faces: the largest, said in a warning.",
         epilog="examples:\n  mpeg4fa fdp me.jpg -o me.fdp --preview check.png\n"
                "  mpeg4fa fdp me.jpg -o me.json --deformer rbf      # JSON FDP; preview calibrated with RBF\n"
                "  mpeg4fa play talk.fba --fdp me.fdp -o talk.mp4",
