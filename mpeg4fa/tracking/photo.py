@@ -117,6 +117,7 @@ def _photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | 
     _lip_midpoints_slid(points, pixels, marks3, marks[:, :2], head, set(given or ()))
     _lips_in_contact(points, head, set(given or ()))
     _lips_level(points, head, set(given or ()))
+    _eyes_open(points, head, set(given or ()))
     return {label: pixels[label] for label in order}, points, float(scale), notes
 
 
@@ -220,6 +221,41 @@ def _lips_level(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], g
                 points[label][1] += drop * min(t, 1.0) ** 2
 
 
+EYES = {"left": ("3.1", "3.3", "3.13", "3.9"), "right": ("3.2", "3.4", "3.14", "3.10")}
+"""Each eye's upper and lower lid margin at the middle, and the folds above and below them."""
+SHUT = 0.5
+"""An eye whose lids are less than this share of the head's own opening apart is shut (a blink, a wink)."""
+
+
+def _shut_eyes(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]
+               ) -> dict[str, tuple[float, float]]:
+    """The eyes shut in the photo: side -> (the lids' gap, the head's own), mm."""
+    out = {}
+    for side, (upper, lower, _, _) in EYES.items():
+        if {upper, lower} <= points.keys() and {upper, lower} <= head.keys() and not {upper, lower} & given:
+            gap, own = points[upper][1] - points[lower][1], head[upper][1] - head[lower][1]
+            if own > 0 and gap < SHUT * own:
+                out[side] = (float(gap), float(own))
+    return out
+
+
+def _eyes_open(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]) -> None:
+    """In the neutral face the lids are tangent to the iris (the facts file's neutral face definition, item 5,
+    [S]): its lid opening is IRISD0, a FAPU every lid motion is measured in. A photo taken in a blink has its lids
+    together, and a head calibrated to them had no opening at all (IRISD0 <= 0: no head could be made from the FDP).
+    A shut eye (:data:`SHUT`) opens to the head's own opening about the middle of the photo's lids, its folds
+    moving with the margins; the texture coordinates stay on the photo's closed lids."""
+    for side, (gap, own) in _shut_eyes(points, head, given).items():
+        upper, lower, upper_fold, lower_fold = EYES[side]
+        middle = (points[upper][1] + points[lower][1]) / 2.0
+        head_middle = (head[upper][1] + head[lower][1]) / 2.0
+        for margin, fold in ((upper, upper_fold), (lower, lower_fold)):
+            move = middle + (head[margin][1] - head_middle) - points[margin][1]
+            points[margin][1] += move
+            if fold in points and fold not in given:
+                points[fold][1] += move
+
+
 NOTE_MM = 2.0
 """Lips apart, or corners over the line of the lips, by less than this (beyond the head's own) are not worth a
 note: the landmark model reads the generic head's own rendered corners up to 1 mm high."""
@@ -244,6 +280,9 @@ def not_neutral(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray]
             way = "over" if lift > 0 else "under"
             out.append(f"the lip corners sit {abs(lift):.0f} mm {way} the line of the lips in the photo "
                        f"({'a smile' if lift > 0 else 'turned down'}); level in the FDP, as the neutral face's are")
+    for side, (gap, own) in _shut_eyes(points, head, given).items():
+        out.append(f"the {side} eye is shut in the photo (its lids {max(gap, 0.0):.1f} mm apart); open in the FDP "
+                   f"as the receiving head's ({own:.1f} mm), as the neutral face's are")
     return out
 
 

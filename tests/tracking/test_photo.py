@@ -237,6 +237,28 @@ def test_a_smile_rendered_gives_the_heads_neutral_lips(made, textured):
     assert max(abs(got[k] - own[k]) for k in own) < 0.5, (got, own)
 
 
+def test_a_photo_taken_in_a_blink_gives_a_head_with_open_eyes():
+    """The neutral face's lids are tangent to the iris, their opening IRISD0 (item 5): a photo taken in a blink
+    (the generic head rendered with both upper lids shut) gave an FDP that no head could be calibrated to (IRISD0
+    <= 0, "feature points out of order", in fdp --preview, say --photo and play --fdp alike). Each shut eye now opens
+    to the head's own opening, said once per eye, and the head made from it blinks."""
+    require_generic()
+    from mpeg4fa.face import FaceModel
+    from mpeg4fa.render import Renderer
+    from mpeg4fa.tracking.photo import fdp_from_photo
+
+    face = FaceModel.default()
+    blink = np.zeros(68)
+    blink[18] = blink[19] = 1000
+    with Renderer(face, width=512, height=512, samples=4, view="front") as r:
+        made = fdp_from_photo(r.render(face.pose_values(blink)), texture=False)
+    assert [n.split(" is shut")[0] for n in made.notes] == ["the left eye", "the right eye"], made.notes
+    head = made.calibrated()
+    assert head.fapu.IRISD0 == pytest.approx(face.fapu.IRISD0, rel=0.1)
+    fp = dict(zip(head.mesh.fp_labels, head.pose_values(blink).feature_points))
+    assert abs(fp["3.1"][1] - fp["3.3"][1]) < 0.1 * head.fapu.IRISD0      # and it blinks
+
+
 def _seal_line_steps(face, values: np.ndarray, view) -> int:
     """Steps of 2 px or more, column to column, in the bottom edge of the dark line where the lips meet (a lit
     300 px render of the mouth, between the inner corners less a tenth each side): a notched seal line has them."""
