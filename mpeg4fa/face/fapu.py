@@ -57,6 +57,8 @@ def measure_fapu(points: dict[str, np.ndarray]) -> Fapu:
     fapu = Fapu(**values)
     bad = [k for k, v in fapu.as_dict().items() if not v > 0]
     if bad:
-        raise FaceError(f"non-positive FAPU {', '.join(bad)} (feature points out of order)",
-                        hint="x must point to the face's left and y up")
+        definitions = "; ".join(r.definition for r in FAPU.values() if r.distance in bad)
+        shut = ", and a neutral face's eyes open (its lids tangent to the iris)" if "IRISD0" in bad else ""
+        raise FaceError(f"non-positive FAPU {', '.join(bad)} (feature points out of order or together)",
+                        hint=f"x must point to the face's left and y up{shut}: {definitions}")
     return fapu
