@@ -281,8 +281,8 @@ def not_neutral(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray]
             out.append(f"the lip corners sit {abs(lift):.0f} mm {way} the line of the lips in the photo "
                        f"({'a smile' if lift > 0 else 'turned down'}); level in the FDP, as the neutral face's are")
     for side, (gap, own) in _shut_eyes(points, head, given).items():
-        out.append(f"the {side} eye is shut in the photo (its lids {max(gap, 0.0):.1f} mm apart); open in the FDP "
-                   f"as the receiving head's ({own:.1f} mm), as the neutral face's are")
+        out.append(f"the {side} eye is shut in the photo (its lids {max(gap, 0.0):.1f} mm apart); opened in the FDP "
+                   f"as wide as the head's own ({own:.1f} mm), as the neutral face's eyes are")
     return out
 
 
