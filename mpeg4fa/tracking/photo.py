@@ -11,7 +11,9 @@ pixel scale. The points are then turned into the generic head's frame (mm, x tow
 left, y up, z out) by the similarity (scale, rotation, shift: :func:`mpeg4fa.face.calibrate.similarity_fit`)
 that best lays them on the head's own points, so a face turned or tilted in the photo gives an
 upright, frontal FDP. Points a photo cannot show (tongue, teeth, ears, skull) are not sent: the
-receiver's head keeps its own, carried along by the calibration. The photo goes into the FDP as
+receiver's head keeps its own, carried along by the calibration. The FDP is the neutral face (the facts file's
+definition): a photo's open or smiling lips are closed and levelled and a shut eye opened, in the points only, and
+the inner lip midpoints sit where the receiving head has its own along the contour. The photo goes into the FDP as
 its texture with every point's texture coordinate (FDP case 3, as ``encode --front`` does), so
 any receiver paints the head with it (:mod:`mpeg4fa.render.fdp_texture`).
 """
@@ -245,7 +247,7 @@ def _eyes_open(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], gi
     together, and a head calibrated to them had no opening at all (IRISD0 <= 0: no head could be made from the FDP).
     A shut eye (:data:`SHUT`) opens to the head's own opening about the middle of the photo's lids, its folds
     moving with the margins; the texture coordinates stay on the photo's closed lids."""
-    for side, (gap, own) in _shut_eyes(points, head, given).items():
+    for side in _shut_eyes(points, head, given):
         upper, lower, upper_fold, lower_fold = EYES[side]
         middle = (points[upper][1] + points[lower][1]) / 2.0
         head_middle = (head[upper][1] + head[lower][1]) / 2.0
@@ -264,8 +266,8 @@ note: the landmark model reads the generic head's own rendered corners up to 1 m
 def not_neutral(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str] = frozenset()
                 ) -> list[str]:
     """One line for each way the face found in a photo (``points``: as found, in the head's frame, mm) is not the
-    neutral face, which the FDP is then made (:func:`_lips_in_contact`, :func:`_lips_level`), with the figure, so a
-    user knows why the head does not smile or part its lips as the photo does."""
+    neutral face, which the FDP is then made (:func:`_lips_in_contact`, :func:`_lips_level`, :func:`_eyes_open`), with
+    the figure, so a user knows why the head does not smile, part its lips or shut its eyes as the photo does."""
     out = []
     gaps = [(points[u][1] - points[lo][1]) - max(float(head[u][1] - head[lo][1]), 0.0) for u, lo in INNER_LIP_PAIRS
             if {u, lo} <= points.keys() and {u, lo} <= head.keys() and not {u, lo} & given]
