@@ -188,7 +188,7 @@ def test_fdp_lips_are_in_contact_though_the_photo_smiles(made):
     """The neutral face's lips touch: the astronaut's open smile gives inner lip points as far apart as the
     generic head's own pairs (under 1.1 mm), not her 4+ mm gap, so the head at rest shows no teeth."""
     from mpeg4fa.face import FaceModel
-    from mpeg4fa.tracking.photo import INNER_LIP_PAIRS
+    from mpeg4fa.tracking.neutral_face import INNER_LIP_PAIRS
 
     head = FaceModel.default().feature_points()
     found = feature_points(made.landmarks)
