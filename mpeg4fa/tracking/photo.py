@@ -12,9 +12,9 @@ left, y up, z out) by the similarity (scale, rotation, shift: :func:`mpeg4fa.fac
 that best lays them on the head's own points, so a face turned or tilted in the photo gives an
 upright, frontal FDP. Points a photo cannot show (tongue, teeth, ears, skull) are not sent: the
 receiver's head keeps its own, carried along by the calibration. The FDP is the neutral face (the facts file's
-definition): a photo's open or smiling lips are closed and levelled and a shut eye opened, in the points only, and
-the inner lip midpoints sit where the receiving head has its own along the contour (:mod:`.neutral_face`). The photo goes into the FDP as
-its texture with every point's texture coordinate (FDP case 3, as ``encode --front`` does), so
+definition, :mod:`.neutral_face`): a photo's open or smiling lips are closed and levelled and a shut eye opened, in
+the points only, and the inner lip midpoints sit where the receiving head has its own along the contour. The photo
+goes into the FDP as its texture with every point's texture coordinate (FDP case 3, as ``encode --front`` does), so
 any receiver paints the head with it (:mod:`mpeg4fa.render.fdp_texture`).
 """
 from __future__ import annotations
