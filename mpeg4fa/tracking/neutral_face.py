@@ -69,7 +69,10 @@ def _lip_midpoints_slid(points: dict[str, np.ndarray], pixels: dict[str, np.ndar
         along = np.maximum.accumulate((x - x[0]) / (x[-1] - x[0])) if abs(x[-1] - x[0]) > 1e-9 else None
         if along is None or along[-1] <= along[0]:
             continue
-        share = (head[label][0] - head[middle][0]) / (head[corner][0] - head[middle][0])
+        across = float(head[corner][0] - head[middle][0])
+        if abs(across) < 1e-9:  # a head whose corner sits on its midline: no share to take
+            continue
+        share = float(head[label][0] - head[middle][0]) / across
         k = int(np.clip(np.searchsorted(along, share, side="right") - 1, 0, len(path) - 2))
         t = float(np.clip((share - along[k]) / max(along[k + 1] - along[k], 1e-12), 0.0, 1.0))
         points[label] = marks3[path[k]] + t * (marks3[path[k + 1]] - marks3[path[k]])
