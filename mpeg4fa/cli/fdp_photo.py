@@ -84,11 +84,16 @@ def run_fdp(args: argparse.Namespace) -> int:
           + (f"; {made.side[0]} shows the face's {made.side[1]} side: {made.side[2]} points from both photos"
              if made.side else "")
           + (f"; {len(given)} points from {args.points}" if given else ""), file=sys.stderr)
-    for note in made.notes:
-        print(f"{args.photo}: {note}", file=sys.stderr)
+    say_notes(made, str(args.photo))
     print(f"wrote {args.output} ({len(made.fdp.labels)} feature points{texture})"
           + (f", {args.preview} (preview, calibrated with {args.deformer})" if args.preview else ""))
     return 0
+
+
+def say_notes(made, where: str) -> None:
+    """What of a photo's face the FDP made neutral (:attr:`mpeg4fa.tracking.PhotoFdp.notes`), a line each."""
+    for note in made.notes:
+        print(f"{where}: {note}", file=sys.stderr)
 
 
 def photo_face(args: argparse.Namespace, method: str = "dffd"):
@@ -115,6 +120,5 @@ def photo_face(args: argparse.Namespace, method: str = "dffd"):
         texture = bake_fdp_texture(face.mesh, made.fdp, source=str(args.photo)).baked.image
     print(f"face: {args.photo} ({len(made.fdp.labels)} feature points found; the head calibrated to them"
           f"{', wearing the photo' if texture is not None else ''})", file=sys.stderr)
-    for note in made.notes:
-        print(f"face: {note}", file=sys.stderr)
+    say_notes(made, "face")
     return face, texture

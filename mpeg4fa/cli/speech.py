@@ -584,13 +584,12 @@ def _speaker_fdp(args: argparse.Namespace):
 def _photo_fdp(args: argparse.Namespace):
     """The FDP of the face found in --front (and --side, turned 20-60 degrees): :func:`mpeg4fa.tracking.fdp_from_photo`."""
     from ..tracking.photo import fdp_from_photo
-    from .fdp_photo import photo_points_file
+    from .fdp_photo import photo_points_file, say_notes
 
     given = photo_points_file(args.front_points) if args.front_points is not None else None
     with _located(str(args.front_points or args.front)):
         made = fdp_from_photo(args.front, side=args.side, points=given)
-    for note in made.notes:
-        print(f"{args.front}: {note}", file=sys.stderr)
+    say_notes(made, str(args.front))
     return made.fdp
 
 

@@ -108,9 +108,9 @@ def _neutral_fdp(args: argparse.Namespace, frame: int):
     """The FDP of the neutral frame (:func:`mpeg4fa.tracking.photo.fdp_from_photo`), its picture as texture."""
     from ..tracking.photo import fdp_from_photo
     from ..tracking.video import frame_at
+    from .fdp_photo import say_notes
 
     rgb = frame_at(args.video, frame)
     made = fdp_from_photo(rgb, where=f"{args.video}: frame {frame}", name=args.video.stem)
-    for note in made.notes:
-        print(f"{args.video}: frame {frame}: {note}", file=sys.stderr)
+    say_notes(made, f"{args.video}: frame {frame}")
     return made.fdp

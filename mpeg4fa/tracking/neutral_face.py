@@ -83,18 +83,24 @@ INNER_LIP_PAIRS = (("2.2", "2.3"), ("2.6", "2.8"), ("2.7", "2.9"))
 """Upper and lower inner lip points that meet in the neutral face."""
 
 
+def _lips_apart(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]
+                ) -> dict[tuple[str, str], float]:
+    """Each inner lip pair (:data:`INNER_LIP_PAIRS`) found, not given: how much further apart (mm, y) it is than the
+    head's own pair (0 or less: in contact as the head models it)."""
+    return {(u, lo): float(points[u][1] - points[lo][1]) - max(float(head[u][1] - head[lo][1]), 0.0)
+            for u, lo in INNER_LIP_PAIRS if {u, lo} <= points.keys() and {u, lo} <= head.keys() and not {u, lo} & given}
+
+
 def _lips_in_contact(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]) -> None:
     """An FDP describes the neutral face, whose lips are in contact (the facts file's neutral face
     definition, item 7, [S]); a photo of a smile or of speech has them apart, and a head calibrated to
     that gap shows its own teeth through it at rest. Each pair of inner lip points found (not given)
     further apart than the head's own pair closes about its midpoint to the head's gap (the lips' contact
     as the head models it; the points stay distinct). The texture coordinates stay on the photo's lips."""
-    for upper, lower in INNER_LIP_PAIRS:
-        if upper in points and lower in points and upper in head and lower in head and not {upper, lower} & given:
-            gap = max(float(head[upper][1] - head[lower][1]), 0.0)
-            if points[upper][1] - points[lower][1] > gap:   # apart (y up)
-                middle = (points[upper][1] + points[lower][1]) / 2.0
-                points[upper][1], points[lower][1] = middle + gap / 2.0, middle - gap / 2.0
+    for (upper, lower), apart in _lips_apart(points, head, given).items():
+        if apart > 0.0:
+            points[upper][1] -= apart / 2.0
+            points[lower][1] += apart / 2.0
 
 
 LIP_CORNERS = {"left": ("8.3", "2.4"), "right": ("8.4", "2.5")}
@@ -104,27 +110,37 @@ LIP_POINTS = ("2.2", "2.3", "2.4", "2.5", "2.6", "2.7", "2.8", "2.9",
 """The points of the lips' contours, which a smile bends."""
 
 
+def _corner_lifts(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]
+                  ) -> dict[tuple[str, str], float]:
+    """Each side's lip corners (:data:`LIP_CORNERS`, none given): their mean height (mm) over the line of the lips
+    at the midline (inner lips 2.2/2.3) beyond where the head's own corners sit over its own line."""
+    if not {"2.2", "2.3"} <= points.keys() or not {"2.2", "2.3"} <= head.keys():
+        return {}
+    line, head_line = ((p["2.2"][1] + p["2.3"][1]) / 2.0 for p in (points, head))
+    out = {}
+    for corners in LIP_CORNERS.values():
+        seen = [c for c in corners if c in points and c in head]
+        if seen and not set(corners) & given:
+            out[corners] = float(np.mean([(points[c][1] - line) - (head[c][1] - head_line) for c in seen]))
+    return out
+
+
 def _lips_level(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], given: set[str]) -> None:
     """In the neutral face the line of the lips is horizontal, at the height of the lip corners (the facts
     file's neutral face definition, item 7, [S]); a smiling photo has its corners raised (the astronaut's
     6.6-8.0 mm over the line of her lips), and a head calibrated to them smiles in every expression. Each side's
-    corners are brought to the line's height at the midline (inner lips 2.2/2.3, as the head's own corners sit
+    corners are brought to the line's height at the midline (:func:`_corner_lifts`: as the head's own corners sit
     against its own line), and the lip points between follow by the square of their share of the way out
     from the midline to the corner, which takes the bend of a smile out of the contours (an upper and lower inner
     lip pair by their mean share, so they stay in contact). Points given (a user's) stay, and a corner given keeps
     its side as found. The texture coordinates stay on the photo's lips, so the receiver paints the photo's lips
     onto the level ones."""
-    if not {"2.2", "2.3"} <= points.keys() or not {"2.2", "2.3"} <= head.keys():
+    lifts = _corner_lifts(points, head, given)
+    if not lifts:
         return
-    line = (points["2.2"][1] + points["2.3"][1]) / 2.0
-    head_line = (head["2.2"][1] + head["2.3"][1]) / 2.0
     middle = (points["2.2"][0] + points["2.3"][0]) / 2.0
-    for corners in LIP_CORNERS.values():
-        seen = [c for c in corners if c in points and c in head]
-        if not seen or set(corners) & given:
-            continue
-        drop = float(np.mean([line + (head[c][1] - head_line) - points[c][1] for c in seen]))
-        reach = float(np.mean([points[c][0] for c in seen])) - middle
+    for corners, lift in lifts.items():
+        reach = float(np.mean([points[c][0] for c in corners if c in points and c in head])) - middle
         if abs(reach) < 1e-6:
             continue
         share = {label: (points[label][0] - middle) / reach for label in LIP_POINTS if label in points}
@@ -133,7 +149,7 @@ def _lips_level(points: dict[str, np.ndarray], head: Mapping[str, np.ndarray], g
                 share.update(dict.fromkeys(pair, (share[pair[0]] + share[pair[1]]) / 2.0))
         for label, t in share.items():
             if t > 0.0 and label not in given:
-                points[label][1] += drop * min(t, 1.0) ** 2
+                points[label][1] -= lift * min(t, 1.0) ** 2
 
 
 EYES = {"left": ("3.1", "3.3", "3.13", "3.9"), "right": ("3.2", "3.4", "3.14", "3.10")}
@@ -182,19 +198,15 @@ def not_neutral(points: Mapping[str, np.ndarray], head: Mapping[str, np.ndarray]
     neutral face, which the FDP is then made (:func:`_lips_in_contact`, :func:`_lips_level`, :func:`_eyes_open`), with
     the figure, so a user knows why the head does not smile, part its lips or shut its eyes as the photo does."""
     out = []
-    gaps = [(points[u][1] - points[lo][1]) - max(float(head[u][1] - head[lo][1]), 0.0) for u, lo in INNER_LIP_PAIRS
-            if {u, lo} <= points.keys() and {u, lo} <= head.keys() and not {u, lo} & given]
-    if gaps and max(gaps) >= NOTE_MM:
-        out.append(f"the lips are {max(gaps):.0f} mm apart in the photo; closed in the FDP, as the neutral face's are")
-    if {"2.2", "2.3"} <= points.keys() and {"2.2", "2.3"} <= head.keys():
-        line, head_line = ((p["2.2"][1] + p["2.3"][1]) / 2.0 for p in (points, head))
-        lifts = [(points[c][1] - line) - (head[c][1] - head_line) for corners in LIP_CORNERS.values()
-                 if not set(corners) & given for c in corners if c in points and c in head]
-        lift = float(np.mean(lifts)) if lifts else 0.0
-        if abs(lift) >= NOTE_MM:
-            way = "over" if lift > 0 else "under"
-            out.append(f"the lip corners sit {abs(lift):.0f} mm {way} the line of the lips in the photo "
-                       f"({'a smile' if lift > 0 else 'turned down'}); level in the FDP, as the neutral face's are")
+    apart = max(_lips_apart(points, head, given).values(), default=0.0)
+    if apart >= NOTE_MM:
+        out.append(f"the lips are {apart:.0f} mm apart in the photo; closed in the FDP, as the neutral face's are")
+    lifts = _corner_lifts(points, head, given)
+    lift = float(np.mean(list(lifts.values()))) if lifts else 0.0
+    if abs(lift) >= NOTE_MM:
+        way = "over" if lift > 0 else "under"
+        out.append(f"the lip corners sit {abs(lift):.0f} mm {way} the line of the lips in the photo "
+                   f"({'a smile' if lift > 0 else 'turned down'}); level in the FDP, as the neutral face's are")
     for side, (gap, own) in _shut_eyes(points, head, given).items():
         out.append(f"the {side} eye is shut in the photo (its lids {max(gap, 0.0):.1f} mm apart); opened in the FDP "
                    f"as wide as the head's own ({own:.1f} mm), as the neutral face's eyes are")

@@ -55,7 +55,8 @@ class PhotoFdp:
     side: tuple[str, str, int] | None = None
     """With a side photo: its name, the side of the face it shows, and how many points it refined."""
     notes: tuple[str, ...] = ()
-    """What of the photo's face was not neutral and was made so in the FDP (:func:`not_neutral`), one line each."""
+    """What of the photo's face was not neutral and was made so in the FDP, one line each
+    (:func:`.neutral_face.not_neutral`)."""
     _faces: dict = field(default_factory=dict, repr=False)
 
     def calibrated(self, method: str = "dffd"):
@@ -92,7 +93,7 @@ def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | N
 def _photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | None = None, *,
                   given: Mapping[str, Sequence[float]] | None = None
                   ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], float, list[str]]:
-    """:func:`photo_points`, and the lines of :func:`not_neutral` on the points as found."""
+    """:func:`photo_points`, and the lines of :func:`.neutral_face.not_neutral` on the points as found."""
     from mpeg4fa.face.calibrate import similarity_fit
 
     head = dict(head_points) if head_points is not None else _generic_points()
