@@ -3,6 +3,7 @@ input that names no usable file (exit status 1, like every other bad input); and
 error becomes one line naming its file and what to do (:func:`os_error_line`)."""
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 
@@ -16,6 +17,16 @@ class UsageError(MpegFaError):
 
 class InputError(MpegFaError):
     """A command-line argument that should name a readable file and does not (``where``: the argument)."""
+
+
+@contextlib.contextmanager
+def located(path: str):
+    """A value the FDP model rejects (a point outside the photo, a bad vertex index) named by its file."""
+    from ..fdp import FdpError, FdpValueError
+    try:
+        yield
+    except FdpValueError as exc:
+        raise FdpError.no_place(path, exc.message, hint="check the feature point annotations") from None
 
 
 def os_error_line(exc: OSError) -> str:

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..atomic import atomic_outputs
 from ..face.calibrate import METHODS
+from .errors import located
 from .options import Commands
 from .paths import refuse_overlaps
 
@@ -70,7 +71,8 @@ def run_fdp(args: argparse.Namespace) -> int:
                     {"-o": args.output, "--preview": args.preview})
     given = photo_points_file(args.points) if args.points is not None else None
     started = time.perf_counter()
-    made = fdp_from_photo(args.photo, side=args.side, points=given, texture=not args.no_texture)
+    with located(str(args.points or args.photo)):
+        made = fdp_from_photo(args.photo, side=args.side, points=given, texture=not args.no_texture)
     found = time.perf_counter()
     picture = preview(made, args.deformer) if args.preview is not None else None
     with atomic_outputs(args.output, args.preview) as (out, check):

@@ -10,7 +10,7 @@ from pathlib import Path
 from ..atomic import atomic_outputs
 from . import options, text_input
 from .coding import coding_options
-from .errors import UsageError
+from .errors import UsageError, located
 from .media import check_frames_output, rendering
 from .options import Commands
 from .paths import refuse_overlaps
@@ -566,14 +566,14 @@ def _speaker_fdp(args: argparse.Namespace):
     if args.face_mesh is not None:
         need("face_points")
         mesh = fdp_io.read_obj(args.face_mesh)
-        with _located(str(args.face_points)):
+        with located(str(args.face_points)):
             return fdp_io.fdp_from_mesh(mesh, fdp_io.read_points_json(args.face_points), name=args.face_mesh.stem)
     if args.front is not None or args.side is not None:
         if args.side_points is None:  # the face is found in the photo(s); given front points win
             need("front")
             return _photo_fdp(args)
         need("front", "front_points", "side", "side_points")
-        with _located(f"{args.front_points} + {args.side_points}"):
+        with located(f"{args.front_points} + {args.side_points}"):
             return fdp_io.fdp_from_photos(fdp_io.read_points_json(args.front_points),
                                           fdp_io.read_points_json(args.side_points), side_view=args.side_view,
                                           texture=fdp_io.texture_from_file(args.front), name=args.front.stem)
@@ -587,20 +587,10 @@ def _photo_fdp(args: argparse.Namespace):
     from .fdp_photo import photo_points_file, say_notes
 
     given = photo_points_file(args.front_points) if args.front_points is not None else None
-    with _located(str(args.front_points or args.front)):
+    with located(str(args.front_points or args.front)):
         made = fdp_from_photo(args.front, side=args.side, points=given)
     say_notes(made, str(args.front))
     return made.fdp
-
-
-@contextlib.contextmanager
-def _located(path: str):
-    """A value the FDP model rejects (a point outside the photo, a bad vertex index) named by its file."""
-    from ..fdp import FdpError, FdpValueError
-    try:
-        yield
-    except FdpValueError as exc:
-        raise FdpError.no_place(path, exc.message, hint="check the feature point annotations") from None
 
 
 def _photo_face(args: argparse.Namespace):

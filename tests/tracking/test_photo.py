@@ -135,6 +135,18 @@ def test_no_face_is_one_line_and_nothing_written(cli, photos, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_given_point_far_off_the_photo_names_its_file(cli, photos, tmp_path):
+    """A --points file with a point a billion pixels off: one line naming the file (it named only "points/3.5"),
+    exit 1, nothing written."""
+    require_generic()
+    given = tmp_path / "far.json"
+    given.write_text('{"3.5": [1e9, 5]}')
+    code, stdout, stderr = cli("fdp", photos / "astronaut.jpg", "--points", given, "-o", tmp_path / "far.fdp")
+    assert code == 1 and stdout == "" and stderr.count("\n") == 1
+    assert f"{given}: feature point 3.5" in stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["far.json"]
+
+
 def test_not_a_photo_is_one_line(cli, tmp_path):
     bad = tmp_path / "notes.jpg"
     bad.write_text("not an image")
