@@ -69,7 +69,7 @@ def run_conform(args: argparse.Namespace) -> int:
         raise ConformanceError("no conformance suite here (manifest.json missing)", where=str(args.suite),
                                hint="give --suite DIR, the folder holding manifest.json")
     manifest = load_manifest(args.suite)
-    if args.decoder:
+    if args.decoder is not None:  # an empty command is an error, not this project's decoder
         decoder = CommandDecoder(args.decoder)
     else:
         from ..conformance.adapter import in_process

@@ -223,9 +223,13 @@ class CommandDecoder:
     """An external decoder: ``command STREAM OUT [--fdp FDP]`` run as a subprocess with a timeout."""
 
     def __init__(self, command: str) -> None:
-        self.argv = shlex.split(command)
+        try:
+            self.argv = shlex.split(command)
+        except ValueError as exc:  # an unclosed quote or a trailing backslash
+            raise ConformanceError(f"the decoder command {command!r} cannot be split into words: {exc}",
+                                   where="--decoder", hint="close its quotes, as a shell would need") from None
         if not self.argv:
-            raise ConformanceError("the decoder command is empty")
+            raise ConformanceError("the decoder command is empty", where="--decoder")
         self.name = command
 
     def __call__(self, stream: Path, fdp: Path | None, timeout: float = DEFAULT_TIMEOUT) -> DecoderResult:

@@ -202,3 +202,17 @@ def test_a_malformed_expected_file_is_located(copy, doc, words):
     with pytest.raises(ConformanceError) as err:
         manifest.expected(vector)
     assert words in str(err.value) and vector.expected in str(err.value)
+
+
+@pytest.mark.parametrize("command, words", [
+    ("'unclosed", "cannot be split into words: No closing quotation"),
+    ("decoder \\", "cannot be split into words"),
+    ("", "the decoder command is empty"),
+    ("   ", "the decoder command is empty"),
+])
+def test_a_decoder_command_that_is_no_command_is_one_line(copy, cli, command, words):
+    """Fuzz of 2026-12-07: an unclosed quote ended in shlex's ValueError traceback, and an empty command quietly
+    ran this project's own decoder instead."""
+    code, out, err = cli("conform", "--suite", str(copy), "--decoder", command)
+    assert code == 1 and words in err and "--decoder" in err, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "PASSED" not in out

@@ -64,6 +64,25 @@ def test_a_voice_name_no_utf8_can_spell_is_an_unknown_voice():
         EspeakEngine().synthesize("Hello", voice="en\udcff")
 
 
+def test_a_voice_variant_too_long_for_espeak_is_refused_not_a_crash():
+    """Fuzz of 2026-12-07: ``--voice en+`` and 40 letters aborted the whole process inside espeak-ng ("buffer overflow
+    detected", exit 134) for every engine on it. Run in a child, so that a crash fails this test, not the suite."""
+    import subprocess
+    import sys
+
+    from mpeg4fa.speech.tts.espeak import MAX_VARIANT_BYTES, EspeakEngine
+    from mpeg4fa.speech.tts.pyttsx3_engine import Pyttsx3Engine
+
+    child = ("from mpeg4fa.speech.tts.espeak import EspeakEngine\n"
+             "try:\n    EspeakEngine().synthesize('Hi', voice='en+' + 'y' * 40)\n"
+             "except Exception as exc:\n    print(type(exc).__name__, exc)\n")
+    run = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.startswith("TTSError") and "at most 32" in run.stdout, run
+    with pytest.raises(TTSError, match="at most 32"):
+        Pyttsx3Engine().synthesize("Hi", voice="en+" + "y" * 40)
+    assert EspeakEngine().synthesize("Hi", voice="en+" + "y" * MAX_VARIANT_BYTES).duration > 0  # taken (unknown: ignored)
+
+
 # -- 2. the parts of a split phoneme end exactly where the phoneme does ------------------------------------------
 
 def test_a_split_phoneme_ends_where_it_ends():

@@ -259,6 +259,21 @@ def _without_emoji_joiners(text: str) -> str:
     return _EMOJI_JOINERS.sub(" ", text)
 
 
+MAX_VARIANT_BYTES = 32
+"""Longest ``+variant`` of a voice name handed to espeak-ng: it copies ``!v/`` and the variant into a 40-byte
+buffer, and from 37 bytes the fortified C library aborts the whole process ("buffer overflow detected", exit 134;
+measured 2026-12-07 on Debian's 1.51). Its own variants are 2-12 bytes."""
+
+
+def check_voice_name(voice: str, where: str = WHERE) -> None:
+    """TTSError for a voice whose variant espeak-ng cannot take without crashing (:data:`MAX_VARIANT_BYTES`)."""
+    variant = voice.partition("+")[2]
+    if len(variant.encode("utf-8", "surrogatepass")) > MAX_VARIANT_BYTES:
+        raise TTSError(f"the voice variant {variant[:20] + '...'!r} is {len(variant)} characters long; espeak-ng "
+                       f"takes at most {MAX_VARIANT_BYTES}", where=where,
+                       hint="use a variant 'mpeg4fa voices' lists, e.g. en-us+f3")
+
+
 def _c_string(name: str) -> bytes | None:
     """``name`` as the C library takes it (UTF-8, no NUL), or None: a voice so named cannot exist (a lone
     surrogate, from a command-line byte that is not UTF-8, has no UTF-8 at all)."""
@@ -515,6 +530,7 @@ class EspeakEngine:
         else:
             source, back, mark_names = text, list(range(len(text) + 1)), {}
 
+        check_voice_name(voice)
         name = _c_string(voice)
         with _lock:
             lib = _load()

@@ -20,6 +20,7 @@ import numpy as np
 
 from mpeg4fa.speech.errors import TTSError
 from mpeg4fa.speech.tts.base import Event, Speech, snap_to_tokens, word_tokens
+from mpeg4fa.speech.tts.espeak import check_voice_name
 
 WHERE = "pyttsx3"
 TIMEOUT = 120.0  # seconds for one synthesis; espeak makes ~50x real time here
@@ -40,6 +41,7 @@ class Pyttsx3Engine:
         voice = voice or self.voice
         if not text.strip():
             raise TTSError("nothing to say: the text is empty", where=WHERE, hint="pass some words")
+        check_voice_name(voice, WHERE)  # the worker's espeak-ng would abort on it
         with tempfile.TemporaryDirectory(prefix="mpeg4fa-pyttsx3-") as tmp:
             wav = Path(tmp) / "speech.wav"
             request = {"text": text, "voice": voice, "rate": int(rate or self.rate), "wav": str(wav)}
