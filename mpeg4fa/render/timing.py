@@ -18,6 +18,12 @@ from mpeg4fa.fba.stream import FapStream
 from mpeg4fa.render.errors import RenderError
 
 _EPS = 1e-9
+MAX_OUTPUT_SECONDS = 12 * 3600.0
+"""Longest output a schedule makes: a player or exporter renders (or resamples) every tick of it, so a stream whose
+time codes jump by hours (a 150-byte .fap whose second frame is numbered 2000000: 22 h at 25 fps) would otherwise
+render for a day or fill memory. Real streams last minutes to a few hours."""
+MAX_OUTPUT_FRAMES = 1_000_000
+"""Most output frames a schedule makes (11 h at 25 frames/s; 65 min at 255): what an export holds in memory."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +72,25 @@ def schedule(stream: FapStream, fps: float | None = None) -> Schedule:
     times = presentation_times(stream)
     end = times[-1] + (int(stream.skip[-1]) + 1) / stream.fps
     n_out = max(int(math.ceil(end * rate - 1e-6)), 1)
+    if end > MAX_OUTPUT_SECONDS or n_out > MAX_OUTPUT_FRAMES:
+        gaps = np.diff(times)
+        k = int(np.argmax(gaps)) + 1 if len(gaps) else 0
+        widest = (f"; frame {k} comes {_span(gaps[k - 1])} after frame {k - 1}: a frame number or time code is "
+                  "probably wrong" if len(gaps) and gaps[k - 1] > end / 2 else "")
+        raise RenderError(f"the stream's {len(times)} frames span {_span(end)}, {n_out:,} output frames at "
+                          f"{rate:g} frames/s{widest}", where="stream",
+                          hint=f"at most {_span(MAX_OUTPUT_SECONDS)} and {MAX_OUTPUT_FRAMES:,} output frames are "
+                               "made; fix the stream's frame numbers or lower --fps")
     ticks = np.arange(n_out) / rate
     source = np.searchsorted(times, ticks + _EPS, side="right") - 1
     return Schedule(rate, np.maximum(source, 0).astype(np.int64), times)
+
+
+def _span(seconds: float) -> str:
+    """``seconds`` as people read a length: 4.2 s, 12 min 30 s, 22 h 13 min."""
+    if seconds < 60:
+        return f"{seconds:.3g} s"
+    minutes = int(seconds // 60)
+    if minutes < 60:
+        return f"{minutes} min {int(seconds - 60 * minutes)} s"
+    return f"{minutes // 60} h {minutes % 60} min"

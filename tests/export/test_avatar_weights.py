@@ -179,3 +179,16 @@ def test_every_viseme_of_both_sets_has_arkit_weights(head):
     assert table[("mpeg4", "AA")][jaw] > 3 * table[("mpeg4", "PP")][jaw]
     assert table[("zh", "a")][jaw] > 3 * table[("zh", "bpm")][jaw]
     assert table[("zh", "uv")][pucker] > table[("zh", "i")][pucker]
+
+
+@pytest.mark.parametrize("frames", [0, 1, 4096, 4097, 9000])
+def test_weights_json_written_in_blocks_is_the_whole_document(tmp_path, frames):
+    """The writer turns a block of frames into text at a time (a million frames as one document took 3.3 GB):
+    the file is still exactly the one document, block edges included."""
+    from mpeg4fa.export.weights import Weights, weights_document
+
+    rng = np.random.default_rng(frames)
+    w = Weights("arkit", ARKIT_BLENDSHAPES, np.arange(frames) / 25.0, rng.random((frames, len(ARKIT_BLENDSHAPES))), 25.0)
+    path = tmp_path / "w.json"
+    write_weights_json(w, path)
+    assert path.read_text(encoding="utf-8") == json.dumps(weights_document(w), separators=(",", ":")) + "\n"

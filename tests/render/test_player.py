@@ -58,6 +58,24 @@ def test_schedule_errors():
         schedule(FapStream.empty(0))
 
 
+def test_a_stream_whose_time_codes_jump_by_hours_is_refused_before_any_frame():
+    """Fuzz of 2026-12-07: a 150-byte .fap whose second frame is numbered 2000000 (22 h at 25 fps) had ``play``
+    render two million frames and ``export --fps 255`` fill 20 GB. The schedule now names the gap at once."""
+    from mpeg4fa.render.timing import MAX_OUTPUT_FRAMES, MAX_OUTPUT_SECONDS
+
+    gap = _stream([1999999, 0], [0, 600])
+    with pytest.raises(RenderError, match=r"span 22 h 13 min.*frame 1 comes 22 h 13 min after frame 0"):
+        schedule(gap)
+    long = _stream([int(MAX_OUTPUT_SECONDS * 25)] * 2, [0, 0])  # evenly sparse: no one gap to blame
+    with pytest.raises(RenderError, match="12 h 0 min") as caught:
+        schedule(long)
+    assert "probably wrong" not in str(caught.value)
+    hour = _stream([49999, 49999], [0, 0])  # 4000 s: 100,000 frames at 25 fps, 1,020,000 at 255
+    assert schedule(hour).n_frames == 100000
+    with pytest.raises(RenderError, match="lower --fps"):
+        schedule(hour, fps=255)
+
+
 def test_each_frame_appears_at_its_presentation_time(procedural_face, tmp_path):
     """PNG output, frame by frame: an open jaw is drawn exactly on the ticks of its frame."""
     s = _stream([0, 2, 0, 1, 0, 0], [0, 600, 0, 600, 0, 0])
