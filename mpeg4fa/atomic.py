@@ -32,7 +32,7 @@ from typing import Any, Callable, Iterator
 PARTIAL_MARK = ".partial-"
 """What every temporary's name holds: ``.NAME.partial-XXXXXXXX`` (+ the target's suffix)."""
 _STEM_MAX = 100  # keeps the temporary's name under the file system's name limit
-_ERROR_TEXT = ("where", "message", "hint", "filename", "filename2", "source")
+_ERROR_TEXT = ("where", "message", "hint", "filename", "filename2", "source", "path", "problem")
 
 
 def partial_path(target: Path) -> Path:
@@ -62,7 +62,11 @@ def atomic_output(path: str | os.PathLike, *, directory: bool = False) -> Iterat
         target = Path(os.path.realpath(target))
     kind = _kind(target)
     if kind == "other":  # a device, pipe or socket: nothing to rename onto
-        yield target
+        try:
+            yield target
+        except OSError as exc:  # /dev/full: the error still says which output
+            _name_output(exc, str(path))
+            raise
         return
     if kind == "dir" and not directory:
         raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))

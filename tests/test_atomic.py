@@ -158,3 +158,21 @@ def test_a_write_error_names_the_output(tmp_path):
             raise OSError(28, "No space left on device")
     assert info.value.filename == str(target) and failed_output(info.value) == str(target)
     assert str(target) in str(info.value)
+
+
+def test_a_reader_error_on_the_temporary_and_a_full_device_name_the_output(tmp_path):
+    """Fuzz of 2026-12-07: ``fdp -o unwritable/f.json`` said ``.f.partial-288e53de.json: permission denied`` (a
+    FormatError keeps its file in ``path``), and ``encode -o /dev/full`` said only ``No space left on device``."""
+    from mpeg4fa.formats import FormatError
+
+    target = tmp_path / "f.json"
+    with pytest.raises(FormatError) as info:
+        with atomic_output(target) as partial:
+            raise FormatError.no_place(str(partial), "permission denied")
+    assert info.value.path == str(target) and str(info.value).startswith(f"{target}: ")
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full here")
+    with pytest.raises(OSError) as full:
+        with atomic_output("/dev/full") as out, open(out, "wb", buffering=0) as f:
+            f.write(b"x")
+    assert failed_output(full.value) == "/dev/full" and full.value.filename == "/dev/full"

@@ -351,11 +351,30 @@ def _aligned(args: argparse.Namespace, inputs: dict, outputs: dict):
     from ..speech.markup import parse_markup
 
     source = text_input.classify(args.transcript, as_text=args.as_text)
-    refuse_overlaps({**inputs, "--speech": args.speech, "--transcript": source.path}, outputs)
+    from_stdin = str(args.speech) == "-"
+    if from_stdin and source.stdin:
+        raise UsageError("--speech - and --transcript - both read standard input",
+                         hint="give the transcript as text or as a file")
+    refuse_overlaps({**inputs, **({} if from_stdin else {"--speech": args.speech}), "--transcript": source.path},
+                    outputs)
     text, name = text_input.read_text(source)
     transcript = parse_markup(text, name=name, lenient=args.lenient) if args.lenient else text
-    return align_recording(args.speech, transcript, lang=args.lang, voice=args.voice, rate=args.rate,
+    recording = _stdin_recording(args) if from_stdin else args.speech
+    return align_recording(recording, transcript, lang=args.lang, voice=args.voice, rate=args.rate,
                            method=args.aligner, name=name, fit_check=args.fit_check), name
+
+
+def _speech_name(args: argparse.Namespace) -> str:
+    """The recording as messages name it: its file, or ``<stdin>`` for ``--speech -``."""
+    return "<stdin>" if str(args.speech) == "-" else str(args.speech)
+
+
+def _stdin_recording(args: argparse.Namespace):
+    """Raw PCM from standard input (``--speech -``, at ``--pcm-rate``) as one recording: an alignment hears the
+    whole of it at once, as it does a file (at most the speech encoder's 30 min: bounded memory)."""
+    from ..speech.listen.stream import recording_of
+
+    return recording_of(_listen_source(args))
 
 
 def speech_options(g) -> list[argparse.Action]:
@@ -473,9 +492,10 @@ def _encode_recording(args: argparse.Namespace) -> int:
     aligned, name = _aligned(args, inputs, outputs)
     fps = args.fps if args.fps is not None else 25.0
     encoded = encode_utterance(aligned.utterance, fps=fps, level=args.level, idle=args.idle)
-    print(f"{args.speech}: {name} aligned by {aligned.method} in {aligned.seconds:.2f} s for "
+    shown = _speech_name(args)
+    print(f"{shown}: {name} aligned by {aligned.method} in {aligned.seconds:.2f} s for "
           f"{encoded.speech.duration:.2f} s of audio", file=sys.stderr)
-    return _write_encoded(args, encoded, str(args.speech), fps, fdp)
+    return _write_encoded(args, encoded, shown, fps, fdp)
 
 
 def _encode_listened(args: argparse.Namespace, fdp) -> int:
@@ -665,7 +685,8 @@ def _say_recording(args: argparse.Namespace) -> int:
         said = say_encoded(encoded, args.output, width=width, height=height, samples=args.aa, keep=args.keep,
                            progress=progress, face=face, texture=texture)
     result, data, stream, kept = said.result, said.data, said.stream, said.kept
-    print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s) of {args.speech} "
+    print(f"{args.output}: {result.n_frames} frames at {result.fps:g} fps ({result.duration:.2f} s) of "
+          f"{_speech_name(args)} "
           f"({how}), {len(data) * 8 / max(len(stream), 1):.0f} bits/frame of FAPs "
           f"({_level_said(args.level)}); rendered in {result.seconds:.1f} s"
           + (f"; kept {', '.join(map(str, kept.values()))}" if kept else ""))

@@ -29,8 +29,10 @@ def frame_range(text: str) -> tuple[int, int | None]:
 
 def run_trace(args: argparse.Namespace) -> int:
     """Print the elements (of the --frames range), then, at a fault, raise the decoder's error (exit 1)."""
-    if sniff(args.stream) != "fba":
-        raise InputError("is a .fap text file: --trace reads binary .fba streams", str(args.stream))
+    if sniff(args.stream) != "fba":  # sniff says "fap" of any other file, whose reader says what is wrong
+        raise InputError("is not a binary .fba stream: it does not begin with an FBA start code (--trace shows the "
+                         "bits of .fba streams; 'mpeg4fa info' without it reads .fap and .bap text files)",
+                         str(args.stream))
     first, stop = args.frames or (0, None)
     out = sys.stdout
     emit = _json_line if args.json else _TextLines(out)

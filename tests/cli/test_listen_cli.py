@@ -83,6 +83,28 @@ def test_raw_pcm_from_standard_input(cli, tmp_path, speech, monkeypatch):
     assert "<stdin>" in err and abs(_frames(out) / 25 - len(samples) / rate) < 0.08
 
 
+def test_raw_pcm_from_standard_input_with_a_transcript(cli, tmp_path, speech, monkeypatch):
+    """Fuzz of 2026-12-07: ``--speech - --transcript TEXT`` said ``-: no such recording`` although --help says that
+    ``-`` reads raw PCM from standard input. Now it is aligned as the same samples in a WAV file are."""
+    samples, rate = speech
+    wav = _write(tmp_path / "s.wav", samples, rate)
+    said = TEXT
+    code, _, err = cli("encode", "--speech", wav, "--transcript", said, "--aligner", "dtw", "-o", tmp_path / "f.fba",
+                       "--timings", tmp_path / "f.json")
+    assert code == 0, err
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(samples.astype("<i2").tobytes())))
+    code, _, err = cli("encode", "--speech", "-", "--pcm-rate", rate, "--transcript", said, "--aligner", "dtw",
+                       "-o", tmp_path / "p.fba", "--timings", tmp_path / "p.json")
+    assert code == 0, err
+    assert err.startswith("<stdin>: ") and _frames(tmp_path / "p.fba") == _frames(tmp_path / "f.fba")
+    # (espeak-ng's reference audio shifts a little with what it spoke before in a process: compare within 60 ms)
+    file_says, pipe_says = (json.loads((tmp_path / f"{k}.json").read_text()) for k in "fp")
+    assert [i.get("viseme") for i in pipe_says] == [i.get("viseme") for i in file_says]
+    assert max(abs(a["start"] - b["start"]) for a, b in zip(pipe_says, file_says)) < 0.06
+    code, _, err = cli("encode", "--speech", "-", "--transcript", "-", "-o", tmp_path / "q.fba")
+    assert code == 2 and "both read standard input" in err and not (tmp_path / "q.fba").exists()
+
+
 @pytest.mark.parametrize("samples", [np.zeros(0, np.int16), np.zeros(32000, np.int16)], ids=["empty", "silent"])
 def test_empty_or_silent_gives_a_closed_mouth_and_one_line(cli, tmp_path, samples):
     path = _write(tmp_path / "s.wav", samples, 16000)

@@ -293,4 +293,9 @@ def test_cli_options(stream_file, tmp_path, capsys):
     fap.write_text("2.1 x 25 1\n0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 "
                    "0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n")
     assert main(["info", "--trace", str(fap)]) == 1
-    assert "--trace reads binary .fba streams" in capsys.readouterr().err
+    assert "is not a binary .fba stream" in capsys.readouterr().err
+    empty = tmp_path / "empty.bin"  # fuzz of 2026-12-07: an empty or random file was called "a .fap text file"
+    empty.write_bytes(b"")
+    assert main(["info", "--trace", str(empty)]) == 1
+    err = capsys.readouterr().err
+    assert "empty.bin: is not a binary .fba stream" in err and ".fap text file" not in err

@@ -84,7 +84,8 @@ def wav_source(path: str | os.PathLike) -> Source:
 def raw_source(handle, rate: int = RAW_RATE, name: str = "<stdin>") -> Source:
     """Raw PCM (:data:`RAW_FORMAT`) read from a binary file (standard input) as it comes."""
     if not 1000 <= rate <= 768_000:
-        raise AlignError(f"--rate {rate} Hz for raw PCM is out of range", where=name, hint="give 1000 to 768000 Hz")
+        raise AlignError(f"raw PCM at {rate} Hz: the sample rate is out of range", where=name,
+                         hint="give a rate (--pcm-rate) of 1000 to 768000 Hz")
 
     def pieces() -> Iterator[np.ndarray]:
         odd = b""
