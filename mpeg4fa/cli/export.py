@@ -120,12 +120,15 @@ def register(commands: Commands) -> None:
 
 
 def _format_of(args: argparse.Namespace) -> str:
-    if args.format is not None:
-        return args.format
     suffix = args.output.suffix.lower()
-    for name, (suffixes, _) in FORMATS.items():
-        if suffix in suffixes:
-            return name
+    by_suffix = next((name for name, (suffixes, _) in FORMATS.items() if suffix in suffixes), None)
+    if args.format is not None:
+        if by_suffix not in (None, args.format):  # JSON in a file named .glb would fool every glTF reader
+            raise UsageError(f"-o {args.output} names a {by_suffix} file, but --format {args.format} writes another",
+                             hint=f"name the output for {args.format} (e.g. .json), or drop --format")
+        return args.format
+    if by_suffix is not None:
+        return by_suffix
     known = ", ".join(s for suffixes, _ in FORMATS.values() for s in suffixes)
     raise UsageError(f"-o {args.output}: no export format for suffix {suffix or '(none)'!r}",
                      hint=f"name the output with one of {known}, or give --format")
