@@ -155,7 +155,7 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{command}: error: {exc}", file=sys.stderr)
         return 2
     except MpegFaError as exc:
-        print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
+        print(f"{command}: error: {one_line(_in_its_file(args, exc))}", file=sys.stderr)
         return 1
     except BrokenPipeError:  # output piped into head, less...: not an error
         sys.stderr.close()
@@ -165,6 +165,21 @@ def _run(args: argparse.Namespace) -> int:
         return 1
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP (Terminated): outputs already cleaned up
         return _stopped(command, exc)
+
+
+def _in_its_file(args: argparse.Namespace, exc: MpegFaError) -> str:
+    """The error as a line, led by the stream file it is in where the codec's place is only a bit offset and frame
+    (``decode talk.fba``: ``talk.fba: marker bit ... at bit 1914 (byte 239), frame 0``)."""
+    import os
+
+    from ..fba import FbaError
+
+    text = str(exc)
+    source = getattr(args, "stream", None) or getattr(args, "input", None)  # encode's input may be text instead
+    if isinstance(exc, FbaError) and isinstance(source, (str, os.PathLike)) and os.path.isfile(source) \
+            and os.fspath(source) not in text:
+        return f"{os.fspath(source)}: {text}"
+    return text
 
 
 def _stopped(command: str, exc: KeyboardInterrupt) -> int:

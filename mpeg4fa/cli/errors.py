@@ -33,9 +33,8 @@ def os_error_line(exc: OSError) -> str:
     """An OS error as one line naming its file and what to do: ``cannot write nodir/x.fap: No such file or
     directory (create the folder nodir first)``; ``cannot write`` where it was raised writing an output."""
     reason = exc.strerror or str(exc)
-    target = failed_output(exc)
-    writing = target is not None
-    path = target if writing else exc.filename  # the output asked for, not its hidden partial file beside it
+    path = exc.filename
+    writing = failed_output(exc) is not None
     hint = _os_hint(exc.errno, None if path is None else os.fsdecode(path), writing)
     if path is None:
         text = reason

@@ -224,3 +224,14 @@ def test_validate_of_a_missing_file_is_an_error_naming_it_once(cli, tmp_path):
     for semantic in ((), ("--semantic",)):
         code, out, err = cli("validate", missing, *semantic)
         assert code == 1 and out == "" and err.count(str(missing)) == 1 and err.startswith("mpeg4fa validate: error:")
+
+
+@pytest.mark.parametrize("argv", [["decode", "{bad}", "-o", "{out}.fap"], ["info", "{bad}"], ["info", "--json", "{bad}"],
+                                  ["encode", "{bad}", "-o", "{out}.fba"]])
+def test_a_damaged_stream_is_named_with_its_bit_offset(cli, demo, tmp_path, argv):
+    """Fuzz of 2026-12-07: a corrupt .fba gave ``... at bit N (byte M), frame F`` without saying which file."""
+    data = bytearray(demo.read_bytes())
+    bad = tmp_path / "damaged.fba"
+    bad.write_bytes(bytes(data[:8]) + b"\xff" * (len(data) - 8))
+    code, _, err = cli(*[a.format(bad=bad, out=tmp_path / "out") for a in argv])
+    assert code == 1 and f"error: {bad}: " in err and " at bit " in err and err.count(str(bad)) == 1, err
