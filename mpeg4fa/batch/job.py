@@ -31,6 +31,7 @@ from typing import Any
 
 from mpeg4fa import __version__
 from mpeg4fa.atomic import PARTIAL_MARK, atomic_output
+from mpeg4fa.batch.errors import BatchError
 from mpeg4fa.batch.manifest import PATH_OPTIONS, Job
 from mpeg4fa.errors import MpegFaError, MpegFaWarning
 
@@ -209,6 +210,16 @@ def _worker_address() -> str | None:
         return None
 
 
+def _check_inside(target: Path, outdir: Path) -> None:
+    """BatchError for an output (or its record beside it) that a symbolic link already in ``outdir`` leads out of
+    it: the manifest's names are checked to stay inside (no ``..``, not absolute), and so is what they resolve to."""
+    root = Path(os.path.realpath(outdir))
+    for path in (target, record_path(target)):
+        if not Path(os.path.realpath(path)).is_relative_to(root):
+            raise BatchError(f"is a link to {os.path.realpath(path)}, outside the output folder",
+                             where=str(path), hint="remove the link, or name another output")
+
+
 def _render(state: _ProcessState, job: Job, outdir: Path, key: str, digests: dict[str, str]) -> dict:
     from mpeg4fa.formats import read_stream
     from mpeg4fa.render import play
@@ -227,6 +238,7 @@ def _render(state: _ProcessState, job: Job, outdir: Path, key: str, digests: dic
                 raise _InStream(text if str(job.stream) in text else f"{job.stream}: {text}") from None
             renderer, reused, renderer_key = state.renderer(job, digests)
             target.parent.mkdir(parents=True, exist_ok=True)
+            _check_inside(target, outdir)
             remove_leftovers(target)
             o = job.options
             played = play(stream, target, renderer=renderer, audio=job.audio, fps=o["fps"], fit=o["fit"],

@@ -163,6 +163,11 @@ class Manifest:
     jobs: tuple[Job, ...]
 
 
+SHOWN_PROBLEMS = 20
+"""Problems a manifest's error line spells out (all are in :attr:`.BatchError.problems`): 10,000 jobs of a
+missing file made one line of 538 KB."""
+
+
 def load_manifest(path: str | os.PathLike) -> Manifest:
     """Read and check a JSON or CSV manifest; one :class:`.BatchError` lists every fault with its place."""
     path = Path(path)
@@ -184,7 +189,10 @@ def load_manifest(path: str | os.PathLike) -> Manifest:
             jobs.append(job)
     _check_outputs(jobs, problems)
     if problems:
-        raise BatchError(f"{len(problems)} problem{'s' if len(problems) > 1 else ''}: {'; '.join(problems)}",
+        shown = "; ".join(problems[:SHOWN_PROBLEMS])
+        if len(problems) > SHOWN_PROBLEMS:
+            shown += f"; and {len(problems) - SHOWN_PROBLEMS:,} more"
+        raise BatchError(f"{len(problems)} problem{'s' if len(problems) > 1 else ''}: {shown}",
                          where=str(path), hint="fix these entries of the manifest and run again",
                          problems=tuple(problems))
     return Manifest(path, tuple(jobs))
@@ -273,7 +281,7 @@ def _element_lines(text: str, pos: int, decoder: json.JSONDecoder) -> list[int]:
 
 
 def _csv_entries(text: str, path: Path) -> list[tuple[int, dict]]:
-    reader = csv.reader(io.StringIO(text, newline=""))
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)  # an unclosed quote is an error, not a cell
     entries: list[tuple[int, dict]] = []
     header: list[str] | None = None
     try:
@@ -294,7 +302,8 @@ def _csv_entries(text: str, path: Path) -> list[tuple[int, dict]]:
                                  where=f"{path}:{line}", hint="quote cells that hold commas")
             entries.append((line, {k: v.strip() for k, v in zip(header, row) if v.strip()}))
     except csv.Error as exc:
-        raise BatchError(f"not valid CSV: {exc}", where=f"{path}:{reader.line_num}") from None
+        raise BatchError(f"not valid CSV: {exc}", where=f"{path}:{reader.line_num}",
+                         hint="close every quote a cell opens (cells holding commas are quoted)") from None
     if header is None:
         raise BatchError("the manifest is empty", where=str(path),
                          hint="a header row (stream,output,...) and one row a job")

@@ -9,11 +9,23 @@ signal: one line, exit status 1.
 """
 from __future__ import annotations
 
+import logging
 import signal
 import threading
 from typing import Any
 
 from ..atomic import Terminated
+
+CLIENT_FAULTS = ("Invalid UTF-8 sequence received from client",)
+"""Messages uvicorn logs with a traceback of its own code for what a client sent wrong (a text frame that is not
+UTF-8: the connection is closed with 1007 and the server goes on): the console gets their one line."""
+
+
+class _ClientFaultsInOneLine(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.exc_info and record.getMessage().startswith(CLIENT_FAULTS):
+            record.exc_info, record.exc_text = None, None
+        return True
 
 
 def run_until_stopped(app: Any, **config: Any) -> None:
@@ -21,6 +33,9 @@ def run_until_stopped(app: Any, **config: Any) -> None:
     import uvicorn
 
     server = uvicorn.Server(uvicorn.Config(app, **config))
+    logger = logging.getLogger("uvicorn.error")
+    if not any(isinstance(f, _ClientFaultsInOneLine) for f in logger.filters):
+        logger.addFilter(_ClientFaultsInOneLine())
     hung_up: list[int] = []
 
     def on_hangup(signum: int, frame: Any) -> None:

@@ -101,11 +101,13 @@ class Microphone:
             await self.start(t if np.isfinite(t) else 0.0)
         now = self.clock()
         self.last_chunk = now
-        gap = int(round((t - self.origin) * RATE)) - self.received if np.isfinite(t) else 0
-        if gap > MAX_GAP * RATE or gap < -len(payload) // 2:
-            await self.send(error_message(f"a chunk at {t:.3f} s, the audio so far ends at {self.origin + self.received / RATE:.3f} s: "
-                                          f"chunks come in order, gaps under {MAX_GAP:g} s", "mic"))
+        ahead = (t - self.origin) * RATE - self.received if np.isfinite(t) else 0.0  # float first: t may be 1e308
+        if not np.isfinite(ahead) or ahead > MAX_GAP * RATE or ahead < -(len(payload) // 2):
+            await self.send(error_message(f"a chunk at {t:.6g} s, the audio so far ends at "
+                                          f"{self.origin + self.received / RATE:.3f} s: chunks come in order, gaps "
+                                          f"under {MAX_GAP:g} s", "mic"))
             return
+        gap = int(round(ahead))
         samples = np.frombuffer(payload, "<i2")
         if gap > 0:
             samples = np.concatenate([np.zeros(gap, np.int16), samples])

@@ -341,9 +341,16 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
 
     @app.post("/api/pose")
     def pose(req: PoseRequest):
-        values = pose_values(req.faps, req.viseme, req.expression, req.intensity)
+        import warnings
+
+        from mpeg4fa.errors import MpegFaWarning
+
+        with warnings.catch_warnings(record=True) as caught:  # values clamped into range: the page's to say, once
+            warnings.simplefilter("always", MpegFaWarning)   # per request, not 66 lines on the console each time
+            values = pose_values(req.faps, req.viseme, req.expression, req.intensity)
         v = posed_vertices(session.require(), the_head(), values, state["cache"])
-        return {"positions": np.round(v, 6).ravel().tolist()}
+        said = [str(w.message) for w in caught if issubclass(w.category, MpegFaWarning)]
+        return {"positions": np.round(v, 6).ravel().tolist(), "warnings": said}
 
     # -- photo calibration (issue 17 item 4; the pure steps are in .photos) ---------------------------
 

@@ -85,7 +85,9 @@ def _read_scene(data: bytes, filename: str, ext: str, resolver) -> list[tuple[st
     except EditError:
         raise
     except Exception as exc:  # any reader fault is the file's
-        raise EditError(f"cannot read the mesh: {exc}", where=filename) from None
+        reason = str(exc).strip() or (f"the reader stopped with a bare {type(exc).__name__} (the file is damaged, "
+                                      "e.g. a buffer claiming more bytes than it holds)")  # trimesh's asserts
+        raise EditError(f"cannot read the mesh: {reason}", where=filename) from None
     if not nodes:
         raise EditError("the file holds no triangles", where=filename)
     out = []

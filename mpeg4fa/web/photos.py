@@ -39,7 +39,10 @@ def decode_photo(data: bytes, where: str) -> np.ndarray:
                 raise EditError(f"the {where} photo is {img.width}x{img.height} pixels, more than "
                                 f"{MAX_PHOTO_PIXELS // 1_000_000} million", where=where, hint="scale it down")
             rgb = np.asarray(img.convert("RGB"))
-    except (OSError, UnidentifiedImageError, ValueError, Image.DecompressionBombError) as exc:
+    except UnidentifiedImageError:  # its text names the in-memory buffer ("<_io.BytesIO object at 0x...>")
+        raise EditError(f"cannot read the {where} photo: no image format Pillow knows", where=where,
+                        hint="send a PNG or JPEG image") from None
+    except (OSError, ValueError, Image.DecompressionBombError) as exc:
         raise EditError(f"cannot read the {where} photo ({exc})", where=where,
                         hint="send a PNG or JPEG image") from None
     if rgb.shape[0] < 16 or rgb.shape[1] < 16:

@@ -132,6 +132,18 @@ def test_failed_jobs_leave_no_output_and_stop_no_other(inputs, scheduler, tmp_pa
     assert sorted(p.name for p in out.iterdir()) == [".fine.mp4.batch.json", SUMMARY_NAME, "fine.mp4"]
 
 
+def test_an_output_a_link_leads_out_of_the_folder_is_not_written_through(inputs, scheduler, tmp_path):
+    """Fuzz of 2026-12-07: with ``OUT/s2.mp4`` already a link to a file outside OUT, the batch wrote the video
+    through it (the manifest's names are kept inside OUT; what they resolve to now is too)."""
+    out, outside = tmp_path / "out", tmp_path / "elsewhere.mp4"
+    out.mkdir()
+    (out / "s2.mp4").symlink_to(outside)
+    summary = run_batch(manifest(inputs, [{"stream": "s2.fba"}, {"stream": "s1.fba"}]), out, scheduler=scheduler)
+    done = by_output(summary)
+    assert done["s2.mp4"].status == "failed" and "outside the output folder" in done["s2.mp4"].error
+    assert done["s1.mp4"].status == "rendered" and not outside.exists() and leftovers(out) == []
+
+
 def test_manifest_faults_are_all_located_at_once(inputs):
     path = inputs / "faulty.json"
     path.write_text('{"jobs": [\n'

@@ -64,3 +64,23 @@ def test_serve_help(cli):
     with pytest.raises(SystemExit) as exit_:
         cli("serve", "--help")
     assert exit_.value.code == 0
+
+
+def test_a_client_text_frame_that_is_not_utf8_is_one_console_line():
+    """Fuzz of 2026-12-07: each such frame put uvicorn's own UnicodeDecodeError traceback on the server's console
+    (the client is closed with 1007 and the server goes on): any client could fill the console at will."""
+    import logging
+    import sys
+
+    from mpeg4fa.cli.local_server import _ClientFaultsInOneLine
+
+    try:
+        b"\xff".decode()
+    except UnicodeDecodeError:
+        info = sys.exc_info()
+    keep = _ClientFaultsInOneLine()
+    fault = logging.LogRecord("uvicorn.error", logging.ERROR, __file__, 1,
+                              "Invalid UTF-8 sequence received from client.", None, info)
+    ours = logging.LogRecord("uvicorn.error", logging.ERROR, __file__, 1, "Exception in ASGI application", None, info)
+    assert keep.filter(fault) and fault.exc_info is None
+    assert keep.filter(ours) and ours.exc_info is info  # a fault of the server's own keeps its traceback

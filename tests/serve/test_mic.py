@@ -110,6 +110,26 @@ def test_an_oversized_or_odd_chunk_is_refused_and_the_connection_goes_on(base, p
         assert json.loads(ws.recv(timeout=20))["type"] == "started"
 
 
+@pytest.mark.parametrize("t", [1e308, -1e308, 1e300])
+def test_a_chunk_time_past_any_clock_is_one_error_and_the_session_goes_on(base, t):
+    """Fuzz of 2026-12-07: a chunk at t = 1e308 after one at 0 raised OverflowError (float infinity to integer) in
+    the server, whose console showed the traceback while the socket dropped without a word."""
+    chunk = np.zeros(1600, np.int16).tobytes()  # 0.1 s
+    with connect(ws_url(base), origin=base) as ws:
+        json.loads(ws.recv(timeout=10))
+        ws.send(pack(MIC_KIND, 0.0, chunk))
+        ws.send(pack(MIC_KIND, t, chunk))
+        error = None
+        while error is None:
+            message = ws.recv(timeout=10)
+            if isinstance(message, str) and json.loads(message)["type"] == "error":
+                error = json.loads(message)
+        assert error["where"] == "mic" and "chunks come in order" in error["error"] and len(error["error"]) < 200
+        ws.send(pack(MIC_KIND, 0.1, b""))  # the session is still there, and ends
+        texts, _ = receive_all(ws, until="ended")
+        assert any(m.get("state") == "ended" for m in texts)
+
+
 def test_audio_faster_than_real_time_and_out_of_order_is_refused(base):
     """The server never listens to more audio than the wall clock since the session's first chunk allows,
     plus AHEAD: a client sending 10 s at once gets errors, and the session holds about what time allowed."""

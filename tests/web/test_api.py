@@ -1,6 +1,7 @@
 """The editor's JSON API, in-process (FastAPI's TestClient), on meshes the tests make and the procedural head."""
 import json
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -116,6 +117,11 @@ def test_pose_moves_the_head(client, procedural_face):
         client.get("/api/model").json()["positions"], (-1, 3))).max() > 0.1
     r = client.post("/api/pose", json={"faps": {"1": 5}})
     assert r.status_code == 422 and "faps" in r.json()["where"]
+    assert client.post("/api/pose", json={"faps": {"3": 400}}).json()["warnings"] == []
+    with warnings.catch_warnings():  # fuzz of 2026-12-07: each clamped FAP was a console line, every request
+        warnings.simplefilter("error")
+        said = client.post("/api/pose", json={"faps": {str(f): 1e300 for f in range(3, 69)}}).json()["warnings"]
+    assert len(said) >= 60 and all("1e+300" in w or "clamp" in w or "range" in w for w in said), said[:3]
 
 
 def test_index_page_lists_the_api(client):

@@ -129,3 +129,17 @@ def test_good_files_still_read():
     assert len(read_mesh(_glb(_gltf_doc()), "head.glb").triangles) == 14
     assert len(read_mesh(json.dumps(_gltf_doc()).encode(), "head.gltf").triangles) == 14
     assert len(read_upload([("m.obj", TETRA), ("m.parts.json", b'{"parts": {"skin": [0, 1, 2, 3]}}')]).triangles) == 4
+
+
+def test_a_reader_fault_that_says_nothing_still_gives_a_reason():
+    """Fuzz of 2026-12-07: a glTF whose buffer claims 10**15 bytes made trimesh raise a bare AssertionError, and
+    the answer read "cannot read the mesh: " with nothing after it."""
+    doc = {"asset": {"version": "2.0"},
+           "buffers": [{"uri": "data:application/octet-stream;base64,AAAA", "byteLength": 10 ** 15}],
+           "bufferViews": [{"buffer": 0, "byteLength": 10 ** 15}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 10 ** 14, "type": "VEC3"}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]}
+    with pytest.raises(EditError) as caught:
+        read_mesh(json.dumps(doc).encode(), "a.gltf")
+    assert caught.value.where == "a.gltf" and "cannot read the mesh: " in str(caught.value)
+    assert len(caught.value.message) > len("cannot read the mesh: ") + 10

@@ -320,3 +320,13 @@ def test_a_mesh_change_clears_the_calibration(client, synth):
     # new photos start afresh: nothing calibrated, nothing cleared
     post_photos(client, synth)
     assert client.get("/api/photos").json()["cleared"] is None
+
+
+def test_bytes_that_are_no_image_name_no_python_object():
+    """Fuzz of 2026-12-07: the answer quoted Pillow's "cannot identify image file <_io.BytesIO object at 0x...>"."""
+    from mpeg4fa.web.edits import EditError
+    from mpeg4fa.web.photos import decode_photo
+
+    with pytest.raises(EditError) as caught:
+        decode_photo(b"this is text, not a photo" * 4, "front")
+    assert "no image format" in str(caught.value) and "BytesIO" not in str(caught.value) and "0x" not in str(caught.value)
