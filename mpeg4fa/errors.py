@@ -37,6 +37,18 @@ class MpegFaWarning(UserWarning):
     """
 
 
+def unwritable(exc: OSError) -> tuple[str, str]:
+    """What a writer says when the system will not take a file: the problem and what to do (the caller names the
+    file), worded for an output (a reader's "no such file, check the path" misleads there)."""
+    if isinstance(exc, IsADirectoryError):
+        return "is a directory, not a file", "give a file name"
+    if isinstance(exc, FileNotFoundError):
+        return "cannot write it: no such folder, or one that takes no files", "write it into an existing folder"
+    if isinstance(exc, PermissionError):
+        return "cannot write it: permission denied", "check the folder's permissions, or write elsewhere"
+    return f"cannot write it: {exc.strerror or exc}", ""
+
+
 def unreadable(exc: OSError) -> tuple[str, str]:
     """What a reader says when the system will not give it a file: the problem and what to do, in the
     same words for every reader (the caller names the file)."""

@@ -262,5 +262,6 @@ def run_demo(args: argparse.Namespace) -> int:
     with atomic_output(args.output) as partial:
         partial.write_bytes(data)
     print(f"wrote {args.output}\n")
-    args.stream, args.json = args.output, False
-    return run_info(args)
+    # what it holds, from the bytes written (the output may be a device: /dev/null reads back empty)
+    print(_as_text({"file": str(args.output), "format": "fba", **describe(decode(data), len(data))}))
+    return 0

@@ -65,11 +65,24 @@ def _found(image: np.ndarray, path: Path, face) -> dict[str, tuple[float, float]
     return {label: (float(p[0]), float(p[1])) for label, p in found.items()}
 
 
+def _photo_view(image: np.ndarray, points: dict, view: str, path: Path):
+    """:class:`~mpeg4fa.render.texture.PhotoView` of the photo at ``path``: what it refuses names that file (a 1x1
+    side photo was "photo: the photo is only 1x1 pixels", the front or the side)."""
+    from ..render.texture import PhotoView
+
+    try:
+        return PhotoView(image, points, view)
+    except RenderError as exc:
+        if exc.where == "photo":
+            exc.where = str(path)
+        raise
+
+
 def run_texture(args: argparse.Namespace) -> int:
     from PIL import Image
 
     from ..render import Renderer
-    from ..render.texture import PhotoView, bake_texture
+    from ..render.texture import bake_texture
 
     if (args.side is None) != (args.side_points is None):
         raise UsageError("--side and --side-points go together", hint="give both, or neither for front-only")
@@ -79,8 +92,9 @@ def run_texture(args: argparse.Namespace) -> int:
     face = face_from_args(args)
     image = read_image(args.front, "photo")
     points = _points(args.points) if args.points is not None else _found(image, args.front, face)
-    front = PhotoView(image, points, "front")
-    side = PhotoView(read_image(args.side, "photo"), _points(args.side_points), args.side_view) if args.side else None
+    front = _photo_view(image, points, "front", args.front)
+    side = (_photo_view(read_image(args.side, "photo"), _points(args.side_points), args.side_view, args.side)
+            if args.side else None)
     baked = bake_texture(face.mesh, front, side, size=args.size)
     preview = None
     if args.preview is not None:

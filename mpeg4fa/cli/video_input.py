@@ -3,6 +3,7 @@ WAV, + the FDP of its neutral face); a thin shell over :func:`mpeg4fa.tracking.t
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import warnings
 from pathlib import Path
@@ -80,7 +81,11 @@ def encode_video(args: argparse.Namespace, given_text: bool) -> int:
         warnings.warn(f"{args.video}: the face was lost in {summary.lost} of {summary.frames} frames; they hold the "
                       f"last values", TrackingWarning)
     data = encode(stream, coding_options(args, EncodeOptions(**TEXT_CODING)))
-    fdp = _neutral_fdp(args, summary.neutral.first) if args.fdp_out is not None else None
+    fdp = picture = None
+    if args.fdp_out is not None:  # the neutral is a frame of the stream (at --fps); the picture a frame of the video
+        source = info.fps if info.fps and info.fps > 0 else summary.fps
+        picture = int(math.floor(summary.neutral.first * source / summary.fps + 1e-9))
+        fdp = _neutral_fdp(args, picture)
     sound = None
     if audio is not None:
         from ..render.audio import read_audio
@@ -95,7 +100,8 @@ def encode_video(args: argparse.Namespace, given_text: bool) -> int:
         if fdp is not None:
             from ..fdp import save_fdp
             save_fdp(fdp, fdp_out)
-            written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points, from frame {summary.neutral.first})")
+            written.append(f"{args.fdp_out} ({len(fdp.labels)} feature points, from the video's frame {picture}, "
+                           f"{summary.neutral.first / summary.fps:.2f} s)")
     frames, seconds = len(stream), len(stream) / summary.fps
     print(f"{args.video}: {frames} frames at {summary.fps:g} fps ({seconds:.2f} s), "
           f"{len(data) * 8 / max(frames, 1):.1f} bits/frame ({len(data) * 8 / max(seconds, 1e-9) / 1000:.2f} kbit/s)",

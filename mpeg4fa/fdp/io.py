@@ -81,4 +81,6 @@ def save_fdp(fdp: Fdp, path: str | os.PathLike[str], *, float32: bool = False) -
     try:
         Path(path).write_bytes(payload)
     except OSError as exc:
-        raise FdpError.from_os_error(name, exc) from None
+        from mpeg4fa.errors import unwritable
+
+        raise FdpError.no_place(name, *unwritable(exc)) from None

@@ -29,7 +29,7 @@ _IMAGE_KINDS = ("a JPEG image", "a PNG image", "a GIF image", "a TIFF image", "a
 def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = None) -> np.ndarray:
     """An image file (or its bytes, e.g. an FDP's texture) as (H, W, 3) uint8 RGB; RenderError naming the
     file, or ``where``, and ``what`` it was for otherwise."""
-    from PIL import Image, UnidentifiedImageError
+    from PIL import Image, ImageOps, UnidentifiedImageError
 
     if isinstance(path, (bytes, bytearray, memoryview)):
         source: str | os.PathLike | io.BytesIO = io.BytesIO(bytes(path))
@@ -48,8 +48,8 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
                                       f"{MAX_PIXELS:,} pixels or {MAX_SIDE:,} a side read", where=where, hint="scale the image down to 8192 x 8192 or less")
                 if width == 0 or height == 0:
                     raise RenderError(f"the {what} has no pixels ({width} x {height})", where=where)
-                pixels = _rgb(img)
                 kind = img.format
+                pixels = _rgb(ImageOps.exif_transpose(img))  # a phone's photo stored sideways, upright
         _pillow_warnings(caught, kind, what, where)
         return pixels
     except FileNotFoundError:
@@ -123,10 +123,18 @@ def _pillow_warnings(caught: list[warnings.WarningMessage], kind: str | None, wh
 
 
 def _rgb(img) -> np.ndarray:
-    """(H, W, 3) uint8; a grey image repeated into three channels without Pillow's 4-byte RGB copy."""
+    """(H, W, 3) uint8; a grey image repeated into three channels without Pillow's 4-byte RGB copy. A 16-bit grey
+    image (modes I;16 and I, as Pillow opens a 16-bit PNG) is scaled to 8 bits: Pillow's own conversion clips it
+    to 255, so a 16-bit photo came out all but white and no face was found in it."""
     if img.mode == "L":
-        return np.repeat(np.asarray(img)[:, :, None], 3, axis=2)
-    return np.asarray(img.convert("RGB"))
+        grey = np.asarray(img)
+    elif img.mode.startswith("I"):
+        grey = np.clip(np.asarray(img, dtype=np.float64) / 257.0, 0, 255).round().astype(np.uint8)
+    elif img.mode == "F":
+        grey = np.clip(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0, 255).round().astype(np.uint8)
+    else:
+        return np.asarray(img.convert("RGB"))
+    return np.repeat(grey[:, :, None], 3, axis=2)
 
 
 def _not_an_image(source: str | os.PathLike | io.BytesIO) -> str:

@@ -330,7 +330,11 @@ def track_video(path, *, fps: float | None = None, neutral: int | float | None =
     if isinstance(neutral, float):
         if not (np.isfinite(neutral) and neutral >= 0):
             raise TrackingError(f"neutral time {neutral!r} s is not a time >= 0", info.path)
-        neutral = int(round(neutral * rate))
+        at = neutral * rate  # the frame showing at that time (1.99 s at 25 fps is frame 49, not 50)
+        if not at < 2 ** 31:  # 1e308 s: no frame of any video (the tracker says where a nearer one falls)
+            raise TrackingError(f"neutral time {neutral:g} s is past the end of any video", info.path,
+                                "give a time within the video")
+        neutral = int(math.floor(at + 1e-9))
     source = info.fps if info.fps and info.fps > 0 else rate
     total = max(int(round(info.frames * rate / source)), 1)
     with FaceTracker(rate, neutral=neutral, face=face, smooth=smooth, where=info.path) as tracker:

@@ -22,6 +22,14 @@ def test_demo_writes_a_stream_that_decodes(demo):
     assert stream.fps == 25.0
 
 
+def test_demo_says_what_it_wrote_without_reading_it_back(capsys):
+    """Fuzz of 2026-12-07: ``demo -o /dev/null`` wrote the stream, read its output back, found nothing there and
+    failed with "/dev/null:1: the file has no header"."""
+    assert main(["demo", "-o", "/dev/null"]) == 0
+    out = capsys.readouterr().out
+    assert "file: /dev/null" in out and "frames: 100" in out
+
+
 def test_info_json(demo, capsys):
     capsys.readouterr()
     assert main(["info", str(demo), "--json"]) == 0

@@ -52,3 +52,8 @@ def test_texture_errors(cli, tmp_path, front_photo):
     assert code == 2 and "--side-points" in err  # a usage clash: exit 2 like argparse
     code, _, err = cli("texture", tmp_path / "none.png", "--points", points, "-o", tmp_path / "s.png")
     assert code == 1 and "none.png" in err
+    tiny = tmp_path / "tiny.png"  # fuzz of 2026-12-07: "photo: the photo is only 1x1 pixels", not its file
+    Image.fromarray(np.zeros((1, 1, 3), np.uint8)).save(tiny)
+    code, _, err = cli("texture", photo, "--points", points, "--side", tiny, "--side-points", points,
+                       "-o", tmp_path / "s.png")
+    assert code == 1 and f"{tiny}: the photo is only 1x1 pixels" in err and not (tmp_path / "s.png").exists()

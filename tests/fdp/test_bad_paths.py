@@ -138,3 +138,12 @@ def test_save_to_a_directory_names_it(tmp_path):
     fdp = Fdp.from_points({"2.1": [0, 0, 0]})
     with pytest.raises(FdpError, match="is a directory"):
         save_fdp(fdp, tmp_path)
+
+
+def test_save_into_no_folder_says_it_cannot_write(tmp_path):
+    """Fuzz of 2026-12-07: ``fdp -o /proc/me.fdp`` said "no such file (check the path ...)", a reader's words."""
+    fdp = Fdp.from_points({"2.1": [0, 0, 0]})
+    with pytest.raises(FdpError) as caught:
+        save_fdp(fdp, tmp_path / "no" / "me.fdp")
+    assert str(caught.value).startswith(f"{tmp_path / 'no' / 'me.fdp'}: cannot write it")
+    assert "existing folder" in caught.value.hint

@@ -96,3 +96,36 @@ def test_a_damaged_tiff_directory_is_the_files_fault():
     with pytest.raises(RenderError, match=r"damaged TIFF image \(Tag data larger than file. Skipping tag 270\)"):
         read_image(bytes(tif), "photo")
     assert (read_image(_saved("TIFF"), "photo") == PIXELS).all()
+
+
+def _picture() -> np.ndarray:
+    """A 40 x 30 picture no turn or flip leaves alike: a ramp across, another down, a dark corner."""
+    y, x = np.mgrid[0:30, 0:40]
+    rgb = np.stack([x * 6, y * 8, np.full_like(x, 90)], axis=2).astype(np.uint8)
+    rgb[:5, :5] = 0
+    return rgb
+
+
+def test_a_sixteen_bit_grey_png_reads_as_its_eight_bit_self(tmp_path):
+    """Fuzz of 2026-12-07: Pillow's own conversion clips 16-bit grey to 255, so a 16-bit photo read almost white
+    (mean 245) and every photo command said "no face found"."""
+    grey = np.asarray(Image.fromarray(_picture()).convert("L"))
+    path = tmp_path / "g16.png"
+    Image.fromarray(grey.astype(np.uint16) * 257).save(path)
+    with Image.open(path) as written:
+        assert written.mode.startswith("I")
+    got = read_image(path, "photo")
+    assert got.shape == (30, 40, 3) and np.abs(got[:, :, 0].astype(int) - grey).max() <= 1
+
+
+@pytest.mark.parametrize("orientation, turn", [(3, 2), (6, -1), (8, 1)])
+def test_a_photo_stored_sideways_is_read_upright(tmp_path, orientation, turn):
+    """Fuzz of 2026-12-07: an EXIF Orientation of 6 (a phone held upright) was ignored, so the face was found lying
+    on its side and the FDP's scale came out 0.910 mm per pixel against 0.615 upright."""
+    upright = _picture()
+    stored = np.rot90(upright, -turn)  # what the camera wrote; the tag says how to turn it back
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    path = tmp_path / "phone.png"
+    Image.fromarray(np.ascontiguousarray(stored)).save(path, exif=exif.tobytes())
+    assert np.array_equal(read_image(path, "photo"), upright)

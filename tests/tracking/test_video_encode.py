@@ -76,6 +76,24 @@ def test_video_gives_a_stream_its_sound_and_an_fdp(videos, tmp_path, capsys):
     assert np.corrcoef(values, jaw[::2])[0, 1] > 0.9
 
 
+def test_the_fdp_comes_from_the_neutral_frame_at_any_rate(videos, tmp_path, capsys):
+    """Fuzz of 2026-12-07: with --fps 100 on a 25 fps video the neutral was found at stream frame 82 and looked up as
+    the video's frame 82 ("the video has no frame 82", after the whole track); at --fps 5 the FDP came from the wrong
+    picture. The stream's frame is now the video's frame shown at its time. And --neutral 1e308 was a traceback."""
+    import re
+
+    paths, _ = videos
+    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "x.fba", "--fps", "100",
+                    "--fdp-out", tmp_path / "me.fdp")
+    assert code == 0, err
+    first = int(re.search(r"neutral face: frames? (\d+)", err).group(1))
+    picture, seconds = re.search(r"from the video's frame (\d+), ([\d.]+) s", err).groups()
+    assert int(picture) == first * FPS // 100 and float(seconds) == pytest.approx(first / 100, abs=0.005)
+    code, err = run(capsys, "encode", "--video", paths["mute"], "-o", tmp_path / "y.fba", "--neutral", "1e308")
+    assert code == 1 and "past the end of any video" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "y.fba").exists()
+
+
 @pytest.mark.parametrize("kind", ["blank", "text", "missing"])
 def test_a_bad_video_is_one_line_naming_it_and_writes_nothing(videos, tmp_path, capsys, kind):
     paths, _ = videos
