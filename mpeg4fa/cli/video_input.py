@@ -3,7 +3,6 @@ WAV, + the FDP of its neutral face); a thin shell over :func:`mpeg4fa.tracking.t
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import warnings
 from pathlib import Path
@@ -82,10 +81,8 @@ def encode_video(args: argparse.Namespace, given_text: bool) -> int:
                       f"last values", TrackingWarning)
     data = encode(stream, coding_options(args, EncodeOptions(**TEXT_CODING)))
     fdp = picture = None
-    if args.fdp_out is not None:  # the neutral is a frame of the stream (at --fps); the picture a frame of the video
-        source = info.fps if info.fps and info.fps > 0 else summary.fps
-        picture = int(math.floor(summary.neutral.first * source / summary.fps + 1e-9))
-        fdp = _neutral_fdp(args, picture)
+    if args.fdp_out is not None:  # the neutral is a frame of the stream (at --fps); the picture, the video's frame
+        picture, fdp = _neutral_fdp(args, summary.neutral.first / summary.fps)  # on screen then
     sound = None
     if audio is not None:
         from ..render.audio import read_audio
@@ -110,13 +107,14 @@ def encode_video(args: argparse.Namespace, given_text: bool) -> int:
     return 0
 
 
-def _neutral_fdp(args: argparse.Namespace, frame: int):
-    """The FDP of the neutral frame (:func:`mpeg4fa.tracking.photo.fdp_from_photo`), its picture as texture."""
+def _neutral_fdp(args: argparse.Namespace, seconds: float):
+    """(the video's frame shown ``seconds`` in, the FDP of it: :func:`mpeg4fa.tracking.photo.fdp_from_photo`, its
+    picture as texture)."""
     from ..tracking.photo import fdp_from_photo
-    from ..tracking.video import frame_at
+    from ..tracking.video import frame_showing
     from .fdp_photo import say_notes
 
-    rgb = frame_at(args.video, frame)
+    frame, rgb = frame_showing(args.video, seconds)
     made = fdp_from_photo(rgb, where=f"{args.video}: frame {frame}", name=args.video.stem)
     say_notes(made, f"{args.video}: frame {frame}")
-    return made.fdp
+    return frame, made.fdp

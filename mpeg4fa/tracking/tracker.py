@@ -313,6 +313,12 @@ class TrackedVideo:
     info: VideoInfo
 
 
+def _push_until(tracker: "FaceTracker", rgb: np.ndarray, ticks: float) -> None:
+    """Push ``rgb`` for the output frames before ``ticks`` (a time in output frames)."""
+    while tracker.frames < math.ceil(ticks - 1e-9):
+        tracker.push(rgb)
+
+
 def track_video(path, *, fps: float | None = None, neutral: int | float | None = None, face=None,
                 smooth: bool = True, progress=None) -> TrackedVideo:
     """Track every frame of the video at ``path`` into a FapStream at the video's frame rate (or ``fps``).
@@ -321,7 +327,7 @@ def track_video(path, *, fps: float | None = None, neutral: int | float | None =
     (float). ``progress(done, total)`` is called per frame (total: the header's frame count, an estimate).
     Frames where the face is lost hold the last values and are counted (``summary.lost``); a video with no
     face at all, or one that is not a readable video, is a TrackingError naming the file (and frame)."""
-    from mpeg4fa.tracking.video import probe_video, read_frames
+    from mpeg4fa.tracking.video import probe_video, timed_frames
 
     info = probe_video(path)
     rate = fps if fps is not None else info.fps
@@ -338,12 +344,17 @@ def track_video(path, *, fps: float | None = None, neutral: int | float | None =
     source = info.fps if info.fps and info.fps > 0 else rate
     total = max(int(round(info.frames * rate / source)), 1)
     with FaceTracker(rate, neutral=neutral, face=face, smooth=smooth, where=info.path) as tracker:
-        for k, rgb in enumerate(read_frames(path, max(rate, source))):
-            # another rate than the video's: each frame is pushed for every output frame whose time it covers
-            # (repeated when the rate is higher, left out when lower), so the stream keeps the video's timing
-            while tracker.frames < math.ceil((k + 1) * rate / source - 1e-9):
-                tracker.push(rgb)
+        # each frame is pushed for every output frame whose time it covers, from its own time stamp to the next
+        # frame's (repeated when the rate is higher, left out when lower, held over a variable rate's gaps), so the
+        # stream keeps the video's timing, and its sound's
+        held, until = None, 0.0
+        for t, rgb in timed_frames(path, max(rate, source)):
+            if held is not None:
+                _push_until(tracker, held, t * rate)
+            held, until = rgb, t + 1.0 / source
             if progress is not None:
                 progress(tracker.frames, max(total, tracker.frames))
+        if held is not None:
+            _push_until(tracker, held, until * rate)
         summary = tracker.finish()
         return TrackedVideo(tracker.stream(), summary, info)

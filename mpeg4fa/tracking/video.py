@@ -90,6 +90,15 @@ def _info(container, path: Path) -> VideoInfo:
 def read_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[np.ndarray]:
     """Every frame of the video as an (H, W, 3) uint8 RGB array, in order; a TrackingError naming the file
     and frame if decoding breaks. ``fps`` (the rate the frames are taken at) only bounds how many are read."""
+    for _, rgb in timed_frames(path, fps):
+        yield rgb
+
+
+def timed_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[tuple[float, np.ndarray]]:
+    """:func:`read_frames` with each frame's presentation time, seconds from the first frame's. A webcam's video
+    often has a variable frame rate: its frames come when they come, not every 1/fps (so counting frames puts a
+    face's motion early or late against its sound). A frame without a time, or one not after the last, is taken
+    one frame period (at the header's rate) after the frame before."""
     import av
 
     path = Path(path)
@@ -101,13 +110,22 @@ def read_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[n
         limit = int(MAX_SECONDS * rate) + 1
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
-        k = 0
+        period = 1.0 / (info.fps or rate)
+        k, first, last = 0, None, -period
         try:
             for frame in container.decode(stream):
                 if k >= limit:
                     raise TrackingError(f"more than {limit:,} frames ({MAX_SECONDS:,.0f} s)", where,
                                         "cut it into parts and track each")
-                yield frame.to_ndarray(format="rgb24")
+                t = frame.time
+                if t is not None and first is None:
+                    first = t - k * period
+                t = t - first if t is not None and first is not None else None
+                last = t if t is not None and t > last + 1e-6 else last + period
+                if last > MAX_SECONDS:  # a time stamp hours on: every output frame up to it would be tracked
+                    raise TrackingError(f"frame {k} is stamped {last:,.0f} s after the first, more than "
+                                        f"{MAX_SECONDS:,.0f} s", where, "the file's time stamps are damaged")
+                yield last, frame.to_ndarray(format="rgb24")
                 k += 1
         except (av.FFmpegError, ValueError, OSError) as exc:
             raise TrackingError(f"frame {k}: cannot decode the video ({exc})", where,
@@ -118,10 +136,14 @@ def read_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[n
         container.close()
 
 
-def frame_at(path: str | os.PathLike, index: int) -> np.ndarray:
-    """Frame ``index`` of the video as RGB (decoded from the start: exact for any codec, time linear in
-    ``index``); a TrackingError if the video is shorter."""
-    for k, rgb in enumerate(read_frames(path)):
-        if k == index:
-            return rgb
-    raise TrackingError(f"the video has no frame {index}", str(path))
+def frame_showing(path: str | os.PathLike, seconds: float) -> tuple[int, np.ndarray]:
+    """The frame of the video on screen ``seconds`` after its first (the last one stamped at or before that time,
+    :func:`timed_frames`) as (its number, RGB); decoded from the start: exact for any codec and frame rate."""
+    shown = None
+    for k, (t, rgb) in enumerate(timed_frames(path)):
+        if t > seconds + 1e-6 and shown is not None:
+            break
+        shown = (k, rgb)
+    if shown is None:
+        raise TrackingError("the video holds no frames", str(path))
+    return shown

@@ -94,6 +94,38 @@ def test_the_fdp_comes_from_the_neutral_frame_at_any_rate(videos, tmp_path, caps
     assert len(err.strip().splitlines()) == 1 and not (tmp_path / "y.fba").exists()
 
 
+def test_a_variable_frame_rate_keeps_the_video_s_timing(videos, tmp_path, capsys):
+    """Fuzz of 2026-12-07: a webcam's variable-rate video was tracked frame by frame as if at its header's rate, so
+    the face ran early against its time (and its sound). Here the talking head's frames are stamped 40 ms apart
+    but for one 600 ms gap just before the jaw opens: the stream is 0.56 s longer and the jaw opens that much later."""
+    import fractions
+
+    import av
+
+    paths, jaw = videos
+    with av.open(str(paths["mute"])) as src:
+        frames = [f.to_ndarray(format="rgb24") for f in src.decode(video=0)]
+    stamps = [40 * k + (560 if k > FPS else 0) for k in range(len(frames))]  # ms; a 600 ms gap after frame 25
+    vfr = tmp_path / "vfr.mkv"
+    with av.open(str(vfr), "w") as out:
+        stream = out.add_stream("libx264", rate=FPS)
+        stream.width, stream.height, stream.pix_fmt = 256, 256, "yuv420p"
+        stream.codec_context.time_base = fractions.Fraction(1, 1000)
+        for image, ms in zip(frames, stamps):
+            frame = av.VideoFrame.from_ndarray(image, format="rgb24")
+            frame.pts, frame.time_base = ms, fractions.Fraction(1, 1000)
+            for packet in stream.encode(frame):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    code, err = run(capsys, "encode", "--video", vfr, "-o", tmp_path / "vfr.fba", "--fps", str(FPS))
+    assert code == 0, err
+    tracked = frames_of(decode(tmp_path / "vfr.fba"))[:, 2].astype(float)
+    assert len(tracked) == len(jaw) + 14  # 0.56 s more at 25 fps
+    opens = int(np.argmax(tracked > 0.3 * tracked.max()))
+    assert abs(opens - (int(np.argmax(jaw > 0.3 * jaw.max())) + 14)) <= 1, (opens, tracked[20:50].round())
+
+
 @pytest.mark.parametrize("kind", ["blank", "text", "missing"])
 def test_a_bad_video_is_one_line_naming_it_and_writes_nothing(videos, tmp_path, capsys, kind):
     paths, _ = videos
