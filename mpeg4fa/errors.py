@@ -37,25 +37,32 @@ class MpegFaWarning(UserWarning):
     """
 
 
+_OS_WORDS: dict[type, tuple[tuple[str, str], tuple[str, str]]] = {
+    FileNotFoundError: (("no such file", "check the path and the current directory"),
+                        ("cannot write it: no such folder, or one that takes no files",
+                         "write it into an existing folder")),
+    IsADirectoryError: (("is a directory, not a file", "name a file inside it"),
+                        ("is a directory, not a file", "give a file name")),
+    PermissionError: (("permission denied", "check the file's permissions"),
+                      ("cannot write it: permission denied", "check the folder's permissions, or write elsewhere")),
+}
+"""Per OS error: (what a reader says, what a writer says), each (the problem, what to do)."""
+
+
+def _os_words(exc: OSError, writing: bool) -> tuple[str, str]:
+    for kind, words in _OS_WORDS.items():
+        if isinstance(exc, kind):
+            return words[writing]
+    return f"cannot {'write it' if writing else 'read the file'}: {exc.strerror or exc}", ""
+
+
 def unwritable(exc: OSError) -> tuple[str, str]:
     """What a writer says when the system will not take a file: the problem and what to do (the caller names the
     file), worded for an output (a reader's "no such file, check the path" misleads there)."""
-    if isinstance(exc, IsADirectoryError):
-        return "is a directory, not a file", "give a file name"
-    if isinstance(exc, FileNotFoundError):
-        return "cannot write it: no such folder, or one that takes no files", "write it into an existing folder"
-    if isinstance(exc, PermissionError):
-        return "cannot write it: permission denied", "check the folder's permissions, or write elsewhere"
-    return f"cannot write it: {exc.strerror or exc}", ""
+    return _os_words(exc, writing=True)
 
 
 def unreadable(exc: OSError) -> tuple[str, str]:
     """What a reader says when the system will not give it a file: the problem and what to do, in the
     same words for every reader (the caller names the file)."""
-    if isinstance(exc, FileNotFoundError):
-        return "no such file", "check the path and the current directory"
-    if isinstance(exc, IsADirectoryError):
-        return "is a directory, not a file", "name a file inside it"
-    if isinstance(exc, PermissionError):
-        return "permission denied", "check the file's permissions"
-    return f"cannot read the file: {exc.strerror or exc}", ""
+    return _os_words(exc, writing=False)
