@@ -49,7 +49,9 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
                 if width == 0 or height == 0:
                     raise RenderError(f"the {what} has no pixels ({width} x {height})", where=where)
                 kind = img.format
-                pixels = _rgb(ImageOps.exif_transpose(img))  # a phone's photo stored sideways, upright
+                if img.getexif().get(_ORIENTATION, 1) != 1:  # a phone's photo stored sideways: read upright
+                    img = ImageOps.exif_transpose(img)           # (a copy: only when there is a turn to make)
+                pixels = _rgb(img)
         _pillow_warnings(caught, kind, what, where)
         return pixels
     except FileNotFoundError:
@@ -120,6 +122,10 @@ def _pillow_warnings(caught: list[warnings.WarningMessage], kind: str | None, wh
         elif _STRUCTURE_WARNINGS.get(kind or "") == module:
             raise RenderError(f"cannot read the {what}: damaged {kind} image ({str(w.message).strip()})", where=where,
                               hint="open it in an image viewer, or save it again as PNG")
+
+
+_ORIENTATION = 0x0112
+"""The EXIF tag saying how a camera's stored pixels turn to stand upright."""
 
 
 def _rgb(img) -> np.ndarray:
