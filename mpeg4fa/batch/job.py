@@ -237,8 +237,8 @@ def _render(state: _ProcessState, job: Job, outdir: Path, key: str, digests: dic
                 text = one_line(exc)
                 raise _InStream(text if str(job.stream) in text else f"{job.stream}: {text}") from None
             renderer, reused, renderer_key = state.renderer(job, digests)
+            _check_inside(target, outdir)  # before any folder is made through a link
             target.parent.mkdir(parents=True, exist_ok=True)
-            _check_inside(target, outdir)
             remove_leftovers(target)
             o = job.options
             played = play(stream, target, renderer=renderer, audio=job.audio, fps=o["fps"], fit=o["fit"],

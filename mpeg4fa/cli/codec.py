@@ -103,19 +103,23 @@ def register(commands: Commands) -> None:
 
 
 def run_info(args: argparse.Namespace) -> int:
-    if getattr(args, "trace", False):  # demo calls this with its own arguments
+    if args.trace:
         return tracing.run_trace(args)
-    if getattr(args, "frames", None) is not None:
+    if args.frames is not None:
         raise UsageError("--frames limits a trace", hint="add --trace")
     stream, kind = read_stream(args.stream)
-    info = {"file": str(args.stream), "format": kind,
-            **describe(stream, os.path.getsize(args.stream) if kind == "fba" else None)}
+    info = _info(args.stream, kind, stream, os.path.getsize(args.stream) if kind == "fba" else None)
     if args.json:
         json.dump(info, sys.stdout, indent=2)
         print()
     else:
         print(_as_text(info))
     return 0
+
+
+def _info(path: str | os.PathLike, kind: str, stream, n_bytes: int | None) -> dict:
+    """What ``info`` shows of a stream (``n_bytes``: the size of its bitstream, None for text)."""
+    return {"file": str(path), "format": kind, **describe(stream, n_bytes)}
 
 
 def _as_text(info: dict) -> str:
@@ -263,5 +267,5 @@ def run_demo(args: argparse.Namespace) -> int:
         partial.write_bytes(data)
     print(f"wrote {args.output}\n")
     # what it holds, from the bytes written (the output may be a device: /dev/null reads back empty)
-    print(_as_text({"file": str(args.output), "format": "fba", **describe(decode(data), len(data))}))
+    print(_as_text(_info(args.output, "fba", decode(data), len(data))))
     return 0

@@ -114,7 +114,7 @@ def _neutral_fdp(args: argparse.Namespace, seconds: float):
     from ..tracking.video import frame_showing
     from .fdp_photo import say_notes
 
-    frame, rgb = frame_showing(args.video, seconds)
+    frame, rgb = frame_showing(args.video, seconds, args.fps)
     made = fdp_from_photo(rgb, where=f"{args.video}: frame {frame}", name=args.video.stem)
     say_notes(made, f"{args.video}: frame {frame}")
     return frame, made.fdp

@@ -164,9 +164,9 @@ def _resampled(weights: Weights, stream: FapStream, fps: float | None) -> Weight
     """At ``fps`` the frame each output tick shows (the player's schedule: :func:`mpeg4fa.render.timing.schedule`)."""
     if fps is None or not len(stream):
         return weights
-    from mpeg4fa.render.timing import schedule
+    from mpeg4fa.render.timing import MAX_HELD_FRAMES, schedule
 
-    plan = schedule(stream, fps)
+    plan = schedule(stream, fps, max_frames=MAX_HELD_FRAMES)  # every tick's weights are held, then written
     return Weights(weights.kind, weights.names, np.arange(plan.n_frames) / plan.fps, weights.values[plan.source],
                    plan.fps)
 

@@ -36,7 +36,8 @@ class FormatError(MpegFaError, ValueError):
 
     @classmethod
     def from_os_error(cls, path: str, exc: OSError) -> "FormatError":
-        """A file that cannot be opened, read or written, said plainly and naming the file."""
+        """A file that cannot be opened or read, said plainly and naming the file (a writer uses
+        :func:`mpeg4fa.errors.unwritable`'s words)."""
         return cls.no_place(path, *unreadable(exc))
 
     @property

@@ -29,7 +29,7 @@ _IMAGE_KINDS = ("a JPEG image", "a PNG image", "a GIF image", "a TIFF image", "a
 def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = None) -> np.ndarray:
     """An image file (or its bytes, e.g. an FDP's texture) as (H, W, 3) uint8 RGB; RenderError naming the
     file, or ``where``, and ``what`` it was for otherwise."""
-    from PIL import Image, ImageOps, UnidentifiedImageError
+    from PIL import Image, UnidentifiedImageError
 
     if isinstance(path, (bytes, bytearray, memoryview)):
         source: str | os.PathLike | io.BytesIO = io.BytesIO(bytes(path))
@@ -49,9 +49,7 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
                 if width == 0 or height == 0:
                     raise RenderError(f"the {what} has no pixels ({width} x {height})", where=where)
                 kind = img.format
-                if img.getexif().get(_ORIENTATION, 1) != 1:  # a phone's photo stored sideways: read upright
-                    img = ImageOps.exif_transpose(img)           # (a copy: only when there is a turn to make)
-                pixels = _rgb(img)
+                pixels = upright_rgb(img)
         _pillow_warnings(caught, kind, what, where)
         return pixels
     except FileNotFoundError:
@@ -126,6 +124,17 @@ def _pillow_warnings(caught: list[warnings.WarningMessage], kind: str | None, wh
 
 _ORIENTATION = 0x0112
 """The EXIF tag saying how a camera's stored pixels turn to stand upright."""
+
+
+def upright_rgb(img) -> np.ndarray:
+    """An open Pillow image's pixels as (H, W, 3) uint8 RGB, as people see it: a photo a phone stored sideways is
+    turned by its EXIF orientation (a copy, only when there is a turn to make), 16-bit grey scaled to 8 bits. One
+    rule for every reader of photos and textures (files, the editor's uploads, an FDP's texture)."""
+    from PIL import ImageOps
+
+    if img.getexif().get(_ORIENTATION, 1) != 1:
+        img = ImageOps.exif_transpose(img)
+    return _rgb(img)
 
 
 def _rgb(img) -> np.ndarray:

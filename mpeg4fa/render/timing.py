@@ -22,8 +22,9 @@ MAX_OUTPUT_SECONDS = 12 * 3600.0
 """Longest output a schedule makes: a player or exporter renders (or resamples) every tick of it, so a stream whose
 time codes jump by hours (a 150-byte .fap whose second frame is numbered 2000000: 22 h at 25 fps) would otherwise
 render for a day or fill memory. Real streams last minutes to a few hours."""
-MAX_OUTPUT_FRAMES = 1_000_000
-"""Most output frames a schedule makes (11 h at 25 frames/s; 65 min at 255): what an export holds in memory."""
+MAX_HELD_FRAMES = 1_000_000
+"""Most output frames a schedule makes where they are all held in memory (an export's resampled weights: 11 h at
+25 frames/s, 65 min at 255); a player streams its frames and takes the time limit alone."""
 
 
 @dataclass(frozen=True)
@@ -62,8 +63,9 @@ def presentation_times(stream: FapStream) -> np.ndarray:
     return rel
 
 
-def schedule(stream: FapStream, fps: float | None = None) -> Schedule:
-    """Output frames at ``fps`` (default: the stream's) covering the stream's duration."""
+def schedule(stream: FapStream, fps: float | None = None, max_frames: int | None = None) -> Schedule:
+    """Output frames at ``fps`` (default: the stream's) covering the stream's duration: at most
+    :data:`MAX_OUTPUT_SECONDS` of them, and ``max_frames`` where given (:data:`MAX_HELD_FRAMES`)."""
     if not len(stream):
         raise RenderError("the stream has no frames to show", where="stream")
     rate = float(fps or stream.fps)
@@ -71,23 +73,28 @@ def schedule(stream: FapStream, fps: float | None = None) -> Schedule:
         raise RenderError(f"frame rate {rate} is not usable", hint="a rate between 0 and 1000 frames/s")
     times = presentation_times(stream)
     end = times[-1] + (int(stream.skip[-1]) + 1) / stream.fps
-    n_out = max(int(math.ceil(end * rate - 1e-6)), 1)
-    if end > MAX_OUTPUT_SECONDS or n_out > MAX_OUTPUT_FRAMES:
+    within = end <= MAX_OUTPUT_SECONDS  # (False for an infinite or NaN time too)
+    n_out = max(int(math.ceil(end * rate - 1e-6)), 1) if within else 0
+    if not within or (max_frames is not None and n_out > max_frames):
         gaps = np.diff(times)
         k = int(np.argmax(gaps)) + 1 if len(gaps) else 0
         widest = (f"; frame {k} comes {_span(gaps[k - 1])} after frame {k - 1}: a frame number or time code is "
                   "probably wrong" if len(gaps) and gaps[k - 1] > end / 2 else "")
-        raise RenderError(f"the stream's {len(times)} frames span {_span(end)}, {n_out:,} output frames at "
-                          f"{rate:g} frames/s{widest}", where="stream",
-                          hint=f"at most {_span(MAX_OUTPUT_SECONDS)} and {MAX_OUTPUT_FRAMES:,} output frames are "
-                               "made; fix the stream's frame numbers or lower --fps")
+        made = f", {n_out:,} output frames at {rate:g} frames/s" if within else ""
+        most = (f"at most {_span(MAX_OUTPUT_SECONDS)} is made" if not within else
+                f"at most {max_frames:,} output frames are made here; lower --fps")
+        raise RenderError(f"the stream's {len(times)} frames span {_span(end)}{made}{widest}", where="stream",
+                          hint=f"{most}, or fix the stream's frame numbers")
     ticks = np.arange(n_out) / rate
     source = np.searchsorted(times, ticks + _EPS, side="right") - 1
     return Schedule(rate, np.maximum(source, 0).astype(np.int64), times)
 
 
 def _span(seconds: float) -> str:
-    """``seconds`` as people read a length: 4.2 s, 12 min 30 s, 22 h 13 min."""
+    """``seconds`` as people read a length: 4.2 s, 12 min 30 s, 22 h 13 min (past a million hours, or not a number,
+    as a number of seconds: 1e+300 s)."""
+    if not seconds < 3.6e9:
+        return f"{seconds:.3g} s"
     if seconds < 60:
         return f"{seconds:.3g} s"
     minutes = int(seconds // 60)

@@ -346,7 +346,8 @@ def track_video(path, *, fps: float | None = None, neutral: int | float | None =
     with FaceTracker(rate, neutral=neutral, face=face, smooth=smooth, where=info.path) as tracker:
         # each frame is pushed for every output frame whose time it covers, from its own time stamp to the next
         # frame's (repeated when the rate is higher, left out when lower, held over a variable rate's gaps), so the
-        # stream keeps the video's timing, and its sound's
+        # stream keeps the video's timing from its first frame (a start offset between its video and its sound, as
+        # some files have, is not read)
         held, until = None, 0.0
         for t, rgb in timed_frames(path, max(rate, source)):
             if held is not None:

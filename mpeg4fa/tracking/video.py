@@ -111,6 +111,7 @@ def timed_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
         period = 1.0 / (info.fps or rate)
+        tick = float(stream.time_base) if stream.time_base else 0.0
         k, first, last = 0, None, -period
         try:
             for frame in container.decode(stream):
@@ -121,6 +122,9 @@ def timed_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[
                 if t is not None and first is None:
                     first = t - k * period
                 t = t - first if t is not None and first is not None else None
+                if t is not None and info.fps and tick:  # a stamp rounded to its time base (MKV and WebM: whole
+                    grid = round(t * info.fps) / info.fps  # ms, 33 ms apart at 30 fps) is on the header's grid
+                    t = grid if abs(t - grid) <= tick / 2 + 1e-9 else t
                 last = t if t is not None and t > last + 1e-6 else last + period
                 if last > MAX_SECONDS:  # a time stamp hours on: every output frame up to it would be tracked
                     raise TrackingError(f"frame {k} is stamped {last:,.0f} s after the first, more than "
@@ -136,11 +140,12 @@ def timed_frames(path: str | os.PathLike, fps: float | None = None) -> Iterator[
         container.close()
 
 
-def frame_showing(path: str | os.PathLike, seconds: float) -> tuple[int, np.ndarray]:
+def frame_showing(path: str | os.PathLike, seconds: float, fps: float | None = None) -> tuple[int, np.ndarray]:
     """The frame of the video on screen ``seconds`` after its first (the last one stamped at or before that time,
-    :func:`timed_frames`) as (its number, RGB); decoded from the start: exact for any codec and frame rate."""
+    :func:`timed_frames` at ``fps``, as the tracker took them) as (its number, RGB); decoded from the start: exact
+    for any codec and frame rate."""
     shown = None
-    for k, (t, rgb) in enumerate(timed_frames(path)):
+    for k, (t, rgb) in enumerate(timed_frames(path, fps)):
         if t > seconds + 1e-6 and shown is not None:
             break
         shown = (k, rgb)

@@ -30,7 +30,7 @@ from mpeg4fa.jsonio import JsonError, loads
 from mpeg4fa.spec import FEATURE_POINTS, FULL_INTENSITY, N_FAPS
 from mpeg4fa.web import edits, photos
 from mpeg4fa.web.files import FORMATS, output_path, read_model, read_upload, save_model
-from mpeg4fa.web.posing import pose_values, posed_vertices
+from mpeg4fa.web.posing import held_in_range, pose_values, posed_vertices
 from mpeg4fa.web.session import Session
 
 UPLOAD_LIMIT = 64 * 1024 * 1024
@@ -341,15 +341,9 @@ def create_app(model_path: str | os.PathLike | None = None, out_dir: str | os.Pa
 
     @app.post("/api/pose")
     def pose(req: PoseRequest):
-        import warnings
-
-        from mpeg4fa.errors import MpegFaWarning
-
-        with warnings.catch_warnings(record=True) as caught:  # values clamped into range: the page's to say, once
-            warnings.simplefilter("always", MpegFaWarning)   # per request, not 66 lines on the console each time
-            values = pose_values(req.faps, req.viseme, req.expression, req.intensity)
+        faps, said = held_in_range(req.faps)  # what was clamped goes back to the page, not to the console
+        values = pose_values(faps, req.viseme, req.expression, req.intensity)
         v = posed_vertices(session.require(), the_head(), values, state["cache"])
-        said = [str(w.message) for w in caught if issubclass(w.category, MpegFaWarning)]
         return {"positions": np.round(v, 6).ravel().tolist(), "warnings": said}
 
     # -- photo calibration (issue 17 item 4; the pure steps are in .photos) ---------------------------

@@ -10,10 +10,21 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from mpeg4fa.decoded import shown_values
+from mpeg4fa.decoded import clamp, shown_values
 from mpeg4fa.face import FaceModel
-from mpeg4fa.spec import EXPRESSION_PROFILES, FULL_INTENSITY, VISEME_PROFILES
+from mpeg4fa.spec import EXPRESSION_PROFILES, FULL_INTENSITY, N_FAPS, VISEME_PROFILES
 from mpeg4fa.web.edits import EditError, EditMesh
+
+
+def held_in_range(faps: dict[int, float]) -> tuple[dict[int, float], list[str]]:
+    """The low-level FAPs held inside what a face shows (:func:`mpeg4fa.decoded.clamp`), and what was changed, one
+    line a FAP: the page's to say. As warnings they went to the server's console, one line a FAP every request
+    (and catching them is process-wide, unsafe in FastAPI's thread pool)."""
+    row = np.zeros(N_FAPS)
+    for fap, value in faps.items():
+        row[int(fap) - 1] = value
+    held, report = clamp(row)
+    return {fap: float(held[int(fap) - 1]) for fap in faps}, [item.message(None) for item in report]
 
 
 def pose_values(faps: dict[int, float], viseme: str | None = None, expression: str | None = None,

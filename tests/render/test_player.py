@@ -61,19 +61,23 @@ def test_schedule_errors():
 def test_a_stream_whose_time_codes_jump_by_hours_is_refused_before_any_frame():
     """Fuzz of 2026-12-07: a 150-byte .fap whose second frame is numbered 2000000 (22 h at 25 fps) had ``play``
     render two million frames and ``export --fps 255`` fill 20 GB. The schedule now names the gap at once."""
-    from mpeg4fa.render.timing import MAX_OUTPUT_FRAMES, MAX_OUTPUT_SECONDS
+    from mpeg4fa.render.timing import MAX_HELD_FRAMES, MAX_OUTPUT_SECONDS
 
     gap = _stream([1999999, 0], [0, 600])
-    with pytest.raises(RenderError, match=r"span 22 h 13 min.*frame 1 comes 22 h 13 min after frame 0"):
+    with pytest.raises(RenderError, match=r"span 22 h 13 min; frame 1 comes 22 h 13 min after frame 0"):
         schedule(gap)
     long = _stream([int(MAX_OUTPUT_SECONDS * 25)] * 2, [0, 0])  # evenly sparse: no one gap to blame
     with pytest.raises(RenderError, match="12 h 0 min") as caught:
         schedule(long)
     assert "probably wrong" not in str(caught.value)
     hour = _stream([49999, 49999], [0, 0])  # 4000 s: 100,000 frames at 25 fps, 1,020,000 at 255
-    assert schedule(hour).n_frames == 100000
+    assert schedule(hour).n_frames == 100000 and schedule(hour, fps=255).n_frames == 1020000  # a player streams
     with pytest.raises(RenderError, match="lower --fps"):
-        schedule(hour, fps=255)
+        schedule(hour, fps=255, max_frames=MAX_HELD_FRAMES)  # an export holds them all
+    absurd = _stream([0, 0], [0, 0])
+    absurd.timestamps[1] = 1e300  # reachable through the API: one located error, not an OverflowError
+    with pytest.raises(RenderError, match="span 1e"):
+        schedule(absurd)
 
 
 def test_each_frame_appears_at_its_presentation_time(procedural_face, tmp_path):

@@ -1,6 +1,7 @@
 """``mpeg4fa encode --video``: a rendered face video with sound -> stream + WAV (+ FDP); bad videos are one line."""
 from __future__ import annotations
 
+import math
 
 import numpy as np
 import pytest
@@ -105,25 +106,41 @@ def test_a_variable_frame_rate_keeps_the_video_s_timing(videos, tmp_path, capsys
     paths, jaw = videos
     with av.open(str(paths["mute"])) as src:
         frames = [f.to_ndarray(format="rgb24") for f in src.decode(video=0)]
-    stamps = [40 * k + (560 if k > FPS else 0) for k in range(len(frames))]  # ms; a 600 ms gap after frame 25
-    vfr = tmp_path / "vfr.mkv"
-    with av.open(str(vfr), "w") as out:
-        stream = out.add_stream("libx264", rate=FPS)
-        stream.width, stream.height, stream.pix_fmt = 256, 256, "yuv420p"
-        stream.codec_context.time_base = fractions.Fraction(1, 1000)
-        for image, ms in zip(frames, stamps):
-            frame = av.VideoFrame.from_ndarray(image, format="rgb24")
-            frame.pts, frame.time_base = ms, fractions.Fraction(1, 1000)
-            for packet in stream.encode(frame):
+
+    def mkv(name: str, rate: int, stamps: list[int]):
+        """The frames in a Matroska file (whose time base is 1 ms), each at its stamp (ms)."""
+        with av.open(str(tmp_path / name), "w") as out:
+            stream = out.add_stream("libx264", rate=rate)
+            stream.width, stream.height, stream.pix_fmt = 256, 256, "yuv420p"
+            stream.codec_context.time_base = fractions.Fraction(1, 1000)
+            for image, ms in zip(frames, stamps):
+                frame = av.VideoFrame.from_ndarray(image, format="rgb24")
+                frame.pts, frame.time_base = ms, fractions.Fraction(1, 1000)
+                for packet in stream.encode(frame):
+                    out.mux(packet)
+            for packet in stream.encode():
                 out.mux(packet)
-        for packet in stream.encode():
-            out.mux(packet)
+        return tmp_path / name
+
+    vfr = mkv("vfr.mkv", FPS, [40 * k + (560 if k > FPS else 0) for k in range(len(frames))])  # 600 ms after 25
     code, err = run(capsys, "encode", "--video", vfr, "-o", tmp_path / "vfr.fba", "--fps", str(FPS))
     assert code == 0, err
     tracked = frames_of(decode(tmp_path / "vfr.fba"))[:, 2].astype(float)
     assert len(tracked) == len(jaw) + 14  # 0.56 s more at 25 fps
     opens = int(np.argmax(tracked > 0.3 * tracked.max()))
     assert abs(opens - (int(np.argmax(jaw > 0.3 * jaw.max())) + 14)) <= 1, (opens, tracked[20:50].round())
+    # a steady 30 fps in whole milliseconds (0, 33, 67, 100...) is one stream frame a video frame, none doubled or
+    # dropped (taken off the stamps alone, a third of them were: review of 2026-12-07)
+    steady = mkv("steady.mkv", 30, [round(k * 1000 / 30) for k in range(len(frames))])
+    from mpeg4fa.tracking.video import timed_frames
+
+    ticks = [math.ceil(t * 30 - 1e-9) for t, _ in timed_frames(steady)]  # raw, 67 ms x 30 = 2.01: tick 3, not 2
+    assert ticks == list(range(len(frames)))
+    code, err = run(capsys, "encode", "--video", steady, "-o", tmp_path / "steady.fba", "--fps", "30")
+    assert code == 0, err
+    tracked = frames_of(decode(tmp_path / "steady.fba"))[:, 2].astype(float)
+    assert len(tracked) == len(jaw)
+    assert int(np.argmax(tracked > 0.3 * tracked.max())) == int(np.argmax(jaw > 0.3 * jaw.max()))
 
 
 @pytest.mark.parametrize("kind", ["blank", "text", "missing"])

@@ -268,10 +268,11 @@ measured 2026-12-07 on Debian's 1.51). Its own variants are 2-12 bytes."""
 def check_voice_name(voice: str, where: str = WHERE) -> None:
     """TTSError for a voice whose variant espeak-ng cannot take without crashing (:data:`MAX_VARIANT_BYTES`)."""
     variant = voice.partition("+")[2]
-    if len(variant.encode("utf-8", "surrogatepass")) > MAX_VARIANT_BYTES:
-        raise TTSError(f"the voice variant {variant[:20] + '...'!r} is {len(variant)} characters long; espeak-ng "
-                       f"takes at most {MAX_VARIANT_BYTES}", where=where,
-                       hint="use a variant 'mpeg4fa voices' lists, e.g. en-us+f3")
+    size = len(variant.encode("utf-8", "surrogatepass"))
+    if size > MAX_VARIANT_BYTES:
+        shown = variant if len(variant) <= 20 else variant[:20] + "..."
+        raise TTSError(f"the voice variant {shown!r} is {size} bytes long; espeak-ng takes at most "
+                       f"{MAX_VARIANT_BYTES}", where=where, hint="use a variant 'mpeg4fa voices' lists, e.g. en-us+f3")
 
 
 def _c_string(name: str) -> bytes | None:
