@@ -90,10 +90,10 @@ def run_texture(args: argparse.Namespace) -> int:
                      "--side-points": args.side_points, "--fdp": args.fdp},
                     {"-o": args.output, "--preview": args.preview})
     face = face_from_args(args)
-    image = read_image(args.front, "photo")
+    image = read_image(args.front, "photo", turn=True)
     points = _points(args.points) if args.points is not None else _found(image, args.front, face)
     front = _photo_view(image, points, "front", args.front)
-    side = (_photo_view(read_image(args.side, "photo"), _points(args.side_points), args.side_view, args.side)
+    side = (_photo_view(read_image(args.side, "photo", turn=True), _points(args.side_points), args.side_view, args.side)
             if args.side else None)
     baked = bake_texture(face.mesh, front, side, size=args.size)
     preview = None

@@ -42,7 +42,7 @@ from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.rbf import RbfField
 from mpeg4fa.fdp.model import Fdp, TextureImage
 from mpeg4fa.render.errors import RenderError
-from mpeg4fa.render.images import upright_rgb
+from mpeg4fa.render.images import image_rgb
 from mpeg4fa.render.texture import (BakedTexture, assemble, projected_depth_map, sample_projected, skin_texels,
                                     uv_rasterise)
 
@@ -117,7 +117,7 @@ def decode_texture(texture: TextureImage, *, source: str | None = None) -> np.nd
 
     try:
         with Image.open(io.BytesIO(texture.data)) as img:
-            rgb = upright_rgb(img)
+            rgb = image_rgb(img)  # the stored pixels: the texture coordinates name them
     except (OSError, UnidentifiedImageError, ValueError) as exc:
         raise RenderError(f"the {texture.media_type} image cannot be decoded ({exc})", where=_where(source, texture),
                           hint="send the texture as a complete PNG or JPEG file") from None

@@ -26,9 +26,11 @@ MAX_SIDE = 1 << 14
 _IMAGE_KINDS = ("a JPEG image", "a PNG image", "a GIF image", "a TIFF image", "a WebP image")
 
 
-def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = None) -> np.ndarray:
+def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = None, *,
+               turn: bool = False) -> np.ndarray:
     """An image file (or its bytes, e.g. an FDP's texture) as (H, W, 3) uint8 RGB; RenderError naming the
-    file, or ``where``, and ``what`` it was for otherwise."""
+    file, or ``where``, and ``what`` it was for otherwise. ``turn``: a photo, turned upright by its EXIF
+    orientation (:func:`image_rgb`)."""
     from PIL import Image, UnidentifiedImageError
 
     if isinstance(path, (bytes, bytearray, memoryview)):
@@ -49,7 +51,7 @@ def read_image(path: str | os.PathLike | bytes, what: str, where: str | None = N
                 if width == 0 or height == 0:
                     raise RenderError(f"the {what} has no pixels ({width} x {height})", where=where)
                 kind = img.format
-                pixels = upright_rgb(img)
+                pixels = image_rgb(img, turn=turn)
         _pillow_warnings(caught, kind, what, where)
         return pixels
     except FileNotFoundError:
@@ -126,13 +128,14 @@ _ORIENTATION = 0x0112
 """The EXIF tag saying how a camera's stored pixels turn to stand upright."""
 
 
-def upright_rgb(img) -> np.ndarray:
-    """An open Pillow image's pixels as (H, W, 3) uint8 RGB, as people see it: a photo a phone stored sideways is
-    turned by its EXIF orientation (a copy, only when there is a turn to make), 16-bit grey scaled to 8 bits. One
-    rule for every reader of photos and textures (files, the editor's uploads, an FDP's texture)."""
-    from PIL import ImageOps
+def image_rgb(img, *, turn: bool = False) -> np.ndarray:
+    """An open Pillow image's pixels as (H, W, 3) uint8 RGB, 16-bit grey scaled to 8 bits; with ``turn``, a photo
+    a phone stored sideways is turned upright by its EXIF orientation (a copy, only when there is a turn to make).
+    Photos of faces are turned (as people see them); textures are not: their coordinates name the stored pixels,
+    as an FDP's receiver, which knows no EXIF, reads them. One rule for every reader of photos and textures."""
+    if turn and img.getexif().get(_ORIENTATION, 1) != 1:
+        from PIL import ImageOps
 
-    if img.getexif().get(_ORIENTATION, 1) != 1:
         img = ImageOps.exif_transpose(img)
     return _rgb(img)
 

@@ -73,7 +73,7 @@ def read_photo(photo: PhotoSource, where: str | None = None) -> tuple[np.ndarray
         return photo, where or "photo"
     from mpeg4fa.render.images import read_image
     name = where or os.fsdecode(photo)
-    return read_image(photo, "photo", name), name
+    return read_image(photo, "photo", name, turn=True), name
 
 
 def photo_points(landmarks: Landmarks, head_points: Mapping[str, np.ndarray] | None = None, *,

@@ -33,14 +33,14 @@ def decode_photo(data: bytes, where: str) -> np.ndarray:
     header is checked before any pixel is decoded: at most :data:`MAX_PHOTO_PIXELS`."""
     from PIL import Image, UnidentifiedImageError
 
-    from mpeg4fa.render.images import upright_rgb
+    from mpeg4fa.render.images import image_rgb
 
     try:
         with Image.open(io.BytesIO(data)) as img:
             if img.width * img.height > MAX_PHOTO_PIXELS:
                 raise EditError(f"the {where} photo is {img.width}x{img.height} pixels, more than "
                                 f"{MAX_PHOTO_PIXELS // 1_000_000} million", where=where, hint="scale it down")
-            rgb = upright_rgb(img)
+            rgb = image_rgb(img, turn=True)
     except UnidentifiedImageError:  # its text names the in-memory buffer ("<_io.BytesIO object at 0x...>")
         raise EditError(f"cannot read the {where} photo: no image format Pillow knows", where=where,
                         hint="send a PNG or JPEG image") from None

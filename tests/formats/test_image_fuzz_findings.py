@@ -121,11 +121,14 @@ def test_a_sixteen_bit_grey_png_reads_as_its_eight_bit_self(tmp_path):
 @pytest.mark.parametrize("orientation, turn", [(3, 2), (6, -1), (8, 1)])
 def test_a_photo_stored_sideways_is_read_upright(tmp_path, orientation, turn):
     """Fuzz of 2026-12-07: an EXIF Orientation of 6 (a phone held upright) was ignored, so the face was found lying
-    on its side and the FDP's scale came out 0.910 mm per pixel against 0.615 upright."""
+    on its side and the FDP's scale came out 0.910 mm per pixel against 0.615 upright. Photos are turned; textures
+    are not (the fuzz campaign's check that an FDP texture's header size is its decoded size holds)."""
     upright = _picture()
     stored = np.rot90(upright, -turn)  # what the camera wrote; the tag says how to turn it back
     exif = Image.Exif()
     exif[0x0112] = orientation
     path = tmp_path / "phone.png"
     Image.fromarray(np.ascontiguousarray(stored)).save(path, exif=exif.tobytes())
-    assert np.array_equal(read_image(path, "photo"), upright)
+    assert np.array_equal(read_image(path, "photo", turn=True), upright)
+    # a texture is read as stored: its coordinates (an FDP's receiver knows no EXIF) name those pixels
+    assert np.array_equal(read_image(path, "texture image"), stored)
