@@ -81,10 +81,12 @@ class Settings:
 
 
 def warm_up(settings: Settings) -> None:
-    """Load the speech engine and compile the codec once, so the first ``say`` is not the slow one."""
+    """Load the speech engine and compile the codec once, so the first ``say`` is not the slow one, and build
+    the first microphone session's listener ahead (:meth:`Microphone.warm_up`)."""
     from mpeg4fa.serve.sentences import Sentence
 
     make_segment(Sentence(0, "Hello.", "Hello.", 0), 0.0, engine=settings.engine, fps=settings.fps)
+    Microphone.warm_up(settings.fps)
 
 
 def create_app(face: FaceModel | None = None, *, engine: str | object = "espeak", fps: float = 25.0,

@@ -18,7 +18,19 @@ them to the player's own handler (``window.player.onBinary``), which decodes and
 sentence's stream. Text messages:
 
 ``{"type": "mic", "state": "started", "latency": 0.18, "rate": 16000, "fps": 25.0}``
-``{"type": "mic", "state": "ended", "frames": n, "seconds": s}``
+``{"type": "mic", "state": "ended", "frames": n, "seconds": s, "skipped": s}``
+
+Falling behind: recognition runs chunk by chunk, and a machine too busy to keep up would leave the
+face further behind the voice for the rest of the session (the chunks wait in the socket). So each
+chunk's lateness is measured, the wall-clock time since the session began less the audio time its end
+reaches, against the least lateness of the last :data:`BASELINE_SECONDS` (the page's sound clock and this
+one may drift apart; a chunk that came at once sets the baseline). Past :data:`MAX_BEHIND` s the
+listener skips chunks (:meth:`~mpeg4fa.speech.live.LiveLipSync.skip`: the mouth rests over them) until
+one comes within :data:`CAUGHT_UP` s of the baseline; the page is told when it has caught up
+(``{"type": "mic", "state": "behind", "skipped": s, "at": t}``, the seconds skipped so far and the
+media time where listening resumed) and ``ended`` says how many seconds were skipped in all. A session's
+listener is built ahead (:meth:`Microphone.warm_up`, on ``serve``'s start and at each session's end), so
+the first chunk is heard at once.
 
 Guard (as :mod:`mpeg4fa.guard` bounds HTTP bodies and :mod:`.protocol` the JSON messages): a chunk
 holds at most :data:`MAX_CHUNK_SECONDS` of audio and an even number of bytes; a session's audio may
@@ -30,12 +42,15 @@ time; a client pushing faster would make the server listen faster than anyone sp
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
+import threading
 import time
 
 import numpy as np
 
 from mpeg4fa.serve.protocol import FBA_KIND, error_message, pack, unpack
+from mpeg4fa.spec import N_FAPS
 
 MIC_KIND = b"MIC1"
 RATE = 16000
@@ -48,8 +63,18 @@ MAX_GAP = 1.0
 """The longest gap between chunks filled with silence; a chunk later than that is dropped."""
 IDLE_END = 5.0
 """Seconds without a chunk after which a session ends by itself."""
+MAX_BEHIND = 1.5
+"""Seconds a chunk may come later than the baseline before the listener skips audio to catch up. Less is
+caught up by listening faster than real time (2.5x on 2 cores, ``tools/bench_live.py``'s fast mode): with
+Chromium drawing beside it and a busy loop on the other core, a session's chunks came up to 1.2 s late and
+were all heard."""
+CAUGHT_UP = 0.1
+"""Seconds within the baseline at which skipping stops."""
+BASELINE_SECONDS = 10.0
+"""The window (s) whose least lateness is the baseline."""
 MAX_SESSIONS = 4
-"""Sessions one server runs at once: each holds four phone decoders, about 115 MiB."""
+"""Sessions one server runs at once: each holds four phone decoders, about 115 MiB (and one more is kept
+built ahead for the next session)."""
 
 
 def is_microphone(data: bytes | None) -> bool:
@@ -78,6 +103,9 @@ class Microphone:
         self.origin = 0.0  # the session's first chunk's media time
         self.tasks: set[asyncio.Task] = set()  # watchdogs running (the loop holds tasks only weakly)
         self.busy = asyncio.Lock()  # one LiveLipSync call at a time (a chunk, or the watchdog's end)
+        self.late = collections.deque()  # (wall clock, lateness) of the chunks of the last BASELINE_SECONDS
+        self.skipping = False
+        self.skipped = 0  # samples skipped in this session
 
     async def take(self, data: bytes) -> None:
         """One ``MIC1`` message."""
@@ -118,36 +146,82 @@ class Microphone:
                                           f"in {now - self.started_at:.2f} s (at most {AHEAD:g} s ahead)", "mic"))
             return
         self.received += len(samples)
+        skip = self._behind(now)
+        self.skipped += len(samples) if skip else 0
+        if self.skipping and not skip:  # caught up: say so, with the seconds skipped so far and where it resumed
+            await self.send({"type": "mic", "state": "behind", "skipped": round(self.skipped / RATE, 3),
+                             "at": self.origin + (self.received - len(samples)) / RATE})
+        self.skipping = skip
         async with self.busy:
             if self.live is not None:
-                await self._out(await asyncio.to_thread(self._feed, self.live, self.coder, samples))
+                await self._out(await asyncio.to_thread(self._feed, self.live, self.coder, samples, skip))
+
+    def _behind(self, now: float) -> bool:
+        """Whether the chunk whose audio ends the session's (``received``) is to be skipped: it came more
+        than MAX_BEHIND s later than the baseline, or skipping goes on and it is not within CAUGHT_UP."""
+        late = (now - self.started_at) - self.received / RATE
+        while self.late and self.late[0][0] < now - BASELINE_SECONDS:
+            self.late.popleft()
+        while self.late and self.late[-1][1] >= late:  # the least of the window stays first
+            self.late.pop()
+        self.late.append((now, late))
+        behind = late - self.late[0][1]
+        return behind > (CAUGHT_UP if self.skipping else MAX_BEHIND)
 
     @staticmethod
-    def _feed(live, coder, samples: np.ndarray | None) -> tuple[int, int, bytes | None]:
+    def _feed(live, coder, samples: np.ndarray | None, skip: bool = False) -> tuple[int, int, bytes | None]:
         """In the worker thread: the frames that came due (all the rest when ``samples`` is None), coded:
-        (the first one's number, how many, the fba_object)."""
+        (the first one's number, how many, the fba_object). ``skip``: the audio is passed over."""
         first = live.frames_out
-        frames = live.flush() if samples is None else live.feed(samples)
+        frames = live.flush() if samples is None else live.skip(samples) if skip else live.feed(samples)
         return first, len(frames), coder.encode(frames) if len(frames) else None
 
     async def start(self, origin: float) -> None:
-        from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
-
         self.started_at = self.last_chunk = self.clock()  # the first chunk's arrival: the audio's clock
         Microphone.running += 1
         try:
-            self.live = await asyncio.to_thread(LiveLipSync, RATE, self.fps, idle=True)
+            self.live, self.coder = await asyncio.to_thread(self._ready, self.fps)
         except BaseException:
             Microphone.running -= 1
             raise
-        self.coder = LiveEncoder(self.fps)
-        self.received = self.frames = 0
+        self.received = self.frames = self.skipped = 0
+        self.late.clear()
+        self.late.append((self.started_at, 0.0))  # the first chunk came at once: the chunks queued meanwhile are late
+        self.skipping = False
         self.origin = origin
         self.watchdog = asyncio.create_task(self._watch())
         self.tasks.add(self.watchdog)
         self.watchdog.add_done_callback(self.tasks.discard)
         await self.send({"type": "mic", "state": "started", "latency": self.live.latency, "rate": RATE,
                          "fps": self.fps})
+
+    spare: dict[float, object] = {}  # fps -> a listener built ahead (a LiveLipSync, 115 MiB), for the next session
+    spare_lock = threading.Lock()
+
+    @staticmethod
+    def warm_up(fps: float) -> None:
+        """Build the next session's listener and load the coding's compiled code ahead. Why: a listener takes
+        0.45 s to build (its four decoders load their models; 1.3 s with Chromium drawing beside it) and the
+        first fba_object 0.8 s, while the session's audio queues; the face would start that far behind the
+        voice and skip to catch up. ``serve`` calls it on starting, and each session's end builds the next."""
+        from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
+
+        with Microphone.spare_lock:
+            if fps in Microphone.spare:
+                return
+        LiveEncoder(fps).encode(np.zeros((1, N_FAPS)))
+        live = LiveLipSync(RATE, fps, idle=True)
+        with Microphone.spare_lock:
+            Microphone.spare.setdefault(fps, live)
+
+    @staticmethod
+    def _ready(fps: float):
+        """In the worker thread: the session's listener (the one built ahead, if any) and its coder."""
+        from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
+
+        with Microphone.spare_lock:
+            live = Microphone.spare.pop(fps, None)
+        return live if live is not None else LiveLipSync(RATE, fps, idle=True), LiveEncoder(fps)
 
     async def end(self) -> None:
         """Flush the session's last frames and say it ended (nothing when none runs)."""
@@ -160,7 +234,9 @@ class Microphone:
             watchdog.cancel()
         async with self.busy:
             await self._out(await asyncio.to_thread(self._feed, live, self.coder, None))
-        await self.send({"type": "mic", "state": "ended", "frames": self.frames, "seconds": self.received / RATE})
+        await self.send({"type": "mic", "state": "ended", "frames": self.frames, "seconds": self.received / RATE,
+                         "skipped": self.skipped / RATE})
+        await asyncio.to_thread(self.warm_up, self.fps)  # the next session's listener, while none waits for it
 
     async def close(self) -> None:
         """The connection is gone: stop the watchdog (no frames to send)."""

@@ -176,7 +176,9 @@ class LiveLipSync:
         self.decoders = [_decoder() for _ in range(int(round(WINDOW / HOP)))]
         for d in self.decoders:  # all windows before the K-th start at the first sample
             d.start_utt()
-        self.fed = 0  # 16 kHz samples fed in all
+        self.fed = 0  # 16 kHz samples fed in all (skipped ones too)
+        self.restart = 0  # 16 kHz samples: where the decoders last started afresh (0, or the end of a skip)
+        self.skipped = 0  # 16 kHz samples skipped in all
         self.committed = 0.0  # s: phones before this are final
         self.open: list | None = None  # [viseme, start, end] of the span being spoken
         self.voiced = np.zeros(0, bool)  # per 10 ms from voiced_from: the detector's verdicts
@@ -205,6 +207,48 @@ class LiveLipSync:
             if self.fed == boundary:
                 self._window_done(boundary // self.hop)
         return self._emit(self.fed / RATE - self.latency)
+
+    def skip(self, chunk: bytes | np.ndarray) -> np.ndarray:
+        """Pass over the next audio without listening to it, and return the frames that became due.
+
+        Why: a listener that cannot keep up (a machine too busy) would fall further behind the voice for
+        the rest of the session; skipping what it is late with costs nothing and brings it back. The
+        mouth rests over the skipped audio (the span being spoken closes where the commits had reached),
+        and the decoders start afresh after it, as at the start of a session."""
+        n_in = len(_samples(chunk))
+        if not n_in:
+            return np.zeros((0, N_FAPS))
+        n = int(round(n_in * RATE / self.rate))
+        if self.rate != RATE:
+            self.resampler = Resampler(self.rate, RATE)  # its filter's state is of the audio before the gap
+        for d in self.decoders:
+            d.end_utt()  # what the windows heard since the last commit is dropped with the gap
+            d.start_utt()
+        self._close(self.committed)
+        self._unheard(n)
+        self.fed += n
+        self.restart = self.fed
+        self.skipped += n
+        self.committed = self.fed / RATE
+        return self._emit(self.fed / RATE - self.latency)
+
+    def _unheard(self, n: int) -> None:
+        """The voice and pitch detectors' state after ``n`` samples not heard: unvoiced frames, no pitch."""
+        vad = int(round(VAD_FRAME * RATE))
+        whole, part = divmod(len(self.vad_tail) + n, vad)
+        keep = int(round(2 * WINDOW / VAD_FRAME))
+        added = min(whole, keep)
+        self.voiced = np.concatenate([self.voiced, np.zeros(added, bool)])
+        self.music = np.concatenate([self.music, np.zeros(added, bool)])
+        drop = len(self.voiced) - keep if len(self.voiced) > keep else 0
+        self.voiced, self.music = self.voiced[drop:], self.music[drop:]
+        self.voiced_from += whole - added + drop
+        self.vad_tail = np.zeros(part, np.int16)
+        self.pitch_context = np.zeros(CONTEXT)
+        self.cents = np.full_like(self.cents, np.nan)
+        self.held = np.zeros_like(self.held)
+        self.sung = np.zeros_like(self.sung)
+        self.music_left = 0
 
     def flush(self) -> np.ndarray:
         """The end of the audio: decode what is left, close the last span and return every frame up to
@@ -246,7 +290,7 @@ class LiveLipSync:
         k = len(self.decoders)
         d = self.decoders[i % k]
         d.end_utt()
-        t0 = max(0, i - k) * self.hop / RATE
+        t0 = max(self.restart, (i - k) * self.hop) / RATE  # where this decoder's utterance began
         phones = []
         for seg in d.seg() or ():
             a = t0 + seg.start_frame * _HOP_10MS + (OFFSET if seg.start_frame else 0.0)

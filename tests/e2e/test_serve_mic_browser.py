@@ -70,7 +70,7 @@ def test_the_mouth_follows_the_microphone(wav):
     fresh_folder(ARTEFACTS)
     args = ARGS + ["--use-fake-device-for-media-stream", "--use-fake-ui-for-media-stream",
                    f"--use-file-for-fake-audio-capture={path}", "--autoplay-policy=no-user-gesture-required"]
-    app = create_app(face_for_tests())
+    app = create_app(face_for_tests(), warm=True)  # as `serve` starts it
     with running(app) as base, sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=args)
         page = browser.new_page(viewport={"width": 900, "height": 700})
@@ -117,7 +117,8 @@ def test_the_mouth_follows_the_microphone(wav):
         mic = page.evaluate("({levels: window.mic.levels, offset: window.mic.offset, faces: window.mic.faces, "
                             "errors: window.mic.errors, ended: window.mic.ended, rate: window.mic.contextRate, "
                             "frames: window.mic.frames, mostHeld: window.mic.mostHeld, dropped: window.mic.dropped, "
-                            "neverShown: window.mic.neverShown(), longestWait: window.mic.longestWait})")
+                            "neverShown: window.mic.neverShown(), longestWait: window.mic.longestWait, skipped: window.mic.skipped, "
+                            "resumedAt: window.mic.resumedAt})")
         frames = np.array(page.evaluate("window.rows()"), dtype=np.float64)
         player_errors = page.evaluate("window.player.errors")
         browser.close()
@@ -129,7 +130,12 @@ def test_the_mouth_follows_the_microphone(wav):
     behind = [int(m.group(1)) for text in statuses if (m := re.search(r"face (\d+) ms behind the voice", text))]
     assert behind, statuses[-3:]
     print(f"status: {statuses[len(statuses) // 2]!r}; behind the voice {min(behind)}-{max(behind)} ms")
-    assert 100 <= np.median(behind) <= 1000, behind  # the server's latency (180 ms) and the page's margin
+    # how long ago the audio of the face on screen was sent, on the page's clock: the server's latency (180 ms)
+    # and the page's margin at least; on this 2-core machine the server shares the cores with Chromium's
+    # software rendering and its answers come 400-550 ms after the audio (2026-12-07). Before, the line said
+    # how far the page's clock was behind the audio sent: 54 ms once in CI, where the fake microphone ran
+    # slower than the clock, though no face can show before the server has heard its audio
+    assert 100 <= np.median(behind) <= 1500, behind
     # frames past their time when they come are shown when they come: no "underruns" on this page; what it
     # says instead is what a viewer would see go wrong (frames never shown, the face waiting for a message)
     lines = [text for text in statuses if "behind the voice" in text]
@@ -145,9 +151,15 @@ def test_the_mouth_follows_the_microphone(wav):
           f"context {mic['rate']} Hz, {sent:.1f} s sent, {len(frames)} frames, speech at "
           + ", ".join(f"{a:.2f}-{b:.2f}" for a, b in spans) + f"; jaw shown up to {max(shown):.0f}")
     assert len(spans) >= 1
+    # a server that fell behind (a busy machine) skipped audio to catch up, the mouth at rest over it: the
+    # speech up to where it last resumed is not its to show (mpeg4fa/serve/microphone.py)
+    resumed = mic["resumedAt"] + 0.5 if mic["skipped"] else -np.inf
+    print(f"the server skipped {mic['skipped']:.2f} s" + (f", last resumed at {mic['resumedAt']:.2f} s" if mic["skipped"] else ""))
+    checked = 0
     for a, b in spans:
-        if b > t[-1] - 0.3:
-            continue  # speech the session ended in the middle of
+        if b > t[-1] - 0.3 or a < resumed:
+            continue  # speech the session ended in the middle of, or that was skipped
+        checked += 1
         inside = (t >= a + 0.1) & (t < b - 0.1)
         assert inside.sum() >= 10 and moving[inside].mean() >= 0.5, \
             f"the mouth moved in {moving[inside].mean():.0%} of the speech at {a:.2f}-{b:.2f} s"
@@ -157,7 +169,7 @@ def test_the_mouth_follows_the_microphone(wav):
         quiet = (t >= a + 0.3) & (t < b - 0.3)
         quiet_frames += int(quiet.sum())
         assert not moving[quiet].any(), f"the mouth moved in the silence {a:.2f}-{b:.2f} s"
-    assert quiet_frames >= 25
+    assert quiet_frames >= 25 and checked >= 2, (quiet_frames, checked, mic["skipped"], mic["resumedAt"], t[-1])
     shown = np.asarray(shown)
     assert shown.max() > 150 and (shown == 0).mean() > 0.2, "the drawn head's jaw did not open and close"
     assert open_shot.exists()

@@ -29,7 +29,7 @@ JAW = FAP_BY_NAME["open_jaw"].number - 1
 
 @pytest.fixture(scope="module")
 def base():
-    with running(create_app(face_for_tests())) as url:
+    with running(create_app(face_for_tests(), warm=True)) as url:  # as `serve` starts it
         yield url
 
 
@@ -169,3 +169,71 @@ def test_a_server_runs_a_bounded_number_of_microphones(base, monkeypatch):
         assert json.loads(second.recv(timeout=20))["state"] == "started"
     time.sleep(0.5)  # the closed connections' sessions end
     assert microphone.Microphone.running == 0
+
+
+def feed_with_clock(pcm: np.ndarray, read_at) -> tuple[list[dict], int]:
+    """Feed ``pcm`` in 20 ms chunks to a Microphone whose clock reads ``read_at(k)`` when chunk ``k`` is
+    taken (when the server gets to it): the messages it sent, and the frames of its faces."""
+    import asyncio
+
+    from mpeg4fa.serve.microphone import Microphone
+
+    texts, frames = [], [0]
+
+    async def send(message) -> None:
+        if isinstance(message, dict):
+            texts.append(message)
+        else:
+            frames[0] += len(decode(unpack(message)[2]).timestamps)
+
+    async def main() -> None:
+        k = [0]
+        mic = Microphone(send, FPS, clock=lambda: read_at(k[0]))
+        for k[0], i in enumerate(range(0, len(pcm), CHUNK)):
+            await mic.take(pack(MIC_KIND, i / RATE, pcm[i:i + CHUNK].astype("<i2").tobytes()))
+        await mic.take(pack(MIC_KIND, len(pcm) / RATE, b""))
+        await mic.close()
+
+    asyncio.run(main())
+    return texts, frames[0]
+
+
+def test_a_server_that_falls_behind_skips_to_catch_up():
+    """A server stalled for 3 s (a busy machine) finds the chunks queued: the ones more than MAX_BEHIND late
+    are skipped until one comes within CAUGHT_UP, the page is told once, and every frame still comes, in
+    order. Before, the face stayed 3 s behind the voice for the rest of the session."""
+    from mpeg4fa.serve.microphone import CAUGHT_UP, MAX_BEHIND
+
+    pcm = np.tile(speech_pcm()[0], 3)  # 11 s: the backlog is caught up at 15 ms a chunk, after 4 s of audio
+    # chunk 50 (1 s) is taken 3 s late (off the 20 ms grid: no lateness falls on a bound); the backlog is then
+    # read 5 ms a chunk
+    stall_at, stall = 50, 3.007
+
+    def read_at(k: int) -> float:
+        on_time = (k + 1) * CHUNK / RATE
+        if k < stall_at:
+            return on_time
+        caught = stall_at * CHUNK / RATE + stall + (k - stall_at) * 0.005
+        return max(on_time, caught)
+
+    texts, frames = feed_with_clock(pcm, read_at)
+    states = [m.get("state") for m in texts]
+    assert states.count("behind") == 1 and states[-1] == "ended" and "error" not in [m["type"] for m in texts], texts
+    skipped = texts[-1]["skipped"]
+    assert next(m for m in texts if m.get("state") == "behind")["skipped"] == pytest.approx(skipped)
+    # skipped: the chunks taken more than MAX_BEHIND late, until one was within CAUGHT_UP
+    late = np.array([read_at(k) - (k + 1) * CHUNK / RATE for k in range(len(pcm) // CHUNK)])
+    first = int(np.argmax(late > MAX_BEHIND))
+    last = first + int(np.argmax(late[first:] <= CAUGHT_UP))
+    assert skipped == pytest.approx((last - first) * CHUNK / RATE), (skipped, first, last)
+    assert frames == texts[-1]["frames"] == math.ceil(len(pcm) / RATE * FPS)
+
+
+def test_a_sound_clock_that_drifts_from_the_server_s_skips_nothing():
+    """The page's sound clock and the server's differ (Chromium's fake microphone on a busy machine ran 1.5 %
+    slow): 10 % slow over 20 s is 2 s of lateness by the end, past MAX_BEHIND, with no backlog: nothing is
+    skipped, since the baseline is the least lateness of the last 10 s."""
+    pcm = np.tile(speech_pcm()[0], 5)[:20 * RATE]
+    texts, frames = feed_with_clock(pcm, lambda k: (k + 1) * CHUNK / RATE * 1.10)
+    assert [m.get("state") for m in texts] == ["started", "ended"] and texts[-1]["skipped"] == 0
+    assert frames == math.ceil(len(pcm) / RATE * FPS)

@@ -254,3 +254,46 @@ def test_the_kept_spans_lie_in_the_speech(clip):
         assert sum(min(t.end, b) - max(t.start, a) for t in spans if t.end > a and t.start < b) >= 0.5 * (b - a)
     with pytest.raises(ValueError, match="keep_spans"):
         LiveLipSync().timings
+
+
+def test_a_skip_rests_the_mouth_over_it_and_listening_resumes_after(clip, fed):
+    """A listener that fell behind skips audio (mpeg4fa.serve.microphone does, past a bound): the frames
+    keep their count and times, the mouth rests over the skipped audio, and the speech after it moves the
+    mouth as when it was all heard."""
+    pcm, speech = clip
+    (a0, a1), (b0, b1) = speech
+    cut0, cut1 = int((a0 + 0.3) * RATE) // 320 * 320, int((a1 + 0.3) * RATE) // 320 * 320  # into the first sentence
+    live = LiveLipSync(RATE, FPS)
+    out, total = [], 0
+    for i in range(0, len(pcm), 320):
+        part = pcm[i:i + 320]
+        frames = live.skip(part) if cut0 <= i < cut1 else live.feed(part)
+        out.append(frames)
+        total += len(frames)
+        due = math.floor(round(((i + len(part)) / RATE - LATENCY) * FPS, 9)) + 1 if i + len(part) >= LATENCY * RATE else 0
+        assert total == due, f"after {i + len(part)} samples {total} frames, {due} due"
+    frames = np.concatenate(out + [live.flush()])
+    assert len(frames) == math.ceil(len(pcm) / RATE * FPS) and live.skipped == cut1 - cut0
+    t = np.arange(len(frames)) / FPS
+    move = moving(frames)
+    assert not move[(t >= cut0 / RATE + 0.25) & (t < cut1 / RATE)].any(), "the mouth moved over the skipped audio"
+    assert move[(t >= a0) & (t < cut0 / RATE - 0.1)].mean() >= 0.6, "the speech before the skip was lost"
+    # the second sentence, heard whole after the skip, as when nothing was skipped
+    whole = np.concatenate([f for _, f in fed[0]] + [fed[1]])
+    inside = (t >= b0 + 0.1) & (t < b1 - 0.1)
+    assert move[inside].mean() >= 0.6
+    agree = (frames[inside][:, LIPS] == whole[inside][:, LIPS]).all(axis=1).mean()
+    print(f"the sentence after the skip: {agree:.0%} of its frames as when all was heard")
+    assert agree >= 0.8
+
+
+def test_a_skip_at_another_rate_keeps_the_clock(clip):
+    """At 48 kHz: a skipped second is 16000 of the model's samples, and the frames after it come on time."""
+    pcm = resample(clip[0] / 32768.0, RATE, 48000)
+    live = LiveLipSync(48000, FPS)
+    n = 0
+    for i in range(0, len(pcm), 960):
+        part = pcm[i:i + 960]
+        n += len(live.skip(part) if 48000 <= i < 96000 else live.feed(part))
+    assert live.skipped == 16000
+    assert n + len(live.flush()) == math.ceil(len(pcm) / 48000 * FPS)

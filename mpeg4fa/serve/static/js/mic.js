@@ -6,7 +6,9 @@
 // player's clock at the first one: a frame shows the server's latency plus MARGIN (a little room for the
 // network's jitter) after its audio was sent, however late the first answer came. A session has no end the
 // page knows of, so the player keeps only the frames shown in the last KEEP s (window.player.trim) and what
-// is still to come; the status line says how far the face is behind the voice. A frame coming after its time
+// is still to come; the status line says how far the face is behind the voice: how long ago, on the page's
+// clock, the audio of the frame on screen was sent (a microphone the browser feeds slower than real time,
+// as a busy machine's does, must not make the face seem to catch up). A frame coming after its time
 // is no fault here (unlike a sentence's, whose whole stream is ahead of the clock): it shows when it comes. What
 // the viewer sees go wrong is a frame that never shows (one after it was due before the next picture) and the
 // face standing still while no frame comes (the longest wait between the server's messages); the status line
@@ -15,11 +17,12 @@ const MIC = "MIC1", FBA = "FBA1";
 const RATE = 16000;
 const MARGIN = 0.08;  // s of room for the network on top of the server's latency
 const KEEP = 2;  // s of frames kept behind the one showing
+const SENT_KEPT = 1500;  // chunks (30 s) whose sending times are kept for the status line
 
 const state = {  // read by the browser test (window.mic)
   on: false, starting: false, sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null,
   errors: [], offset: null, levels: [], contextRate: null, frames: 0, dropped: 0, mostHeld: 0,
-  shownAtStart: 0, lastFaceAt: null, longestWait: 0,
+  shownAtStart: 0, lastFaceAt: null, longestWait: 0, sentAt: [], skipped: 0, resumedAt: null,
 };
 window.mic = state;
 
@@ -45,6 +48,7 @@ function onMessage(e) {
   if (typeof e.data === "string") {
     const m = JSON.parse(e.data);
     if (m.type === "mic" && m.state === "started") state.started = m;
+    else if (m.type === "mic" && m.state === "behind") { state.skipped = m.skipped; state.resumedAt = m.at; }  // caught up
     else if (m.type === "mic" && m.state === "ended") { state.ended = m; if (!state.on && ws) { ws.close(); ws = null; } }
     else if (m.type === "error") state.errors.push(m);
     return;
@@ -88,24 +92,36 @@ function neverShown() {
 }
 state.neverShown = neverShown;
 
+/** How long ago (s, the page's clock) the audio at session time t was sent: the first chunk that reached
+ * past t. Audio not sent yet (a face ahead of its voice cannot be) counts as now. */
+function behindTheVoice(t) {
+  const upTo = t * RATE, sentAt = state.sentAt;
+  let lo = 0, hi = sentAt.length;
+  while (lo < hi) { const mid = (lo + hi) >> 1; if (sentAt[mid][0] < upTo) lo = mid + 1; else hi = mid; }
+  return lo < sentAt.length ? Math.max(0, (performance.now() - sentAt[lo][1]) / 1000) : 0;
+}
+
 /** The status line while the microphone runs: how far the face shown is behind the audio sent, the frames
  * received and held, those never shown and the longest the face waited for a message (null when it does not
  * run: the player's own lines). */
 function statusLines() {
   if (!state.on && !state.starting) return null;
   const player = window.player;
-  if (state.offset === null) return [`microphone: listening, ${(state.sent / RATE).toFixed(1)} s sent, no face yet`];
-  const behind = state.sent / RATE - (player.mediaNow() - state.offset);
-  return [`microphone: listening, the face ${Math.max(0, behind * 1000).toFixed(0)} ms behind the voice`,
+  if (state.offset === null || player.shown < 0) {
+    return [`microphone: listening, ${(state.sent / RATE).toFixed(1)} s sent, no face yet`];
+  }
+  const behind = behindTheVoice(player.frames[player.shown].t - state.offset);
+  return [`microphone: listening, the face ${(behind * 1000).toFixed(0)} ms behind the voice`,
           `${state.frames} frames in ${state.faces} messages, ${player.frames.length} held, ${neverShown()} never ` +
-          `shown, longest wait ${(state.longestWait * 1000).toFixed(0)} ms`];
+          `shown, longest wait ${(state.longestWait * 1000).toFixed(0)} ms` +
+          (state.skipped ? `; the server fell behind and skipped ${state.skipped.toFixed(1)} s to catch up` : "")];
 }
 
 async function start() {
   state.starting = true;
   Object.assign(state, { sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null, offset: null,
                          levels: [], frames: 0, dropped: 0, mostHeld: 0, shownAtStart: window.player.shownFrames,
-                         lastFaceAt: null, longestWait: 0 });
+                         lastFaceAt: null, longestWait: 0, sentAt: [], skipped: 0, resumedAt: null });
   window.player.statusLines = statusLines;
   button.disabled = true;
   try {
@@ -147,6 +163,8 @@ function send(pcm) {
   state.levels.push(10 * Math.log10(sum / pcm.length / (32768 * 32768) + 1e-12));  // dBFS of each chunk
   state.sent += pcm.length;
   state.chunks++;
+  state.sentAt.push([state.sent, performance.now()]);  // where each chunk's audio ends, and when it went
+  if (state.sentAt.length > 2 * SENT_KEPT) state.sentAt.splice(0, state.sentAt.length - SENT_KEPT);
 }
 
 function stop() {
