@@ -19,18 +19,19 @@ sentence's stream. Text messages:
 
 ``{"type": "mic", "state": "started", "latency": 0.18, "rate": 16000, "fps": 25.0}``
 ``{"type": "mic", "state": "ended", "frames": n, "seconds": s, "skipped": s}``
+``{"type": "mic", "state": "skipping", "at": t}`` and ``{"type": "mic", "state": "resumed", "at": t, "skipped": s}``
 
 Falling behind: recognition runs chunk by chunk, and a machine too busy to keep up would leave the
 face further behind the voice for the rest of the session (the chunks wait in the socket). So each
 chunk's lateness is measured, the wall-clock time since the session began less the audio time its end
-reaches, against the least lateness of the last :data:`BASELINE_SECONDS` (the page's sound clock and this
-one may drift apart; a chunk that came at once sets the baseline). Past :data:`MAX_BEHIND` s the
+reaches, against the least lateness over the last :data:`BASELINE_SECONDS` of audio (the page's sound
+clock and this one may drift apart; a chunk that came at once sets the baseline; the window is of audio,
+so a stall of any length is measured against the lateness before it). Past :data:`MAX_BEHIND` s the
 listener skips chunks (:meth:`~mpeg4fa.speech.live.LiveLipSync.skip`: the mouth rests over them) until
-one comes within :data:`CAUGHT_UP` s of the baseline; the page is told when it has caught up
-(``{"type": "mic", "state": "behind", "skipped": s, "at": t}``, the seconds skipped so far and the
-media time where listening resumed) and ``ended`` says how many seconds were skipped in all. A session's
-listener is built ahead (:meth:`Microphone.warm_up`, on ``serve``'s start and at each session's end), so
-the first chunk is heard at once.
+one comes within :data:`CAUGHT_UP` s of the baseline; the page is told when skipping begins and when it
+resumes listening (``at``: the media time; ``skipped``: the seconds skipped so far), and ``ended`` says
+how many seconds were skipped in all. A session's listener is built ahead (:meth:`Microphone.warm_up`,
+on ``serve``'s start and, in the background, when a session ends), so the first chunk is heard at once.
 
 Guard (as :mod:`mpeg4fa.guard` bounds HTTP bodies and :mod:`.protocol` the JSON messages): a chunk
 holds at most :data:`MAX_CHUNK_SECONDS` of audio and an even number of bytes; a session's audio may
@@ -70,11 +71,21 @@ Chromium drawing beside it and a busy loop on the other core, a session's chunks
 were all heard."""
 CAUGHT_UP = 0.1
 """Seconds within the baseline at which skipping stops."""
-BASELINE_SECONDS = 10.0
-"""The window (s) whose least lateness is the baseline."""
+BASELINE_SECONDS = 60.0
+"""The window (s of audio) whose least lateness is the baseline. A server slower than real time and a sound
+clock slower than this one look alike (lateness that grows); within the window, growth past MAX_BEHIND is
+taken for the server's: a sound clock may run up to 2.5 % slow (Chromium's fake microphone on a busy
+machine ran 1.5 % slow), a server falling 2.5 % or more behind real time is caught up."""
 MAX_SESSIONS = 4
 """Sessions one server runs at once: each holds four phone decoders, about 115 MiB (and one more is kept
 built ahead for the next session)."""
+
+
+def _listener(fps: float):
+    """A session's listener: the bundled phone loop at :data:`RATE`, with blinks and head motion."""
+    from mpeg4fa.speech.live import LiveLipSync
+
+    return LiveLipSync(RATE, fps, idle=True)
 
 
 def is_microphone(data: bytes | None) -> bool:
@@ -103,9 +114,8 @@ class Microphone:
         self.origin = 0.0  # the session's first chunk's media time
         self.tasks: set[asyncio.Task] = set()  # watchdogs running (the loop holds tasks only weakly)
         self.busy = asyncio.Lock()  # one LiveLipSync call at a time (a chunk, or the watchdog's end)
-        self.late = collections.deque()  # (wall clock, lateness) of the chunks of the last BASELINE_SECONDS
+        self.late = collections.deque()  # (audio time, lateness) of the chunks of the last BASELINE_SECONDS
         self.skipping = False
-        self.skipped = 0  # samples skipped in this session
 
     async def take(self, data: bytes) -> None:
         """One ``MIC1`` message."""
@@ -126,7 +136,8 @@ class Microphone:
                 await self.send(error_message(f"{MAX_SESSIONS} microphones are live on this server already: "
                                               "try again when one has stopped", "mic"))
                 return
-            await self.start(t if np.isfinite(t) else 0.0)
+            if not await self.start(t if np.isfinite(t) else 0.0):
+                return
         now = self.clock()
         self.last_chunk = now
         ahead = (t - self.origin) * RATE - self.received if np.isfinite(t) else 0.0  # float first: t may be 1e308
@@ -147,10 +158,11 @@ class Microphone:
             return
         self.received += len(samples)
         skip = self._behind(now)
-        self.skipped += len(samples) if skip else 0
-        if self.skipping and not skip:  # caught up: say so, with the seconds skipped so far and where it resumed
-            await self.send({"type": "mic", "state": "behind", "skipped": round(self.skipped / RATE, 3),
-                             "at": self.origin + (self.received - len(samples)) / RATE})
+        if skip != self.skipping:  # the page shows the skipped time as the server's, not the microphone's
+            at = self.origin + (self.received - len(samples)) / RATE
+            await self.send({"type": "mic", "state": "skipping", "at": at} if skip else
+                            {"type": "mic", "state": "resumed", "at": at,
+                             "skipped": self.live.skipped / RATE if self.live is not None else 0.0})
         self.skipping = skip
         async with self.busy:
             if self.live is not None:
@@ -159,12 +171,13 @@ class Microphone:
     def _behind(self, now: float) -> bool:
         """Whether the chunk whose audio ends the session's (``received``) is to be skipped: it came more
         than MAX_BEHIND s later than the baseline, or skipping goes on and it is not within CAUGHT_UP."""
-        late = (now - self.started_at) - self.received / RATE
-        while self.late and self.late[0][0] < now - BASELINE_SECONDS:
+        audio = self.received / RATE
+        late = (now - self.started_at) - audio
+        while self.late and self.late[0][0] < audio - BASELINE_SECONDS:
             self.late.popleft()
         while self.late and self.late[-1][1] >= late:  # the least of the window stays first
             self.late.pop()
-        self.late.append((now, late))
+        self.late.append((audio, late))
         behind = late - self.late[0][1]
         return behind > (CAUGHT_UP if self.skipping else MAX_BEHIND)
 
@@ -176,7 +189,14 @@ class Microphone:
         frames = live.flush() if samples is None else live.skip(samples) if skip else live.feed(samples)
         return first, len(frames), coder.encode(frames) if len(frames) else None
 
-    async def start(self, origin: float) -> None:
+    async def start(self, origin: float) -> bool:
+        """Begin a session at the first chunk (False, with an error sent, when the microphone cannot run)."""
+        from mpeg4fa.extras import absent
+
+        missing = absent("align", "pocketsphinx")
+        if missing is not None:
+            await self.send(error_message(str(missing), "mic"))
+            return False
         self.started_at = self.last_chunk = self.clock()  # the first chunk's arrival: the audio's clock
         Microphone.running += 1
         try:
@@ -184,9 +204,9 @@ class Microphone:
         except BaseException:
             Microphone.running -= 1
             raise
-        self.received = self.frames = self.skipped = 0
+        self.received = self.frames = 0
         self.late.clear()
-        self.late.append((self.started_at, 0.0))  # the first chunk came at once: the chunks queued meanwhile are late
+        self.late.append((0.0, 0.0))  # the first chunk came at once: the chunks queued meanwhile are late
         self.skipping = False
         self.origin = origin
         self.watchdog = asyncio.create_task(self._watch())
@@ -194,34 +214,56 @@ class Microphone:
         self.watchdog.add_done_callback(self.tasks.discard)
         await self.send({"type": "mic", "state": "started", "latency": self.live.latency, "rate": RATE,
                          "fps": self.fps})
+        return True
 
     spare: dict[float, object] = {}  # fps -> a listener built ahead (a LiveLipSync, 115 MiB), for the next session
+    building: set[float] = set()  # fps whose spare is being built
     spare_lock = threading.Lock()
 
     @staticmethod
     def warm_up(fps: float) -> None:
-        """Build the next session's listener and load the coding's compiled code ahead. Why: a listener takes
-        0.45 s to build (its four decoders load their models; 1.3 s with Chromium drawing beside it) and the
-        first fba_object 0.8 s, while the session's audio queues; the face would start that far behind the
-        voice and skip to catch up. ``serve`` calls it on starting, and each session's end builds the next."""
-        from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
+        """Build the next session's listener and load the coding's compiled code ahead (nothing without the
+        ``align`` extra: a session then says it is missing). Why: a listener takes 0.45 s to build (its four
+        decoders load their models; 1.3 s with Chromium drawing beside it) and the first fba_object 0.8 s,
+        while the session's audio queues; the face would start that far behind the voice and skip to catch
+        up. ``serve`` calls it on starting; a session's end builds the next in the background."""
+        from mpeg4fa.extras import absent
+        from mpeg4fa.speech.live import LiveEncoder
 
+        if absent("align", "pocketsphinx") is not None:
+            return
         with Microphone.spare_lock:
-            if fps in Microphone.spare:
+            if fps in Microphone.spare or fps in Microphone.building:
                 return
-        LiveEncoder(fps).encode(np.zeros((1, N_FAPS)))
-        live = LiveLipSync(RATE, fps, idle=True)
-        with Microphone.spare_lock:
-            Microphone.spare.setdefault(fps, live)
+            Microphone.building.add(fps)
+        try:
+            LiveEncoder(fps).encode(np.zeros((1, N_FAPS)))
+            live = _listener(fps)
+            with Microphone.spare_lock:
+                Microphone.spare.setdefault(fps, live)
+        finally:
+            with Microphone.spare_lock:
+                Microphone.building.discard(fps)
+
+    @staticmethod
+    def build_ahead(fps: float) -> None:
+        """:meth:`warm_up` in a thread of its own: the connection goes on reading meanwhile (a session
+        started before it is done builds its own listener)."""
+        def build() -> None:
+            with contextlib.suppress(Exception):  # a spare that fails to build is built again by its session
+                Microphone.warm_up(fps)
+
+        # not a daemon: the interpreter waits for it (a second at most) rather than stop it inside pocketsphinx
+        threading.Thread(target=build, name="microphone-spare").start()
 
     @staticmethod
     def _ready(fps: float):
         """In the worker thread: the session's listener (the one built ahead, if any) and its coder."""
-        from mpeg4fa.speech.live import LiveEncoder, LiveLipSync
+        from mpeg4fa.speech.live import LiveEncoder
 
         with Microphone.spare_lock:
             live = Microphone.spare.pop(fps, None)
-        return live if live is not None else LiveLipSync(RATE, fps, idle=True), LiveEncoder(fps)
+        return live if live is not None else _listener(fps), LiveEncoder(fps)
 
     async def end(self) -> None:
         """Flush the session's last frames and say it ended (nothing when none runs)."""
@@ -235,13 +277,14 @@ class Microphone:
         async with self.busy:
             await self._out(await asyncio.to_thread(self._feed, live, self.coder, None))
         await self.send({"type": "mic", "state": "ended", "frames": self.frames, "seconds": self.received / RATE,
-                         "skipped": self.skipped / RATE})
-        await asyncio.to_thread(self.warm_up, self.fps)  # the next session's listener, while none waits for it
+                         "skipped": live.skipped / RATE})
+        self.build_ahead(self.fps)
 
     async def close(self) -> None:
         """The connection is gone: stop the watchdog (no frames to send)."""
         if self.live is not None:
             Microphone.running -= 1
+            self.build_ahead(self.fps)
         self.live = None
         for task in list(self.tasks):
             task.cancel()

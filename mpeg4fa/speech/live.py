@@ -79,6 +79,8 @@ VAD_MODE = 3
 """pocketsphinx's voice activity detector's aggressiveness (0-3); 3 hears least noise as voice."""
 VAD_FRAME = 0.01
 """The detector's frame (s)."""
+VERDICTS_KEPT = int(round(2 * WINDOW / VAD_FRAME))
+"""The detector's newest verdicts kept (two windows' worth)."""
 FLAT = 0.3
 """Spectral flatness (0..1) from which a 10 ms frame is noise, not a voice: white noise has about 0.56
 (a periodogram's geometric over arithmetic mean, e^-0.577), voiced speech below 0.1."""
@@ -179,6 +181,8 @@ class LiveLipSync:
         self.fed = 0  # 16 kHz samples fed in all (skipped ones too)
         self.restart = 0  # 16 kHz samples: where the decoders last started afresh (0, or the end of a skip)
         self.skipped = 0  # 16 kHz samples skipped in all
+        self.skipped_in = 0  # samples at ``rate`` skipped in all (the 16 kHz count follows their total)
+        self.stale_filter = False  # the resampler's state is of the audio before a skip
         self.committed = 0.0  # s: phones before this are final
         self.open: list | None = None  # [viseme, start, end] of the span being spoken
         self.voiced = np.zeros(0, bool)  # per 10 ms from voiced_from: the detector's verdicts
@@ -197,6 +201,8 @@ class LiveLipSync:
     # ---- input -------------------------------------------------------------------------------
     def feed(self, chunk: bytes | np.ndarray) -> np.ndarray:
         """Take the next audio and return the frames that became due, (n, 68) (n may be 0)."""
+        if self.stale_filter:
+            self.resampler, self.stale_filter = Resampler(self.rate, RATE), False
         samples = self.resampler(_samples(chunk))
         pos = 0
         while pos < len(samples):
@@ -218,9 +224,9 @@ class LiveLipSync:
         n_in = len(_samples(chunk))
         if not n_in:
             return np.zeros((0, N_FAPS))
-        n = int(round(n_in * RATE / self.rate))
-        if self.rate != RATE:
-            self.resampler = Resampler(self.rate, RATE)  # its filter's state is of the audio before the gap
+        self.skipped_in += n_in
+        n = int(round(self.skipped_in * RATE / self.rate)) - self.skipped  # no rounding piles up over the chunks
+        self.stale_filter = self.rate != RATE
         for d in self.decoders:
             d.end_utt()  # what the windows heard since the last commit is dropped with the gap
             d.start_utt()
@@ -234,15 +240,12 @@ class LiveLipSync:
 
     def _unheard(self, n: int) -> None:
         """The voice and pitch detectors' state after ``n`` samples not heard: unvoiced frames, no pitch."""
-        vad = int(round(VAD_FRAME * RATE))
-        whole, part = divmod(len(self.vad_tail) + n, vad)
-        keep = int(round(2 * WINDOW / VAD_FRAME))
-        added = min(whole, keep)
-        self.voiced = np.concatenate([self.voiced, np.zeros(added, bool)])
-        self.music = np.concatenate([self.music, np.zeros(added, bool)])
-        drop = len(self.voiced) - keep if len(self.voiced) > keep else 0
-        self.voiced, self.music = self.voiced[drop:], self.music[drop:]
-        self.voiced_from += whole - added + drop
+        whole, part = divmod(len(self.vad_tail) + n, int(round(VAD_FRAME * RATE)))
+        unkept = max(0, whole - VERDICTS_KEPT)  # frames that would be dropped at once: never stored
+        if unkept:
+            self.voiced_from += len(self.voiced) + unkept
+            self.voiced, self.music = np.zeros(0, bool), np.zeros(0, bool)
+        self._verdicts(np.zeros(whole - unkept, bool), np.zeros(whole - unkept, bool))
         self.vad_tail = np.zeros(part, np.int16)
         self.pitch_context = np.zeros(CONTEXT)
         self.cents = np.full_like(self.cents, np.nan)
@@ -315,9 +318,13 @@ class LiveLipSync:
         else:
             music = np.zeros(0, bool)
         self.vad_tail = buf[frames * n:]
-        self.voiced = np.concatenate([self.voiced, verdicts])
+        self._verdicts(verdicts, music)
+
+    def _verdicts(self, voiced: np.ndarray, music: np.ndarray) -> None:
+        """Add the verdicts of the next 10 ms frames, keeping the newest :data:`VERDICTS_KEPT`."""
+        self.voiced = np.concatenate([self.voiced, voiced])
         self.music = np.concatenate([self.music, music])
-        drop = max(0, len(self.voiced) - int(round(2 * WINDOW / VAD_FRAME)))
+        drop = max(0, len(self.voiced) - VERDICTS_KEPT)
         if drop:
             self.voiced, self.music, self.voiced_from = self.voiced[drop:], self.music[drop:], self.voiced_from + drop
 

@@ -22,7 +22,7 @@ const SENT_KEPT = 1500;  // chunks (30 s) whose sending times are kept for the s
 const state = {  // read by the browser test (window.mic)
   on: false, starting: false, sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null,
   errors: [], offset: null, levels: [], contextRate: null, frames: 0, dropped: 0, mostHeld: 0,
-  shownAtStart: 0, lastFaceAt: null, longestWait: 0, sentAt: [], skipped: 0, resumedAt: null,
+  shownAtStart: 0, lastFaceAt: null, longestWait: 0, sentAt: [], skipped: 0, skips: [],
 };
 window.mic = state;
 
@@ -48,8 +48,12 @@ function onMessage(e) {
   if (typeof e.data === "string") {
     const m = JSON.parse(e.data);
     if (m.type === "mic" && m.state === "started") state.started = m;
-    else if (m.type === "mic" && m.state === "behind") { state.skipped = m.skipped; state.resumedAt = m.at; }  // caught up
-    else if (m.type === "mic" && m.state === "ended") { state.ended = m; if (!state.on && ws) { ws.close(); ws = null; } }
+    else if (m.type === "mic" && m.state === "skipping") state.skips.push([m.at, null]);  // the server fell behind
+    else if (m.type === "mic" && m.state === "resumed") {
+      state.skipped = m.skipped;
+      if (state.skips.length) state.skips[state.skips.length - 1][1] = m.at;
+    }
+    else if (m.type === "mic" && m.state === "ended") { state.ended = m; state.skipped = m.skipped; if (!state.on && ws) { ws.close(); ws = null; } }
     else if (m.type === "error") state.errors.push(m);
     return;
   }
@@ -107,21 +111,22 @@ function behindTheVoice(t) {
 function statusLines() {
   if (!state.on && !state.starting) return null;
   const player = window.player;
-  if (state.offset === null || player.shown < 0) {
-    return [`microphone: listening, ${(state.sent / RATE).toFixed(1)} s sent, no face yet`];
-  }
-  const behind = behindTheVoice(player.frames[player.shown].t - state.offset);
+  const t = state.offset === null || player.shown < 0 ? -1 : player.frames[player.shown].t - state.offset;
+  if (t < 0) return [`microphone: listening, ${(state.sent / RATE).toFixed(1)} s sent, no face yet`];  // or an earlier one's
+  const behind = behindTheVoice(t);
+  const skipping = state.skips.length && state.skips[state.skips.length - 1][1] === null;
   return [`microphone: listening, the face ${(behind * 1000).toFixed(0)} ms behind the voice`,
           `${state.frames} frames in ${state.faces} messages, ${player.frames.length} held, ${neverShown()} never ` +
           `shown, longest wait ${(state.longestWait * 1000).toFixed(0)} ms` +
-          (state.skipped ? `; the server fell behind and skipped ${state.skipped.toFixed(1)} s to catch up` : "")];
+          (skipping ? "; the server fell behind: skipping to catch up" :
+           state.skipped ? `; the server fell behind and skipped ${state.skipped.toFixed(1)} s to catch up` : "")];
 }
 
 async function start() {
   state.starting = true;
   Object.assign(state, { sent: 0, chunks: 0, faces: 0, faceBytes: 0, started: null, ended: null, offset: null,
                          levels: [], frames: 0, dropped: 0, mostHeld: 0, shownAtStart: window.player.shownFrames,
-                         lastFaceAt: null, longestWait: 0, sentAt: [], skipped: 0, resumedAt: null });
+                         lastFaceAt: null, longestWait: 0, sentAt: [], skipped: 0, skips: [] });
   window.player.statusLines = statusLines;
   button.disabled = true;
   try {
