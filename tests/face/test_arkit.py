@@ -85,3 +85,28 @@ def test_sides_hold_on_a_head_moved_in_the_senders_frame(generic_face):
     assert _side(moved.mesh, 4) is None and _side(moved.mesh, 59) == "left" and _side(moved.mesh, 60) == "right"
     names = moved.with_deformer("arkit").arkit_rig.unit_names
     assert "browInnerUp[left]" in names and "mouthFunnel" in names
+
+
+def test_the_feature_point_field_serves_only_where_the_sculpt_nears_a_fold(generic_face, arkit_face):
+    """The fallback (arkit.FALLBACK_MM) changes nothing where no triangle nears a fold (the 14 visemes, bit for
+    bit) and, where one folds (brows pulled down twice their extreme), takes the skin there onto the
+    feature-point deformer's guarded field: nothing turned over any more, the named points but the passive ones
+    (the lid centres ride the field: 3.2 mm lower) where they were."""
+    import dataclasses
+
+    from mpeg4fa.face import creases, quality
+
+    bare = FaceModel.default().with_deformer("arkit")
+    bare.__dict__["posing"] = dataclasses.replace(arkit_face.posing, fallback=None)
+    for name, values in VISEME_PROFILES["mpeg4"].items():
+        v = np.asarray(values, float).copy()
+        v[:2] = 0
+        assert np.array_equal(arkit_face.deform(v).vertices, bare.deform(v).vertices), name
+    down = creases.crease_poses(generic_face)["brows x2 down"]
+    mesh = generic_face.mesh
+    graph = quality.skin_graph(mesh)
+    assert creases.measure_pose(bare, down, graph).folded > 0  # what the fallback is for
+    assert creases.measure_pose(arkit_face, down, graph).folded == 0
+    moved = np.linalg.norm(arkit_face.deform(down).feature_points - bare.deform(down).feature_points, axis=1)
+    passive = [mesh.fp_index(label) for label in PASSIVE_POINTS]
+    assert moved[np.setdiff1d(np.arange(len(moved)), passive)].max() <= 1e-9 * mesh.height()

@@ -30,10 +30,9 @@ PASSING = ("yaw +40 jaw open", "yaw -40 jaw open", "roll +40 jaw open", "roll -4
            "yaw 40 pitch 20 jaw open", "pitch -40 jaw open", "pitch +40 jaw open",
            "squeeze x2", "brows 400", "brows x2 down", "brows x2 up")
 # measured on the generic head (folded / fold lines / strain over floor); not met yet
-NOT_YET = {
-    ("arkit", "brows x2 down"): "2 folded, 2 fold lines under the middle brows 4.3/4.4 (the sculpted browDown "
-                                "with the correction spread wide), ratio 1.31; was 6 folded, 6 fold lines",
-}
+NOT_YET: dict[tuple[str, str], str] = {}
+# met since: ARKit's brows x2 down (2 folded, 2 fold lines under the middle brows 4.3/4.4, the sculpted browDown
+# with the correction spread wide, ratio 1.31): the skin there takes the feature-point field (arkit.FALLBACK_MM)
 DEFORMERS = ("fap", "arkit")
 FULL_RANGE_PASSING_AT_LEAST = 42
 """Skin FAPs alone at their full default I range (+-i_max x quant step) that pass, of 96. Unlimited, most

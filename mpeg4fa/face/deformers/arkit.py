@@ -17,7 +17,9 @@ lips that funnel and pucker). This deformer:
    its target: the residuals spread by the same smooth skin weights that the
    feature-point deformer uses (:func:`.rig.skin_weights`), for every skin point;
    where that would turn skin over (brows pulled down twice their extreme), the fold
-   guard of the feature-point deformer spreads them wider (:class:`.FoldGuard`).
+   guard of the feature-point deformer spreads them wider (:class:`.FoldGuard`), and where
+   the sculpt itself still nears a fold, the skin around takes the feature-point deformer's
+   own guarded field, as much as the fold is near (:data:`FALLBACK_MM`).
 
 Eyes, teeth and tongue come from the feature-point deformer, and so do the lids
 (:mod:`.lids`, turned after the sculpt): the sculpted ``eyeBlink*`` units move
@@ -35,7 +37,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deformers.feature_points import FoldGuard, apply_head_rotation, apply_lids, pose_in_head_frame
+from mpeg4fa.face.deformers.feature_points import (FOLD_FULL, FOLD_START, FoldGuard, _smooth_step, apply_head_rotation,
+                                                   apply_lids, pose_in_head_frame, skin_guard)
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
@@ -44,6 +47,15 @@ from mpeg4fa.face.rig import CORNER_HOLD_MM, Rig, skin_weights
 from mpeg4fa.spec import FAPS, N_FAPS
 
 MIN_FULL_SCALE = 1.0  # a unit that moves a FAP's point by less than one FAPU unit does not serve it
+FALLBACK_MM = (8.0, 20.0)
+"""Where the sculpt nears a fold that the correction's guard cannot undo (a sculpted unit at its end and the
+correction carrying the rest: brows pulled down twice their extreme turned two triangles over under the
+middle brows 4.3/4.4, joy at 63 one a side at the lower lids' outer corners, disgust at 63 two fold lines),
+the skin within these distances (mm, at rest: all, then less and less) of each nearing triangle takes the
+feature-point deformer's guarded field, by how near it is to folding (none at the guard's
+:data:`.FOLD_START`, all at :data:`.FOLD_FULL`). On the generic head, (0, 15) mm left brows x2 down and joy
+folded, (0, 20) a fold line over the upper lids, (8, 20) nothing. Only such poses pay for the second field
+(joy at 63: 6 ms a pose, 2 without)."""
 
 
 @dataclass(frozen=True)
@@ -208,12 +220,15 @@ def unit_weights(arkit: ArkitRig, values: np.ndarray) -> np.ndarray:
     return np.clip(arkit.gains @ values, 0.0, 1.0)
 
 
-def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guard: FoldGuard | None = None) -> Pose:
+def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guard: FoldGuard | None = None,
+                 fallback: FoldGuard | None = None) -> Pose:
     """Pose one frame with the sculpted face units, feature points exactly where the FAPs put them.
 
-    ``guard`` (over the correction's columns) spreads the correction wider where it would fold skin.
-    The targets come from the feature-point deformer without its guard: the guard moves no named
-    point, but the lid centres 3.13/3.14 ride on its wider skin, and pulled there they tented the lids."""
+    ``guard`` (over the correction's columns) spreads the correction wider where it would fold skin;
+    ``fallback`` (the feature-point deformer's guard) then poses the skin around what still nears a fold
+    (:data:`FALLBACK_MM`). The targets come from the feature-point deformer without its guard: the guard
+    moves no named point, but the lid centres 3.13/3.14 ride on its wider skin, and pulled there they
+    tented the lids (where the fallback takes its field, they ride with it: brows x2 down, 3.3 mm)."""
     v = np.asarray(values, dtype=np.float64)
     p, pupils = pose_in_head_frame(rig, v, lids=False)
     skin = rig.parts["skin"]
@@ -223,9 +238,28 @@ def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guard: FoldGuard
     p[skin] = sculpted + arkit.correction @ residual
     if guard is not None:
         guard.relieve(p, residual, p_target - rig.rest[arkit.fp_global])
+        if fallback is not None:
+            _fall_back(rig, p, v, guard, fallback)
     apply_lids(rig, p, v)  # after sculpting: the lids turn over the eyeball as in the feature-point deformer
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
+
+
+def _fall_back(rig: Rig, p: np.ndarray, v: np.ndarray, guard: FoldGuard, fallback: FoldGuard) -> None:
+    """Blend the skin near the triangles of ``p`` that still near a fold toward the feature-point deformer's
+    guarded field (in place; :data:`FALLBACK_MM`)."""
+    c = guard.facing(p)
+    near = c < FOLD_START
+    if not near.any():
+        return
+    severity = 1.0 - _smooth_step((c[near] - FOLD_FULL) / (FOLD_START - FOLD_FULL))
+    skin = rig.parts["skin"]
+    centres = rig.rest[guard.triangles[near]].mean(axis=1)
+    distance = np.linalg.norm(rig.rest[skin][:, None, :] - centres[None], axis=2)  # (skin vertices, nearing)
+    full, none = FALLBACK_MM
+    share = (smooth_down((distance - full) / (none - full)) * severity).max(axis=1)
+    field, _ = pose_in_head_frame(rig, v, lids=False, guard=fallback)
+    p[skin] += share[:, None] * (field[skin] - p[skin])
 
 
 @dataclass(frozen=True)
@@ -235,9 +269,10 @@ class ArkitDeformer:
     rig: Rig
     arkit: ArkitRig
     guard: FoldGuard | None = None
+    fallback: FoldGuard | None = None
 
     def __call__(self, values: np.ndarray) -> Pose:
-        return deform_arkit(self.rig, self.arkit, values, self.guard)
+        return deform_arkit(self.rig, self.arkit, values, self.guard, self.fallback)
 
 
 def correction_guard(mesh: HeadMesh, arkit: ArkitRig) -> FoldGuard:
@@ -250,4 +285,4 @@ def correction_guard(mesh: HeadMesh, arkit: ArkitRig) -> FoldGuard:
 
 def build(mesh: HeadMesh, rig: Rig) -> ArkitDeformer:
     arkit = build_arkit_rig(mesh, rig)
-    return ArkitDeformer(rig, arkit, correction_guard(mesh, arkit))
+    return ArkitDeformer(rig, arkit, correction_guard(mesh, arkit), skin_guard(mesh, rig))
