@@ -37,8 +37,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
-from mpeg4fa.face.deformers.feature_points import (FOLD_FULL, FOLD_START, FoldGuard, _smooth_step, apply_head_rotation,
-                                                   apply_lids, pose_in_head_frame, skin_guard)
+from mpeg4fa.face.deformers.feature_points import (FoldGuard, apply_head_rotation, apply_lids, fall_back,
+                                                   pose_in_head_frame, skin_guard)
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.mesh import HeadMesh
@@ -239,27 +239,10 @@ def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guard: FoldGuard
     if guard is not None:
         guard.relieve(p, residual, p_target - rig.rest[arkit.fp_global])
         if fallback is not None:
-            _fall_back(rig, p, v, guard, fallback)
+            fall_back(rig, p, lambda: pose_in_head_frame(rig, v, lids=False, guard=fallback)[0], guard, FALLBACK_MM)
     apply_lids(rig, p, v)  # after sculpting: the lids turn over the eyeball as in the feature-point deformer
     apply_head_rotation(rig, p, v)
     return Pose(vertices=p, parts=rig.parts, pupil_diameter=pupils, fp_vertex=rig.fp_vertex)
-
-
-def _fall_back(rig: Rig, p: np.ndarray, v: np.ndarray, guard: FoldGuard, fallback: FoldGuard) -> None:
-    """Blend the skin near the triangles of ``p`` that still near a fold toward the feature-point deformer's
-    guarded field (in place; :data:`FALLBACK_MM`)."""
-    c = guard.facing(p)
-    near = c < FOLD_START
-    if not near.any():
-        return
-    severity = 1.0 - _smooth_step((c[near] - FOLD_FULL) / (FOLD_START - FOLD_FULL))
-    skin = rig.parts["skin"]
-    centres = rig.rest[guard.triangles[near]].mean(axis=1)
-    distance = np.linalg.norm(rig.rest[skin][:, None, :] - centres[None], axis=2)  # (skin vertices, nearing)
-    full, none = FALLBACK_MM
-    share = (smooth_down((distance - full) / (none - full)) * severity).max(axis=1)
-    field, _ = pose_in_head_frame(rig, v, lids=False, guard=fallback)
-    p[skin] += share[:, None] * (field[skin] - p[skin])
 
 
 @dataclass(frozen=True)

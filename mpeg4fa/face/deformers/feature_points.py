@@ -26,7 +26,7 @@ from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS
 from mpeg4fa.face.lids import lid_drops, lid_strips, turn_lid
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
-from mpeg4fa.face.regions import LID_MARGIN_LOOPS, WIDE_REACH_MM, shortest_loop, wide_weights
+from mpeg4fa.face.regions import LID_MARGIN_LOOPS, WIDE_REACH_MM, shortest_loop, smooth_down, wide_weights
 from mpeg4fa.face.rig import CORNER_MARGIN_MM, THROAT_BOW_DEGREES, Rig
 
 EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
@@ -203,6 +203,25 @@ _SOFT = 0.05  # width of the smooth max's rounding (a weight sum)
 def _smooth_step(x: np.ndarray) -> np.ndarray:
     t = np.clip(x, 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
+
+
+def fall_back(rig: Rig, p: np.ndarray, field, guard: FoldGuard, reach_mm: tuple[float, float]) -> None:
+    """Where another deformer's skin ``p`` still nears a fold (a watched triangle of ``guard`` facing less
+    than :data:`FOLD_START`), blend the skin around toward ``field()`` (in place): the feature-point
+    deformer's guarded field, computed only then. Each nearing triangle takes the skin within
+    ``reach_mm[0]`` (mm, at rest) whole and fades out by ``reach_mm[1]``, by how near it is to folding (none
+    at FOLD_START, all at :data:`FOLD_FULL`); the feature points the field and ``p`` share stay put."""
+    c = guard.facing(p)
+    near = c < FOLD_START
+    if not near.any():
+        return
+    severity = 1.0 - _smooth_step((c[near] - FOLD_FULL) / (FOLD_START - FOLD_FULL))
+    skin = rig.parts["skin"]
+    centres = rig.rest[guard.triangles[near]].mean(axis=1)
+    distance = np.linalg.norm(rig.rest[skin][:, None, :] - centres[None], axis=2)  # (skin vertices, nearing)
+    full, none = reach_mm
+    share = (smooth_down((distance - full) / (none - full)) * severity).max(axis=1)
+    p[skin] += share[:, None] * (field()[skin] - p[skin])
 
 
 def skin_guard(mesh: HeadMesh, rig: Rig) -> FoldGuard:
