@@ -16,10 +16,12 @@ expressions nothing changes.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.spatial.distance import cdist
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS
@@ -205,7 +207,8 @@ def _smooth_step(x: np.ndarray) -> np.ndarray:
     return t * t * (3.0 - 2.0 * t)
 
 
-def fall_back(rig: Rig, p: np.ndarray, field, guard: FoldGuard, reach_mm: tuple[float, float]) -> None:
+def fall_back(rig: Rig, p: np.ndarray, field: Callable[[], np.ndarray], guard: FoldGuard,
+              reach_mm: tuple[float, float]) -> None:
     """Where another deformer's skin ``p`` still nears a fold (a watched triangle of ``guard`` facing less
     than :data:`FOLD_START`), blend the skin around toward ``field()`` (in place): the feature-point
     deformer's guarded field, computed only then. Each nearing triangle takes the skin within
@@ -218,9 +221,11 @@ def fall_back(rig: Rig, p: np.ndarray, field, guard: FoldGuard, reach_mm: tuple[
     severity = 1.0 - _smooth_step((c[near] - FOLD_FULL) / (FOLD_START - FOLD_FULL))
     skin = rig.parts["skin"]
     centres = rig.rest[guard.triangles[near]].mean(axis=1)
-    distance = np.linalg.norm(rig.rest[skin][:, None, :] - centres[None], axis=2)  # (skin vertices, nearing)
     full, none = reach_mm
-    share = (smooth_down((distance - full) / (none - full)) * severity).max(axis=1)
+    share = np.zeros(skin.stop - skin.start)
+    for k in range(0, len(centres), 256):  # (skin vertices, 256) at a time: a stream folding everywhere stays small
+        distance = cdist(rig.rest[skin], centres[k:k + 256])
+        share = np.maximum(share, (smooth_down((distance - full) / (none - full)) * severity[k:k + 256]).max(axis=1))
     p[skin] += share[:, None] * (field()[skin] - p[skin])
 
 
