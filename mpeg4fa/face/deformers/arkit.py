@@ -225,8 +225,8 @@ def deform_arkit(rig: Rig, arkit: ArkitRig, values: np.ndarray, guard: FoldGuard
     """Pose one frame with the sculpted face units, feature points exactly where the FAPs put them.
 
     ``guard`` (over the correction's columns) spreads the correction wider where it would fold skin;
-    ``fallback`` (the feature-point deformer's guard) then poses the skin around what still nears a fold
-    (:data:`FALLBACK_MM`). The targets come from the feature-point deformer without its guard: the guard
+    ``fallback`` (the feature-point deformer's guard; with ``guard`` only) then poses the skin around what
+    still nears a fold (:data:`FALLBACK_MM`). The targets come from the feature-point deformer without its guard: the guard
     moves no named point, but the lid centres 3.13/3.14 ride on its wider skin, and pulled there they
     tented the lids (where the fallback takes its field, they ride with it: brows x2 down, 3.3 mm)."""
     v = np.asarray(values, dtype=np.float64)

@@ -179,7 +179,7 @@ class FoldGuard:
         if c.min() >= FOLD_START:
             return
         near = c < FOLD_START
-        s = 1.0 - _smooth_step((c[near] - FOLD_FULL) / (FOLD_START - FOLD_FULL))
+        s = _nearness(c[near])
         share = (self.touches[rows[near]] * s[:, None]).max(axis=0)
         share[~moving] = 0.0
         if share.any():
@@ -207,18 +207,25 @@ def _smooth_step(x: np.ndarray) -> np.ndarray:
     return t * t * (3.0 - 2.0 * t)
 
 
+def _nearness(c: np.ndarray) -> np.ndarray:
+    """How near triangles of facing ``c`` are to folding: 0 at :data:`FOLD_START`, 1 at :data:`FOLD_FULL` and below."""
+    return 1.0 - _smooth_step((c - FOLD_FULL) / (FOLD_START - FOLD_FULL))
+
+
 def fall_back(rig: Rig, p: np.ndarray, field: Callable[[], np.ndarray], guard: FoldGuard,
               reach_mm: tuple[float, float]) -> None:
     """Where another deformer's skin ``p`` still nears a fold (a watched triangle of ``guard`` facing less
     than :data:`FOLD_START`), blend the skin around toward ``field()`` (in place): the feature-point
     deformer's guarded field, computed only then. Each nearing triangle takes the skin within
-    ``reach_mm[0]`` (mm, at rest) whole and fades out by ``reach_mm[1]``, by how near it is to folding (none
-    at FOLD_START, all at :data:`FOLD_FULL`); the feature points the field and ``p`` share stay put."""
+    ``reach_mm[0]`` (mm, at rest, straight across: over the mouth and eye openings too, where both poses
+    are whole) whole and fades out by ``reach_mm[1]``, by how near it is to folding (none at FOLD_START, all
+    at :data:`FOLD_FULL`: continuous as the values sweep). A feature point stays put where ``field()`` puts it
+    where ``p`` does (the caller's to see to: the guard holds all but the passive ones)."""
     c = guard.facing(p)
     near = c < FOLD_START
     if not near.any():
         return
-    severity = 1.0 - _smooth_step((c[near] - FOLD_FULL) / (FOLD_START - FOLD_FULL))
+    severity = _nearness(c[near])
     skin = rig.parts["skin"]
     centres = rig.rest[guard.triangles[near]].mean(axis=1)
     full, none = reach_mm
