@@ -241,11 +241,7 @@ class LiveLipSync:
     def _unheard(self, n: int) -> None:
         """The voice and pitch detectors' state after ``n`` samples not heard: unvoiced frames, no pitch."""
         whole, part = divmod(len(self.vad_tail) + n, int(round(VAD_FRAME * RATE)))
-        unkept = max(0, whole - VERDICTS_KEPT)  # frames that would be dropped at once: never stored
-        if unkept:
-            self.voiced_from += len(self.voiced) + unkept
-            self.voiced, self.music = np.zeros(0, bool), np.zeros(0, bool)
-        self._verdicts(np.zeros(whole - unkept, bool), np.zeros(whole - unkept, bool))
+        self._verdicts(np.zeros(whole, bool), np.zeros(whole, bool))
         self.vad_tail = np.zeros(part, np.int16)
         self.pitch_context = np.zeros(CONTEXT)
         self.cents = np.full_like(self.cents, np.nan)
