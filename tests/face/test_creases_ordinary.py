@@ -47,15 +47,11 @@ def _values(**faps: float) -> np.ndarray:
     return v
 
 
-def expression(name: str = "joy") -> np.ndarray:
+def expression(name: str) -> np.ndarray:
     """An expression at its profile's intensity, alone (the profile's own 63)."""
     v = np.asarray(expression_blend(name, 63, name, 0), float)[:68].copy()
     v[:2] = 0
     return v
-
-
-def joy() -> np.ndarray:
-    return expression("joy")
 
 
 def ordinary_poses() -> dict[str, np.ndarray]:
