@@ -115,11 +115,12 @@ function statusLines() {
   if (t < 0) return [`microphone: listening, ${(state.sent / RATE).toFixed(1)} s sent, no face yet`];  // or an earlier one's
   const behind = behindTheVoice(t);
   const skipping = state.skips.length && state.skips[state.skips.length - 1][1] === null;
-  return [`microphone: listening, the face ${(behind * 1000).toFixed(0)} ms behind the voice`,
-          `${state.frames} frames in ${state.faces} messages, ${player.frames.length} held, ${neverShown()} never ` +
-          `shown, longest wait ${(state.longestWait * 1000).toFixed(0)} ms` +
-          (skipping ? "; the server fell behind: skipping to catch up" :
-           state.skipped ? `; the server fell behind and skipped ${state.skipped.toFixed(1)} s to catch up` : "")];
+  const lines = [`microphone: listening, the face ${(behind * 1000).toFixed(0)} ms behind the voice`,
+                 `${state.frames} frames in ${state.faces} messages, ${player.frames.length} held, ${neverShown()} ` +
+                 `never shown, longest wait ${(state.longestWait * 1000).toFixed(0)} ms`];
+  if (skipping) lines.push("the server fell behind: skipping to catch up");  // a line of its own: the box does not wrap
+  else if (state.skipped) lines.push(`the server fell behind and skipped ${state.skipped.toFixed(1)} s to catch up`);
+  return lines;
 }
 
 async function start() {
