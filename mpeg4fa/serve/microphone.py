@@ -143,7 +143,7 @@ class Microphone:
         ahead = (t - self.origin) * RATE - self.received if np.isfinite(t) else 0.0  # float first: t may be 1e308
         if not np.isfinite(ahead) or ahead > MAX_GAP * RATE or ahead < -(len(payload) // 2):
             await self.send(error_message(f"a chunk at {t:.6g} s, the audio so far ends at "
-                                          f"{self.origin + self.received / RATE:.3f} s: chunks come in order, gaps "
+                                          f"{self.origin + self.received / RATE:.6g} s: chunks come in order, gaps "
                                           f"under {MAX_GAP:g} s", "mic"))
             return
         gap = int(round(ahead))
