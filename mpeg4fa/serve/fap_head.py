@@ -27,7 +27,7 @@ from mpeg4fa.face.reach import load_reach
 from mpeg4fa.face.rig import CORNER_MARGIN_MM, THROAT_BOW_DEGREES
 from mpeg4fa.spec import ANGLE_UNIT
 
-RIG_VERSION = 5
+RIG_VERSION = 6
 """Bumped when the layout of :func:`rig_data` changes (``static/js/facerig.js`` checks it)."""
 
 
@@ -54,7 +54,7 @@ def _fold_guard(face: FaceModel) -> dict:
     guard = feature_points.skin_guard(face.mesh, face.rig)
     t_rows, t_cols = np.nonzero(guard.touches)  # row-major: CSR order
     steep = guard.steep.toarray()[t_rows, t_cols]  # 0 where a touched triangle is flat in a column: sums the same
-    return {"fold_start": float(feature_points.FOLD_START), "fold_full": float(feature_points.FOLD_FULL),
+    return {"onset": float(feature_points.GUARD_ONSET), "full_ratio": float(feature_points.GUARD_FULL_RATIO),
             "columns": _ints(guard.columns), "triangles": _ints(guard.triangles), "rest_normal": _floats(guard.rest_normal),
             "touches": {"indptr": _ints(np.searchsorted(t_rows, np.arange(len(guard.triangles) + 1))),
                         "indices": _ints(t_cols), "steep": _floats(steep)},

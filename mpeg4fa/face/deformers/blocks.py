@@ -101,6 +101,7 @@ FAP_ERRORS: dict[int, tuple[float, float]] = {
     37: (0.34, 0.32), 38: (0.34, 0.32), 39: (0.0, 0.0002), 40: (0.0, 0.0002), 41: (0.0001, 0.06),
     42: (0.0001, 0.06), 51: (0.78, 0.19), 52: (0.58, 0.34), 53: (0.58, 0.43), 54: (0.58, 0.43), 55: (0.75, 0.25),
     56: (0.75, 0.25), 57: (0.65, 0.34), 58: (0.65, 0.34), 59: (0.58, 0.43), 60: (0.58, 0.43),
+    61: (0.0, 0.0011), 62: (0.0, 0.0011),
 }
 """The FAPs this deformer realises approximately, with the default blocks on the generic head,
 each alone at +-200 (the errors are linear in the value, so the same at any value): FAP ->
@@ -108,7 +109,8 @@ each alone at +-200 (the errors are linear in the value, so the same at any valu
 where the feature-point deformer puts it), both relative to value x FAPU and rounded up to
 0.01 (0.0001 under 0.005). 39-42 (cheek puff and lift) move their point as the feature-point
 deformer does (41/42 0.0001 off FAPU in both), but the passive outer lid centre 3.9/3.10 that
-rides on that skin moves with the eye block's field instead. Every FAP not listed is
+rides on that skin moves with the eye block's field instead; so does it under 61/62 (nose stretch) at -200,
+where the feature-point deformer's fold guard spreads a little (0.01 mm). Every FAP not listed is
 exact (to rounding): the jaw, lids, eyes, tongue, head, nose, ears, cheek puff, chin."""
 
 

@@ -10,7 +10,7 @@
 // identity up to a knee, then knee + span x tanh(excess / span) below the limit). Same steps, same order, same numbers: the page's head is the
 // Python face's to rounding, not an approximation of it.
 
-const RIG_VERSION = 5;
+const RIG_VERSION = 6;
 
 /** Right-handed rotation by ``angle`` about axis 0, 1 or 2, as a row-major 3x3 (motion.rotation_matrix). */
 export function rotation(axis, angle) {
@@ -119,7 +119,7 @@ export class FaceRig {
     this.gaze = data.gaze;
     const f = data.fold;
     this.fold = {
-      start: f.fold_start, full: f.fold_full, columns: i32(f.columns), triangles: i32(f.triangles),
+      onset: f.onset, fullRatio: f.full_ratio, columns: i32(f.columns), triangles: i32(f.triangles),
       normal: f64(f.rest_normal), indptr: i32(f.touches.indptr), indices: i32(f.touches.indices), steep: f64(f.touches.steep),
       shift: { rows: i32(f.shift.rows), indptr: i32(f.shift.indptr), indices: i32(f.shift.indices), data: f64(f.shift.data) },
       scalp: { rows: i32(f.scalp.rows), indptr: i32(f.scalp.indptr), indices: i32(f.scalp.indices), data: f64(f.scalp.data) },
@@ -198,7 +198,7 @@ export class FaceRig {
       size[k] = Math.sqrt(x * x + y * y + z * z);
       if (size[k] > largest) largest = size[k];
     }
-    const look = 1 - Math.sqrt(f.start), span = f.start - f.full;
+    const look = 1 - Math.sqrt(f.onset), rest = this.rest, k = 1 - f.onset, widest = 1 - 1 / f.fullRatio;
     let folding = false;
     share.fill(0);
     for (let j = 0; j < order.length && bound[j] * largest > look; j++) {
@@ -212,9 +212,23 @@ export class FaceRig {
       const wx = p[c] - p[a], wy = p[c + 1] - p[a + 1], wz = p[c + 2] - p[a + 2];
       const facing = (uy * wz - uz * wy) * normal[3 * t] + (uz * wx - ux * wz) * normal[3 * t + 1]
         + (ux * wy - uy * wx) * normal[3 * t + 2];
-      if (!(facing < f.start)) continue;
+      if (!(facing < f.onset)) continue;
       folding = true;
-      const s = 1 - smoothStep((facing - f.full) / span);
+      // the share (FoldGuard.shares): where the facing of the skin's motion scaled by s (a quadratic in s)
+      // crosses the onset, s0, and the share by how far the motion has gone past it
+      const ex = rest[b] - rest[a], ey = rest[b + 1] - rest[a + 1], ez = rest[b + 2] - rest[a + 2];
+      const gx = rest[c] - rest[a], gy = rest[c + 1] - rest[a + 1], gz = rest[c + 2] - rest[a + 2];
+      const dx = ux - ex, dy = uy - ey, dz = uz - ez, hx = wx - gx, hy = wy - gy, hz = wz - gz;
+      const nx = normal[3 * t], ny = normal[3 * t + 1], nz = normal[3 * t + 2];
+      const linear = (ey * hz - ez * hy + dy * gz - dz * gy) * nx + (ez * hx - ex * hz + dz * gx - dx * gz) * ny
+        + (ex * hy - ey * hx + dx * gy - dy * gx) * nz;
+      const square = (dy * hz - dz * hy) * nx + (dz * hx - dx * hz) * ny + (dx * hy - dy * hx) * nz;
+      const root = Math.sqrt(Math.max(linear * linear - 4 * square * k, 0));
+      const q = -0.5 * (linear + (linear >= 0 ? root : -root));
+      const one = k / q, other = q / square;
+      let s0 = one >= 0 && one <= 1 ? one : other;
+      s0 = Number.isNaN(s0) ? 1 : Math.min(1, Math.max(0, s0));
+      const s = smoothStep((1 - s0) / widest);
       for (let e = indptr[t]; e < indptr[t + 1]; e++) if (s > share[indices[e]]) share[indices[e]] = s;
     }
     if (!folding) return;
