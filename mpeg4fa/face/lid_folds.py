@@ -25,21 +25,18 @@ trades the folds for eyeball: R0 5 mm, blink 1000 0 folded / 8 fold lines but 48
 lower margin lies below the corners); 3 mm, 14 / 14 and 2-16 pixels. Projecting the shares onto "no wall
 inverted" constraints (per triangle, linear in the shares) did not converge: held margin vertices leave them
 infeasible. Evening out never settles here and runs all :data:`.fold_relief.MAX_ROUNDS` (stopping at the
-round that folded least gave more folds at a blink), so its result is kept in the user cache (:func:`_kept_at`).
+round that folded least gave more folds at a blink), so its result is kept in the user cache (:func:`.kept.kept`).
 """
 from __future__ import annotations
 
-import hashlib
-import os
 import sys
-import tempfile
-from pathlib import Path
 
 import numpy as np
 
-from mpeg4fa.face import motion
-from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.face import fold_relief, motion
 from mpeg4fa.face.fold_relief import even_out, skin_triangles
+from mpeg4fa.face.kept import kept
+from mpeg4fa.face.mesh import HeadMesh
 
 UPPER_STAGES = (0.25, 0.5, 0.75, 1.0)
 """Shares of the eye's opening an upper lid closes in the check: a blink goes all the way (1000 IRISD of 1024)."""
@@ -92,37 +89,9 @@ def even_out_lids(mesh: HeadMesh, eyes: list[tuple[int, int, int]], fields: list
         angles.append(row)
     angles = np.array(angles)
     tris = skin_triangles(mesh)
-    path = _kept_at(rest, tris, fields, held, angles)
-    if path.is_file():
-        try:
-            with np.load(path) as saved:
-                return list(saved["fields"])
-        except (OSError, ValueError, KeyError):
-            pass  # a torn or foreign file: evened out again below and written anew
-    fields = even_out(rest, tris, fields, lambda f: _turned(rest, f, joints, angles), held)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".npz", delete=False) as tmp:
-            np.savez_compressed(tmp, fields=np.stack(fields))
-        os.replace(tmp.name, path)
-    except OSError:
-        pass  # no writable cache: the next build evens out again
-    return fields
-
-
-def _kept_at(rest: np.ndarray, triangles: np.ndarray, fields: list[np.ndarray], held: list[np.ndarray],
-             angles: np.ndarray) -> Path:
-    """Where the evened shares of these inputs are kept (:func:`.asset.cache_dir`, ``lid-shares/``): named by a
-    hash of all they depend on (the head's rest shape, triangles, raw shares, held vertices, angles, and the
-    source of the rule, this module and :mod:`.fold_relief`), so a calibrated or custom head, or a changed rule,
-    gets its own. Evening out never settles at the generic head's corners and runs all its rounds (0.33 s of a
-    0.8 s rig build); read back, it costs milliseconds."""
-    from mpeg4fa.face import asset, fold_relief
-    h = hashlib.sha256()
-    for module in (fold_relief, sys.modules[__name__]):
-        h.update(Path(module.__file__).read_bytes())
-    for a in (rest, triangles, *fields, *(np.unique(k) for k in held), angles):
-        a = np.ascontiguousarray(a)
-        h.update(f"{a.dtype}{a.shape}".encode())
-        h.update(a.tobytes())
-    return asset.cache_dir() / "lid-shares" / f"{h.hexdigest()[:32]}.npz"
+    # evening out never settles at the generic head's corners and runs all its rounds (0.33 s of a 0.8 s rig
+    # build); read back from the user cache, it costs milliseconds
+    evened = kept("lid-shares", (rest, tris, *fields, *(np.unique(k) for k in held), angles),
+                  (fold_relief, sys.modules[__name__]),
+                  lambda: np.stack(even_out(rest, tris, fields, lambda f: _turned(rest, f, joints, angles), held)))
+    return list(evened)

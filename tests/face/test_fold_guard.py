@@ -147,3 +147,13 @@ def test_a_growing_pose_moves_the_skin_smoothly(request, deformer, sweep):
     jerk = np.linalg.norm(np.diff(posed, 2, axis=0), axis=2)
     step, vertex = np.unravel_index(jerk.argmax(), jerk.shape)
     assert jerk.max() <= 0.3, f"{sweep}: vertex {vertex} at step {step + 1} of 63: {jerk.max():.2f} mm"
+
+
+def test_the_wide_weights_are_kept(generic_face, tmp_path, monkeypatch):
+    """The guard's spreads (a system solved per column, paid on the first frame that nears a fold: 0.4 s, 1 s for
+    ARKit's columns) are kept in the user cache: a second guard over the same head reads them back."""
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    first = fp.skin_guard(generic_face.mesh, generic_face.rig).shift
+    assert len(list((tmp_path / "fold-guard").glob("*.npz"))) == 1
+    monkeypatch.setattr(fp.FoldGuard, "_derive_spread", lambda *a: pytest.fail("derived again"))
+    assert np.array_equal(fp.skin_guard(generic_face.mesh, generic_face.rig).shift, first)

@@ -16,6 +16,7 @@ expressions nothing changes.
 """
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from functools import cached_property
 
@@ -25,6 +26,7 @@ from scipy.spatial.distance import cdist
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS
+from mpeg4fa.face.kept import kept
 from mpeg4fa.face.lids import lid_drops, lid_strips, turn_lid
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.pose import Pose
@@ -86,6 +88,7 @@ class FoldGuard:
         from mpeg4fa.face.quality import skin_graph  # the crease measure's own idea of outside skin
 
         self.mesh, self.columns = mesh, np.asarray(columns)
+        self.brows = np.array([mesh.fp_labels[c].startswith("4.") for c in self.columns], dtype=bool)
         self.skin = mesh.part("skin")
         self.narrow = sp.csc_matrix(narrow)
         graph = skin_graph(mesh)
@@ -115,6 +118,18 @@ class FoldGuard:
         self.steep = sp.csr_matrix(np.linalg.norm(grad, axis=2) * self.touches)
 
     def _spread(self, scalp_slides: bool) -> np.ndarray:
+        """:meth:`_derive_spread`, kept in the user cache (:func:`.kept.kept`): the wide weights solve a system per
+        column (0.4 s for the feature-point deformer's 38 columns and as much again where the scalp slides, 1 s
+        for ARKit's 72), paid on the first frame that nears a fold; read back, milliseconds."""
+        from mpeg4fa.face import couplings, elastic, lids, mesh as mesh_module, regions
+        mesh, narrow = self.mesh, self.narrow
+        inputs = (mesh.vertices, *mesh.triangles.values(), "\n".join(mesh.triangles), np.asarray(mesh.fp_vertex),
+                  "\n".join(mesh.fp_labels), repr(mesh.part_ranges), self.columns, narrow.data, narrow.indices,
+                  narrow.indptr, f"scalp slides {scalp_slides}")
+        rules = (sys.modules[__name__], regions, lids, couplings, elastic, mesh_module)
+        return kept("fold-guard", inputs, rules, lambda: self._derive_spread(scalp_slides))
+
+    def _derive_spread(self, scalp_slides: bool) -> np.ndarray:
         """``(skin vertices, K)``: wide minus narrow weights, the hairline held or (``scalp_slides``: a raise) not,
         and in a raise the upper lids' front edges held with the margins (:func:`.lids.lid_strips`: a brow raise
         that lifted them 3-5 mm over the held margins turned the strip between to face the viewer, a dark band
@@ -158,8 +173,7 @@ class FoldGuard:
         weights reach :data:`SCALP_REACH_MM`: the scalp gives way to a forehead raised into it, not to
         one pulled down (that stretches the forehead, the hairline stays). The brows' columns only: the
         correction of the ARKit deformer pulls the hairline itself back onto its target, and that is no raise."""
-        brows = np.array([self.mesh.fp_labels[c].startswith("4.") for c in self.columns])
-        return np.where(brows, self._spread(True) - self.shift, 0.0)
+        return np.where(self.brows, self._spread(True) - self.shift, 0.0)
 
     def facing(self, p: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
         """Per watched triangle (or those ``rows`` of them): its posed area along its rest normal,
@@ -214,7 +228,7 @@ class FoldGuard:
             p[self.skin] += self.shift @ spread
             lift = moves if lift is None else lift
             rise = np.maximum(lift[:, 1], 0.0) / np.maximum(np.linalg.norm(lift, axis=1), 1e-300)  # its upward share
-            if (rise * share).any():
+            if (rise * share)[self.brows].any():  # the scalp's columns but the brows' are 0: not built for them
                 p[self.skin] += self.scalp @ (rise[:, None] * spread)
 
 

@@ -1,0 +1,54 @@
+"""Arrays that slow rules derive from a head, kept in the user cache (:func:`.asset.cache_dir`).
+
+A result is named by a hash of everything it depends on: the input arrays and the source of the modules
+whose rules derive it, so a calibrated or custom head, or a changed rule, gets its own file. Written
+atomically (a torn or foreign file is derived again); where the cache cannot be written, every call derives.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+import zipfile
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+
+def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],
+         derive: Callable[[], np.ndarray]) -> np.ndarray:
+    """``derive()``, or what it gave before for the same ``inputs`` and ``rules`` (read back from
+    ``cache_dir()/kind/``)."""
+    path = _path(kind, inputs, rules)
+    if path.is_file():
+        try:
+            with np.load(path) as saved:
+                return saved["array"]
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            pass  # derived again below and written anew
+    array = np.asarray(derive())
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".npz", delete=False) as tmp:
+            np.savez_compressed(tmp, array=array)
+        os.replace(tmp.name, path)
+    except OSError:
+        pass  # no writable cache: the next call derives again
+    return array
+
+
+def _path(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType]) -> Path:
+    from mpeg4fa.face import asset
+    h = hashlib.sha256()
+    for module in rules:
+        h.update(Path(module.__file__).read_bytes())
+    for a in inputs:
+        if isinstance(a, (str, bytes)):
+            h.update(a.encode() if isinstance(a, str) else a)
+            continue
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.dtype}{a.shape}".encode())
+        h.update(a.tobytes())
+    return asset.cache_dir() / kind / f"{h.hexdigest()[:32]}.npz"

@@ -1,0 +1,57 @@
+"""Arrays kept in the user cache (:func:`mpeg4fa.face.kept.kept`): read back they are what was derived, any other
+input or rule is derived anew under its own name, and a torn file or a cache that cannot be written costs only
+the time."""
+from __future__ import annotations
+
+import numpy as np
+
+from mpeg4fa.face import kept as kept_module, lid_folds
+from mpeg4fa.face.kept import kept
+
+
+def test_read_back_is_what_was_derived(tmp_path, monkeypatch):
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    calls = []
+    a = np.arange(6.0).reshape(2, 3)
+
+    def derive():
+        calls.append(1)
+        return a * 2
+
+    first = kept("things", (a,), (kept_module,), derive)
+    again = kept("things", (a,), (kept_module,), derive)
+    assert len(calls) == 1 and np.array_equal(first, again) and np.array_equal(again, a * 2)
+    assert len(list((tmp_path / "things").glob("*.npz"))) == 1
+
+
+def test_another_input_rule_or_kind_is_kept_apart(tmp_path, monkeypatch):
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    rest = np.zeros((4, 3))
+    base = kept_module._path("things", (rest, "label"), (kept_module,))
+    moved = rest.copy()
+    moved[2, 1] += 1e-9
+    assert kept_module._path("things", (moved, "label"), (kept_module,)) != base
+    assert kept_module._path("things", (rest.astype(np.float32), "label"), (kept_module,)) != base
+    assert kept_module._path("things", (rest, "other"), (kept_module,)) != base
+    assert kept_module._path("things", (rest, "label"), (kept_module, lid_folds)) != base
+    assert kept_module._path("others", (rest, "label"), (kept_module,)).parent == tmp_path / "others"
+    assert base.parent == tmp_path / "things"
+
+
+def test_a_torn_file_is_derived_again(tmp_path, monkeypatch):
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    a = np.ones(3)
+    path = kept_module._path("things", (a,), (kept_module,))
+    path.parent.mkdir(parents=True)
+    path.write_bytes(b"PK\x03\x04 not a whole file")
+    assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a + 1), a + 1)
+    assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a * 0), a + 1)  # written anew
+
+
+def test_no_writable_cache_derives_every_time(tmp_path, monkeypatch):
+    blocked = tmp_path / "file"
+    blocked.write_text("a file where the cache folder would be")
+    monkeypatch.setenv("MPEG4FA_CACHE", str(blocked))
+    a = np.ones(3)
+    assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a + 1), a + 1)
+    assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a + 2), a + 2)
