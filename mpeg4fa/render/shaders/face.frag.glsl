@@ -63,7 +63,8 @@ const float TOOTH_MM = 7.0;       // a typical tooth width, for the tip rounding
 const float TIP_MM = 1.1;         // radius of a tooth's rounded corners
 const float CROWN_MM = 9.5;       // crown height at the middle of a tooth (gum line above)
 const float WRINKLE_MM = 4.2;     // spacing of the nose creases
-const float BACK_TEETH_SHADE = 0.12; // premolars and molars: the light that reaches inside the mouth
+const float BACK_TEETH_SHADE = 0.06; // premolars and molars: the light that reaches inside the mouth
+                                      // (0.12 left the far ones a grey slab with a jagged top at three-quarter)
 const float LINGUAL_SHADE = 0.3;     // a tooth's inner side (the far side's, seen across an open mouth): in its shadow
 
 #ifdef LASHES
