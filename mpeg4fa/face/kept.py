@@ -9,7 +9,6 @@ from __future__ import annotations
 import hashlib
 import os
 import tempfile
-import zipfile
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from types import ModuleType
@@ -24,18 +23,23 @@ def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[
     path = _path(kind, inputs, rules)
     if path.is_file():
         try:
-            with np.load(path) as saved:
-                return saved["array"]
-        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            with np.load(path, allow_pickle=False) as saved:
+                return np.array(saved["array"])
+        except Exception:  # noqa: BLE001 - torn, foreign or unreadable (zlib, zip, npy, key errors alike)
             pass  # derived again below and written anew
     array = np.asarray(derive())
+    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".npz", delete=False) as tmp:
+        with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".", suffix=".part", delete=False) as tmp:
             np.savez_compressed(tmp, array=array)
+        os.chmod(tmp.name, 0o644)  # a cache shared by users ($MPEG4FA_CACHE) is read by all
         os.replace(tmp.name, path)
     except OSError:
         pass  # no writable cache: the next call derives again
+    finally:
+        if tmp is not None and os.path.exists(tmp.name):
+            os.unlink(tmp.name)
     return array
 
 

@@ -157,3 +157,45 @@ def test_the_wide_weights_are_kept(generic_face, tmp_path, monkeypatch):
     assert len(list((tmp_path / "fold-guard").glob("*.npz"))) == 1
     monkeypatch.setattr(fp.FoldGuard, "_derive_spread", lambda *a: pytest.fail("derived again"))
     assert np.array_equal(fp.skin_guard(generic_face.mesh, generic_face.rig).shift, first)
+
+
+def _loose_triangles(rng, n: int):
+    """A guard over ``n`` unconnected random triangles (each its own three vertices): :meth:`FoldGuard.shares`
+    needs only the watched triangles, their rest normals and edges."""
+    rest = rng.normal(0.0, 1.0, (n, 3, 3)) * 10.0 ** rng.uniform(-1, 1, (n, 1, 1))
+    guard = fp.FoldGuard.__new__(fp.FoldGuard)
+    guard.triangles = np.arange(3 * n).reshape(n, 3)
+    e, g = rest[:, 1] - rest[:, 0], rest[:, 2] - rest[:, 0]
+    n0 = np.cross(e, g)
+    guard.rest_normal = n0 / np.einsum("ij,ij->i", n0, n0)[:, None]
+    guard.rest_edges = (e, g)
+    return guard, rest.reshape(-1, 3)
+
+
+def test_the_share_follows_the_motion_past_the_onset():
+    """The share is a smooth step of how far the motion has gone past where the facing crossed the onset: checked
+    against the crossing found by bisection on random triangles and motions; and a triangle a rounding error past
+    the onset takes none (the root was once chosen by range: a facing within an ulp of the onset took the
+    other root, share 1 for one frame, a 3.3 mm jump of the guarded skin)."""
+    rng = np.random.default_rng(7)
+    guard, rest = _loose_triangles(rng, 4000)
+    motion = rng.normal(0.0, 1.0, rest.shape) * 3.0 * np.repeat(np.linalg.norm(guard.rest_edges[0], axis=1), 3)[:, None]
+    at = lambda s: rest + np.repeat(s, 3)[:, None] * motion  # noqa: E731
+    below = guard.facing(at(np.ones(4000))) < fp.GUARD_ONSET
+    rows = np.flatnonzero(below)
+    lo, hi = np.zeros(len(rows)), np.ones(len(rows))
+    for _ in range(80):  # where each facing crosses the onset, by bisection
+        mid = 0.5 * (lo + hi)
+        s = np.ones(4000)
+        s[rows] = mid
+        over = guard.facing(at(s), rows) >= fp.GUARD_ONSET
+        lo, hi = np.where(over, mid, lo), np.where(over, hi, mid)
+    crossing = 0.5 * (lo + hi)
+    wanted = fp._smooth_step((1.0 - crossing) / (1.0 - 1.0 / fp.GUARD_FULL_RATIO))
+    assert len(rows) > 1000 and np.abs(guard.shares(at(np.ones(4000)), rows) - wanted).max() < 1e-9
+    for past in (1e-15, 1e-13, 1e-11):  # a hair past the crossing: no share
+        s = np.ones(4000)
+        s[rows] = crossing * (1.0 + past)
+        posed = at(s)
+        hit = rows[guard.facing(posed, rows) < fp.GUARD_ONSET]
+        assert len(hit) > 100 and guard.shares(posed, hit).max() < 1e-6

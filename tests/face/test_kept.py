@@ -46,6 +46,10 @@ def test_a_torn_file_is_derived_again(tmp_path, monkeypatch):
     path.write_bytes(b"PK\x03\x04 not a whole file")
     assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a + 1), a + 1)
     assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a * 0), a + 1)  # written anew
+    with path.open("wb") as f:  # a foreign file: a plain .npy where the .npz should be
+        np.save(f, a * 7)
+    assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a + 2), a + 2)
+    assert sorted(p.name for p in path.parent.iterdir()) == [path.name]  # no part-written file left behind
 
 
 def test_no_writable_cache_derives_every_time(tmp_path, monkeypatch):

@@ -36,7 +36,8 @@ from mpeg4fa.face.rig import CORNER_MARGIN_MM, THROAT_BOW_DEGREES, Rig
 EYE_JOINT = {"eye_l": "l-eye", "eye_r": "r-eye"}
 GUARD_ONSET = 0.2
 """The guard looks at a skin triangle once it keeps less than this share of its area facing its rest normal
-(1 at rest, 0 edge-on, < 0 turned over): the visemes keep more, but for E (0.21 mm on the generic head)."""
+(1 at rest, 0 edge-on, < 0 turned over); 0.15 before :meth:`FoldGuard.shares`, and raised with it the visemes'
+skin moved at most 0.21 mm (E) on the generic head."""
 GUARD_FULL_RATIO = 1.4
 """... and spreads the motion of the points around it over their wide weights by how far that motion has gone
 past what brought the triangle to the onset (:meth:`FoldGuard.shares`): in full from this many times it on.
@@ -125,7 +126,7 @@ class FoldGuard:
         mesh, narrow = self.mesh, self.narrow
         inputs = (mesh.vertices, *mesh.triangles.values(), "\n".join(mesh.triangles), np.asarray(mesh.fp_vertex),
                   "\n".join(mesh.fp_labels), repr(mesh.part_ranges), self.columns, narrow.data, narrow.indices,
-                  narrow.indptr, f"scalp slides {scalp_slides}")
+                  narrow.indptr, f"scalp slides {scalp_slides}", np.asarray(mesh.lateral()))
         rules = (sys.modules[__name__], regions, lids, couplings, elastic, mesh_module)
         return kept("fold-guard", inputs, rules, lambda: self._derive_spread(scalp_slides))
 
@@ -194,17 +195,23 @@ class FoldGuard:
         ``full_ratio`` times the onset's, so the spread grows with the motion itself, not with the
         facing, which may pass through the whole ramp in a unit of a FAP."""
         t, n = self.triangles[rows], self.rest_normal[rows]
-        e1, e2 = self.rest_edges[0][rows], self.rest_edges[1][rows]
-        d1, d2 = p[t[:, 1]] - p[t[:, 0]] - e1, p[t[:, 2]] - p[t[:, 0]] - e2
-        linear = np.einsum("ij,ij->i", np.cross(e1, d2) + np.cross(d1, e2), n)
-        square = np.einsum("ij,ij->i", np.cross(d1, d2), n)
-        # square s^2 + linear s + (1 - onset) = 0 has one root in (0, 1): the stable pair of roots
+        e, g = self.rest_edges[0][rows], self.rest_edges[1][rows]
+        d, h = p[t[:, 1]] - p[t[:, 0]] - e, p[t[:, 2]] - p[t[:, 0]] - g  # the edges' motion
+        # by components, in facerig.js's order (the page's shares are these to the bit): e x h + d x g, d x h
+        ex, ey, ez, gx, gy, gz = e[:, 0], e[:, 1], e[:, 2], g[:, 0], g[:, 1], g[:, 2]
+        dx, dy, dz, hx, hy, hz = d[:, 0], d[:, 1], d[:, 2], h[:, 0], h[:, 1], h[:, 2]
+        linear = ((ey * hz - ez * hy + dy * gz - dz * gy) * n[:, 0] + (ez * hx - ex * hz + dz * gx - dx * gz) * n[:, 1]
+                  + (ex * hy - ey * hx + dx * gy - dy * gx) * n[:, 2])
+        square = (dy * hz - dz * hy) * n[:, 0] + (dz * hx - dx * hz) * n[:, 1] + (dx * hy - dy * hx) * n[:, 2]
+        # square s^2 + linear s + (1 - onset) = 0 has one root in (0, 1); of the stable pair k/q, q/square it is
+        # k/q where linear < 0, else q/square (square < -k then): chosen by sign, not by range, which a facing
+        # within rounding of the onset put a hair past 1 (the other root, clipped to 0, gave share 1 for a frame)
         k = 1.0 - onset
-        root = np.sqrt(np.maximum(linear * linear - 4.0 * square * k, 0.0))
-        q = -0.5 * (linear + np.where(linear >= 0.0, root, -root))
+        disc = linear * linear - 4.0 * square * k
+        q = -0.5 * (linear + np.where(linear >= 0.0, 1.0, -1.0) * np.sqrt(np.maximum(disc, 0.0)))
         with np.errstate(divide="ignore", invalid="ignore"):
-            one, other = k / q, q / square
-        s0 = np.clip(np.nan_to_num(np.where((one >= 0.0) & (one <= 1.0), one, other), nan=1.0), 0.0, 1.0)
+            s0 = np.where(linear < 0.0, k / q, q / square)
+        s0 = np.where(disc > 0.0, np.clip(np.nan_to_num(s0, nan=1.0), 0.0, 1.0), 1.0)
         return _smooth_step((1.0 - s0) / (1.0 - 1.0 / full_ratio))
 
     def relieve(self, p: np.ndarray, moves: np.ndarray, lift: np.ndarray | None = None) -> None:

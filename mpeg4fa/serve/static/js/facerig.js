@@ -187,8 +187,9 @@ export class FaceRig {
   }
 
   /** The fold guard (FoldGuard.relieve): where the skin the narrow weights moved by ``m`` nears a fold,
-   * move the columns around it toward their wide weights, by a share that grows as it nears (in place); the upward
-   * share of each column's motion also lets the scalp slide (FoldGuard.scalp). */
+   * move the columns around it toward their wide weights, by a share that grows with the motion past the onset
+   * (in place, FoldGuard.shares); the upward share of each column's motion also lets the scalp slide
+   * (FoldGuard.scalp). */
   relieve(m) {
     const f = this.fold, p = this.p, { columns, size, share, moves, steep, indptr, indices, triangles, normal, order, bound } = f;
     let largest = 0;
@@ -223,11 +224,11 @@ export class FaceRig {
       const linear = (ey * hz - ez * hy + dy * gz - dz * gy) * nx + (ez * hx - ex * hz + dz * gx - dx * gz) * ny
         + (ex * hy - ey * hx + dx * gy - dy * gx) * nz;
       const square = (dy * hz - dz * hy) * nx + (dz * hx - dx * hz) * ny + (dx * hy - dy * hx) * nz;
-      const root = Math.sqrt(Math.max(linear * linear - 4 * square * k, 0));
+      const disc = linear * linear - 4 * square * k;
+      const root = Math.sqrt(Math.max(disc, 0));
       const q = -0.5 * (linear + (linear >= 0 ? root : -root));
-      const one = k / q, other = q / square;
-      let s0 = one >= 0 && one <= 1 ? one : other;
-      s0 = Number.isNaN(s0) ? 1 : Math.min(1, Math.max(0, s0));
+      let s0 = linear < 0 ? k / q : q / square;  // the root in (0, 1), chosen by sign (see FoldGuard.shares)
+      s0 = disc > 0 ? (Number.isNaN(s0) ? 1 : Math.min(1, Math.max(0, s0))) : 1;
       const s = smoothStep((1 - s0) / widest);
       for (let e = indptr[t]; e < indptr[t + 1]; e++) if (s > share[indices[e]]) share[indices[e]] = s;
     }
