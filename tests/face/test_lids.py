@@ -79,6 +79,23 @@ def test_the_upper_margin_meets_the_lower_one_when_closed(generic_face):
         assert upper_now[1] == pytest.approx(lower[1], abs=1e-9)
 
 
+@pytest.mark.parametrize("upper, lower", [(1146, 369), (1000, 260), (1000, 520), (600, 600), (300, 200)])
+def test_lids_closing_together_meet_and_never_pass(face, upper, lower):
+    """A blink over a smile's raised lower lids (a visage stream sends 19/20 at 1146 over 21/22 at 369): the upper
+    lid comes down onto the lower one and stops there; the lower lid moves its value x IRISD as alone. Before, the
+    lids passed through each other and the skin folded (52 triangles in that frame)."""
+    for up_fap, low_fap in ((19, 21), (20, 22)):
+        pose = face.deform({up_fap: upper, low_fap: lower})
+        up_i, low_i = face.mesh.fp_index(LIDS[up_fap][2]), face.mesh.fp_index(LIDS[low_fap][2])
+        up_y, low_y = pose.feature_points[up_i][1], pose.feature_points[low_i][1]
+        assert low_y - face.mesh.fp(LIDS[low_fap][2])[1] == pytest.approx(lower * face.fapu.unit("IRISD"), abs=1e-9)
+        if upper / closing_value(face, up_fap) + lower / closing_value(face, low_fap) >= 1.0:
+            assert up_y == pytest.approx(low_y, abs=1e-9)  # they meet ...
+        else:
+            assert up_y - face.mesh.fp(LIDS[up_fap][2])[1] == pytest.approx(-upper * face.fapu.unit("IRISD"), abs=1e-9)
+        assert up_y >= low_y - 1e-9  # ... and never pass
+
+
 def test_the_lids_of_both_deformers_agree(generic_face):
     fap_pose = generic_face.deform({19: 900, 22: 400})
     ark_pose = generic_face.with_deformer("arkit").deform({19: 900, 22: 400})

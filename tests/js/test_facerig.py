@@ -37,6 +37,7 @@ def rows_to_check(rng: np.random.Generator) -> np.ndarray:
     row(f6=120, f7=120, f53=-200, f54=-200)  # a smile over a rounded mouth: the rule splits the way
     row(f4=-100, f5=-200, f8=50, f9=50, f10=-80, f11=-80, f51=-100, f52=-150, f55=30, f56=30, f57=-60)
     row(f19=800, f20=400, f21=-200, f22=300)  # lids
+    row(f19=1146, f20=1146, f21=369, f22=369, f25=640)  # a blink over raised lower lids: the lids meet
     row(f47=3000, f43=100, f44=60)  # tongue roll and tip
     row(f23=20000, f24=-15000, f25=10000, f26=-5000, f27=100, f28=-50)  # eyeballs
     row(f48=15000, f49=-20000, f50=8000)  # head

@@ -298,9 +298,14 @@ export class FaceRig {
       const followL = pitch ? this.followDrop(low, "lower", pitch) : 0;
       const opening = rest[3 * up.point + 1] - rest[3 * low.point + 1];
       followU = Math.min(followU, followL + (1 - slit) * Math.max(opening, 0));
-      const closeU = vu * this.irisd, closeL = vl * this.irisd;  // mm each FAP closes its lid
-      const tU = opening > 0 ? Math.min(Math.max(closeU / opening, 0), 1) : 0;
+      const closeL = vl * this.irisd;  // mm each FAP closes its lid
+      let closeU = vu * this.irisd;
+      let tU = opening > 0 ? Math.min(Math.max(closeU / opening, 0), 1) : 0;
       const tL = opening > 0 ? Math.min(Math.max(closeL / opening, 0), 1) : 0;
+      if (tU + tL > 1) {  // the lids meet: the upper comes down onto the raised lower lid (lids.lid_moves)
+        tU = 1 - tL;
+        closeU = tU * opening;
+      }
       const moveU = followU + tU * (followL - followU), moveL = followL + tL * (followU - followL);
       if (closeU || moveU) this.turnLid(up, closeU + moveU);
       if (closeL || moveL) this.turnLid(low, -closeL + moveL);
