@@ -36,7 +36,8 @@ NOT_YET = {
     **{(d, f"lower {s}"): f"2 folded, a triangle a side at the outer corners ({CORNER}), was {fig}" for d in DEFORMERS
        for s, fig in ((300, "8 / 14"), (400, "10 / 18"), (520, "12 / 22"))},
     **{(d, f"blink {u} over lower {s}"): f"{fig} at the eye corners" for d in DEFORMERS for u, s, fig in (
-        (500, 260, "4 folded / 2 fold lines, was 16 / 18"), (1000, 260, "10 / 10 since the upper lid stops on the lower, was 18 / 18, 48 / 44 at first"))},
+        (500, 260, "4 folded / 2 fold lines, was 16 / 18"),
+        (1000, 260, "10 / 10 since the upper lid stops on the lower, was 18 / 18, 48 / 44 at first"))},
 }
 
 

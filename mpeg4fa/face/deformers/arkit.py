@@ -54,8 +54,8 @@ middle brows 4.3/4.4, joy at 63 one a side at the lower lids' outer corners, dis
 the skin within these distances (mm, at rest: all, then less and less) of each nearing triangle takes the
 feature-point deformer's guarded field, by how near it is to folding (none at :data:`.FALLBACK_ONSET`, all
 from :data:`.FALLBACK_FULL_RATIO` times the motion that brought it there). On the generic head, (0, 15) mm
-left brows x2 down and joy folded, (0, 20) a fold line over the upper lids, (8, 20) nothing. Only such poses pay for the second field
-(joy at 63: 6 ms a pose, 2 without)."""
+left brows x2 down and joy folded, (0, 20) a fold line over the upper lids, (8, 20) nothing. Only such poses pay
+for the second field (joy at 63: 6 ms a pose, 2 without)."""
 
 
 @dataclass(frozen=True)
