@@ -3,6 +3,8 @@
 A result is named by a hash of everything it depends on: the input arrays and the source of the modules
 whose rules derive it, so a calibrated or custom head, or a changed rule, gets its own file. Written
 atomically (a torn or foreign file is derived again); where the cache cannot be written, every call derives.
+Each kind keeps its :data:`KEEP` most recently used files (a head calibrated to every photo a user tries, and
+every edit of a rule, would otherwise add files for good).
 """
 from __future__ import annotations
 
@@ -15,6 +17,9 @@ from types import ModuleType
 
 import numpy as np
 
+KEEP = 64
+"""Files kept per kind; the least recently used beyond these are removed when one is written."""
+
 
 def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],
          derive: Callable[[], np.ndarray]) -> np.ndarray:
@@ -24,7 +29,9 @@ def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[
     if path.is_file():
         try:
             with np.load(path, allow_pickle=False) as saved:
-                return np.array(saved["array"])
+                array = np.array(saved["array"])
+            _touch(path)
+            return array
         except Exception:  # noqa: BLE001 - torn, foreign or unreadable (zlib, zip, npy, key errors alike)
             pass  # derived again below and written anew
     array = np.asarray(derive())
@@ -35,12 +42,30 @@ def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[
             np.savez_compressed(tmp, array=array)
         os.chmod(tmp.name, 0o644)  # a cache shared by users ($MPEG4FA_CACHE) is read by all
         os.replace(tmp.name, path)
+        _prune(path.parent)
     except OSError:
         pass  # no writable cache: the next call derives again
     finally:
         if tmp is not None and os.path.exists(tmp.name):
             os.unlink(tmp.name)
     return array
+
+
+def _touch(path: Path) -> None:
+    try:
+        os.utime(path)
+    except OSError:
+        pass  # read-only cache: the order of use is lost, nothing else
+
+
+def _prune(folder: Path) -> None:
+    """Remove all but the :data:`KEEP` most recently used files of a kind."""
+    files = sorted(folder.glob("*.npz"), key=lambda p: p.stat().st_mtime_ns, reverse=True)
+    for old in files[KEEP:]:
+        try:
+            old.unlink()
+        except OSError:
+            pass  # gone already (another process pruned it), or not ours to remove
 
 
 def _path(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType]) -> Path:

@@ -3,7 +3,10 @@ input or rule is derived anew under its own name, and a torn file or a cache tha
 the time."""
 from __future__ import annotations
 
+import os
+
 import numpy as np
+import pytest
 
 from mpeg4fa.face import kept as kept_module, lid_folds
 from mpeg4fa.face.kept import kept
@@ -59,3 +62,22 @@ def test_no_writable_cache_derives_every_time(tmp_path, monkeypatch):
     a = np.ones(3)
     assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a + 1), a + 1)
     assert np.array_equal(kept("things", (a,), (kept_module,), lambda: a + 2), a + 2)
+
+
+def test_a_kind_keeps_its_most_recently_used_files(tmp_path, monkeypatch):
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    monkeypatch.setattr(kept_module, "KEEP", 5)
+    folder = tmp_path / "things"
+    for i in range(8):
+        kept("things", (np.full(2, float(i)),), (kept_module,), lambda: np.zeros(1))
+        newest = kept_module._path("things", (np.full(2, float(i)),), (kept_module,))
+        os.utime(newest, ns=(i * 10**9, i * 10**9))  # one second apart, whatever the file system's clock
+        if i == 4:  # the first file used again: it stays
+            first = kept_module._path("things", (np.full(2, 0.0),), (kept_module,))
+            kept("things", (np.full(2, 0.0),), (kept_module,), lambda: pytest.fail("derived again"))
+            os.utime(first, ns=(45 * 10**8, 45 * 10**8))
+    names = {p.name for p in folder.glob("*.npz")}
+    assert len(names) == 5
+    assert kept_module._path("things", (np.full(2, 0.0),), (kept_module,)).name in names
+    assert kept_module._path("things", (np.full(2, 7.0),), (kept_module,)).name in names
+    assert kept_module._path("things", (np.full(2, 1.0),), (kept_module,)).name not in names
