@@ -19,6 +19,9 @@ deforms them (like the lip tint in :mod:`.materials`):
 * **teeth** (:func:`tooth_coordinates`): position along the dental arch in teeth (0 on
   the midline, the integer part says which tooth, the sign which side) and height in
   mm from the incisal edge, for the gaps, rounded tips and gum line of each tooth.
+* **tongue** (:func:`tongue_coordinates`): how far out to its side a vertex lies (signed, 1 at
+  the edge) and how many mm behind the tip, for the mouth's shadow over it: an evenly lit tongue
+  read as a flat pink slab behind the dark back teeth at three-quarter.
 """
 from __future__ import annotations
 
@@ -43,6 +46,7 @@ WRINKLE_SLOPE = 0.6  # the creases fall this many mm per mm toward the sides (bu
 UPPER_TOOTH_MM = (8.5, 6.5, 7.5, 7.0, 6.5, 10.0, 9.0)  # mesio-distal widths from the midline
 LOWER_TOOTH_MM = (5.0, 5.5, 7.0, 7.0, 7.0, 11.0, 10.5)
 ARCH_BINS = 24  # directions the biting edge is sampled in
+TONGUE_BIN_MM = 3.0  # depth slices in which the tongue's half width is taken
 
 
 def cavity_weights(mesh: HeadMesh) -> np.ndarray:
@@ -150,3 +154,22 @@ def tooth_coordinates(vertices: np.ndarray, upper: bool) -> np.ndarray:
     teeth = np.interp(np.abs(s), bounds, np.arange(len(bounds)), right=len(widths))
     height = (v[:, 1] - edge) if upper else (edge - v[:, 1])
     return np.c_[np.sign(s) * teeth, np.maximum(height, 0.0)]
+
+
+def tongue_coordinates(vertices: np.ndarray) -> np.ndarray:
+    """``(N, 2)``: (signed share of the half width at the vertex's depth, mm behind the tip) of the tongue.
+
+    The tip is the tongue's frontmost point (largest z); the half width is the widest ``|x|`` in each
+    :data:`TONGUE_BIN_MM` slice of depth, so the edge is 1 all along however the tongue narrows to its tip.
+    """
+    v = np.asarray(vertices, float)
+    if len(v) == 0:
+        return np.zeros((0, 2))
+    depth = v[:, 2].max() - v[:, 2]
+    slices = (depth / TONGUE_BIN_MM).astype(int)
+    widest = np.zeros(slices.max() + 1)
+    np.maximum.at(widest, slices, np.abs(v[:, 0]))
+    filled = np.flatnonzero(np.bincount(slices))  # slices that hold a vertex
+    half = np.interp(depth, (filled + 0.5) * TONGUE_BIN_MM, widest[filled])
+    side = np.where(half > 1e-6, v[:, 0] / np.maximum(half, 1e-6), 0.0)
+    return np.c_[np.clip(side, -1.0, 1.0), depth]

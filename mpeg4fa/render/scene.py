@@ -20,7 +20,8 @@ from scipy import sparse
 
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.neck import cap_triangles, neck_vertices
-from mpeg4fa.render.details import brow_coordinates, cavity_weights, nose_coordinates, tooth_coordinates
+from mpeg4fa.render.details import (brow_coordinates, cavity_weights, nose_coordinates, tongue_coordinates,
+                                    tooth_coordinates)
 from mpeg4fa.render.materials import LIP_OUTLINE, PART_MATERIAL, lip_weights
 
 
@@ -94,6 +95,10 @@ def build_layout(mesh: HeadMesh) -> SceneLayout:
             arch = tooth_coordinates(mesh.vertices[a:b], upper=part == "teeth_upper")
             mine = (source >= a) & (source < b)
             detail[mine] = arch[source[mine] - a]
+    if "tongue" in mesh.part_ranges and len(mesh.triangles.get("tongue", ())):
+        a, b = mesh.part_ranges["tongue"]
+        mine = (source >= a) & (source < b)
+        detail[mine] = tongue_coordinates(mesh.vertices[a:b])[source[mine] - a]
     return SceneLayout(
         source=source,
         uv=corner_uv[first].astype(np.float32),

@@ -14,7 +14,7 @@ import pytest
 from mpeg4fa.face import asset
 from mpeg4fa.face.creases import turn
 from mpeg4fa.render import Materials, Renderer, frame_points
-from mpeg4fa.render.details import brow_coordinates, cavity_weights, tooth_coordinates
+from mpeg4fa.render.details import brow_coordinates, cavity_weights, tongue_coordinates, tooth_coordinates
 from mpeg4fa.spec.profiles import VISEME_PROFILES
 from goldens import assert_matches_golden
 
@@ -204,6 +204,18 @@ def test_tooth_coordinates_count_teeth_from_the_midline(generic_face):
         assert (np.sign(t[:, 0]) == np.sign(np.round(v[:, 0], 6))).mean() > 0.9  # left is +, right is -
         assert 5.0 <= np.abs(t[:, 0]).max() <= 7.0  # about seven teeth a side
         assert t[:, 1].min() >= 0.0
+
+
+def test_tongue_coordinates_run_back_from_the_tip_and_out_to_the_edges(generic_face):
+    mesh = generic_face.mesh
+    v = mesh.vertices[mesh.part("tongue")]
+    t = tongue_coordinates(v)
+    tip = mesh.fp_vertex[mesh.fp_index("6.1")] - mesh.part("tongue").start
+    assert abs(t[tip, 0]) < 1e-6 and t[tip, 1] < 1.0  # the tip: on the midline, at the front
+    np.testing.assert_allclose(t[:, 1], v[:, 2].max() - v[:, 2])  # mm behind the tip
+    assert np.abs(t[:, 0]).max() == 1.0 and (np.sign(t[:, 0]) == np.sign(np.round(v[:, 0], 6))).all()
+    assert (np.abs(t[:, 0]) > 0.95).sum() >= 10  # the edge all along, however the tongue narrows
+    assert tongue_coordinates(np.zeros((0, 3))).shape == (0, 2)
 
 
 TURNS = ({}, {48: 3000, 49: 4000}, {49: -turn(5.0)}, {49: turn(17.0)}, {49: -turn(17.0)})

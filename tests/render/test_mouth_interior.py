@@ -9,7 +9,10 @@ teeth, gums and tongue blue), the mouth's interior is the black and blue pixels:
 * the grey shapes seen through the open lips at three-quarter on TH, AA, E and oh were the far side's
   premolars and molars, their outer faces turned toward the camera by the arch and lit by the key light
   (which sits on that side) at 0.3 of a front tooth: a flat grey wall against the dark cavity. Lit, the
-  teeth pixels where the far back teeth project now read as in the mouth's shadow.
+  teeth pixels where the far back teeth project now read as in the mouth's shadow;
+* lit evenly, the tongue read as a flat pink slab there, cut by a hard dark notch where the far lower molars
+  stand in front of its edge: it now lies in the mouth's shadow too, lit at its tip and darker back along it
+  and toward its edges (:func:`~mpeg4fa.render.details.tongue_coordinates`).
 """
 from __future__ import annotations
 
@@ -35,11 +38,20 @@ CODED = Materials().with_colours(skin=(1, 0, 0), lips=(1, 0, 0), mouth=(0, 1, 0)
 LOOKS = ([(f"mpeg4 {v.name}", VISEME_PROFILES["mpeg4"][v.name]) for v in VISEMES if v.number]
          + [(f"zh {v.name}", VISEME_PROFILES["zh"][v.name]) for v in CHINESE_VISEMES])
 GREY_VISEMES = ("TH", "AA", "E", "oh")
-FAR_BACK_LUMA = 22.0
+FAR_BACK_LUMA = 12.0
 """Mean lit luma (0-255) allowed for the teeth pixels where the far premolars and molars are nearest, at
 three-quarter: measured 58-63 on TH, AA, E and oh before (the grey wall against the cavity's 10-20),
-26-28 in their shadow at 0.12 of a front tooth (still a grey slab with a jagged top at 512 px), 14-15 at 0.06;
-the incisors in front stay bright (tests/render/test_mouth.py)."""
+26-28 in their shadow at 0.12 of a front tooth (still a grey slab with a jagged top at 512 px), 14-15 at 0.06,
+7.8-8.4 at 0.03 (a faint shape in the dark); the incisors in front stay bright (tests/render/test_mouth.py)."""
+SHADOWED_TONGUE = ("AA", "oh", "E")  # the visemes whose tongue shows beside the far back teeth at three-quarter
+TONGUE_SPREAD = 0.45
+"""The tongue's 10th-percentile lit luma at most this share of its 90th at three-quarter: measured 0.73, 0.78 and
+0.82 on AA, oh and E lit evenly (a flat slab), 0.28, 0.29 and 0.32 in the mouth's shadow."""
+TONGUE_TIP_LUMA = 60.0
+"""...while its lit front keeps a 90th-percentile luma of at least this: measured 99, 88 and 70 (102, 95, 84 before)."""
+NOTCH_STEP = 50.0
+"""Largest mean luma step from the tongue to the far back teeth where they meet (pixels within 3 px of the other):
+measured 80, 74 and 68 lit evenly (the notch), 39, 38 and 33 in the mouth's shadow."""
 
 
 @pytest.fixture(scope="module", params=[(view, d) for d in EXACT_DEFORMERS for view in ("front", "three-quarter")],
@@ -123,17 +135,40 @@ def _far_back_teeth(face, pose, camera) -> np.ndarray:
     return back
 
 
-@pytest.mark.parametrize("name", GREY_VISEMES)
-def test_far_back_teeth_sit_in_the_mouth_s_shadow(request, name):
+def _three_quarter(request, name):
+    """The lit luma of viseme ``name`` at three-quarter, and its teeth, far back teeth and tongue pixels (unlit,
+    colour-coded: teeth and gums blue, tongue green)."""
     face = face_under(request, "generic", "fap")
     camera = frame_points(np.array([face.mesh.fp(label) for label in MOUTH_POINTS]), SIZE, SIZE, view="three-quarter")
     pose = _pose(face, VISEME_PROFILES["mpeg4"][name])
     with Renderer(face, width=SIZE, height=SIZE, camera=camera, lighting=False,
-                  materials=Materials().with_colours(teeth=(0, 0, 1))) as flat, \
+                  materials=Materials().with_colours(teeth=(0, 0, 1), gums=(0, 0, 1), tongue=(0, 1, 0))) as flat, \
             Renderer(face, width=SIZE, height=SIZE, camera=camera) as lit:
         coded = flat.render(pose).astype(int)
         luma = lit.render(pose).astype(float) @ np.array([0.2126, 0.7152, 0.0722])
-    teeth = (coded[..., 2] > 200) & (coded[..., 0] < 50) & (coded[..., 1] < 50)
-    far = teeth & _far_back_teeth(face, pose, camera)
+    r, g, b = coded[..., 0], coded[..., 1], coded[..., 2]
+    teeth = (b > 200) & (r < 50) & (g < 50)
+    tongue = (g > 200) & (r < 50) & (b < 50)
+    return luma, teeth, teeth & _far_back_teeth(face, pose, camera), tongue
+
+
+@pytest.mark.parametrize("name", GREY_VISEMES)
+def test_far_back_teeth_sit_in_the_mouth_s_shadow(request, name):
+    luma, _teeth, far, _tongue = _three_quarter(request, name)
     assert far.sum() >= 100, (name, int(far.sum()))  # they show (measured 300-1000 px)
     assert luma[far].mean() <= FAR_BACK_LUMA, (name, float(luma[far].mean()))
+
+
+@pytest.mark.parametrize("name", SHADOWED_TONGUE)
+def test_the_tongue_lies_in_the_mouth_s_shadow(request, name):
+    """Lit at its tip, darker back along it and toward its edges; where the far lower molars stand in front of its
+    edge, the two meet without a hard notch."""
+    luma, _teeth, far, tongue = _three_quarter(request, name)
+    assert tongue.sum() >= 300, (name, int(tongue.sum()))  # it shows (measured 617-2888 px)
+    low, high = np.percentile(luma[tongue], [10, 90])
+    assert high >= TONGUE_TIP_LUMA and low <= TONGUE_SPREAD * high, (name, float(low), float(high))
+    near_far = tongue & ndimage.binary_dilation(far, iterations=3)
+    near_tongue = far & ndimage.binary_dilation(tongue, iterations=3)
+    assert near_far.sum() >= 30, (name, int(near_far.sum()))  # they meet (measured 57-132 px)
+    step = luma[near_far].mean() - luma[near_tongue].mean()
+    assert step <= NOTCH_STEP, (name, float(step))

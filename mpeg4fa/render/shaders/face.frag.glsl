@@ -12,7 +12,8 @@
 // The skin mixes in the lip and brow colours (untextured only) and the dark of the oral cavity;
 // the teeth get their shape from tooth coordinates: gaps, rounded tips, scalloped gums; the premolars
 // and molars and any tooth's inner side sit in the mouth's shadow (at three-quarter the far side's back
-// teeth, lit by the key light on that side, read as a grey wall against the dark cavity).
+// teeth, lit by the key light on that side, read as a grey wall against the dark cavity); the tongue
+// likewise, lit at its tip and darker back along it and toward its edges (render/details.py).
 // Unlit, every part is one flat colour (the tests classify pixels by it): brows, cavity and gums
 // are then pure where their weight is 1, and hair strokes and tooth gaps are left out.
 uniform vec3 camera_position;
@@ -63,9 +64,12 @@ const float TOOTH_MM = 7.0;       // a typical tooth width, for the tip rounding
 const float TIP_MM = 1.1;         // radius of a tooth's rounded corners
 const float CROWN_MM = 9.5;       // crown height at the middle of a tooth (gum line above)
 const float WRINKLE_MM = 4.2;     // spacing of the nose creases
-const float BACK_TEETH_SHADE = 0.06; // premolars and molars: the light that reaches inside the mouth
+const float BACK_TEETH_SHADE = 0.03; // premolars and molars: the light that reaches inside the mouth
                                       // (0.12 left the far ones a grey slab with a jagged top at three-quarter)
 const float LINGUAL_SHADE = 0.3;     // a tooth's inner side (the far side's, seen across an open mouth): in its shadow
+const vec2 TONGUE_SHADOW_MM = vec2(10.0, 45.0);  // behind the tongue's tip: where the mouth's shadow begins and is full
+const float TONGUE_BACK_SHADE = 0.3;  // the light that reaches the tongue's back
+const float TONGUE_SIDE_SHADE = 0.55; // and its edges, under the teeth
 
 #ifdef LASHES
 float hash(float x) { return fract(sin(x * 127.1 + 311.7) * 43758.5453); }
@@ -213,6 +217,10 @@ void main() {
     } else {
         slot = v_material;   // 4 tongue
         base = base_colour[slot];
+        // lit at its tip, in the mouth's shadow further back and toward its edges, which lie under the
+        // teeth (evenly lit, it read as a flat slab, cut by the dark back teeth at three-quarter)
+        shade = mix(1.0, TONGUE_BACK_SHADE, smoothstep(TONGUE_SHADOW_MM.x, TONGUE_SHADOW_MM.y, v_detail.y))
+              * mix(1.0, TONGUE_SIDE_SHADE, smoothstep(0.5, 1.0, abs(v_detail.x)));
     }
     if (!lighting) {
         colour = vec4(base, 1.0);
