@@ -1,4 +1,5 @@
-"""Arrays that slow rules derive from a head, kept in the user cache (:func:`.asset.cache_dir`).
+"""Arrays and sparse matrices that slow rules derive from a head, kept in the user cache
+(:func:`.asset.cache_dir`).
 
 A result is named by a hash of everything it depends on: the input arrays and the source of the modules
 whose rules derive it, so a calibrated or custom head, or a changed rule, gets its own file. Written
@@ -16,30 +17,55 @@ from pathlib import Path
 from types import ModuleType
 
 import numpy as np
+import scipy.sparse as sp
 
 KEEP = 64
 """Files kept per kind; the least recently used beyond these are removed when one is written."""
+SPARSE = ("data", "indices", "indptr", "shape")
+"""The arrays a sparse matrix is kept as (:func:`kept_sparse`)."""
 
 
 def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],
          derive: Callable[[], np.ndarray]) -> np.ndarray:
     """``derive()``, or what it gave before for the same ``inputs`` and ``rules`` (read back from
     ``cache_dir()/kind/``)."""
+    return _kept(kind, inputs, rules, ("array",), lambda: {"array": np.asarray(derive())})["array"]
+
+
+def kept_sparse(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],
+                derive: Callable[[], sp.spmatrix]) -> sp.csr_matrix:
+    """:func:`kept` of a sparse matrix (kept as its CSR arrays)."""
+    def arrays() -> dict[str, np.ndarray]:
+        m = sp.csr_matrix(derive())
+        return {"data": m.data, "indices": m.indices, "indptr": m.indptr, "shape": np.array(m.shape)}
+
+    a = _kept(kind, inputs, rules, SPARSE, arrays)
+    try:
+        m = sp.csr_matrix((a["data"], a["indices"], a["indptr"]), shape=tuple(int(n) for n in a["shape"]))
+        m.check_format(full_check=True)
+        return m
+    except (ValueError, TypeError, IndexError):  # a foreign file's arrays that make no matrix
+        return sp.csr_matrix(derive())
+
+
+def _kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],
+          names: tuple[str, ...], derive: Callable[[], dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """The arrays ``derive()`` gives by ``names``, or gave before (see :func:`kept`)."""
     path = _path(kind, inputs, rules)
     if path.is_file():
         try:
             with np.load(path, allow_pickle=False) as saved:
-                array = np.array(saved["array"])
+                arrays = {name: np.array(saved[name]) for name in names}
             _touch(path)
-            return array
+            return arrays
         except Exception:  # noqa: BLE001 - torn, foreign or unreadable (zlib, zip, npy, key errors alike)
             pass  # derived again below and written anew
-    array = np.asarray(derive())
+    arrays = derive()
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".", suffix=".part", delete=False) as tmp:
-            np.savez_compressed(tmp, array=array)
+            np.savez_compressed(tmp, **arrays)
         os.chmod(tmp.name, 0o644)  # a cache shared by users ($MPEG4FA_CACHE) is read by all
         os.replace(tmp.name, path)
         _prune(path.parent)
@@ -48,7 +74,7 @@ def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[
     finally:
         if tmp is not None and os.path.exists(tmp.name):
             os.unlink(tmp.name)
-    return array
+    return arrays
 
 
 def _touch(path: Path) -> None:

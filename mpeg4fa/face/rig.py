@@ -37,9 +37,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from mpeg4fa.face import motion
+from mpeg4fa.face import motion, sibson
 from mpeg4fa.face.couplings import PASSIVE_POINTS, add_couplings, couplings
 from mpeg4fa.face.fapu import Fapu
+from mpeg4fa.face.kept import kept_sparse
 from mpeg4fa.face.lids import LidSheet, build_lids
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import (LID_MARGIN_LOOPS, adjacency, detour_fade, edge_graph, edge_hops, falloff,
@@ -226,8 +227,10 @@ def _sibson(mesh: HeadMesh, part: slice, fps: list[int],
     queries = rest[part]
     cloud = np.concatenate(sites + [queries])
     sites.append(cage_points(cloud))
-    w = natural_neighbour_weights(np.concatenate(sites), queries)[:, :len(controls)].tocsc()
-    return controls, w
+    sites = np.concatenate(sites)
+    # kept in the user cache: the Delaunay insertions are half a second of every start that poses a head
+    w = kept_sparse("sibson", (sites, queries), (sibson,), lambda: natural_neighbour_weights(sites, queries))
+    return controls, w[:, :len(controls)].tocsc()
 
 
 def _driven_controls(mesh: HeadMesh, part: slice, fps: list[int], driven: list[int],

@@ -81,3 +81,55 @@ def test_a_kind_keeps_its_most_recently_used_files(tmp_path, monkeypatch):
     assert kept_module._path("things", (np.full(2, 0.0),), (kept_module,)).name in names
     assert kept_module._path("things", (np.full(2, 7.0),), (kept_module,)).name in names
     assert kept_module._path("things", (np.full(2, 1.0),), (kept_module,)).name not in names
+
+
+def test_a_sparse_matrix_reads_back_exactly(tmp_path, monkeypatch):
+    """The rig's Sibson weights (:func:`mpeg4fa.face.rig._sibson`) are kept this way: read back, the same
+    matrix to the bit; a file that holds something else is derived again."""
+    import scipy.sparse as sp
+
+    from mpeg4fa.face.kept import kept_sparse
+
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    m = sp.random(40, 9, density=0.2, random_state=1, format="csc")
+    calls = []
+
+    def derive():
+        calls.append(1)
+        return m
+
+    first = kept_sparse("weights", (np.arange(3.0),), (kept_module,), derive)
+    again = kept_sparse("weights", (np.arange(3.0),), (kept_module,), derive)
+    assert len(calls) == 1 and again.shape == (40, 9) and again.dtype == m.dtype
+    assert (first != m).nnz == 0 and np.array_equal(again.toarray(), m.toarray())
+    kept("weights", (np.arange(3.0),), (kept_module,), lambda: np.zeros(2))  # read back: not a matrix
+    path = kept_module._path("weights", (np.arange(3.0),), (kept_module,))
+    np.savez(path, array=np.zeros(2))  # a dense array under the matrix's name
+    assert np.array_equal(kept_sparse("weights", (np.arange(3.0),), (kept_module,), derive).toarray(), m.toarray())
+    assert len(calls) == 2
+
+
+def test_the_rig_built_from_kept_weights_is_the_rig(generic_face, tmp_path, monkeypatch):
+    from mpeg4fa.face import rig as rig_module
+
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    mesh = generic_face.mesh
+    skin = mesh.part("skin")
+    fps = [i for i, v in enumerate(mesh.fp_vertex) if skin.start <= v < skin.stop]
+    derived = rig_module._sibson(mesh, skin, fps, None)  # the cache is empty: derived and kept
+    read = rig_module._sibson(mesh, skin, fps, None)
+    assert list((tmp_path / "sibson").glob("*.npz"))
+    assert derived[0] == read[0] and (derived[1] != read[1]).nnz == 0
+
+
+def test_a_foreign_sparse_file_is_derived_again(tmp_path, monkeypatch):
+    import scipy.sparse as sp
+
+    from mpeg4fa.face.kept import kept_sparse
+
+    monkeypatch.setenv("MPEG4FA_CACHE", str(tmp_path))
+    m = sp.identity(4, format="csr")
+    path = kept_module._path("weights", (np.ones(2),), (kept_module,))
+    path.parent.mkdir(parents=True)
+    np.savez(path, data=np.ones(4), indices=np.array([0, 9, 1, 2]), indptr=np.arange(5), shape=np.array([4, 4]))
+    assert np.array_equal(kept_sparse("weights", (np.ones(2),), (kept_module,), lambda: m).toarray(), np.eye(4))
