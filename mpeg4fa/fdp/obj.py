@@ -35,7 +35,6 @@ import os
 import re
 
 import numpy as np
-import trimesh
 
 from mpeg4fa.fdp.errors import FdpError, read_bytes
 from mpeg4fa.filetype import HEAD_BYTES, refuse_foreign
@@ -137,6 +136,8 @@ def _groups(feed: str, faces: np.ndarray, path: str) -> list[str]:
     by_group = _GROUP.search(feed) is not None
     if not by_group and not _OBJECT.search(feed):
         return [""] * len(faces)
+    import trimesh  # here, not at the top: a fifth of a second of every start that reads no OBJ file
+
     try:
         scene = trimesh.load(io.StringIO(feed), file_type="obj", force="scene", process=False, maintain_order=True,
                              skip_materials=True, group_material=False, split_objects=not by_group,
@@ -163,6 +164,8 @@ def _groups(feed: str, faces: np.ndarray, path: str) -> list[str]:
 def _trimesh_read(feed: str, plain: str, counts: dict[str, int], triangles: int, path: str,
                   uv: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(vertices, triangles, per-vertex uvs or None) as trimesh reads ``feed``, checked against the file."""
+    import trimesh  # (see _groups)
+
     try:
         scene = trimesh.load(io.StringIO(feed), file_type="obj", force="scene", process=False,
                              maintain_order=not uv, skip_materials=True, group_material=False)
