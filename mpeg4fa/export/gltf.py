@@ -22,9 +22,12 @@ decoder. Two ways to bake the stream:
 Geometry is in metres (the model's millimetres / 1000), y up, the face looking along +z,
 one primitive per drawn part (skin, eyes, teeth, tongue; in morph animation the eyes in
 meshes of their own) with its material: base colours
-of :mod:`mpeg4fa.render.materials`, the lip tint and the dark of the mouth baked into the
-skin's vertex colours (brows are the renderer's alone), iris and pupil into the eyes',
-and a skin texture (e.g. an FDP's) embedded as PNG. glTF carries no sound: the stream's
+of :mod:`mpeg4fa.render.materials`; the skin's own colours (skin, lips, brows with their hair strokes, the dark
+of the mouth) baked by the renderer's face shader into the skin's UV image (:meth:`.Renderer.skin_albedo`,
+embedded as PNG), so that any viewer shows the brows and lips our renderer draws (where no GL context can be
+made, the lips and the mouth's dark go into the skin's vertex colours and the brows are left out); iris and pupil
+in the eyes' vertex colours; or a skin texture (e.g. an FDP's) embedded as PNG, the mouth's dark in the vertex
+colours. glTF carries no sound: the stream's
 WAV is written beside the GLB under its name (``head.glb`` -> ``head.wav``).
 """
 from __future__ import annotations
@@ -56,6 +59,9 @@ ANIMATIONS = ("morph", "vertex")
 RENDER_GAMMA = 1.15
 """The face shader's output curve (``pow(rgb, 1 / 1.15)`` in ``render/shaders/face.frag.glsl``)."""
 MM = 0.001  # model millimetres -> glTF metres
+ALBEDO_SIZE = 2048
+"""Texels a side of the baked skin image: the generic head's face spans a sixth of its UV square (about 2 texels
+a mm here, a texel a pixel where the browser pages show the head; 42 KiB of PNG, baked in about a second)."""
 PART_LOOK = {"skin": "skin", "eye_l": "sclera", "eye_r": "sclera", "teeth_upper": "teeth", "teeth_lower": "teeth",
              "tongue": "tongue"}
 """Drawn part -> the :class:`~mpeg4fa.render.materials.Materials` entry it wears, in the renderer's order."""
@@ -76,6 +82,7 @@ class GlbExport:
     animation: str
     audio: Path | None    # the WAV beside the GLB, if any
     bytes: int
+    skin: str = "albedo"  # what the skin's texture holds: albedo (its own colours), photo, or colours (no texture)
 
 
 @dataclass(frozen=True)
@@ -116,7 +123,12 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     values, times = _keyed_frames(stream)
     looks = materials or Materials()
     layout = build_layout(face.mesh)
-    parts = _parts(face, layout, looks, texture is not None)
+    if texture is not None:
+        skin = "photo"
+    else:
+        texture = _albedo(face, looks)
+        skin = "albedo" if texture is not None else "colours"
+    parts = _parts(face, layout, looks, skin)
     rest = face.mesh.vertices
     if animation == "morph":
         units = arkit_units(face, where=name)
@@ -153,13 +165,14 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     gltf.set_binary_blob(blob)
     out = b"".join(gltf.save_to_bytes())
     duration = float(times[-1] - times[0]) if len(times) else 0.0
-    return out, {"n_parts": len(parts), "n_targets": len(names), "n_frames": len(times), "duration": duration}
+    return out, {"n_parts": len(parts), "n_targets": len(names), "n_frames": len(times), "duration": duration,
+                 "skin": skin}
 
 
 def part_sources(face: FaceModel) -> dict[str, np.ndarray]:
     """Per drawn part (a primitive of :func:`build_glb`, named in its ``extras.part``): the mesh vertex of each of
     its GL vertices, so that a page moving the mesh itself (the FBA player) writes each where it belongs."""
-    return {part.name: part.source for part in _parts(face, build_layout(face.mesh), Materials(), False)}
+    return {part.name: part.source for part in _parts(face, build_layout(face.mesh), Materials(), "colours")}
 
 
 def _keyed_frames(stream: FapStream) -> tuple[np.ndarray, np.ndarray]:
@@ -186,7 +199,20 @@ def _frame_poses(face: FaceModel, values: np.ndarray, rest: np.ndarray,
     return shapes, [f"frame {int(f)}" for f in first], weights
 
 
-def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, textured: bool) -> list[_Part]:
+def _albedo(face: FaceModel, looks: Materials) -> np.ndarray | None:
+    """The skin's own colours in its UV image (:meth:`.Renderer.skin_albedo`), or None where GL cannot draw."""
+    from mpeg4fa.render import Renderer
+    from mpeg4fa.render.errors import RenderError
+
+    try:
+        with Renderer(face, width=ALBEDO_SIZE, height=ALBEDO_SIZE, materials=looks, lighting=False,
+                      lashes=False) as r:
+            return r.skin_albedo()
+    except RenderError:
+        return None
+
+
+def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str) -> list[_Part]:
     """The renderer's GL vertices (one per mesh vertex and UV) split into one set per drawn part."""
     mesh = face.mesh
     parts, tri_start = [], 0
@@ -199,15 +225,20 @@ def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, textured: boo
         indices = layout.indices[tri_start:tri_start + len(tris)].astype(np.int64) - mine[0]
         tri_start += len(tris)
         uv = layout.uv[mine].astype(np.float64)
-        colour = _colours(face, part, layout, mine, looks, textured)
+        colour = _colours(face, part, layout, mine, looks, skin)
         parts.append(_Part(part, layout.source[mine], np.c_[uv[:, 0], 1.0 - uv[:, 1]], colour, indices))
     return parts
 
 
 def _colours(face: FaceModel, part: str, layout: SceneLayout, mine: np.ndarray, looks: Materials,
-             textured: bool) -> np.ndarray:
-    """Per-vertex linear colours, multiplied by the material's base colour (white where they are set here)."""
+             skin: str) -> np.ndarray:
+    """Per-vertex linear colours, multiplied by the material's base colour (white where they are set here).
+    ``skin``: what the skin's texture holds: ``albedo`` all of its colours, ``photo`` a photo's (the mouth's dark
+    goes on it here), ``colours`` none (no texture: skin, lips and the mouth's dark here)."""
     n = len(mine)
+    textured = skin != "colours"
+    if part == "skin" and skin == "albedo":
+        return np.ones((n, 3))
     if part == "skin":
         base = np.ones((n, 3)) if textured else np.tile(shown_colour(looks.skin.colour), (n, 1))
         if not textured:

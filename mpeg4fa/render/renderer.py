@@ -72,6 +72,7 @@ class Renderer:
         self.width, self.height = int(width), int(height)
         self.materials = materials or Materials()
         self.lighting = lighting
+        self._baking = False  # drawing the skin's albedo into its UV image (skin_albedo)
         self.key_light = _unit(KEY_LIGHT[0] if key_light is None else key_light)
         self.layout = build_layout(face.mesh)
         self.lashes = build_lashes(face.mesh) if lashes else None
@@ -178,6 +179,7 @@ class Renderer:
         prog["orthographic"] = camera.orthographic
         prog["view_direction"] = tuple(-camera.view[2, :3])
         prog["lighting"] = self.lighting
+        prog["uv_space"] = prog["albedo"] = self._baking
         prog["use_texture"] = self.texture is not None
         prog["skin_texture"] = 0
         prog["iris_texture"] = 1
@@ -248,6 +250,36 @@ class Renderer:
             self.lash_vao.render()
         if self.ms_fbo is not None:
             ctx.copy_framebuffer(self.fbo, self.ms_fbo)
+
+    def skin_albedo(self) -> np.ndarray:
+        """The skin's own colours (skin, lips, brows, the mouth's dark) in its UV image, as this renderer shows them
+        under a unit light: ``(height, width, 3)`` uint8, row 0 = v 1 (as :meth:`set_texture` takes an image).
+
+        Drawn by the face shader itself in texture space, so a viewer that has only a texture (a glTF one, the
+        browser pages) shows the brows and lips this renderer draws. Texels off the skin take their nearest skin
+        texel's colour, so that mipmaps and bilinear lookups at an island's edge find no background."""
+        from scipy import ndimage
+
+        ctx = self.ctx
+        self._baking = True
+        try:
+            self._apply_uniforms()
+            self._upload(self.face.neutral())
+        finally:
+            self._baking = False
+        self.fbo.use()
+        self.fbo.clear(0.0, 0.0, 0.0, 0.0)
+        ctx.disable(ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE)
+        self.vao.render(vertices=3 * len(self.face.mesh.triangles["skin"]), first=0)  # the skin's, first (no cap)
+        rgba = np.empty((self.height, self.width, 4), np.uint8)
+        self.fbo.read_into(rgba, components=4, alignment=1)
+        image, covered = rgba[::-1, :, :3], rgba[::-1, :, 3] > 0
+        if not covered.any():
+            raise RenderError("the skin has no texture coordinates to bake into", where="renderer",
+                              hint="give the head's skin a UV map")
+        nearest = ndimage.distance_transform_edt(~covered, return_distances=False, return_indices=True)
+        return np.ascontiguousarray(image[nearest[0], nearest[1]])
 
     def read(self, out: np.ndarray | None = None) -> np.ndarray:
         """The last drawn image as (H, W, 3) uint8, top row first (into ``out`` if given)."""

@@ -152,7 +152,8 @@ def test_morph_animation_needs_face_units(procedural_face, stream, tmp_path):
 
 
 def test_validator_finds_no_errors(face, stream, tmp_path):
-    """Morph animation on the generic head (vertex on both), and an embedded texture: 0 errors, 0 warnings."""
+    """Morph animation on the generic head (vertex on both), and an embedded texture (given, or the skin's colours
+    baked): 0 errors, 0 warnings."""
     texture = np.zeros((64, 64, 3), np.uint8)
     texture[..., 0] = np.arange(64)[:, None] * 4
     animations = ("vertex", "morph") if face.mesh.face_units is not None else ("vertex",)
@@ -164,7 +165,7 @@ def test_validator_finds_no_errors(face, stream, tmp_path):
         assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"][:5]
         info = report["info"]
         assert info["hasMorphTargets"] and info["animationCount"] == 1 and info["drawCallCount"] == 6
-        assert info["hasTextures"] == (animation == "vertex")
+        assert info["hasTextures"]  # the given texture, or the skin's own colours baked (brows and lips)
 
 
 def test_texture_is_embedded_png_on_the_skin(procedural_face, stream, tmp_path):
@@ -324,3 +325,25 @@ def test_blink_is_the_deformers_lid_turn(generic_face, tmp_path):
     assert moved.any() and np.all(position[moved, 0] > 0)  # the left lid (+x) only
     assert np.linalg.norm(position[moved] - upper_lid, axis=1).max() < 0.03
 
+
+
+def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
+    """Without a texture the skin's own colours (brows and lips included) go in as its texture, its vertex colours
+    white; where no GL context can be made, the lips and the mouth's dark go into the vertex colours instead."""
+    from mpeg4fa.render import Renderer
+    from mpeg4fa.render.errors import RenderError
+
+    import pygltflib
+
+    path, result, gltf = _export(tmp_path, stream, face, animation="vertex")
+    skin = next(p for m in gltf.meshes for p in m.primitives if p.extras["part"] == "skin")
+    assert len(gltf.images) == 1 and gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture is not None
+    assert skin.attributes.TEXCOORD_0 is not None
+
+    def no_gl(self):
+        raise RenderError("cannot create a headless OpenGL context", where="GL context")
+
+    monkeypatch.setattr(Renderer, "skin_albedo", no_gl)
+    data, summary = build_glb(stream, face, animation="vertex")
+    assert summary["skin"] == "colours" and not pygltflib.GLTF2.load_from_bytes(data).images
+    assert result.skin == "albedo"

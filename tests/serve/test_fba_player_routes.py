@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
+from mpeg4fa.export.gltf import ALBEDO_SIZE
 from mpeg4fa.serve.app import create_app
 from mpeg4fa.serve.fap_head import RIG_VERSION
 from serve.live_server import face_for_tests
@@ -72,5 +73,17 @@ def test_a_served_texture_is_in_the_pages_head():
     glb = TestClient(create_app(face_for_tests(), texture=image), base_url="http://127.0.0.1").get("/static/fap-head.glb")
     gltf = pygltflib.GLTF2.load_from_bytes(glb.content)
     assert len(gltf.images) == 1 and gltf.images[0].mimeType == "image/png"
+    assert _png_size(gltf) == (64, 64)
     plain = TestClient(create_app(face_for_tests()), base_url="http://127.0.0.1").get("/static/fap-head.glb")
-    assert not pygltflib.GLTF2.load_from_bytes(plain.content).images
+    plain_gltf = pygltflib.GLTF2.load_from_bytes(plain.content)  # without one: the skin's own colours, baked
+    assert len(plain_gltf.images) == 1 and _png_size(plain_gltf) == (ALBEDO_SIZE, ALBEDO_SIZE)
+
+
+def _png_size(gltf) -> tuple[int, int]:
+    import io
+
+    from PIL import Image
+
+    view = gltf.bufferViews[gltf.images[0].bufferView]
+    blob = gltf.binary_blob()
+    return Image.open(io.BytesIO(blob[view.byteOffset or 0:(view.byteOffset or 0) + view.byteLength])).size

@@ -18,6 +18,7 @@
 // are then pure where their weight is 1, and hair strokes and tooth gaps are left out.
 uniform vec3 camera_position;
 uniform bool lighting;
+uniform bool albedo;              // the surface's own colour as lit by a unit light, hair strokes kept (the UV bake)
 uniform bool orthographic;
 uniform vec3 view_direction;      // toward the camera, for orthographic views
 
@@ -124,7 +125,7 @@ float brow_cover(vec2 d) {
     float outer = clamp((1.07 - along) / 0.3, 0.0, 1.0);    // a tapered outer end
     float half_width = (3.3 - 1.9 * clamp(along, 0.0, 1.0)) * inner * (2.0 - inner) * outer * (2.0 - outer);
     float cover = clamp((half_width - abs(d.y + 0.4)) / 0.9 + 0.5, 0.0, 1.0);
-    if (lighting) cover *= 0.8 + 0.4 * abs(fract(27.0 * along + 0.35 * d.y) - 0.5);   // hair strokes
+    if (lighting || albedo) cover *= 0.8 + 0.4 * abs(fract(27.0 * along + 0.35 * d.y) - 0.5);   // hair strokes
     return cover;
 }
 
@@ -140,7 +141,8 @@ void main() {
     vec3 wet_normal = n;
     float wetness = 0.0;
     if (v_material == 0) {
-        if (gl_FrontFacing || v_neck > 0.999) {   // the capped neck's back side: a silhouette sliver of skin
+        // the capped neck's back side: a silhouette sliver of skin; in texture space a side is the UVs' winding
+        if (gl_FrontFacing || v_neck > 0.999 || albedo) {
             if (!gl_FrontFacing) n = -n;
             slot = 0;
             if (use_texture) {
@@ -222,8 +224,8 @@ void main() {
         shade = mix(1.0, TONGUE_BACK_SHADE, smoothstep(TONGUE_SHADOW_MM.x, TONGUE_SHADOW_MM.y, v_detail.y))
               * mix(1.0, TONGUE_SIDE_SHADE, smoothstep(0.5, 1.0, abs(v_detail.x)));
     }
-    if (!lighting) {
-        colour = vec4(base, 1.0);
+    if (!lighting || albedo) {
+        colour = vec4(albedo ? pow(base, vec3(1.0 / 1.15)) : base, 1.0);
         return;
     }
     vec3 light = ambient;

@@ -1,6 +1,7 @@
 #version 330 core
 // Positions and normals in world space (mm); the camera matrix takes them to clip space.
 uniform mat4 world_to_clip;
+uniform bool uv_space;   // draw in texture space instead: the skin's colours baked into its UV image (Renderer.skin_albedo)
 
 in vec3 in_position;
 in vec3 in_normal;
@@ -29,5 +30,5 @@ void main() {
     v_detail = in_detail;
     v_nose = in_nose;
     v_neck = in_neck;
-    gl_Position = world_to_clip * vec4(in_position, 1.0);
+    gl_Position = uv_space ? vec4(2.0 * in_uv - 1.0, 0.0, 1.0) : world_to_clip * vec4(in_position, 1.0);
 }
