@@ -22,12 +22,12 @@ decoder. Two ways to bake the stream:
 Geometry is in metres (the model's millimetres / 1000), y up, the face looking along +z,
 one primitive per drawn part (skin, eyes, teeth, tongue; in morph animation the eyes in
 meshes of their own) with its material: base colours
-of :mod:`mpeg4fa.render.materials`; the skin's own colours (skin, lips, brows with their hair strokes, the dark
-of the mouth) baked by the renderer's face shader into the skin's UV image (:meth:`.Renderer.skin_albedo`,
-embedded as PNG), so that any viewer shows the brows and lips our renderer draws (where no GL context can be
-made, the lips and the mouth's dark go into the skin's vertex colours and the brows are left out); iris and pupil
-in the eyes' vertex colours; or a skin texture (e.g. an FDP's) embedded as PNG, the mouth's dark in the vertex
-colours. glTF carries no sound: the stream's
+of :mod:`mpeg4fa.render.materials`; the head's own colours (skin, lips, brows with their hair strokes, the dark of
+the mouth; teeth with gums, gaps and the back teeth's shadow; the tongue in the mouth's shadow) baked by the
+renderer's face shader into the head's UV image (:meth:`.Renderer.albedo`, embedded as PNG), so that any viewer
+shows the brows, lips and mouth our renderer draws (where no GL context can be made, the lips and the mouth's dark
+go into the skin's vertex colours and the rest is left out); iris and pupil in the eyes' vertex colours; or a skin
+texture (e.g. an FDP's) embedded as PNG, the mouth's dark in the vertex colours. glTF carries no sound: the stream's
 WAV is written beside the GLB under its name (``head.glb`` -> ``head.wav``).
 """
 from __future__ import annotations
@@ -123,11 +123,13 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     values, times = _keyed_frames(stream)
     looks = materials or Materials()
     layout = build_layout(face.mesh)
+    textured: tuple[str, ...] = ("skin",)  # the parts that wear the texture
     if texture is not None:
         skin = "photo"
     else:
-        texture = _albedo(face, looks)
-        skin = "albedo" if texture is not None else "colours"
+        baked = _albedo(face, looks)
+        skin = "albedo" if baked is not None else "colours"
+        texture, textured = (baked.image, _wearing(baked.parts)) if baked is not None else (None, ())
     parts = _parts(face, layout, looks, skin)
     rest = face.mesh.vertices
     if animation == "morph":
@@ -144,7 +146,8 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     normals = vertex_normals(rest, layout.triangles, layout.incidence)
 
     def mesh(mesh_name: str, members: list[_Part], targets: np.ndarray | None) -> int:
-        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, skin_texture) for part in members]
+        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, skin_texture if part.name in textured else None)
+                 for part in members]
         extra = ({"weights": [0.0] * len(names), "extras": {"targetNames": names}} if targets is not None
                  else {"weights": None})
         gltf.meshes.append(gl.Mesh(name=mesh_name, primitives=prims, **extra))
@@ -199,17 +202,23 @@ def _frame_poses(face: FaceModel, values: np.ndarray, rest: np.ndarray,
     return shapes, [f"frame {int(f)}" for f in first], weights
 
 
-def _albedo(face: FaceModel, looks: Materials) -> np.ndarray | None:
-    """The skin's own colours in its UV image (:meth:`.Renderer.skin_albedo`), or None where GL cannot draw."""
+def _albedo(face: FaceModel, looks: Materials):
+    """The head's own colours in its UV image (:meth:`.Renderer.albedo`), or None where GL cannot draw."""
     from mpeg4fa.render import Renderer
     from mpeg4fa.render.errors import RenderError
 
     try:
         with Renderer(face, width=ALBEDO_SIZE, height=ALBEDO_SIZE, materials=looks, lighting=False,
                       lashes=False) as r:
-            return r.skin_albedo()
+            return r.albedo()
     except RenderError:
         return None
+
+
+def _wearing(baked: tuple[str, ...]) -> tuple[str, ...]:
+    """The parts that wear the baked image: those it holds, but the teeth both or neither (one material)."""
+    teeth = ("teeth_upper", "teeth_lower")
+    return tuple(p for p in baked if p not in teeth or all(t in baked for t in teeth))
 
 
 def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str) -> list[_Part]:
@@ -293,12 +302,12 @@ def _primitive(gltf: gl.GLTF2, buf: GlbBuffer, part: _Part, rest: np.ndarray, no
     look_name = PART_LOOK[part.name]
     names = [m.name for m in gltf.materials]
     material = names.index(look_name) if look_name in names else _material(
-        gltf, look_name, getattr(looks, look_name), texture if part.name == "skin" else None, True)
+        gltf, look_name, getattr(looks, look_name), texture, True)
     attributes = gl.Attributes(
         POSITION=buf.accessor((rest[part.source] * MM).astype(np.float32), target=gl.ARRAY_BUFFER, bounds=True),
         NORMAL=buf.accessor(normals[part.source].astype(np.float32), target=gl.ARRAY_BUFFER),
         COLOR_0=buf.accessor(part.colour.astype(np.float32), target=gl.ARRAY_BUFFER))
-    if texture is not None and part.name == "skin":
+    if texture is not None:
         attributes.TEXCOORD_0 = buf.accessor(part.uv.astype(np.float32), target=gl.ARRAY_BUFFER)
     index_type = np.uint16 if len(part.source) <= 0xFFFF else np.uint32
     indices = buf.accessor(part.indices.reshape(-1).astype(index_type), target=gl.ELEMENT_ARRAY_BUFFER)

@@ -10,6 +10,8 @@ only positions and normals change, so the layout (:mod:`.scene`) is built once.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from mpeg4fa.face.eyes import eye_looks
@@ -27,12 +29,22 @@ from mpeg4fa.render.scene import build_layout, vertex_data
 
 _EYES = (("eye_l", "l-eye"), ("eye_r", "r-eye"))
 MAX_SIZE = 8192
+BAKED_WITH_SKIN = ("teeth_upper", "teeth_lower", "tongue")
+"""Parts :meth:`Renderer.albedo` bakes into the skin's UV image where their UVs lie apart from it (the generic head's
+map keeps them in free corners of the skin's square)."""
 STATIC_ATTRIBUTES = ("2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints", "in_detail", "in_nose", "in_neck")
 """The layout's per-vertex columns (uv, material, lips and cavity tints, detail, nose, neck) as the face programs read them."""
 
 KEY_LIGHT = ((-0.45, 0.45, 0.77), (0.78, 0.76, 0.72))
 FILL_LIGHT = ((0.65, 0.05, 0.75), (0.28, 0.30, 0.34))
 AMBIENT = (0.24, 0.24, 0.26)
+
+
+class Albedo(NamedTuple):
+    """What :meth:`Renderer.albedo` bakes: the UV image and the parts whose colours it holds."""
+
+    image: np.ndarray
+    parts: tuple[str, ...]
 
 
 class _Uniforms:
@@ -72,7 +84,7 @@ class Renderer:
         self.width, self.height = int(width), int(height)
         self.materials = materials or Materials()
         self.lighting = lighting
-        self._baking = False  # drawing the skin's albedo into its UV image (skin_albedo)
+        self._baking = False  # drawing the head's own colours into its UV image (albedo)
         self.key_light = _unit(KEY_LIGHT[0] if key_light is None else key_light)
         self.layout = build_layout(face.mesh)
         self.lashes = build_lashes(face.mesh) if lashes else None
@@ -251,13 +263,17 @@ class Renderer:
         if self.ms_fbo is not None:
             ctx.copy_framebuffer(self.fbo, self.ms_fbo)
 
-    def skin_albedo(self) -> np.ndarray:
-        """The skin's own colours (skin, lips, brows, the mouth's dark) in its UV image, as this renderer shows them
-        under a unit light: ``(height, width, 3)`` uint8, row 0 = v 1 (as :meth:`set_texture` takes an image).
+    def albedo(self) -> Albedo:
+        """The head's own colours in its UV image, as this renderer shows them under a unit light (the mouth's
+        shadow in, the light's direction and shine out): the skin (lips, brows, the mouth's dark) and, where its UV
+        map places them apart from the skin, the teeth (gums, gaps, the back teeth's shadow) and the tongue;
+        :class:`Albedo`: the ``(height, width, 3)`` uint8 image, row 0 = v 1 (as :meth:`set_texture` takes one), and
+        the parts it holds.
 
-        Drawn by the face shader itself in texture space, so a viewer that has only a texture (a glTF one, the
-        browser pages) shows the brows and lips this renderer draws. Texels off the skin take their nearest skin
-        texel's colour, so that mipmaps and bilinear lookups at an island's edge find no background."""
+        Drawn by the face shader itself in texture space, so a viewer that has only textures (a glTF one, the
+        browser pages) shows the brows, lips and mouth this renderer draws. Texels off every island take their
+        nearest island texel's colour, so that mipmaps and bilinear lookups at an island's edge find no
+        background."""
         from scipy import ndimage
 
         ctx = self.ctx
@@ -271,15 +287,36 @@ class Renderer:
         self.fbo.clear(0.0, 0.0, 0.0, 0.0)
         ctx.disable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
-        self.vao.render(vertices=3 * len(self.face.mesh.triangles["skin"]), first=0)  # the skin's, first (no cap)
-        rgba = np.empty((self.height, self.width, 4), np.uint8)
-        self.fbo.read_into(rgba, components=4, alignment=1)
-        image, covered = rgba[::-1, :, :3], rgba[::-1, :, 3] > 0
-        if not covered.any():
+        mesh, lay = self.face.mesh, self.layout
+        counts = [len(mesh.triangles.get(part, ())) for part in PART_MATERIAL]
+        starts = dict(zip(PART_MATERIAL, np.r_[0, np.cumsum(counts)[:-1]].astype(int)))
+        self.vao.render(vertices=3 * counts[0], first=0)  # the skin's triangles (the neck's cap has no UVs of its own)
+        skin = self._read_rgba()[..., 3] > 0
+        if not skin.any():
             raise RenderError("the skin has no texture coordinates to bake into", where="renderer",
                               hint="give the head's skin a UV map")
+        parts = ["skin"]
+        for part in BAKED_WITH_SKIN:  # where their UVs lie apart from the skin's (else they would paint over it)
+            n = len(mesh.triangles.get(part, ()))
+            if not n:
+                continue
+            first = starts[part]
+            uv = lay.uv[lay.indices[first:first + n].ravel()]
+            lo = np.clip(np.floor(uv.min(axis=0) * (self.width, self.height)).astype(int), 0, None)
+            hi = np.ceil(uv.max(axis=0) * (self.width, self.height)).astype(int) + 1
+            if not skin[lo[1]:hi[1], lo[0]:hi[0]].any():
+                self.vao.render(vertices=3 * n, first=3 * first)
+                parts.append(part)
+        rgba = self._read_rgba()[::-1]
+        image, covered = rgba[..., :3], rgba[..., 3] > 0
         nearest = ndimage.distance_transform_edt(~covered, return_distances=False, return_indices=True)
-        return np.ascontiguousarray(image[nearest[0], nearest[1]])
+        return Albedo(np.ascontiguousarray(image[nearest[0], nearest[1]]), tuple(parts))
+
+    def _read_rgba(self) -> np.ndarray:
+        """The framebuffer as (H, W, 4) uint8, bottom row first (GL's order)."""
+        rgba = np.empty((self.height, self.width, 4), np.uint8)
+        self.fbo.read_into(rgba, components=4, alignment=1)
+        return rgba
 
     def read(self, out: np.ndarray | None = None) -> np.ndarray:
         """The last drawn image as (H, W, 3) uint8, top row first (into ``out`` if given)."""

@@ -328,8 +328,9 @@ def test_blink_is_the_deformers_lid_turn(generic_face, tmp_path):
 
 
 def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
-    """Without a texture the skin's own colours (brows and lips included) go in as its texture, its vertex colours
-    white; where no GL context can be made, the lips and the mouth's dark go into the vertex colours instead."""
+    """Without a texture the head's own colours (brows, lips, the teeth's and tongue's shadow) go in as its texture,
+    the skin's vertex colours white; where no GL context can be made, the lips and the mouth's dark go into the
+    vertex colours instead."""
     from mpeg4fa.render import Renderer
     from mpeg4fa.render.errors import RenderError
 
@@ -339,11 +340,18 @@ def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
     skin = next(p for m in gltf.meshes for p in m.primitives if p.extras["part"] == "skin")
     assert len(gltf.images) == 1 and gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture is not None
     assert skin.attributes.TEXCOORD_0 is not None
+    worn = {p.extras["part"] for m in gltf.meshes for p in m.primitives
+            if gltf.materials[p.material].pbrMetallicRoughness.baseColorTexture is not None}
+    for m in gltf.meshes:  # a part wears the image with its texture coordinates, or neither
+        for p in m.primitives:
+            assert (p.extras["part"] in worn) == (p.attributes.TEXCOORD_0 is not None), p.extras["part"]
+    if face.mesh.face_units is not None:  # the generic head's map keeps its teeth and tongue apart: baked too
+        assert worn == {"skin", "teeth_upper", "teeth_lower", "tongue"}, worn
 
     def no_gl(self):
         raise RenderError("cannot create a headless OpenGL context", where="GL context")
 
-    monkeypatch.setattr(Renderer, "skin_albedo", no_gl)
+    monkeypatch.setattr(Renderer, "albedo", no_gl)
     data, summary = build_glb(stream, face, animation="vertex")
     assert summary["skin"] == "colours" and not pygltflib.GLTF2.load_from_bytes(data).images
     assert result.skin == "albedo"

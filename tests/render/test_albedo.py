@@ -1,4 +1,4 @@
-"""The skin's own colours baked into its UV image by the face shader (:meth:`mpeg4fa.render.Renderer.skin_albedo`):
+"""The skin's own colours baked into its UV image by the face shader (:meth:`mpeg4fa.render.Renderer.albedo`):
 what a viewer that has only a texture (a glTF one, the browser pages) shows in place of the shader's procedural
 brows, lips and mouth. Before it the exported and served heads had no brows at all (vertex colours cannot draw
 them at the mesh's density), so the pages showed a browless face."""
@@ -18,9 +18,14 @@ FACE_POINTS = ("4.1", "4.2", "4.5", "4.6", "8.3", "8.4", "2.1", "9.3")
 
 
 @pytest.fixture(scope="module")
-def albedo(generic_face) -> np.ndarray:
+def baked(generic_face):
     with Renderer(generic_face, width=BAKE, height=BAKE, lighting=False, lashes=False) as r:
-        return r.skin_albedo()
+        return r.albedo()
+
+
+@pytest.fixture(scope="module")
+def albedo(baked) -> np.ndarray:
+    return baked.image
 
 
 def _renders(face, texture: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -55,3 +60,32 @@ def test_texels_off_the_skin_take_their_nearest_skin_colour(albedo):
     assert not (albedo.astype(int).sum(axis=2) == 0).any()
     shown = np.round(255.0 * np.asarray(Materials().skin.colour) ** (1.0 / RENDER_GAMMA))
     assert np.abs(albedo[0, 0].astype(float) - shown).max() <= 2, albedo[0, 0]
+
+
+def _at_vertices(face, image: np.ndarray, part: str) -> tuple[np.ndarray, np.ndarray]:
+    """Luma of ``image`` at the UVs of ``part``'s GL vertices, and their detail coordinates (render/details.py)."""
+    from mpeg4fa.render.scene import build_layout
+
+    lay = build_layout(face.mesh)
+    a, b = face.mesh.part_ranges[part]
+    mine = (lay.source >= a) & (lay.source < b)
+    uv = lay.uv[mine].astype(float)
+    rows = np.clip(((1.0 - uv[:, 1]) * len(image)).astype(int), 0, len(image) - 1)
+    cols = np.clip((uv[:, 0] * image.shape[1]).astype(int), 0, image.shape[1] - 1)
+    return image[rows, cols].astype(float) @ np.array([0.2126, 0.7152, 0.0722]), lay.detail[mine]
+
+
+def test_the_teeth_and_tongue_are_baked_with_the_mouth_s_shadow(generic_face, baked):
+    """The generic head's map keeps the teeth and tongue apart from the skin, so they are baked too: in a glTF
+    viewer the premolars and molars showed as white fangs at the corners of an open mouth (the Python renderer
+    shades them by their place along the arch). Measured at the vertices' texels: back teeth (4 and more along the
+    arch) luma 29 / 38 (upper / lower) against the front teeth's brightest 233, the tongue's back 32 against its
+    tip's 98."""
+    assert baked.parts == ("skin", "teeth_upper", "teeth_lower", "tongue")
+    for part in ("teeth_upper", "teeth_lower"):
+        luma, detail = _at_vertices(generic_face, baked.image, part)
+        front, back = luma[np.abs(detail[:, 0]) < 1.5], luma[np.abs(detail[:, 0]) >= 4.0]
+        assert len(front) and len(back) and back.mean() < 0.2 * front.max(), (part, back.mean(), front.max())
+    luma, detail = _at_vertices(generic_face, baked.image, "tongue")
+    tip, rear = luma[detail[:, 1] < 8.0], luma[detail[:, 1] > 45.0]
+    assert len(tip) and len(rear) and rear.mean() < 0.6 * tip.mean(), (rear.mean(), tip.mean())

@@ -18,7 +18,7 @@
 // are then pure where their weight is 1, and hair strokes and tooth gaps are left out.
 uniform vec3 camera_position;
 uniform bool lighting;
-uniform bool albedo;              // the surface's own colour as lit by a unit light, hair strokes kept (the UV bake)
+uniform bool albedo;              // the surface's own colour and shadow under a unit light, details kept (the UV bake)
 uniform bool orthographic;
 uniform vec3 view_direction;      // toward the camera, for orthographic views
 
@@ -211,10 +211,10 @@ void main() {
             bool lingual = dot(n, to_eye) < 0.0;          // the arch seen from inside: the far side's inner faces
             if (lingual) n = -n;
             n = normalize(n + 0.7 * to_eye + cross(vec3(0.0, 1.0, 0.0), n) * (1.8 * f - 0.9) * (1.0 - back));
-            if (lighting) shade = mix(mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap)), 0.9, back);  // the gaps
+            if (lighting || albedo) shade = mix(mix(0.55, 1.0, smoothstep(0.0, 0.35, from_gap)), 0.9, back);  // gaps
             // teeth further back along the arch sit deeper in the mouth, in its shadow
             shade *= mix(1.0, BACK_TEETH_SHADE, smoothstep(2.0, 4.0, abs(v_detail.x)));
-            if (lingual && lighting) shade *= LINGUAL_SHADE;
+            if (lingual && lighting && !albedo) shade *= LINGUAL_SHADE;   // (seen from a viewer: not the bake's)
         }
     } else {
         slot = v_material;   // 4 tongue
@@ -224,8 +224,12 @@ void main() {
         shade = mix(1.0, TONGUE_BACK_SHADE, smoothstep(TONGUE_SHADOW_MM.x, TONGUE_SHADOW_MM.y, v_detail.y))
               * mix(1.0, TONGUE_SIDE_SHADE, smoothstep(0.5, 1.0, abs(v_detail.x)));
     }
-    if (!lighting || albedo) {
-        colour = vec4(albedo ? pow(base, vec3(1.0 / 1.15)) : base, 1.0);
+    if (albedo) {   // as shown under a unit light: the mouth's shadow in, the light's direction and shine out
+        colour = vec4(pow(clamp(base * shade, 0.0, 1.0), vec3(1.0 / 1.15)), 1.0);
+        return;
+    }
+    if (!lighting) {
+        colour = vec4(base, 1.0);
         return;
     }
     vec3 light = ambient;

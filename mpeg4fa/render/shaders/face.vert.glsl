@@ -1,7 +1,7 @@
 #version 330 core
 // Positions and normals in world space (mm); the camera matrix takes them to clip space.
 uniform mat4 world_to_clip;
-uniform bool uv_space;   // draw in texture space instead: the skin's colours baked into its UV image (Renderer.skin_albedo)
+uniform bool uv_space;   // draw in texture space instead: the head's own colours baked into its UV image (Renderer.albedo)
 
 in vec3 in_position;
 in vec3 in_normal;
