@@ -124,13 +124,15 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     looks = materials or Materials()
     layout = build_layout(face.mesh)
     textured: tuple[str, ...] = ("skin",)  # the parts that wear the texture
+    eye_image = None
     if texture is not None:
         skin = "photo"
     else:
         baked = _albedo(face, looks)
         skin = "albedo" if baked is not None else "colours"
         texture, textured = (baked.image, _wearing(baked.parts)) if baked is not None else (None, ())
-    parts = _parts(face, layout, looks, skin)
+        eye_image = baked.eye if baked is not None else None
+    parts = _parts(face, layout, looks, skin, eye_image is not None)
     rest = face.mesh.vertices
     if animation == "morph":
         units = arkit_units(face, where=name)
@@ -142,12 +144,13 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
 
     gltf = gl.GLTF2(asset=gl.Asset(version="2.0", generator=f"mpeg4fa {__version__}"), scene=0)
     buf = GlbBuffer(gltf)
-    skin_texture = _add_texture(gltf, buf, texture) if texture is not None else None
+    worn = dict.fromkeys(textured, _add_texture(gltf, buf, texture, "head") if texture is not None else None)
+    if eye_image is not None:  # both eyeballs' maps are the left one's
+        worn.update(dict.fromkeys(EYES, _add_texture(gltf, buf, eye_image, "eye", mipmaps=False)))
     normals = vertex_normals(rest, layout.triangles, layout.incidence)
 
     def mesh(mesh_name: str, members: list[_Part], targets: np.ndarray | None) -> int:
-        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, skin_texture if part.name in textured else None)
-                 for part in members]
+        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, worn.get(part.name)) for part in members]
         extra = ({"weights": [0.0] * len(names), "extras": {"targetNames": names}} if targets is not None
                  else {"weights": None})
         gltf.meshes.append(gl.Mesh(name=mesh_name, primitives=prims, **extra))
@@ -221,7 +224,7 @@ def _wearing(baked: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(p for p in baked if p not in teeth or all(t in baked for t in teeth))
 
 
-def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str) -> list[_Part]:
+def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str, eyes_baked: bool = False) -> list[_Part]:
     """The renderer's GL vertices (one per mesh vertex and UV) split into one set per drawn part."""
     mesh = face.mesh
     parts, tri_start = [], 0
@@ -234,7 +237,8 @@ def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str) ->
         indices = layout.indices[tri_start:tri_start + len(tris)].astype(np.int64) - mine[0]
         tri_start += len(tris)
         uv = layout.uv[mine].astype(np.float64)
-        colour = _colours(face, part, layout, mine, looks, skin)
+        colour = (np.ones((len(mine), 3)) if eyes_baked and part in EYES
+                  else _colours(face, part, layout, mine, looks, skin))
         parts.append(_Part(part, layout.source[mine], np.c_[uv[:, 0], 1.0 - uv[:, 1]], colour, indices))
     return parts
 
@@ -317,7 +321,9 @@ def _primitive(gltf: gl.GLTF2, buf: GlbBuffer, part: _Part, rest: np.ndarray, no
                         targets=targets, extras={"part": part.name})
 
 
-def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray) -> int:
+def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray, name: str = "skin", mipmaps: bool = True) -> int:
+    """``texture`` embedded as PNG; ``mipmaps`` off for a map whose triangles stretch across it (the eyeball's
+    front-pole fan and its seam: a viewer's mip level there is its coarsest, a light streak across the iris)."""
     from PIL import Image
 
     img = np.asarray(texture)
@@ -326,9 +332,9 @@ def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray) -> int:
                           hint="convert it to 8-bit RGB first")
     png = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(img[:, :, :3])).save(png, format="PNG")
-    gltf.samplers.append(gl.Sampler(magFilter=gl.LINEAR, minFilter=gl.LINEAR_MIPMAP_LINEAR,
+    gltf.samplers.append(gl.Sampler(magFilter=gl.LINEAR, minFilter=gl.LINEAR_MIPMAP_LINEAR if mipmaps else gl.LINEAR,
                                     wrapS=gl.CLAMP_TO_EDGE, wrapT=gl.CLAMP_TO_EDGE))
-    gltf.images.append(gl.Image(bufferView=buf.view(png.getvalue()), mimeType="image/png", name="skin"))
+    gltf.images.append(gl.Image(bufferView=buf.view(png.getvalue()), mimeType="image/png", name=name))
     gltf.textures.append(gl.Texture(sampler=len(gltf.samplers) - 1, source=len(gltf.images) - 1))
     return len(gltf.textures) - 1
 

@@ -29,6 +29,9 @@ from mpeg4fa.render.scene import build_layout, vertex_data
 
 _EYES = (("eye_l", "l-eye"), ("eye_r", "r-eye"))
 MAX_SIZE = 8192
+EYE_ALBEDO_SIZE = 512
+"""Texels a side of the baked eyeball (its map runs from the front pole down to the back: the iris takes the first
+sixth, some 80 texels from the pupil's centre to the limbus)."""
 BAKED_WITH_SKIN = ("teeth_upper", "teeth_lower", "tongue")
 """Parts :meth:`Renderer.albedo` bakes into the skin's UV image where their UVs lie apart from it (the generic head's
 map keeps them in free corners of the skin's square)."""
@@ -41,10 +44,12 @@ AMBIENT = (0.24, 0.24, 0.26)
 
 
 class Albedo(NamedTuple):
-    """What :meth:`Renderer.albedo` bakes: the UV image and the parts whose colours it holds."""
+    """What :meth:`Renderer.albedo` bakes: the UV image, the parts whose colours it holds, and the left eyeball's
+    own UV image (sclera, iris, pupil; None without eyes), which the right one's map shares on the generic head."""
 
     image: np.ndarray
     parts: tuple[str, ...]
+    eye: np.ndarray | None = None
 
 
 class _Uniforms:
@@ -60,6 +65,17 @@ class _Uniforms:
                     prog[name].write(value)
                 else:
                     prog[name].value = value
+
+
+def _filled(rgba: np.ndarray) -> np.ndarray:
+    """An (H, W, 4) bake, bottom row first, as an (H, W, 3) image top row first whose texels off every island (alpha
+    0) take their nearest island texel's colour."""
+    from scipy import ndimage
+
+    rgba = rgba[::-1]
+    covered = rgba[..., 3] > 0
+    nearest = ndimage.distance_transform_edt(~covered, return_distances=False, return_indices=True)
+    return np.ascontiguousarray(rgba[..., :3][nearest[0], nearest[1]])
 
 
 def _unit(v) -> np.ndarray:
@@ -274,8 +290,6 @@ class Renderer:
         browser pages) shows the brows, lips and mouth this renderer draws. Texels off every island take their
         nearest island texel's colour, so that mipmaps and bilinear lookups at an island's edge find no
         background."""
-        from scipy import ndimage
-
         ctx = self.ctx
         self._baking = True
         try:
@@ -287,17 +301,20 @@ class Renderer:
         self.fbo.clear(0.0, 0.0, 0.0, 0.0)
         ctx.disable(ctx.DEPTH_TEST)
         ctx.disable(ctx.CULL_FACE)
+        if self.texture is not None:
+            self.texture.use(0)
+        self.iris_texture.use(1)
         mesh, lay = self.face.mesh, self.layout
-        counts = [len(mesh.triangles.get(part, ())) for part in PART_MATERIAL]
-        starts = dict(zip(PART_MATERIAL, np.r_[0, np.cumsum(counts)[:-1]].astype(int)))
-        self.vao.render(vertices=3 * counts[0], first=0)  # the skin's triangles (the neck's cap has no UVs of its own)
+        counts = {part: len(mesh.triangles.get(part, ())) for part in PART_MATERIAL}  # build_layout's order
+        starts = dict(zip(counts, np.r_[0, np.cumsum(list(counts.values()))[:-1]].astype(int)))
+        self.vao.render(vertices=3 * counts["skin"], first=0)  # the skin's (the neck's cap has no UVs of its own)
         skin = self._read_rgba()[..., 3] > 0
         if not skin.any():
             raise RenderError("the skin has no texture coordinates to bake into", where="renderer",
                               hint="give the head's skin a UV map")
         parts = ["skin"]
         for part in BAKED_WITH_SKIN:  # where their UVs lie apart from the skin's (else they would paint over it)
-            n = len(mesh.triangles.get(part, ()))
+            n = counts.get(part, 0)
             if not n:
                 continue
             first = starts[part]
@@ -307,10 +324,18 @@ class Renderer:
             if not skin[lo[1]:hi[1], lo[0]:hi[0]].any():
                 self.vao.render(vertices=3 * n, first=3 * first)
                 parts.append(part)
-        rgba = self._read_rgba()[::-1]
-        image, covered = rgba[..., :3], rgba[..., 3] > 0
-        nearest = ndimage.distance_transform_edt(~covered, return_distances=False, return_indices=True)
-        return Albedo(np.ascontiguousarray(image[nearest[0], nearest[1]]), tuple(parts))
+        image = _filled(self._read_rgba())
+        eye = None
+        if counts.get("eye_l"):
+            size = min(EYE_ALBEDO_SIZE, self.width, self.height)
+            self.fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self.fbo.viewport = (0, 0, size, size)
+            try:
+                (self.eye_vao or self.vao).render(vertices=3 * counts["eye_l"], first=3 * starts["eye_l"])
+                eye = _filled(self._read_rgba()[:size, :size])
+            finally:
+                self.fbo.viewport = (0, 0, self.width, self.height)
+        return Albedo(image, tuple(parts), eye)
 
     def _read_rgba(self) -> np.ndarray:
         """The framebuffer as (H, W, 4) uint8, bottom row first (GL's order)."""

@@ -329,24 +329,28 @@ def test_blink_is_the_deformers_lid_turn(generic_face, tmp_path):
 
 def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
     """Without a texture the head's own colours (brows, lips, the teeth's and tongue's shadow) go in as its texture,
-    the skin's vertex colours white; where no GL context can be made, the lips and the mouth's dark go into the
-    vertex colours instead."""
+    and the eyeball's (iris and pupil) as theirs, the vertex colours white; where no GL context can be made, the
+    lips and the mouth's dark go into the vertex colours instead."""
+    import pygltflib
+
     from mpeg4fa.render import Renderer
     from mpeg4fa.render.errors import RenderError
 
-    import pygltflib
-
     path, result, gltf = _export(tmp_path, stream, face, animation="vertex")
     skin = next(p for m in gltf.meshes for p in m.primitives if p.extras["part"] == "skin")
-    assert len(gltf.images) == 1 and gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture is not None
+    assert [i.name for i in gltf.images] == ["head", "eye"]
+    eye_sampler = gltf.samplers[gltf.textures[1].sampler]  # no mipmaps: the pole's fan and seam streaked the iris
+    assert eye_sampler.minFilter == pygltflib.LINEAR
+    assert gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture is not None
     assert skin.attributes.TEXCOORD_0 is not None
     worn = {p.extras["part"] for m in gltf.meshes for p in m.primitives
             if gltf.materials[p.material].pbrMetallicRoughness.baseColorTexture is not None}
     for m in gltf.meshes:  # a part wears the image with its texture coordinates, or neither
         for p in m.primitives:
             assert (p.extras["part"] in worn) == (p.attributes.TEXCOORD_0 is not None), p.extras["part"]
+    assert {"skin", "eye_l", "eye_r"} <= worn  # the eyeballs wear the left one's bake (iris with its detail)
     if face.mesh.face_units is not None:  # the generic head's map keeps its teeth and tongue apart: baked too
-        assert worn == {"skin", "teeth_upper", "teeth_lower", "tongue"}, worn
+        assert worn == {"skin", "teeth_upper", "teeth_lower", "tongue", "eye_l", "eye_r"}, worn
 
     def no_gl(self):
         raise RenderError("cannot create a headless OpenGL context", where="GL context")

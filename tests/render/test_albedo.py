@@ -63,7 +63,8 @@ def test_texels_off_the_skin_take_their_nearest_skin_colour(albedo):
 
 
 def _at_vertices(face, image: np.ndarray, part: str) -> tuple[np.ndarray, np.ndarray]:
-    """Luma of ``image`` at the UVs of ``part``'s GL vertices, and their detail coordinates (render/details.py)."""
+    """Colours (RGB, float) of ``image`` at the UVs of ``part``'s GL vertices, and their detail coordinates
+    (render/details.py)."""
     from mpeg4fa.render.scene import build_layout
 
     lay = build_layout(face.mesh)
@@ -72,7 +73,11 @@ def _at_vertices(face, image: np.ndarray, part: str) -> tuple[np.ndarray, np.nda
     uv = lay.uv[mine].astype(float)
     rows = np.clip(((1.0 - uv[:, 1]) * len(image)).astype(int), 0, len(image) - 1)
     cols = np.clip((uv[:, 0] * image.shape[1]).astype(int), 0, image.shape[1] - 1)
-    return image[rows, cols].astype(float) @ np.array([0.2126, 0.7152, 0.0722]), lay.detail[mine]
+    return image[rows, cols].astype(float), lay.detail[mine]
+
+
+def _luma(rgb: np.ndarray) -> np.ndarray:
+    return rgb @ np.array([0.2126, 0.7152, 0.0722])
 
 
 def test_the_teeth_and_tongue_are_baked_with_the_mouth_s_shadow(generic_face, baked):
@@ -83,9 +88,42 @@ def test_the_teeth_and_tongue_are_baked_with_the_mouth_s_shadow(generic_face, ba
     tip's 98."""
     assert baked.parts == ("skin", "teeth_upper", "teeth_lower", "tongue")
     for part in ("teeth_upper", "teeth_lower"):
-        luma, detail = _at_vertices(generic_face, baked.image, part)
+        rgb, detail = _at_vertices(generic_face, baked.image, part)
+        luma = _luma(rgb)
         front, back = luma[np.abs(detail[:, 0]) < 1.5], luma[np.abs(detail[:, 0]) >= 4.0]
         assert len(front) and len(back) and back.mean() < 0.2 * front.max(), (part, back.mean(), front.max())
-    luma, detail = _at_vertices(generic_face, baked.image, "tongue")
+    rgb, detail = _at_vertices(generic_face, baked.image, "tongue")
+    luma = _luma(rgb)
     tip, rear = luma[detail[:, 1] < 8.0], luma[detail[:, 1] > 45.0]
     assert len(tip) and len(rear) and rear.mean() < 0.6 * tip.mean(), (rear.mean(), tip.mean())
+
+
+def test_the_eyeball_is_baked_with_its_iris(generic_face, baked):
+    """The eyeball's own image: pupil, iris (brown, with its detail) and sclera where the shader draws them, by the
+    distance of each of the left eyeball's vertices from its axis (measured: the iris's middle ring luma 70 against
+    the sclera's 189, RGB 96 / 66 / 37). Before it a viewer showed the iris only as far as the eyeball's vertex
+    colours could (a flat disc)."""
+    from mpeg4fa.render.renderer import EYE_ALBEDO_SIZE
+
+    face = generic_face
+    assert baked.eye is not None and baked.eye.shape == (EYE_ALBEDO_SIZE, EYE_ALBEDO_SIZE, 3)
+    rgb, _ = _at_vertices(face, baked.eye, "eye_l")
+    luma = _luma(rgb)
+    from mpeg4fa.render.scene import build_layout
+
+    lay, mesh = build_layout(face.mesh), face.mesh
+    a, b = mesh.part_ranges["eye_l"]
+    source = lay.source[(lay.source >= a) & (lay.source < b)]
+    centre = mesh.vertices[mesh.joints["l-eye"]]
+    axis = mesh.vertices[a] - centre  # vertex 0 of an eyeball is its front pole
+    axis /= np.linalg.norm(axis)
+    offset = mesh.vertices[source] - centre
+    across = np.linalg.norm(offset - np.outer(offset @ axis, axis), axis=1)
+    front = offset @ axis > 0
+    iris = float(face.fapu.IRISD0) / 2.0
+    ring = front & (across > 0.45 * iris) & (across < 0.85 * iris)
+    sclera = front & (across > 1.3 * iris)
+    assert ring.sum() >= 6 and sclera.sum() >= 6, (int(ring.sum()), int(sclera.sum()))
+    assert luma[ring].mean() < 0.6 * luma[sclera].mean(), (luma[ring].mean(), luma[sclera].mean())
+    red, blue = rgb[ring, 0].mean(), rgb[ring, 2].mean()
+    assert red > 1.5 * blue, (red, blue)  # brown: the iris's colour through its pattern, not grey

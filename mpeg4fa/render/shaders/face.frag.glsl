@@ -91,7 +91,7 @@ vec3 eye_colour(int eye, out int slot, out vec3 wet_normal) {
         vec3 cornea = normalize(side / max(across, 1e-5) * a + axis * sqrt(cornea_radius * cornea_radius - a * a));
         wet_normal = normalize(mix(cornea, wet_normal, smoothstep(iris_radius * 0.9, limbus, across)));
     }
-    if (!lighting) {                                  // unlit: flat colours, for the pixel tests
+    if (!lighting && !albedo) {                       // unlit: flat colours, for the pixel tests
         if (along <= 0.0 || across > iris_radius) return base_colour[2];
         return across < pupil_radius[eye] ? pupil_colour : iris_colour;
     }
