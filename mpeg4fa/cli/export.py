@@ -40,7 +40,8 @@ def _write_glb(args: argparse.Namespace) -> str:
         bar.close()
     extra = f"; speech: {result.audio}" if result.audio else ""
     if result.skin == "colours":
-        extra += "; no GL context, so the brows are left out (the lips are in the vertex colours)"
+        extra += ("; the head's colours could not be baked into a texture (no OpenGL context, or no UV map), so "
+                  "the brows are left out (the lips are in the vertex colours)")
     return (f"{args.output}: {result.n_parts} parts, {result.n_targets} morph targets, {result.n_frames} key frames "
             f"({result.duration:.2f} s, {args.animation} animation), {result.bytes / 1e6:.1f} MB{extra}")
 

@@ -23,11 +23,12 @@ Geometry is in metres (the model's millimetres / 1000), y up, the face looking a
 one primitive per drawn part (skin, eyes, teeth, tongue; in morph animation the eyes in
 meshes of their own) with its material: base colours
 of :mod:`mpeg4fa.render.materials`; the head's own colours (skin, lips, brows with their hair strokes, the dark of
-the mouth; teeth with gums, gaps and the back teeth's shadow; the tongue in the mouth's shadow) baked by the
+the mouth; teeth with gums and the back teeth's shadow, their gaps a texel; the tongue in the mouth's shadow;
+the eyeball's sclera, iris and pupil in an image of its own) baked by the
 renderer's face shader into the head's UV image (:meth:`.Renderer.albedo`, embedded as PNG), so that any viewer
 shows the brows, lips and mouth our renderer draws (where no GL context can be made, the lips and the mouth's dark
-go into the skin's vertex colours and the rest is left out); iris and pupil in the eyes' vertex colours; or a skin
-texture (e.g. an FDP's) embedded as PNG, the mouth's dark in the vertex colours. glTF carries no sound: the stream's
+go into the skin's vertex colours, iris and pupil into the eyes', and the rest is left out); or a skin texture (e.g.
+an FDP's) embedded as PNG, the mouth's dark in the vertex colours. glTF carries no sound: the stream's
 WAV is written beside the GLB under its name (``head.glb`` -> ``head.wav``).
 """
 from __future__ import annotations
@@ -206,15 +207,17 @@ def _frame_poses(face: FaceModel, values: np.ndarray, rest: np.ndarray,
 
 
 def _albedo(face: FaceModel, looks: Materials):
-    """The head's own colours in its UV image (:meth:`.Renderer.albedo`), or None where GL cannot draw."""
+    """The head's own colours in its UV image (:meth:`.Renderer.albedo`), or None where they cannot be baked."""
     from mpeg4fa.render import Renderer
     from mpeg4fa.render.errors import RenderError
+
+    import moderngl
 
     try:
         with Renderer(face, width=ALBEDO_SIZE, height=ALBEDO_SIZE, materials=looks, lighting=False,
                       lashes=False) as r:
             return r.albedo()
-    except RenderError:
+    except (RenderError, moderngl.Error):  # no GL context, no UV map, or a framebuffer this GL cannot make
         return None
 
 

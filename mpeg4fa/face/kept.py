@@ -35,17 +35,20 @@ def kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[
 def kept_sparse(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],
                 derive: Callable[[], sp.spmatrix]) -> sp.csr_matrix:
     """:func:`kept` of a sparse matrix (kept as its CSR arrays)."""
-    def arrays() -> dict[str, np.ndarray]:
-        m = sp.csr_matrix(derive())
-        return {"data": m.data, "indices": m.indices, "indptr": m.indptr, "shape": np.array(m.shape)}
-
-    a = _kept(kind, inputs, rules, SPARSE, arrays)
+    a = _kept(kind, inputs, rules, SPARSE, lambda: _csr_arrays(derive()))
     try:
         m = sp.csr_matrix((a["data"], a["indices"], a["indptr"]), shape=tuple(int(n) for n in a["shape"]))
         m.check_format(full_check=True)
         return m
-    except (ValueError, TypeError, IndexError):  # a foreign file's arrays that make no matrix
-        return sp.csr_matrix(derive())
+    except (ValueError, TypeError, IndexError):  # a foreign file's arrays that make no matrix: derived and written anew
+        m = sp.csr_matrix(derive())
+        _write(_path(kind, inputs, rules), _csr_arrays(m))
+        return m
+
+
+def _csr_arrays(matrix: sp.spmatrix) -> dict[str, np.ndarray]:
+    m = sp.csr_matrix(matrix)
+    return {"data": m.data, "indices": m.indices, "indptr": m.indptr, "shape": np.array(m.shape)}
 
 
 def _kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],
@@ -61,6 +64,12 @@ def _kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable
         except Exception:  # noqa: BLE001 - torn, foreign or unreadable (zlib, zip, npy, key errors alike)
             pass  # derived again below and written anew
     arrays = derive()
+    _write(path, arrays)
+    return arrays
+
+
+def _write(path: Path, arrays: dict[str, np.ndarray]) -> None:
+    """Write ``arrays`` at ``path`` atomically (a reader sees the old file or the new one), then prune its kind."""
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -74,7 +83,6 @@ def _kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable
     finally:
         if tmp is not None and os.path.exists(tmp.name):
             os.unlink(tmp.name)
-    return arrays
 
 
 def _touch(path: Path) -> None:

@@ -33,6 +33,9 @@ EYE_ALBEDO_SIZE = 512
 """Texels a side of the baked eyeball (its map runs from the front pole down to the back: the iris takes the first
 sixth, some 80 texels from the pupil's centre to the limbus)."""
 BAKED_WITH_SKIN = ("teeth_upper", "teeth_lower", "tongue")
+OVERLAP_SHARE = 0.05
+"""A part baked with the skin may share at most this share of its texels with what is baked already (the generic
+head's upper and lower teeth touch along a row of texels; a part laid over another shares most of them)."""
 """Parts :meth:`Renderer.albedo` bakes into the skin's UV image where their UVs lie apart from it (the generic head's
 map keeps them in free corners of the skin's square)."""
 STATIC_ATTRIBUTES = ("2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints", "in_detail", "in_nose", "in_neck")
@@ -308,23 +311,27 @@ class Renderer:
         counts = {part: len(mesh.triangles.get(part, ())) for part in PART_MATERIAL}  # build_layout's order
         starts = dict(zip(counts, np.r_[0, np.cumsum(list(counts.values()))[:-1]].astype(int)))
         self.vao.render(vertices=3 * counts["skin"], first=0)  # the skin's (the neck's cap has no UVs of its own)
-        skin = self._read_rgba()[..., 3] > 0
-        if not skin.any():
+        baked = self._read_rgba()
+        taken = baked[..., 3] > 0
+        if not taken.any():
             raise RenderError("the skin has no texture coordinates to bake into", where="renderer",
                               hint="give the head's skin a UV map")
         parts = ["skin"]
-        for part in BAKED_WITH_SKIN:  # where their UVs lie apart from the skin's (else they would paint over it)
+        for part in BAKED_WITH_SKIN:  # each where its UVs lie apart from what is baked (else it would paint over it)
             n = counts.get(part, 0)
-            if not n:
+            uv = lay.uv[lay.indices[starts[part]:starts[part] + n].ravel()]
+            if not n or uv.min() < 0.0 or uv.max() > 1.0:  # none, or off the image (another UV tile)
                 continue
-            first = starts[part]
-            uv = lay.uv[lay.indices[first:first + n].ravel()]
-            lo = np.clip(np.floor(uv.min(axis=0) * (self.width, self.height)).astype(int), 0, None)
-            hi = np.ceil(uv.max(axis=0) * (self.width, self.height)).astype(int) + 1
-            if not skin[lo[1]:hi[1], lo[0]:hi[0]].any():
-                self.vao.render(vertices=3 * n, first=3 * first)
-                parts.append(part)
-        image = _filled(self._read_rgba())
+            self.fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self.vao.render(vertices=3 * n, first=3 * starts[part])
+            drawn = self._read_rgba()
+            mine = drawn[..., 3] > 0
+            # none (UVs collapsed to a point), or on another island (islands that touch share an edge's texels)
+            if mine.sum() == 0 or (mine & taken).sum() > OVERLAP_SHARE * mine.sum():
+                continue
+            baked[mine], taken = drawn[mine], taken | mine
+            parts.append(part)
+        image = _filled(baked)
         eye = None
         if counts.get("eye_l"):
             size = min(EYE_ALBEDO_SIZE, self.width, self.height)

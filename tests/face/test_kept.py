@@ -102,7 +102,6 @@ def test_a_sparse_matrix_reads_back_exactly(tmp_path, monkeypatch):
     again = kept_sparse("weights", (np.arange(3.0),), (kept_module,), derive)
     assert len(calls) == 1 and again.shape == (40, 9) and again.dtype == m.dtype
     assert (first != m).nnz == 0 and np.array_equal(again.toarray(), m.toarray())
-    kept("weights", (np.arange(3.0),), (kept_module,), lambda: np.zeros(2))  # read back: not a matrix
     path = kept_module._path("weights", (np.arange(3.0),), (kept_module,))
     np.savez(path, array=np.zeros(2))  # a dense array under the matrix's name
     assert np.array_equal(kept_sparse("weights", (np.arange(3.0),), (kept_module,), derive).toarray(), m.toarray())
@@ -120,6 +119,14 @@ def test_the_rig_built_from_kept_weights_is_the_rig(generic_face, tmp_path, monk
     read = rig_module._sibson(mesh, skin, fps, None)
     assert list((tmp_path / "sibson").glob("*.npz"))
     assert derived[0] == read[0] and (derived[1] != read[1]).nnz == 0
+    # the same as the weights without the cache (the rule as it was before it was kept)
+    from mpeg4fa.face.sibson import cage_points, natural_neighbour_weights
+
+    sites = mesh.vertices[mesh.fp_vertex[read[0]]]
+    queries = mesh.vertices[skin]
+    plain = natural_neighbour_weights(np.concatenate([sites, cage_points(np.concatenate([sites, queries]))]),
+                                      queries)[:, :len(read[0])].tocsc()
+    assert (plain != read[1]).nnz == 0
 
 
 def test_a_foreign_sparse_file_is_derived_again(tmp_path, monkeypatch):
@@ -133,3 +140,6 @@ def test_a_foreign_sparse_file_is_derived_again(tmp_path, monkeypatch):
     path.parent.mkdir(parents=True)
     np.savez(path, data=np.ones(4), indices=np.array([0, 9, 1, 2]), indptr=np.arange(5), shape=np.array([4, 4]))
     assert np.array_equal(kept_sparse("weights", (np.ones(2),), (kept_module,), lambda: m).toarray(), np.eye(4))
+    # written anew: read back without deriving
+    again = kept_sparse("weights", (np.ones(2),), (kept_module,), lambda: pytest.fail("derived again"))
+    assert np.array_equal(again.toarray(), np.eye(4))

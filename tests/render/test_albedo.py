@@ -127,3 +127,32 @@ def test_the_eyeball_is_baked_with_its_iris(generic_face, baked):
     assert luma[ring].mean() < 0.6 * luma[sclera].mean(), (luma[ring].mean(), luma[sclera].mean())
     red, blue = rgb[ring, 0].mean(), rgb[ring, 2].mean()
     assert red > 1.5 * blue, (red, blue)  # brown: the iris's colour through its pattern, not grey
+
+
+def test_parts_off_the_image_or_on_baked_texels_are_not_baked(generic_face):
+    """A part's UVs off the unit square (another UV tile) or over an island already baked leave it out of the bake
+    (it would wear the image's edge, skin-coloured teeth, or another part's colours); found by review."""
+    from dataclasses import replace
+
+    from mpeg4fa.face import FaceModel
+
+    mesh = generic_face.mesh
+    uvs = dict(mesh.corner_uvs)
+    uvs["tongue"] = uvs["tongue"] + (1.0, 0.0)  # another UV tile
+    uvs["teeth_lower"] = uvs["teeth_upper"][:len(uvs["teeth_lower"])]  # onto the upper teeth's island
+    face = FaceModel(replace(mesh, corner_uvs=uvs))
+    with Renderer(face, width=256, height=256, lighting=False, lashes=False) as r:
+        assert r.albedo().parts == ("skin", "teeth_upper")
+
+
+def test_a_textured_renderer_bakes_its_own_texture(generic_face):
+    """The bake binds the renderer's own skin texture (another renderer's drawn before it was still bound to the
+    unit: found by review)."""
+    red, green = (np.zeros((64, 64, 3), np.uint8) for _ in range(2))
+    red[..., 0] = 255
+    green[..., 1] = 255
+    with Renderer(generic_face, width=128, height=128, texture=red) as first, \
+            Renderer(generic_face, width=256, height=256, lighting=False, lashes=False, texture=green) as second:
+        first.render(generic_face.neutral())
+        image = second.albedo().image.astype(int)
+    assert (image[..., 1] > image[..., 0]).mean() > 0.5
