@@ -28,7 +28,8 @@ the eyeball's sclera, iris and pupil in an image of its own) baked by the
 renderer's face shader into the head's UV image (:meth:`.Renderer.albedo`, embedded as PNG), so that any viewer
 shows the brows, lips and mouth our renderer draws (where no GL context can be made, the lips and the mouth's dark
 go into the skin's vertex colours, iris and pupil into the eyes', and the rest is left out); or a skin texture (e.g.
-an FDP's) embedded as PNG, the mouth's dark in the vertex colours. glTF carries no sound: the stream's
+an FDP's) embedded as PNG with the baked teeth and tongue laid on their islands, the mouth's dark in the vertex
+colours. glTF carries no sound: the stream's
 WAV is written beside the GLB under its name (``head.glb`` -> ``head.wav``).
 """
 from __future__ import annotations
@@ -125,14 +126,16 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     looks = materials or Materials()
     layout = build_layout(face.mesh)
     textured: tuple[str, ...] = ("skin",)  # the parts that wear the texture
-    eye_image = None
     if texture is not None:
-        skin = "photo"
+        texture = _checked(texture)
+        skin, baked = "photo", _albedo(face, looks, (texture.shape[1], texture.shape[0]))
+        if baked is not None:  # the photo's skin, the teeth's and tongue's own colours on their islands
+            texture, textured = _with_parts(texture, baked)
     else:
         baked = _albedo(face, looks)
         skin = "albedo" if baked is not None else "colours"
         texture, textured = (baked.image, _wearing(baked.parts)) if baked is not None else (None, ())
-        eye_image = baked.eye if baked is not None else None
+    eye_image = baked.eye if baked is not None else None
     parts = _parts(face, layout, looks, skin, eye_image is not None)
     rest = face.mesh.vertices
     if animation == "morph":
@@ -206,19 +209,31 @@ def _frame_poses(face: FaceModel, values: np.ndarray, rest: np.ndarray,
     return shapes, [f"frame {int(f)}" for f in first], weights
 
 
-def _albedo(face: FaceModel, looks: Materials):
-    """The head's own colours in its UV image (:meth:`.Renderer.albedo`), or None where they cannot be baked."""
+def _albedo(face: FaceModel, looks: Materials, size: tuple[int, int] = (ALBEDO_SIZE, ALBEDO_SIZE)):
+    """The head's own colours in its UV image (:meth:`.Renderer.albedo`, ``size`` texels), or None where they cannot
+    be baked."""
+    import moderngl
+
     from mpeg4fa.render import Renderer
     from mpeg4fa.render.errors import RenderError
 
-    import moderngl
-
     try:
-        with Renderer(face, width=ALBEDO_SIZE, height=ALBEDO_SIZE, materials=looks, lighting=False,
-                      lashes=False) as r:
+        with Renderer(face, width=size[0], height=size[1], materials=looks, lighting=False, lashes=False) as r:
             return r.albedo()
     except (RenderError, moderngl.Error):  # no GL context, no UV map, or a framebuffer this GL cannot make
         return None
+
+
+def _with_parts(photo: np.ndarray, baked) -> tuple[np.ndarray, tuple[str, ...]]:
+    """A photo texture with the baked parts other than the skin (teeth, tongue) laid on their own islands, and the
+    parts that wear it (the photo's texels elsewhere as they were)."""
+    wearing = _wearing(baked.parts)
+    out = np.array(photo[:, :, :3])
+    for k, part in enumerate(baked.parts):
+        if part != "skin" and part in wearing:
+            here = baked.owner == k
+            out[here] = baked.image[here]
+    return out, wearing
 
 
 def _wearing(baked: tuple[str, ...]) -> tuple[str, ...]:
@@ -329,10 +344,7 @@ def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray, name: str 
     front-pole fan and its seam: a viewer's mip level there is its coarsest, a light streak across the iris)."""
     from PIL import Image
 
-    img = np.asarray(texture)
-    if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8:
-        raise ExportError(f"a skin texture is an (H, W, 3) uint8 image, got {img.shape} {img.dtype}",
-                          hint="convert it to 8-bit RGB first")
+    img = _checked(texture)
     png = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(img[:, :, :3])).save(png, format="PNG")
     gltf.samplers.append(gl.Sampler(magFilter=gl.LINEAR, minFilter=gl.LINEAR_MIPMAP_LINEAR if mipmaps else gl.LINEAR,
@@ -340,6 +352,14 @@ def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray, name: str 
     gltf.images.append(gl.Image(bufferView=buf.view(png.getvalue()), mimeType="image/png", name=name))
     gltf.textures.append(gl.Texture(sampler=len(gltf.samplers) - 1, source=len(gltf.images) - 1))
     return len(gltf.textures) - 1
+
+
+def _checked(texture: np.ndarray) -> np.ndarray:
+    img = np.asarray(texture)
+    if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8 or min(img.shape[:2]) < 1:
+        raise ExportError(f"a skin texture is an (H, W, 3) uint8 image, got {img.shape} {img.dtype}",
+                          hint="convert it to 8-bit RGB first")
+    return img
 
 
 def _rigid_scene(gltf: gl.GLTF2, face: FaceModel, values: np.ndarray, parts: list[_Part], name: str,

@@ -53,6 +53,7 @@ class Albedo(NamedTuple):
     image: np.ndarray
     parts: tuple[str, ...]
     eye: np.ndarray | None = None
+    owner: np.ndarray | None = None  # (H, W) uint8, top row first: each texel's part (index into parts; 255: none)
 
 
 class _Uniforms:
@@ -313,6 +314,7 @@ class Renderer:
         self.vao.render(vertices=3 * counts["skin"], first=0)  # the skin's (the neck's cap has no UVs of its own)
         baked = self._read_rgba()
         taken = baked[..., 3] > 0
+        owner = np.where(taken, 0, 255).astype(np.uint8)
         if not taken.any():
             raise RenderError("the skin has no texture coordinates to bake into", where="renderer",
                               hint="give the head's skin a UV map")
@@ -330,6 +332,7 @@ class Renderer:
             if mine.sum() == 0 or (mine & taken).sum() > OVERLAP_SHARE * mine.sum():
                 continue
             baked[mine], taken = drawn[mine], taken | mine
+            owner[mine] = len(parts)
             parts.append(part)
         image = _filled(baked)
         eye = None
@@ -342,7 +345,7 @@ class Renderer:
                 eye = _filled(self._read_rgba()[:size, :size])
             finally:
                 self.fbo.viewport = (0, 0, self.width, self.height)
-        return Albedo(image, tuple(parts), eye)
+        return Albedo(image, tuple(parts), eye, np.ascontiguousarray(owner[::-1]))
 
     def _read_rgba(self) -> np.ndarray:
         """The framebuffer as (H, W, 4) uint8, bottom row first (GL's order)."""

@@ -174,10 +174,17 @@ def test_texture_is_embedded_png_on_the_skin(procedural_face, stream, tmp_path):
     from PIL import Image
     texture = np.random.default_rng(1).integers(0, 255, (32, 48, 3), dtype=np.uint8)
     path, _, gltf = _export(tmp_path, stream, procedural_face, animation="vertex", texture=texture)
-    image, = gltf.images
+    image, eye = gltf.images  # the photo (the teeth's and tongue's islands baked onto it), the eyeball's own bake
     view = gltf.bufferViews[image.bufferView]
     png = gltf.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength]
-    assert image.mimeType == "image/png" and np.array_equal(np.asarray(Image.open(io.BytesIO(png))), texture)
+    got = np.asarray(Image.open(io.BytesIO(png)))
+    from mpeg4fa.render import Renderer
+
+    with Renderer(procedural_face, width=48, height=32, lighting=False, lashes=False) as r:
+        baked = r.albedo()
+    kept = np.isin(baked.owner, [0, 255])  # the skin's texels and those of no island: the photo's own
+    assert image.mimeType == "image/png" and eye.name == "eye" and kept.mean() > 0.5
+    assert got.shape == texture.shape and np.array_equal(got[kept], texture[kept])
     skin = _primitives(gltf)["skin"][1]
     assert gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture.index == 0
     uv = read_accessor(gltf, skin.attributes.TEXCOORD_0)
@@ -359,3 +366,24 @@ def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
     data, summary = build_glb(stream, face, animation="vertex")
     assert summary["skin"] == "colours" and not pygltflib.GLTF2.load_from_bytes(data).images
     assert result.skin == "albedo"
+
+
+def test_a_photo_texture_carries_the_baked_teeth_and_tongue(generic_face, stream):
+    """With a photo texture (an FDP's) the teeth and tongue still wear their own baked colours, laid on their islands
+    of the photo's image, and the eyeballs theirs: a calibrated head in the browser pages showed white fangs."""
+    import io
+
+    import pygltflib
+    from PIL import Image
+
+    photo = np.zeros((512, 512, 3), np.uint8)
+    photo[..., 1] = 200
+    data, summary = build_glb(stream, generic_face, animation="vertex", texture=photo)
+    gltf = pygltflib.GLTF2.load_from_bytes(data)
+    assert summary["skin"] == "photo" and [i.name for i in gltf.images] == ["head", "eye"]
+    worn = {p.extras["part"] for m in gltf.meshes for p in m.primitives if p.attributes.TEXCOORD_0 is not None}
+    assert worn == {"skin", "teeth_upper", "teeth_lower", "tongue", "eye_l", "eye_r"}, worn
+    view = gltf.bufferViews[gltf.images[0].bufferView]
+    got = np.asarray(Image.open(io.BytesIO(gltf.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength])))
+    changed = (got != photo).any(axis=2)
+    assert 0.001 < changed.mean() < 0.05, changed.mean()  # the islands only (measured 0.25 %)

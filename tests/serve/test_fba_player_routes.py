@@ -72,7 +72,7 @@ def test_a_served_texture_is_in_the_pages_head():
     image[..., 1] = 200
     glb = TestClient(create_app(face_for_tests(), texture=image), base_url="http://127.0.0.1").get("/static/fap-head.glb")
     gltf = pygltflib.GLTF2.load_from_bytes(glb.content)
-    assert len(gltf.images) == 1 and gltf.images[0].mimeType == "image/png"
+    assert [i.name for i in gltf.images] == ["head", "eye"] and gltf.images[0].mimeType == "image/png"
     assert _png_size(gltf) == (64, 64)
     plain = TestClient(create_app(face_for_tests()), base_url="http://127.0.0.1").get("/static/fap-head.glb")
     plain_gltf = pygltflib.GLTF2.load_from_bytes(plain.content)  # without one: the skin's own colours, baked
