@@ -81,6 +81,31 @@ def per_frame(face, renderer, data: bytes, repeat: int) -> dict:
     return best
 
 
+def albedo_bake(face, repeat: int = 3) -> dict:
+    """The head's own colours baked into its UV images, as the GLB export and the browser pages' head do it:
+    seconds (best of ``repeat``, renderer set-up included) and the PNGs' sizes."""
+    import io
+
+    from PIL import Image
+
+    from mpeg4fa.export.gltf import ALBEDO_SIZE
+
+    best, baked = float("inf"), None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        with Renderer(face, width=ALBEDO_SIZE, height=ALBEDO_SIZE, lighting=False, lashes=False) as r:
+            baked = r.albedo()
+        best = min(best, time.perf_counter() - t)
+
+    def kib(image) -> float:
+        png = io.BytesIO()
+        Image.fromarray(image).save(png, format="PNG")
+        return len(png.getvalue()) / 1024
+
+    return {"size": ALBEDO_SIZE, "seconds": best, "parts": list(baked.parts), "head_png_kib": kib(baked.image),
+            "eye_png_kib": kib(baked.eye) if baked.eye is not None else 0.0}
+
+
 def compare(args) -> int:
     """Per-frame stages of this checkout and of ``--against`` in turns; the best of each, and their ratio."""
     import subprocess
@@ -160,6 +185,7 @@ def main() -> int:
             exports[label] = {"seconds": r.seconds, "video_s": r.duration, "speed_x_realtime": r.speed,
                               "frames": r.n_frames, "rendered": r.rendered}
     result["export"] = exports
+    result["albedo"] = albedo_bake(face)
     result["max_rss_mib"] = rss_mib()
 
     print(f"GL: {result['gl']['GL_RENDERER']} ({result['gl']['GL_VERSION']}); context {result['context_s'] * 1e3:.0f} ms")
@@ -174,6 +200,9 @@ def main() -> int:
     for label, e in exports.items():
         ok = "PASS" if e["speed_x_realtime"] >= 1 else "FAIL"
         print(f"{label:24s} {e['seconds']:8.2f} {e['video_s']:8.2f} {e['speed_x_realtime']:12.2f}  >= 1 {ok}")
+    b = result["albedo"]
+    print(f"albedo bake (the GLB's textures, Renderer.albedo at {b['size']}): {b['seconds']:.2f} s, "
+          f"{', '.join(b['parts'])}; PNGs {b['head_png_kib']:.0f} + {b['eye_png_kib']:.0f} KiB")
     print(f"max RSS {result['max_rss_mib']:.0f} MiB")
     args.json.write_text(json.dumps(result, indent=1, default=float))
     print(f"wrote {args.json}")
