@@ -63,7 +63,7 @@ RENDER_GAMMA = 1.15
 MM = 0.001  # model millimetres -> glTF metres
 ALBEDO_SIZE = 2048
 """Texels a side of the baked skin image: the generic head's face spans a sixth of its UV square (about 2 texels
-a mm here, a texel a pixel where the browser pages show the head; 42 KiB of PNG, baked in about a second)."""
+a mm here, a texel a pixel where the browser pages show the head; 59 KiB of PNG, baked in about a second)."""
 PART_LOOK = {"skin": "skin", "eye_l": "sclera", "eye_r": "sclera", "teeth_upper": "teeth", "teeth_lower": "teeth",
              "tongue": "tongue"}
 """Drawn part -> the :class:`~mpeg4fa.render.materials.Materials` entry it wears, in the renderer's order."""
@@ -255,17 +255,17 @@ def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str, ey
         indices = layout.indices[tri_start:tri_start + len(tris)].astype(np.int64) - mine[0]
         tri_start += len(tris)
         uv = layout.uv[mine].astype(np.float64)
-        colour = (np.ones((len(mine), 3)) if eyes_baked and part in EYES
-                  else _colours(face, part, layout, mine, looks, skin))
+        colour = _colours(face, part, layout, mine, looks, skin, eyes_baked)
         parts.append(_Part(part, layout.source[mine], np.c_[uv[:, 0], 1.0 - uv[:, 1]], colour, indices))
     return parts
 
 
 def _colours(face: FaceModel, part: str, layout: SceneLayout, mine: np.ndarray, looks: Materials,
-             skin: str) -> np.ndarray:
+             skin: str, eyes_baked: bool = False) -> np.ndarray:
     """Per-vertex linear colours, multiplied by the material's base colour (white where they are set here).
     ``skin``: what the skin's texture holds: ``albedo`` all of its colours, ``photo`` a photo's (the mouth's dark
-    goes on it here), ``colours`` none (no texture: skin, lips and the mouth's dark here)."""
+    goes on it here), ``colours`` none (no texture: skin, lips and the mouth's dark here); ``eyes_baked``: the
+    eyeballs wear their own baked image (else iris and pupil go here)."""
     n = len(mine)
     textured = skin != "colours"
     if part == "skin" and skin == "albedo":
@@ -276,8 +276,8 @@ def _colours(face: FaceModel, part: str, layout: SceneLayout, mine: np.ndarray, 
             base += layout.lips[mine, None] * (shown_colour(looks.lips) - base)
         cavity = shown_colour(looks.cavity) / (1.0 if not textured else shown_colour(looks.skin.colour))
         return base + layout.cavity[mine, None] * (np.minimum(cavity, 1.0) - base)
-    if part in ("eye_l", "eye_r"):
-        return _eye_colours(face, part, layout.source[mine], looks)
+    if part in EYES:
+        return np.ones((n, 3)) if eyes_baked else _eye_colours(face, part, layout.source[mine], looks)
     return np.ones((n, 3))
 
 

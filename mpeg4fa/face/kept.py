@@ -48,7 +48,7 @@ def kept_sparse(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: It
 
 def _csr_arrays(matrix: sp.spmatrix) -> dict[str, np.ndarray]:
     m = sp.csr_matrix(matrix)
-    return {"data": m.data, "indices": m.indices, "indptr": m.indptr, "shape": np.array(m.shape)}
+    return dict(zip(SPARSE, (m.data, m.indices, m.indptr, np.array(m.shape))))
 
 
 def _kept(kind: str, inputs: Iterable[np.ndarray | str | bytes], rules: Iterable[ModuleType],

@@ -33,11 +33,11 @@ EYE_ALBEDO_SIZE = 512
 """Texels a side of the baked eyeball (its map runs from the front pole down to the back: the iris takes the first
 sixth, some 80 texels from the pupil's centre to the limbus)."""
 BAKED_WITH_SKIN = ("teeth_upper", "teeth_lower", "tongue")
+"""Parts :meth:`Renderer.albedo` bakes into the skin's UV image where their UVs lie apart from it (the generic head's
+map keeps them in free corners of the skin's square)."""
 OVERLAP_SHARE = 0.05
 """A part baked with the skin may share at most this share of its texels with what is baked already (the generic
 head's upper and lower teeth touch along a row of texels; a part laid over another shares most of them)."""
-"""Parts :meth:`Renderer.albedo` bakes into the skin's UV image where their UVs lie apart from it (the generic head's
-map keeps them in free corners of the skin's square)."""
 STATIC_ATTRIBUTES = ("2f 1f 2f 2f 2f 1f", "in_uv", "in_material", "in_tints", "in_detail", "in_nose", "in_neck")
 """The layout's per-vertex columns (uv, material, lips and cavity tints, detail, nose, neck) as the face programs read them."""
 
@@ -287,8 +287,9 @@ class Renderer:
         """The head's own colours in its UV image, as this renderer shows them under a unit light (the mouth's
         shadow in, the light's direction and shine out): the skin (lips, brows, the mouth's dark) and, where its UV
         map places them apart from the skin, the teeth (gums, gaps, the back teeth's shadow) and the tongue;
-        :class:`Albedo`: the ``(height, width, 3)`` uint8 image, row 0 = v 1 (as :meth:`set_texture` takes one), and
-        the parts it holds.
+        :class:`Albedo`: the ``(height, width, 3)`` uint8 image, row 0 = v 1 (as :meth:`set_texture` takes one), the
+        parts it holds, which part each texel belongs to, and the left eyeball's own image (:data:`EYE_ALBEDO_SIZE`
+        a side: sclera, the iris with its detail, the pupil at rest).
 
         Drawn by the face shader itself in texture space, so a viewer that has only textures (a glTF one, the
         browser pages) shows the brows, lips and mouth this renderer draws. Texels off every island take their
