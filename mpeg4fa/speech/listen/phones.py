@@ -68,10 +68,11 @@ def phone_decoder():
 
 
 def decode_pcm(decoder, pcm: bytes) -> list:
-    """One utterance through ``decoder``: its segments (empty where it finds no path)."""
-    decoder.start_utt()
-    decoder.process_raw(pcm, full_utt=True)
-    decoder.end_utt()
+    """One utterance through ``decoder`` (:func:`~mpeg4fa.speech.align.sphinx.decode_whole`): its segments (empty
+    where it finds no path)."""
+    from mpeg4fa.speech.align.sphinx import decode_whole
+
+    decode_whole(decoder, pcm)
     return list(decoder.seg()) if decoder.hyp() is not None else []
 
 

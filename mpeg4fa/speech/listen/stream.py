@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from mpeg4fa.speech.align.errors import AlignError
-from mpeg4fa.speech.align.recording import HOP, Recording, frame_levels
+from mpeg4fa.speech.align.recording import HOP, Recording, frame_levels, speech_frames
 from mpeg4fa.speech.listen.core import (Listened, check_language, choose_recognizer, expression_cues, listen,
                                         phone_loop, settled)
 from mpeg4fa.speech.listen.voice import voice_activity
@@ -31,6 +31,10 @@ BLOCK_SECONDS = 30.0
 """Audio heard at a time."""
 CUT_SECONDS = 3.0
 """A block ends at the quietest 10 ms of its last this many seconds."""
+SPLIT_SECONDS = 4.0
+"""A last block heard alone is cut in two from this length on (:func:`blocks`)."""
+PAUSE_SECONDS = 0.08
+"""The shortest pause that cut is put in (:func:`_middle_pause`): between words, not a stop's closure."""
 RAW_RATE = 16000
 """Sample rate of raw PCM (``encode --speech -``) unless told otherwise."""
 RAW_FORMAT = "signed 16-bit little-endian mono (s16le)"
@@ -101,25 +105,54 @@ def raw_source(handle, rate: int = RAW_RATE, name: str = "<stdin>") -> Source:
     return Source(name, rate, None, pieces())
 
 
+def _quiet_cut(x: np.ndarray, start: int, stop: int, rate: int) -> int:
+    """The sample at the quietest 10 ms of ``x[start:stop]``: between words, not inside one."""
+    levels = frame_levels(x[start:stop].astype(np.float64) / 32768.0, rate)
+    return start + int(np.argmin(levels)) * int(round(HOP * rate))
+
+
+def _middle_pause(x: np.ndarray, rate: int) -> int:
+    """Where to cut a lone block in two: the middle of the pause (at least :data:`PAUSE_SECONDS` without speech
+    energy, :func:`~mpeg4fa.speech.align.recording.speech_frames`) nearest the block's middle within its middle
+    half (the two halves take about as long to hear), else the quietest 10 ms there."""
+    hop = int(round(HOP * rate))
+    quiet = ~speech_frames(frame_levels(x.astype(np.float64) / 32768.0, rate))
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], quiet.astype(np.int8), [0]])))
+    runs = edges.reshape(-1, 2)  # [start, stop) of each quiet run, in frames
+    runs = runs[runs[:, 1] - runs[:, 0] >= int(round(PAUSE_SECONDS / HOP))]
+    middles = (runs[:, 0] + runs[:, 1]) // 2 * hop
+    inside = middles[(middles >= len(x) // 4) & (middles <= 3 * len(x) // 4)]
+    if len(inside):
+        return int(inside[np.argmin(np.abs(inside - len(x) // 2))])
+    return _quiet_cut(x, len(x) // 4, 3 * len(x) // 4, rate)
+
+
 def blocks(source: Source, block_seconds: float = BLOCK_SECONDS) -> Iterator[tuple[float, Recording]]:
-    """``(offset s, Recording)`` blocks of the source, each cut at a quiet moment (see the module docstring)."""
+    """``(offset s, Recording)`` blocks of the source, each cut at a quiet moment (see the module docstring).
+    The source's last block, when it would be heard alone (an even number of blocks before it) and lasts at
+    least :data:`SPLIT_SECONDS`, is cut in two at the pause nearest its middle (:func:`_middle_pause`), so that a clip shorter
+    than a block is heard by both cores too (:func:`heard_blocks`); the cut depends on the audio alone, never
+    on the cores."""
     rate = source.rate
     size = int(block_seconds * rate)
+    window = int(CUT_SECONDS * rate)
     buffered: list[np.ndarray] = []
-    held = 0
+    held = count = 0
     offset = 0
     for piece in source.pieces:
         buffered.append(piece)
         held += len(piece)
-        while held >= size + int(CUT_SECONDS * rate):
+        while held >= size + window:
             x = np.concatenate(buffered)
-            tail = x[size - int(CUT_SECONDS * rate):size].astype(np.float64) / 32768.0
-            levels = frame_levels(tail, rate)
-            cut = size - int(CUT_SECONDS * rate) + int(np.argmin(levels)) * int(round(HOP * rate))
+            cut = _quiet_cut(x, size - window, size, rate)
             yield offset / rate, Recording(x[:cut], rate, source.name)
-            offset += cut
+            offset, count = offset + cut, count + 1
             buffered, held = [x[cut:]], len(x) - cut
     x = np.concatenate(buffered) if buffered else np.zeros(0, np.int16)
+    if count % 2 == 0 and len(x) >= SPLIT_SECONDS * rate:
+        cut = _middle_pause(x, rate)
+        yield offset / rate, Recording(x[:cut], rate, source.name)
+        offset, x = offset + cut, x[cut:]
     yield offset / rate, Recording(x, rate, source.name)
 
 
