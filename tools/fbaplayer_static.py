@@ -4,7 +4,7 @@
     .venv/bin/python tools/fbaplayer_static.py -o out/player/fbaplayer.html [--fdp face.fdp]
 
 A browser refuses ES modules from file:// URLs, so every module of the page (fbaplayer.js, head.js,
-facerig.js, fba.js, shown.js, spec.js, three.js and the two addons it uses) goes into the page's import map as a data:
+facerig.js, lashes.js, fba.js, shown.js, spec.js, three.js and the two addons it uses) goes into the page's import map as a data:
 URL under a bare name (their relative imports rewritten to those names), and the head (the
 GLB and rig of :mod:`mpeg4fa.serve.fap_head`, of the generic head or of one calibrated to ``--fdp``) and its
 key ride along in the page. Open the file and drop a .fba with its .wav on it (a URL cannot be
@@ -36,7 +36,8 @@ MODULES = {  # bare name -> (file, {relative import as written: bare name})
     "fba/fba.js": (STATIC / "js/fba/fba.js", {"./spec.js": "fba/spec.js"}),
     "fba/shown.js": (STATIC / "js/fba/shown.js", {"./spec.js": "fba/spec.js"}),
     "facerig": (STATIC / "js/facerig.js", {}),
-    "head": (STATIC / "js/head.js", {"./facerig.js": "facerig"}),
+    "lashes": (STATIC / "js/lashes.js", {}),
+    "head": (STATIC / "js/head.js", {"./facerig.js": "facerig", "./lashes.js": "lashes"}),
     "fbaplayer": (STATIC / "js/fbaplayer.js", {"./fba/fba.js": "fba/fba.js", "./fba/shown.js": "fba/shown.js",
                                                "./head.js": "head"}),
 }

@@ -127,10 +127,36 @@ def rig_data(face: FaceModel) -> dict:
     }
 
 
+def lash_data(face: FaceModel) -> dict | None:
+    """The lash cards (:mod:`mpeg4fa.render.lashes`) as data for ``static/js/lashes.js``, which grows them from
+    the posed lid margins each frame as :func:`~mpeg4fa.render.lashes.lash_vertices` does: per lash its margin
+    vertex, the skin vertex it grows from, the margin's neighbours (tangent), the eye joint, the turn's sign,
+    length and the two halves' turns (radians); the strands' place along the margin (mm) and length share
+    (thinner where short), the triangles over the 3K card vertices (roots, middles, tips), colour and strand
+    spacing and width (mm). None where the face has no lid margins to grow them on."""
+    from mpeg4fa.export.gltf import shown_colour
+    from mpeg4fa.face.eyes import eye_looks
+    from mpeg4fa.render.lashes import ROOT_OFFSET_MM, build_lashes
+    from mpeg4fa.render.materials import Materials
+
+    layout = build_lashes(face.mesh)
+    if layout is None:
+        return None
+    k, looks = len(layout.rows), eye_looks()
+    return {"rows": _ints(layout.rows), "roots": _ints(layout.roots), "before": _ints(layout.before),
+            "after": _ints(layout.after), "joint": _ints(layout.joint), "sign": _floats(layout.sign),
+            "length": _floats(layout.length), "lift": _floats(layout.lift), "bend": _floats(layout.bend),
+            "along": _floats(layout.static[:k, 5]), "share": _floats(layout.static[:k, 3]),
+            "indices": _ints(layout.indices), "root_offset": float(ROOT_OFFSET_MM),
+            "colour": _floats(shown_colour(Materials().lashes)), "spacing": float(looks.lash_spacing),
+            "width": float(looks.lash_width)}
+
+
 def fap_head(face: FaceModel, texture: np.ndarray | None = None) -> tuple[bytes, dict]:
     """The GLB (the face at rest, every part, with ``texture`` on the skin if given) and its key:
     ``{"parts": {primitive part: [mesh vertex of each GL vertex]}, "feature_points": {"labels", "rest"
-    (metres)}, "rig": rig_data(face), "deformer": the face's deformer}``.
+    (metres)}, "rig": rig_data(face), "deformer": the face's deformer, "lashes": lash_data(face)}``; no lashes
+    (None) with a photo texture, which has the person's own, as the renderer draws them.
 
     The rig is the feature-point deformer's whatever ``face.deformer`` says: the pages pose with it."""
     from mpeg4fa.export.gltf import MM, build_glb, part_sources
@@ -142,7 +168,8 @@ def fap_head(face: FaceModel, texture: np.ndarray | None = None) -> tuple[bytes,
     rest = face.mesh.vertices[np.asarray(face.mesh.fp_vertex)] * MM
     key = {"parts": {name: _ints(src) for name, src in part_sources(face).items()},
            "feature_points": {"labels": list(face.mesh.fp_labels), "rest": rest.tolist()},
-           "rig": rig_data(face), "deformer": face.deformer}
+           "rig": rig_data(face), "deformer": face.deformer,
+           "lashes": lash_data(face) if texture is None else None}
     return data, key
 
 
@@ -157,4 +184,4 @@ def write_fap_head(face: FaceModel, glb_path, key_path, texture: np.ndarray | No
     return key
 
 
-__all__ = ["fap_head", "write_fap_head", "rig_data", "RIG_VERSION"]
+__all__ = ["fap_head", "write_fap_head", "rig_data", "lash_data", "RIG_VERSION"]

@@ -136,6 +136,46 @@ def test_made_stream_plays_with_the_python_face(page, face, tmp_path):
     assert not page.errors, page.errors
 
 
+def blink_stream(folder: Path) -> Path:
+    """1 s at 25 fps: both upper lids close (FAPs 19, 20 to 1000) and open again, the eyes look up a little."""
+    n = 25
+    s = FapStream.empty(n)
+    s.source_fps = 25.0
+    s.timestamps[:] = np.arange(n) / 25.0
+    s.fap_mask[:, [18, 19, 23]] = True  # FAPs 19, 20 (upper lids), 24 (left eye pitch)
+    s.fap_values[:, 18] = s.fap_values[:, 19] = np.rint(1000 * np.sin(np.pi * np.arange(n) / (n - 1))).astype(np.int32)
+    s.fap_values[:, 23] = -20000
+    fba = folder / "blink.fba"
+    fba.write_bytes(encode(s, EncodeOptions(fap_quant=1)))
+    return fba
+
+
+def test_lashes_grow_from_the_posed_lids_as_the_python_renderer_s(page, face, tmp_path):
+    from mpeg4fa.render.lashes import build_lashes, lash_vertices
+
+    fba = blink_stream(tmp_path)
+    open_files(page, fba)
+    values = resolve(decode(fba))
+    layout = build_lashes(face.mesh)
+    for k in (0, 6, 12):  # open, half shut, shut
+        page.evaluate(f"window.fbaPlayer.showFrame({k})")
+        got = np.array(page.evaluate("window.fbaPlayer.lashVertices()")).reshape(-1, 3)
+        want = lash_vertices(layout, face.pose_values(values[k]).vertices)[:, :3]
+        assert got.shape == want.shape and np.abs(got - want).max() < 0.01, (k, np.abs(got - want).max())
+    # drawn: the lashes darken the picture round the eyes (looked at: test-artifacts/fbaplayer/lashes-*.png)
+    page.evaluate("window.fbaPlayer.showFrame(0)")
+    page.evaluate("window.fbaPlayer.showLashes(true)")
+    page.screenshot(path=str(ARTEFACTS / "lashes-on.png"))
+    page.evaluate("window.fbaPlayer.showLashes(false)")
+    page.screenshot(path=str(ARTEFACTS / "lashes-off.png"))
+    page.evaluate("window.fbaPlayer.showLashes(true)")
+    on, off = (np.asarray(Image.open(ARTEFACTS / f"lashes-{w}.png").convert("L"), dtype=float) for w in ("on", "off"))
+    darker = np.argwhere(off - on > 25)
+    assert len(darker) >= 60, len(darker)
+    assert np.ptp(darker[:, 0]) < 0.15 * on.shape[0], "lash pixels outside a band across the eyes"
+    assert not page.errors, page.errors
+
+
 def test_audio_and_picture_in_sync(page, tmp_path):
     """Played from the start for 10 s: the frame shown is the one whose time the audio clock reads (within a
     frame), at a few pictures past 10 s."""

@@ -3,12 +3,14 @@
 // The GLB is the face at rest (mpeg4fa/serve/fap_head.py); its key carries the face engine's rig, which
 // facerig.js runs to put every vertex where the Python face puts it. Each frame the posed vertices go
 // into the GLB's primitives (each GL vertex is a mesh vertex, listed per part in the key), normals are
-// recomputed over the whole mesh (so seams between parts stay smooth), and the picture is drawn.
+// recomputed over the whole mesh (so seams between parts stay smooth), the lashes are grown from the posed
+// lid margins (lashes.js; none on a photo-textured head, whose photo has its own), and the picture is drawn.
 // One view set-up (renderer, light, camera framing the face, resizing with its element) for both pages.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { FaceRig } from "./facerig.js";
+import { Lashes } from "./lashes.js";
 
 const MM = 0.001;  // the rig's millimetres -> the GLB's metres
 
@@ -85,6 +87,8 @@ export class Head {
       }
       return null;
     });
+    this.lashes = key.lashes ? new Lashes(key.lashes) : null;
+    if (this.lashes) root.add(this.lashes.mesh);
     view.scene.add(root);
     this.frame();
     this.values = new Float64Array(68);
@@ -147,6 +151,12 @@ export class Head {
       pos.needsUpdate = true;
       if (nor) nor.needsUpdate = true;
     }
+    if (this.lashes) this.lashes.update(p);
+  }
+
+  /** The lash cards' vertices in millimetres (roots, middles, tips; null without lashes): what tests compare. */
+  lashVertices() {
+    return this.lashes ? Array.from(this.lashes.positions) : null;
   }
 
   /** Feature points of the drawn head in millimetres (world), read back from the GL vertices: what tests compare. */
