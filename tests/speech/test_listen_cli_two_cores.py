@@ -54,7 +54,7 @@ def test_two_blocks_at_once_give_the_stream_of_one_process(long_speech):
     assert one.blocks == two.blocks >= 4 and one.frames == two.frames == int(np.ceil(len(x) / rate * 25))
     assert [t.start for t in two_timings] == sorted(t.start for t in two_timings)
     assert two_timings[-1].end > len(x) / rate - 2  # every block's timings, on the recording's clock
-    # each utterance decoded from a fresh decoder's state (sphinx.decode_whole; 0.95 of frames agreed when each
+    # each utterance decoded from a fresh decoder's state (phones.decode_pcm; 0.95 of frames agreed when each
     # block leaned on the state the last one left): the phones path's stream is the same, byte for byte
     assert one.recognizer == two.recognizer == "phonetic"
     assert one_bytes == two_bytes and one_timings == two_timings

@@ -125,17 +125,6 @@ def acoustic_score(decoder) -> tuple[float, int]:
     return float(sum(logmath.log(s.ascore) for s in segments)), words
 
 
-def decode_whole(decoder, pcm: bytes) -> None:
-    """One whole utterance (:func:`pcm16k`) through ``decoder``, from the state a fresh decoder has: its front
-    end's state (noise and level estimates) is otherwise carried from the last utterance, so that the same audio
-    decoded after other audio gave other phones and times, and a block's result depended on what the process
-    had heard before it (the order of blocks, one process or two)."""
-    decoder.reinit_feat()
-    decoder.start_utt()
-    decoder.process_raw(pcm, full_utt=True)
-    decoder.end_utt()
-
-
 def fit_score(pcm: bytes, forced: tuple[float, int]) -> float:
     """The forced alignment's acoustic log-likelihood (``forced``: it and its word frames, from
     :func:`force_align_scored`) minus a free phone-loop decoding's of the same audio (:func:`free_decoder`),
@@ -143,7 +132,9 @@ def fit_score(pcm: bytes, forced: tuple[float, int]) -> float:
     alignment had to force other words onto the audio (silences score alike in both and would only
     dilute it). Units: pocketsphinx's log scores (base 1.0001, of its scaled senone scores) per 10 ms."""
     decoder = free_decoder()
-    decode_whole(decoder, pcm)
+    decoder.start_utt()
+    decoder.process_raw(pcm, full_utt=True)
+    decoder.end_utt()
     return (forced[0] - acoustic_score(decoder)[0]) / max(forced[1], 1)
 
 
@@ -164,7 +155,9 @@ def force_align_scored(pcm: bytes, words: list[str]):
                 raise RuntimeError("no path through the transcript's words")
             forced = acoustic_score(decoder)
             decoder.set_alignment()
-        decode_whole(decoder, pcm)
+        decoder.start_utt()
+        decoder.process_raw(pcm, full_utt=True)
+        decoder.end_utt()
     return decoder.get_alignment(), forced
 
 

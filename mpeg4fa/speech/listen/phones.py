@@ -68,11 +68,14 @@ def phone_decoder():
 
 
 def decode_pcm(decoder, pcm: bytes) -> list:
-    """One utterance through ``decoder`` (:func:`~mpeg4fa.speech.align.sphinx.decode_whole`): its segments (empty
-    where it finds no path)."""
-    from mpeg4fa.speech.align.sphinx import decode_whole
-
-    decode_whole(decoder, pcm)
+    """One utterance through ``decoder``, from the state a fresh decoder has: its segments (empty where it finds no
+    path). Without ``reinit_feat`` the front end carries state from the last utterance, so that the same block
+    heard after other audio gave other phones and times: a block's result depended on what the process had heard
+    before it (the order of blocks, one process or two)."""
+    decoder.reinit_feat()
+    decoder.start_utt()
+    decoder.process_raw(pcm, full_utt=True)
+    decoder.end_utt()
     return list(decoder.seg()) if decoder.hyp() is not None else []
 
 
