@@ -280,8 +280,10 @@ def run_speed(clips: dict[str, tuple[np.ndarray, int]], lengths: tuple[float, ..
     what one idle core gives). ``x_real_time_idle``: the audio's seconds over the larger CPU time of the two processes
     of the best run (this one, ``cpu_here_s``, and its helper, ``cpu_helper_s``): the speed two idle cores would give,
     the two working at once, whatever else loads a shared machine. ``same`` (clips up to 2 min): the two give the
-    same stream and timings, byte for byte (:func:`_forked`); expected of one block only: two blocks heard at
-    once start from the same decoder state, one after the other from the state the first left."""
+    same stream and timings, byte for byte (:func:`_forked`): expected of the phones path at any length (each
+    utterance is decoded from a fresh decoder's state, :func:`~mpeg4fa.speech.listen.phones.decode_pcm`), and of
+    the words path for one block only (a clip of 4 s or more is two: :func:`~mpeg4fa.speech.listen.stream.blocks`):
+    its alignment hears espeak-ng's rendering of the words, whose audio depends on what the process spoke before."""
     rows = []
     for clip, (whole, rate) in clips.items():
         stream_listened(Source("warm", rate, 3.0, iter([whole[:3 * rate]])), io.BytesIO(), lang="en",

@@ -65,8 +65,11 @@ ALBEDO_SIZE = 2048
 """Texels a side of the baked skin image: the generic head's face spans a sixth of its UV square (about 2 texels
 a mm here, a texel a pixel where the browser pages show the head; 59 KiB of PNG, baked in about a second)."""
 PART_LOOK = {"skin": "skin", "eye_l": "sclera", "eye_r": "sclera", "teeth_upper": "teeth", "teeth_lower": "teeth",
-             "tongue": "tongue"}
+             "tongue": "tongue", "lashes": "lashes"}
 """Drawn part -> the :class:`~mpeg4fa.render.materials.Materials` entry it wears, in the renderer's order."""
+LASH_CUTOFF = 0.35
+"""Alpha below which a viewer leaves a lash texel out (glTF ``MASK``): under a half, so that strands thinner
+than a texel at a distance (their mip levels' coverage) still show as a lash line."""
 Progress = Callable[[int, int], None]
 
 
@@ -94,6 +97,17 @@ class _Part:
     uv: np.ndarray       # (n, 2) glTF texture coordinates (v down)
     colour: np.ndarray   # (n, 3) linear vertex colour
     indices: np.ndarray  # (t, 3) local vertex indices
+
+
+@dataclass(frozen=True)
+class _Lashes:
+    """The lash cards (:mod:`mpeg4fa.render.lashes`) as a part of their own: their vertices are grown from the
+    posed lids, not mesh vertices, so they carry their rest, normals and each morph target's offsets."""
+
+    part: _Part           # source: 0 .. 3K - 1 into the arrays below
+    rest: np.ndarray      # (3K, 3) mm
+    normals: np.ndarray   # (3K, 3)
+    shapes: np.ndarray | None  # (T, 3K, 3) mm, grown from rest + each of the mesh's targets
 
 
 def export_glb(stream: FapStream, face: FaceModel, path: str | os.PathLike, *, animation: str = "morph",
@@ -153,8 +167,15 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
         worn.update(dict.fromkeys(EYES, _add_texture(gltf, buf, eye_image, "eye", mipmaps=False)))
     normals = vertex_normals(rest, layout.triangles, layout.incidence)
 
+    lashes = _lashes(face, shapes) if skin != "photo" else None  # a photo has the person's own lashes
+    if lashes is not None:
+        parts.append(lashes.part)
+        worn["lashes"] = _add_texture(gltf, buf, _lash_texture(looks), "lashes", repeat=True)
+
     def mesh(mesh_name: str, members: list[_Part], targets: np.ndarray | None) -> int:
-        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, worn.get(part.name)) for part in members]
+        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, worn.get(part.name)) if part.name != "lashes"
+                 else _primitive(gltf, buf, part, lashes.rest, lashes.normals, lashes.shapes if targets is not None
+                                 else None, looks, worn["lashes"]) for part in members]
         extra = ({"weights": [0.0] * len(names), "extras": {"targetNames": names}} if targets is not None
                  else {"weights": None})
         gltf.meshes.append(gl.Mesh(name=mesh_name, primitives=prims, **extra))
@@ -177,6 +198,33 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     duration = float(times[-1] - times[0]) if len(times) else 0.0
     return out, {"n_parts": len(parts), "n_targets": len(names), "n_frames": len(times), "duration": duration,
                  "skin": skin}
+
+
+def _lashes(face: FaceModel, shapes: np.ndarray) -> _Lashes | None:
+    """The lash cards at rest and grown from rest + each target's offsets (None where the face has no lid margins)."""
+    from mpeg4fa.render.lashes import build_lashes, lash_vertices, strand_uv
+
+    layout = build_lashes(face.mesh)
+    if layout is None:
+        return None
+    rest = face.mesh.vertices
+    at_rest = lash_vertices(layout, rest).astype(np.float64)
+    grown = np.empty((len(shapes), len(at_rest), 3), np.float32)
+    for k, shape in enumerate(shapes):
+        grown[k] = lash_vertices(layout, rest + shape)[:, :3] - at_rest[:, :3]
+    n = len(at_rest)
+    part = _Part("lashes", np.arange(n), strand_uv(layout), np.ones((n, 3)), layout.indices.astype(np.int64))
+    return _Lashes(part, at_rest[:, :3], at_rest[:, 3:], grown)
+
+
+def _lash_texture(looks: Materials) -> np.ndarray:
+    """The strands (:func:`~mpeg4fa.render.lashes.strand_image`) as RGBA: the lashes' colour as our renderer
+    shows it (sRGB bytes), their coverage as alpha."""
+    from mpeg4fa.render.lashes import strand_image
+
+    alpha = strand_image()
+    colour = np.rint(255 * np.asarray(looks.lashes, np.float64) ** (1.0 / RENDER_GAMMA)).astype(np.uint8)
+    return np.dstack([np.broadcast_to(colour, alpha.shape + (3,)), alpha])
 
 
 def part_sources(face: FaceModel) -> dict[str, np.ndarray]:
@@ -315,7 +363,10 @@ def _material(gltf: gl.GLTF2, name: str, look: Material, texture: int | None, ve
     pbr = gl.PbrMetallicRoughness(baseColorFactor=[*map(float, colour), 1.0], metallicFactor=0.0,
                                   roughnessFactor=float(np.sqrt(2.0 / (look.shininess + 2.0))),
                                   baseColorTexture=gl.TextureInfo(index=texture) if texture is not None else None)
-    gltf.materials.append(gl.Material(name=name, pbrMetallicRoughness=pbr, doubleSided=name == "skin"))
+    cards = name == "lashes"  # strands cut out of cards seen from both sides
+    gltf.materials.append(gl.Material(name=name, pbrMetallicRoughness=pbr, doubleSided=name == "skin" or cards,
+                                      alphaMode=gl.MASK if cards else gl.OPAQUE,
+                                      alphaCutoff=LASH_CUTOFF if cards else None))
     return len(gltf.materials) - 1
 
 
@@ -323,8 +374,9 @@ def _primitive(gltf: gl.GLTF2, buf: GlbBuffer, part: _Part, rest: np.ndarray, no
                shapes: np.ndarray | None, looks: Materials, texture: int | None) -> gl.Primitive:
     look_name = PART_LOOK[part.name]
     names = [m.name for m in gltf.materials]
+    look = getattr(looks, look_name)
     material = names.index(look_name) if look_name in names else _material(
-        gltf, look_name, getattr(looks, look_name), texture, True)
+        gltf, look_name, look if isinstance(look, Material) else Material(look, 0.0, 4.0), texture, True)
     attributes = gl.Attributes(
         POSITION=buf.accessor((rest[part.source] * MM).astype(np.float32), target=gl.ARRAY_BUFFER, bounds=True),
         NORMAL=buf.accessor(normals[part.source].astype(np.float32), target=gl.ARRAY_BUFFER),
@@ -339,16 +391,18 @@ def _primitive(gltf: gl.GLTF2, buf: GlbBuffer, part: _Part, rest: np.ndarray, no
                         targets=targets, extras={"part": part.name})
 
 
-def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray, name: str = "skin", mipmaps: bool = True) -> int:
+def _add_texture(gltf: gl.GLTF2, buf: GlbBuffer, texture: np.ndarray, name: str = "skin", mipmaps: bool = True,
+                 repeat: bool = False) -> int:
     """``texture`` embedded as PNG; ``mipmaps`` off for a map whose triangles stretch across it (the eyeball's
-    front-pole fan and its seam: a viewer's mip level there is its coarsest, a light streak across the iris)."""
+    front-pole fan and its seam: a viewer's mip level there is its coarsest, a light streak across the iris);
+    ``repeat``: across u, and its alpha kept (the lashes' strands; other textures are opaque RGB)."""
     from PIL import Image
 
     img = _checked(texture)
     png = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(img[:, :, :3])).save(png, format="PNG")
+    Image.fromarray(np.ascontiguousarray(img if repeat else img[:, :, :3])).save(png, format="PNG")
     gltf.samplers.append(gl.Sampler(magFilter=gl.LINEAR, minFilter=gl.LINEAR_MIPMAP_LINEAR if mipmaps else gl.LINEAR,
-                                    wrapS=gl.CLAMP_TO_EDGE, wrapT=gl.CLAMP_TO_EDGE))
+                                    wrapS=gl.REPEAT if repeat else gl.CLAMP_TO_EDGE, wrapT=gl.CLAMP_TO_EDGE))
     gltf.images.append(gl.Image(bufferView=buf.view(png.getvalue()), mimeType="image/png", name=name))
     gltf.textures.append(gl.Texture(sampler=len(gltf.samplers) - 1, source=len(gltf.images) - 1))
     return len(gltf.textures) - 1

@@ -152,3 +152,43 @@ def lash_vertices(layout: LashLayout, vertices: np.ndarray, out: np.ndarray | No
     out[:k, 3:] = out[k:2 * k, 3:] = _unit(np.cross(tangent, first))
     out[2 * k:, 3:] = _unit(np.cross(tangent, second))
     return out
+
+
+STRANDS = 64
+"""Strands in one repeat of :func:`strand_image` along the margin."""
+
+
+def _hash(x: np.ndarray) -> np.ndarray:
+    """The face shader's ``hash`` (the same strands everywhere they are drawn)."""
+    return np.mod(np.sin(x * 127.1 + 311.7) * 43758.5453, 1.0)
+
+
+def strand_image(width: int = 1024, height: int = 64, supersample: int = 4) -> np.ndarray:
+    """The shader's lash strands as coverage, for viewers that draw the cards from a texture (the GLB, the
+    browser head): (height, width) uint8, :data:`STRANDS` strands across (u along the margin, repeating), the
+    tips at row 0 and the roots at the bottom row; each strand a little off its place, of its own reach,
+    leaning and thinning to its tip as the shader draws it (strands at their longest: no per-lash thinning)."""
+    looks = eye_looks()
+    spacing, half_root = looks.lash_spacing, looks.lash_width
+    n = supersample
+    u = (np.arange(width * n) + 0.5) / (width * n) * STRANDS * spacing     # mm along the margin
+    h = 1.0 - (np.arange(height * n) + 0.5) / (height * n)                  # 0 at the root .. 1 at the tip
+    covered = np.zeros((height * n, width * n), bool)
+    for shift in (-1, 0, 1):  # a strand's own place and its neighbours' (jitter and lean reach past one)
+        ids = np.floor(u / spacing) + shift
+        wrapped = np.mod(ids, STRANDS)
+        reach = 0.7 + 0.3 * _hash(wrapped + 11.0)
+        centre = (ids + 0.5 + 0.4 * (_hash(wrapped) - 0.5)) * spacing
+        lean = 0.25 * (_hash(wrapped + 3.0) - 0.5) * h[:, None]
+        half = half_root * (1.0 - 0.85 * h[:, None] / reach)
+        covered |= (h[:, None] <= reach) & (np.abs(u - centre - lean) <= half)
+    coverage = covered.reshape(height, n, width, n).mean(axis=(1, 3))
+    return np.rint(coverage * 255).astype(np.uint8)
+
+
+def strand_uv(layout: LashLayout) -> np.ndarray:
+    """(3K, 2) texture coordinates of the cards on :func:`strand_image` (glTF's: v down): u the strand place
+    along the margin, v 1 at the roots, 0.5 at the middles and 0 at the tips."""
+    k = len(layout.rows)
+    along = layout.static[:k, 5] / (STRANDS * eye_looks().lash_spacing)
+    return np.c_[np.tile(along, 3), np.repeat([1.0, 0.5, 0.0], k)]

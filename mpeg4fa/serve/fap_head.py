@@ -128,28 +128,19 @@ def rig_data(face: FaceModel) -> dict:
 
 
 def lash_data(face: FaceModel) -> dict | None:
-    """The lash cards (:mod:`mpeg4fa.render.lashes`) as data for ``static/js/lashes.js``, which grows them from
-    the posed lid margins each frame as :func:`~mpeg4fa.render.lashes.lash_vertices` does: per lash its margin
-    vertex, the skin vertex it grows from, the margin's neighbours (tangent), the eye joint, the turn's sign,
-    length and the two halves' turns (radians); the strands' place along the margin (mm) and length share
-    (thinner where short), the triangles over the 3K card vertices (roots, middles, tips), colour and strand
-    spacing and width (mm). None where the face has no lid margins to grow them on."""
-    from mpeg4fa.export.gltf import shown_colour
-    from mpeg4fa.face.eyes import eye_looks
+    """How ``static/js/lashes.js`` grows the GLB's lash cards (its ``lashes`` primitive: roots, middles, tips) from the
+    posed lid margins each frame, as :func:`~mpeg4fa.render.lashes.lash_vertices` does: per lash the skin vertex it
+    grows from, the margin's neighbours (its tangent), the eye joint, the turn's sign, its length and the two
+    halves' turns (radians). None where the face has no lid margins to grow them on."""
     from mpeg4fa.render.lashes import ROOT_OFFSET_MM, build_lashes
-    from mpeg4fa.render.materials import Materials
 
     layout = build_lashes(face.mesh)
     if layout is None:
         return None
-    k, looks = len(layout.rows), eye_looks()
     return {"rows": _ints(layout.rows), "roots": _ints(layout.roots), "before": _ints(layout.before),
             "after": _ints(layout.after), "joint": _ints(layout.joint), "sign": _floats(layout.sign),
             "length": _floats(layout.length), "lift": _floats(layout.lift), "bend": _floats(layout.bend),
-            "along": _floats(layout.static[:k, 5]), "share": _floats(layout.static[:k, 3]),
-            "indices": _ints(layout.indices), "root_offset": float(ROOT_OFFSET_MM),
-            "colour": _floats(shown_colour(Materials().lashes)), "spacing": float(looks.lash_spacing),
-            "width": float(looks.lash_width)}
+            "root_offset": float(ROOT_OFFSET_MM)}
 
 
 def fap_head(face: FaceModel, texture: np.ndarray | None = None) -> tuple[bytes, dict]:

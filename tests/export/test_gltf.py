@@ -9,8 +9,10 @@ from mpeg4fa.decoded import resolve
 from mpeg4fa.errors import MpegFaError
 from mpeg4fa.export.arkit_units import NoFaceUnitsError, arkit_units, base_unit
 from mpeg4fa.export.gltf import MM, PART_LOOK, ExportError, build_glb, export_glb
+from mpeg4fa.fba import FapStream
 from mpeg4fa.face.deformers.arkit import deform_arkit, unit_weights
 from mpeg4fa.formats import write_fap
+from mpeg4fa.render.lashes import build_lashes, lash_vertices
 from mpeg4fa.render.timing import presentation_times
 
 from export.gltf_files import OPEN_FRAME, load, read_accessor, talk_stream, validate, world_positions
@@ -34,7 +36,7 @@ def _primitives(gltf) -> dict:
 
 def _check_common(gltf, result, stream, face, n_targets):
     prims = _primitives(gltf)
-    assert sorted(prims) == sorted(PART_LOOK) and result.n_parts == 6 and result.n_targets == n_targets
+    assert sorted(prims) == sorted(PART_LOOK) and result.n_parts == 7 and result.n_targets == n_targets
     animation, = gltf.animations
     channel = animation.channels[0]
     assert channel.target.path == "weights"
@@ -47,6 +49,11 @@ def _check_common(gltf, result, stream, face, n_targets):
         acc = gltf.accessors[prim.attributes.POSITION]
         assert acc.min == position.min(axis=0).tolist() and acc.max == position.max(axis=0).tolist()
         indices = read_accessor(gltf, prim.indices)
+        if part == "lashes":  # cards grown from the lids (render/lashes.py), roots, middles, tips, at rest
+            layout = build_lashes(face.mesh)
+            assert np.abs(position - lash_vertices(layout, face.mesh.vertices)[:, :3] * MM).max() < 1e-7
+            assert np.array_equal(indices, layout.indices.reshape(-1))
+            continue
         assert indices.max() < len(position) and len(indices) == 3 * len(face.mesh.triangles[part])
         # every vertex of the primitive is a vertex of its part, at its rest position
         nearest, _ = cKDTree(face.mesh.vertices[face.mesh.part(part)] * MM).query(position)
@@ -135,6 +142,10 @@ def test_vertex_animation_is_the_face_pose_of_every_frame(procedural_face, strea
     for k in (0, OPEN_FRAME, len(stream) - 1):
         pose = procedural_face.pose_values(values[k]).vertices
         for part, shown in world_positions(gltf, k).items():
+            if part == "lashes":  # grown from the posed lids as the renderer grows them
+                want = lash_vertices(build_lashes(procedural_face.mesh), pose)[:, :3]
+                assert np.abs(shown - want * MM).max() < 1e-6, (part, k)
+                continue
             source = _sources(procedural_face, _rest(gltf, part), part)
             assert np.abs(shown - pose[source] * MM).max() < 1e-6, (part, k)
     lower = _targets(gltf, "teeth_lower")
@@ -142,6 +153,39 @@ def test_vertex_animation_is_the_face_pose_of_every_frame(procedural_face, strea
     assert np.abs(lower[open_target]).max() > 0.005  # the jaw drops the lower teeth by millimetres
     names = gltf.meshes[0].extras["targetNames"]
     assert names[int(np.argmax(weights[0]))] == "frame 0"
+
+
+def test_lashes_close_with_the_lids_and_wear_their_strands(procedural_face, tmp_path):
+    import io
+
+    from PIL import Image
+
+    s = FapStream.empty(3)
+    s.source_fps = 25.0
+    s.timestamps[:] = np.arange(3) / 25.0
+    s.fap_mask[:, [18, 19]] = True
+    s.fap_values[:, 18] = s.fap_values[:, 19] = [0, 500, 1000]  # both upper lids: open, half, shut
+    path, _, gltf = _export(tmp_path, s, procedural_face, animation="vertex")
+    layout = build_lashes(procedural_face.mesh)
+    values = resolve(s)
+    tips = slice(2 * len(layout.rows), None)
+    moved = []
+    for k in range(3):
+        shown = world_positions(gltf, k)["lashes"]
+        want = lash_vertices(layout, procedural_face.pose_values(values[k]).vertices)[:, :3] * MM
+        assert np.abs(shown - want).max() < 1e-6, k
+        moved.append(np.linalg.norm(shown[tips] - world_positions(gltf, 0)["lashes"][tips], axis=1).max() / MM)
+    assert moved[0] == 0 and 2 < moved[1] < moved[2], moved  # the upper lashes' tips swing down by millimetres
+    _, prim = _primitives(gltf)["lashes"]
+    material = gltf.materials[prim.material]
+    assert material.alphaMode == "MASK" and material.doubleSided and 0 < material.alphaCutoff < 0.5
+    texture = gltf.textures[material.pbrMetallicRoughness.baseColorTexture.index]
+    assert gltf.samplers[texture.sampler].wrapS == 10497  # REPEAT: the strands run on along the margin
+    view = gltf.bufferViews[gltf.images[texture.source].bufferView]
+    rgba = np.asarray(Image.open(io.BytesIO(gltf.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength])))
+    alpha = rgba[..., 3].astype(float) / 255
+    assert rgba.shape[2] == 4 and rgba[..., :3].max() < 80  # dark strands
+    assert alpha[-1].mean() > 0.6 and alpha[0].mean() < 0.1  # dense at the roots (bottom row), few reach the top
 
 
 def test_morph_animation_needs_face_units(procedural_face, stream, tmp_path):
@@ -164,7 +208,8 @@ def test_validator_finds_no_errors(face, stream, tmp_path):
         issues = report["issues"]
         assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"][:5]
         info = report["info"]
-        assert info["hasMorphTargets"] and info["animationCount"] == 1 and info["drawCallCount"] == 6
+        lashes = animation != "vertex"  # a photo texture has its own lashes: the cards are left out
+        assert info["hasMorphTargets"] and info["animationCount"] == 1 and info["drawCallCount"] == 6 + lashes
         assert info["hasTextures"]  # the given texture, or the skin's own colours baked (brows and lips)
 
 
@@ -175,6 +220,7 @@ def test_texture_is_embedded_png_on_the_skin(procedural_face, stream, tmp_path):
     texture = np.random.default_rng(1).integers(0, 255, (32, 48, 3), dtype=np.uint8)
     path, _, gltf = _export(tmp_path, stream, procedural_face, animation="vertex", texture=texture)
     image, eye = gltf.images  # the photo (the teeth's and tongue's islands baked onto it), the eyeball's own bake
+    assert "lashes" not in _primitives(gltf)  # a photo has the person's own lashes, as the renderer leaves them out
     view = gltf.bufferViews[image.bufferView]
     png = gltf.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength]
     got = np.asarray(Image.open(io.BytesIO(png)))
@@ -345,7 +391,7 @@ def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
 
     path, result, gltf = _export(tmp_path, stream, face, animation="vertex")
     skin = next(p for m in gltf.meshes for p in m.primitives if p.extras["part"] == "skin")
-    assert [i.name for i in gltf.images] == ["head", "eye"]
+    assert [i.name for i in gltf.images] == ["head", "eye", "lashes"]
     eye_sampler = gltf.samplers[gltf.textures[1].sampler]  # no mipmaps: the pole's fan and seam streaked the iris
     assert eye_sampler.minFilter == pygltflib.LINEAR
     assert gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture is not None
@@ -357,14 +403,14 @@ def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
             assert (p.extras["part"] in worn) == (p.attributes.TEXCOORD_0 is not None), p.extras["part"]
     assert {"skin", "eye_l", "eye_r"} <= worn  # the eyeballs wear the left one's bake (iris with its detail)
     if face.mesh.face_units is not None:  # the generic head's map keeps its teeth and tongue apart: baked too
-        assert worn == {"skin", "teeth_upper", "teeth_lower", "tongue", "eye_l", "eye_r"}, worn
+        assert worn == {"skin", "teeth_upper", "teeth_lower", "tongue", "eye_l", "eye_r", "lashes"}, worn
 
     def no_gl(self):
         raise RenderError("cannot create a headless OpenGL context", where="GL context")
 
     monkeypatch.setattr(Renderer, "albedo", no_gl)
     data, summary = build_glb(stream, face, animation="vertex")
-    assert summary["skin"] == "colours" and not pygltflib.GLTF2.load_from_bytes(data).images
+    assert summary["skin"] == "colours" and [i.name for i in pygltflib.GLTF2.load_from_bytes(data).images] == ["lashes"]
     assert result.skin == "albedo"
 
 

@@ -76,7 +76,7 @@ def test_a_served_texture_is_in_the_pages_head():
     assert _png_size(gltf) == (64, 64)
     plain = TestClient(create_app(face_for_tests()), base_url="http://127.0.0.1").get("/static/fap-head.glb")
     plain_gltf = pygltflib.GLTF2.load_from_bytes(plain.content)  # without one: the skin's own colours, baked
-    assert [i.name for i in plain_gltf.images] == ["head", "eye"]
+    assert [i.name for i in plain_gltf.images] == ["head", "eye", "lashes"]  # the photo has its own lashes: none
     assert _png_size(plain_gltf) == (ALBEDO_SIZE, ALBEDO_SIZE)
 
 

@@ -58,8 +58,10 @@ export class Head {
     this.key = key;
     this.rig = new FaceRig(key.rig);
     this.parts = [];  // {mesh, source: mesh vertex of each GL vertex}
+    let lashMesh = null;
     root.traverse((o) => {
       const part = o.isMesh && o.geometry.userData.part;
+      if (part === "lashes") lashMesh = o;
       if (!part || !key.parts[part]) return;
       const source = Int32Array.from(key.parts[part]);
       if (source.length !== o.geometry.attributes.position.count) throw new Error(`head part ${part}: vertex count differs from its key`);
@@ -87,8 +89,8 @@ export class Head {
       }
       return null;
     });
-    this.lashes = key.lashes ? new Lashes(key.lashes) : null;
-    if (this.lashes) root.add(this.lashes.mesh);
+    this.lashes = key.lashes && lashMesh ? new Lashes(key.lashes, lashMesh) : null;
+    if (lashMesh && !this.lashes) lashMesh.visible = false;  // no layout to grow them by: not left at rest
     view.scene.add(root);
     this.frame();
     this.values = new Float64Array(68);

@@ -1,83 +1,32 @@
 // lashes.js: the browser head's eyelashes, cards grown from the posed lid margins every frame.
 //
-// The same cards as the Python renderer's (mpeg4fa/render/lashes.py, lash_vertices): each lash leaves the
-// lid's front edge along the eyeball's outward direction, turned about the margin's tangent by its lift on
-// the first half and by lift + curl on the second, so the lashes turn with the lids whatever they do. The
-// layout comes in the head's key (mpeg4fa/serve/fap_head.py, lash_data); nothing is retyped here but the
-// strand look, which the GL shader draws per fragment and a three.js material takes as a texture: strands
-// across the card, each a little off its place, of its own reach, thinning to the tip.
-import * as THREE from "three";
-
+// The cards are the GLB's ``lashes`` primitive (mpeg4fa/export/gltf.py: the renderer's lash cards at rest, their
+// strands a texture of the shader's, alpha-masked); here they are grown as the Python renderer grows them
+// (mpeg4fa/render/lashes.py, lash_vertices) from the layout in the head's key (mpeg4fa/serve/fap_head.py,
+// lash_data): each lash leaves the lid's front edge along the eyeball's outward direction, turned about the
+// margin's tangent by its lift on the first half and by lift + curl on the second, so the lashes turn with the
+// lids whatever they do.
 const MM = 0.001;  // millimetres -> the GLB's metres
-const STRANDS = 64;  // strands in one repeat of the strand texture along the margin
-
-/** A repeatable 0..1 hash of a strand's number (the same pattern every load). */
-function hash(n) {
-  const x = Math.sin(n * 127.1 + 311.7) * 43758.5453;
-  return x - Math.floor(x);
-}
-
-/** The strands' alpha: STRANDS strands across (u: along the margin), root at v = 0 to tip at v = 1. */
-function strandTexture(spacing, width) {
-  const w = 2048, h = 128, perMm = w / (STRANDS * spacing);
-  const canvas = document.createElement("canvas");
-  canvas.width = w;
-  canvas.height = h;
-  const g = canvas.getContext("2d");
-  g.fillStyle = "#000";
-  g.fillRect(0, 0, w, h);
-  g.fillStyle = "#fff";
-  for (let i = 0; i < STRANDS; i++) {
-    const centre = (i + 0.5 + 0.4 * (hash(i) - 0.5)) * spacing;
-    const reach = 0.7 + 0.3 * hash(i + 11);
-    const lean = 0.25 * (hash(i + 3) - 0.5) * reach;
-    const root = width, tip = width * 0.15;
-    for (const shift of [-STRANDS * spacing, 0, STRANDS * spacing]) {  // strands across the seam wrap round
-      const x0 = (centre + shift) * perMm, x1 = (centre + lean + shift) * perMm;
-      g.beginPath();
-      g.moveTo(x0 - root * perMm, h);
-      g.lineTo(x0 + root * perMm, h);
-      g.lineTo(x1 + tip * perMm, h * (1 - reach));
-      g.lineTo(x1 - tip * perMm, h * (1 - reach));
-      g.closePath();
-      g.fill();
-    }
-  }
-  const texture = new THREE.CanvasTexture(canvas);
-  texture.wrapS = THREE.RepeatWrapping;
-  texture.anisotropy = 4;
-  return texture;
-}
 
 export class Lashes {
-  /** The cards of ``data`` (the key's ``lashes``), posed by :meth:`update` from the rig's posed vertices. */
-  constructor(data) {
+  /** The GLB's lash ``mesh``, posed by :meth:`update` from the rig's posed vertices by the layout ``data`` (the
+   * key's ``lashes``). */
+  constructor(data, mesh) {
     this.data = data;
+    this.mesh = mesh;
     const k = data.rows.length;
     this.k = k;
-    this.positions = new Float32Array(9 * k);  // roots, middles, tips (mm, what tests read back)
-    const geometry = new THREE.BufferGeometry();
-    this.position = new THREE.BufferAttribute(new Float32Array(9 * k), 3);
-    this.normal = new THREE.BufferAttribute(new Float32Array(9 * k), 3);
-    const uv = new Float32Array(6 * k);
-    for (let row = 0; row < 3; row++) {
-      for (let i = 0; i < k; i++) {
-        uv[2 * (row * k + i)] = data.along[i] / (STRANDS * data.spacing);
-        uv[2 * (row * k + i) + 1] = row / 2;
-      }
+    this.position = mesh.geometry.attributes.position;
+    this.normal = mesh.geometry.attributes.normal;
+    if (this.position.count !== 3 * k) throw new Error("the head's lashes: vertex count differs from its key");
+    if (this.position.isInterleavedBufferAttribute || this.normal.isInterleavedBufferAttribute) {
+      throw new Error("the head's lashes: interleaved vertex data (the pose writes plain arrays)");
     }
-    geometry.setAttribute("position", this.position);
-    geometry.setAttribute("normal", this.normal);
-    geometry.setAttribute("uv", new THREE.BufferAttribute(uv, 2));
-    geometry.setIndex(data.indices);
-    const colour = new THREE.Color().setRGB(...data.colour, THREE.LinearSRGBColorSpace);
-    const material = new THREE.MeshLambertMaterial({
-      color: colour, alphaMap: strandTexture(data.spacing, data.width), alphaToCoverage: true, alphaTest: 0.05,
-      side: THREE.DoubleSide,
-    });
-    this.mesh = new THREE.Mesh(geometry, material);
-    this.mesh.name = "lashes";
-    this.mesh.frustumCulled = false;  // they move with the lids
+    this.positions = new Float32Array(9 * k);  // roots, middles, tips (mm, what tests read back)
+    // strands thinner than a pixel far off: their coverage, not an all-or-nothing cut, with the canvas's samples
+    mesh.material.alphaToCoverage = true;
+    mesh.material.alphaTest = 0.05;
+    mesh.frustumCulled = false;  // they move with the lids
   }
 
   /** Grow the cards from the posed vertices ``p`` (mm, x y z of every mesh vertex). */
