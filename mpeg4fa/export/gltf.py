@@ -29,7 +29,9 @@ renderer's face shader into the head's UV image (:meth:`.Renderer.albedo`, embed
 shows the brows, lips and mouth our renderer draws (where no GL context can be made, the lips and the mouth's dark
 go into the skin's vertex colours, iris and pupil into the eyes', and the rest is left out); or a skin texture (e.g.
 an FDP's) embedded as PNG with the baked teeth and tongue laid on their islands, the mouth's dark in the vertex
-colours. glTF carries no sound: the stream's
+colours. The lashes are cards of their own (:mod:`mpeg4fa.render.lashes`), grown from the lids at rest and in each
+target's pose, their strands an alpha-masked texture (none with a photo texture, which has the person's own).
+glTF carries no sound: the stream's
 WAV is written beside the GLB under its name (``head.glb`` -> ``head.wav``).
 """
 from __future__ import annotations

@@ -46,9 +46,10 @@ RECOGNIZERS = ("auto", "words", "phonetic", "either")
 ENGLISH_DEFAULT = "either"
 """What ``auto`` uses for English: the one that found the most closures within 40 ms over espeak-ng's speech, the
 LibriVox recordings (tools/bench_lipsync_audio.py --human) and festival's voices (tools/bench_lipsync_festival.py),
-2026-12-06: either 92.2 / 86.2 / 70.6, 69.1, 58.1 % (phonetic 92.2 / 55.2 / 52.2, 72.1, 58.8; words 35.7 / 86.2 /
-72.1, 69.9, 57.4); speed on 2 cores (tools/bench_lipsync_audio.json): espeak-ng 10.2-16.5x real time from 5 to 60 s,
-people's speech (LibriVox) 9.0-9.4x for 5-25 s clips and 12.1x for an hour (phonetic 24x per core)."""
+2026-12-07, each utterance decoded from a fresh front end: either 92.2 / 82.8 / 72.8, 68.4, 54.4 % (phonetic 92.2 /
+55.2 / 52.2, 71.3, 58.1; words 35.2 / 82.8 / 72.1, 68.4, 61.0); speed on 2 cores (tools/bench_lipsync_audio.json,
+2026-12-07, a machine 1.4x slower than the day before): espeak-ng 10.2-14.2x real time from 5 to 60 s, people's
+speech (LibriVox) 9.5-11.3x (phonetic 24-41x)."""
 WORDS_CONFIDENT = -23.0
 """``either`` takes the words path where :func:`word_confidence` is at least this (pocketsphinx's log units,
 base 1.0001, per 10 ms of words). Measured 2026-12-06 per sentence (tools/bench_lipsync_audio.py's English
