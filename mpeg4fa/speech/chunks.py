@@ -34,6 +34,12 @@ MAX_RUN = 128
 smashing, found by the fuzz campaign), so a longer run is cut, between characters, into chunks of its own."""
 _LONG_RUN = re.compile(rf"\S{{{MAX_RUN + 1},}}")
 
+
+def long_run(text: str) -> re.Match[str] | None:
+    """The first run without white space longer than :data:`MAX_RUN` in ``text`` (None if none): what espeak-ng is
+    never handed, for text spoken whole (a transcript, a direct call) rather than cut in chunks."""
+    return _LONG_RUN.search(text)
+
 _SENTENCE_END = re.compile(r"[.!?\u2026]+[\"'\u201d\u2019\u00bb)\]]*(?=\s)|[\u3002\uff01\uff1f]+[\u201d\u2019\u300d\u300f\uff09]*"
                            r"|\n[^\S\n]*\n")
 """Where a sentence ends: terminal punctuation (and closing quotes) before a space, a CJK full stop,

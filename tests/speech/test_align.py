@@ -146,6 +146,11 @@ def test_clear_errors(tmp_path, recorded):
         align_recording(rec, TEXT, lang="xx-nowhere")
     with pytest.raises(MarkupError):
         align_recording(rec, "(joy, 99, 1) Please bring the maps")
+    # a run no word is as long as: refused at its place in the transcript (espeak-ng is never handed it; encode
+    # and say cut such a run in text they speak without a recording, a transcript must be the words said)
+    with pytest.raises(MarkupError, match="300 characters without a space") as err:
+        align_recording(rec, "Please bring\nthe " + "ab" * 150, name="words.txt")
+    assert err.value.where == "words.txt:2:5" and "put spaces" in err.value.hint
 
 
 def test_dtw_path_follows_a_known_warp():

@@ -256,6 +256,21 @@ def check_fit(method: str, fit: float, rec: Recording, name: str) -> None:
                           "align anyway")
 
 
+def _check_runs(markup: Markup, name: str) -> None:
+    """MarkupError at the first run without a space longer than a word can be (:data:`~mpeg4fa.speech.chunks.MAX_RUN`):
+    the transcript is spoken whole as the reference, and espeak-ng is never handed such a run (text spoken
+    without a recording is cut there instead; a transcript must be the words said)."""
+    from mpeg4fa.speech.chunks import MAX_RUN, long_run
+    from mpeg4fa.speech.errors import MarkupError
+
+    run = long_run(markup.text)
+    if run is not None:
+        line, column = markup.place(run.start())
+        raise MarkupError(f"{len(run.group()):,} characters without a space: longer than any word ({MAX_RUN} at most)",
+                          line, column, "a transcript is the words the recording says: put spaces between them",
+                          name)
+
+
 def align_recording(recording: Recording | str | os.PathLike, transcript: str | Markup, *, lang: str = "auto",
                     voice: str | None = None, rate: int | None = None, method: str = "auto",
                     name: str = "<transcript>", fit_check: bool = True, measure_fit: bool = True) -> Alignment:
@@ -274,6 +289,7 @@ def align_recording(recording: Recording | str | os.PathLike, transcript: str | 
     began = time.perf_counter()
     rec = recording if isinstance(recording, Recording) else read_recording(recording)
     markup = transcript if isinstance(transcript, Markup) else parse_markup(transcript, name=name)
+    _check_runs(markup, name)
     engine = EspeakEngine()
     check_language(lang, engine)
     how = choose_method(method, markup.text, lang)

@@ -505,9 +505,9 @@ class EspeakEngine:
         if "\0" in text:
             raise TTSError("the text contains a NUL character", where=WHERE,
                            hint="remove NUL characters from the text")
-        from mpeg4fa.speech.chunks import MAX_RUN  # the parse pass cuts text there; other callers are checked
+        from mpeg4fa.speech.chunks import MAX_RUN, long_run  # the parse pass cuts text there; others are checked
 
-        run = re.search(rf"\S{{{MAX_RUN + 1},}}", text)
+        run = long_run(text)
         if run is not None:  # espeak-ng 1.52 overruns a buffer on ~200 dotted letters: never hand it such a run
             raise TTSError(f"{len(run.group()):,} characters without a space at character {run.start() + 1}: "
                            f"espeak-ng speaks at most {MAX_RUN} at a time", where=WHERE,
