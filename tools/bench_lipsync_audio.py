@@ -283,7 +283,9 @@ def run_speed(clips: dict[str, tuple[np.ndarray, int]], lengths: tuple[float, ..
     same stream and timings, byte for byte (:func:`_forked`): expected of the phones path at any length (each
     utterance is decoded from a fresh decoder's state, :func:`~mpeg4fa.speech.listen.phones.decode_pcm`), and of
     the words path for one block only (a clip of 4 s or more is two: :func:`~mpeg4fa.speech.listen.stream.blocks`):
-    its alignment hears espeak-ng's rendering of the words, whose audio depends on what the process spoke before."""
+    its alignment is the transcript aligner's, whose decoder carries its front end's state from one alignment to
+    the next and which hears espeak-ng's rendering of the words, whose audio depends on what the process spoke
+    before."""
     rows = []
     for clip, (whole, rate) in clips.items():
         stream_listened(Source("warm", rate, 3.0, iter([whole[:3 * rate]])), io.BytesIO(), lang="en",

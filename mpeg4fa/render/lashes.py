@@ -159,7 +159,7 @@ STRANDS = 64
 
 
 def _hash(x: np.ndarray) -> np.ndarray:
-    """The face shader's ``hash`` (the same strands everywhere they are drawn)."""
+    """The face shader's ``hash``: strands placed, jittered and leaning by the shader's rule."""
     return np.mod(np.sin(x * 127.1 + 311.7) * 43758.5453, 1.0)
 
 
@@ -167,7 +167,9 @@ def strand_image(width: int = 1024, height: int = 64, supersample: int = 4) -> n
     """The shader's lash strands as coverage, for viewers that draw the cards from a texture (the GLB, the
     browser head): (height, width) uint8, :data:`STRANDS` strands across (u along the margin, repeating), the
     tips at row 0 and the roots at the bottom row; each strand a little off its place, of its own reach,
-    leaning and thinning to its tip as the shader draws it (strands at their longest: no per-lash thinning)."""
+    leaning and thinning to its tip by the shader's rule. Not the renderer's very strands: these repeat every
+    :data:`STRANDS` along the margin (the shader numbers them from each margin's corner), none is thinned for a
+    short lash, and the far-off merging into a lash line is left to the viewer's mip levels."""
     looks = eye_looks()
     spacing, half_root = looks.lash_spacing, looks.lash_width
     n = supersample

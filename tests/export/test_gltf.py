@@ -53,6 +53,9 @@ def _check_common(gltf, result, stream, face, n_targets):
             layout = build_lashes(face.mesh)
             assert np.abs(position - lash_vertices(layout, face.mesh.vertices)[:, :3] * MM).max() < 1e-7
             assert np.array_equal(indices, layout.indices.reshape(-1))
+            uv, k = read_accessor(gltf, prim.attributes.TEXCOORD_0), len(layout.rows)
+            assert np.array_equal(uv[:, 1], np.repeat([1.0, 0.5, 0.0], k))  # roots on the image's bottom row (v down)
+            assert np.allclose(uv[:k, 0], uv[2 * k:, 0]) and (np.diff(uv[:k // 4, 0]) > 0).all()  # along the margin
             continue
         assert indices.max() < len(position) and len(indices) == 3 * len(face.mesh.triangles[part])
         # every vertex of the primitive is a vertex of its part, at its rest position
@@ -94,6 +97,15 @@ def test_morph_targets_are_the_arkit_units_driven_as_the_deformer_drives_them(ge
         assert np.allclose(weights[:, names.index(base_unit(name))], expected, atol=1e-6), name
     undriven = [u for u, n in enumerate(names) if n not in {base_unit(d) for d in rig.unit_names}]
     assert len(undriven) == 52 - 27 and not weights[:, undriven].any()
+    # each unit's lash target: the cards grown from the unit's shape (a viewer blends them linearly: at half a blink
+    # they sit 0.2 mm from the cards grown from the half-blinked lids)
+    layout, rest = build_lashes(generic_face.mesh), generic_face.mesh.vertices
+    at_rest, shapes = lash_vertices(layout, rest)[:, :3], arkit_units(generic_face).shapes
+    grown = _targets(gltf, "lashes") / MM
+    for name in ("eyeBlinkLeft", "eyeBlinkRight", "jawOpen"):
+        u = names.index(name)
+        assert np.abs(grown[u] - (lash_vertices(layout, rest + shapes[u])[:, :3] - at_rest)).max() < 1e-3, name
+    assert np.abs(grown[names.index("eyeBlinkLeft")]).max() > 3  # the blink swings the lashes by millimetres
     assert weights[OPEN_FRAME, names.index("jawOpen")] > 0.3 and not weights[0].any()
     # the one-sided brow FAP drives the left half only: the unit shows it at half on both sides
     brow = [k for k, n in enumerate(rig.unit_names) if n.startswith("browInnerUp")]

@@ -76,8 +76,13 @@ def test_a_served_texture_is_in_the_pages_head():
     assert _png_size(gltf) == (64, 64)
     plain = TestClient(create_app(face_for_tests()), base_url="http://127.0.0.1").get("/static/fap-head.glb")
     plain_gltf = pygltflib.GLTF2.load_from_bytes(plain.content)  # without one: the skin's own colours, baked
-    assert [i.name for i in plain_gltf.images] == ["head", "eye", "lashes"]  # the photo has its own lashes: none
+    assert [i.name for i in plain_gltf.images] == ["head", "eye", "lashes"]  # the lash strands: on the plain head only
     assert _png_size(plain_gltf) == (ALBEDO_SIZE, ALBEDO_SIZE)
+    # the pages grow the GLB's lash cards by the key's layout; the photo head has its own lashes and no layout
+    textured_key = TestClient(create_app(face_for_tests(), texture=image),
+                              base_url="http://127.0.0.1").get("/static/fap-head.json").json()
+    plain_key = TestClient(create_app(face_for_tests()), base_url="http://127.0.0.1").get("/static/fap-head.json").json()
+    assert textured_key["lashes"] is None and len(plain_key["lashes"]["roots"]) == len(plain_key["lashes"]["rows"]) > 0
 
 
 def _png_size(gltf) -> tuple[int, int]:

@@ -1,7 +1,8 @@
 """A long recording is heard two blocks at a time, one in a helper process (pocketsphinx holds the GIL while
 it decodes, so only a second process uses a second core): the stream is the one a single process writes, in
 the same order and on the same clock (byte for byte on the phones path; the words path's alignment hears
-espeak-ng's rendering of the words, whose audio depends on what the process spoke before). Speed itself is measured by tools/bench_lipsync_audio.py, not here."""
+espeak-ng's rendering of the words, whose audio depends on what the process spoke before, and the aligner's decoder
+carries its state from one alignment to the next). Speed itself is measured by tools/bench_lipsync_audio.py, not here."""
 import io
 import json
 import os
@@ -137,11 +138,44 @@ def test_a_clip_shorter_than_a_block_is_cut_in_two_at_the_pause_nearest_its_midd
     # too short to be worth two: whole
     short = x[:int((SPLIT_SECONDS - 0.5) * rate)]
     assert len(list(blocks(Source("short", rate, len(short) / rate, iter([short]))))) == 1
-    # no pause in its middle half: its quietest 10 ms there
-    plain = _speech_with_pauses(rate, 8.0, [(0.5, 0.3)])
-    plain[int(4.4 * rate):int(4.41 * rate)] //= 50
-    assert [round(o, 2) for o, _ in blocks(Source("plain", rate, 8.0, iter([plain])))] == [0.0, 4.4]
+    # no pause in its middle half (a 60 ms gap is a stop's closure): whole, not cut inside a closure
+    plain = _speech_with_pauses(rate, 8.0, [(0.5, 0.3), (4.0, 0.06)])
+    assert [round(o, 2) for o, _ in blocks(Source("plain", rate, 8.0, iter([plain])))] == [0.0]
     # a last block after an odd number of blocks pairs with the one before it, whole; after an even number, in two
     for seconds, count in ((15.0, 4), (19.0, 6)):
         long = np.concatenate([x, x])[:int(seconds * rate)]
         assert len(list(blocks(Source("long", rate, seconds, iter([long])), block_seconds=5.0))) == count
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2 or os.name != "posix", reason="one core, or no fork")
+def test_each_block_takes_the_same_recogniser_on_one_core_or_two(monkeypatch):
+    # either judges each block of a pair on its own and the pair's first block settles the rest, on one core as on
+    # two: here the first block sounds synthetic (phones), the second like a person (words)
+    from mpeg4fa.speech.listen import stream
+    from mpeg4fa.speech.listen.core import Listened
+    from mpeg4fa.speech.listen.stream import heard_blocks
+    from mpeg4fa.speech.utterance import Utterance
+
+    def judged(rec, recognizer, lang):
+        person = rec.samples.mean() > 0  # the fake's judgement: by the block's sign
+        took = recognizer if recognizer != "either" else ("words" if person else "phonetic")
+        confidence = (-10.0 if person else -40.0) if recognizer == "either" else float("nan")
+        return Listened(Utterance(None, (), (), None), took, confidence=confidence)
+
+    monkeypatch.setattr(stream, "listen", judged)
+    rate = 16000
+    parts = []
+    for sign in (-1, 1, 1, -1, 1):  # 6 s blocks, each ending in a 50 ms gap that the block before is cut at
+        part = np.full(6 * rate, 1000 * sign, np.int16)
+        part[int(5.9 * rate):int(5.95 * rate)] = 0
+        parts.append(part)
+    x = np.concatenate(parts)
+    seen = []
+    for helper in (False, True):
+        with stream._helper(helper) as pool:
+            got = [heard.recognizer for _, _, heard in heard_blocks(Source("x", rate, 30.0, iter([x])), 6.0, "either",
+                                                                     "en", pool, None)]
+        seen.append(got)
+    # the first pair judged block by block, the rest as the pair's first block (one core used to settle after it)
+    assert seen[0] == seen[1] and len(seen[0]) >= 4, seen
+    assert seen[0][:2] == ["phonetic", "words"] and set(seen[0][2:]) == {"phonetic"}, seen

@@ -3,7 +3,7 @@ block, with the memory of a block.
 
 The audio is read in blocks of about :data:`BLOCK_SECONDS`, each cut at the quietest 10 ms of its last
 :data:`CUT_SECONDS` (between words, not inside one), and a last block that would be heard alone in two at the
-pause nearest its middle (so that a short clip has both cores too); each block is heard on its own (:func:`.core.listen`)
+pause nearest its middle, where it has one (so that a short clip has both cores too); each block is heard on its own (:func:`.core.listen`)
 and goes through the encoder's passes on the recording's clock: phones (stops from their closures) ->
 frames (:class:`~mpeg4fa.speech.frames.FrameMaker`, running on across blocks) -> bits
 (:class:`~mpeg4fa.speech.bits.FbaBlocks`). The timings are written as they come.
@@ -112,10 +112,11 @@ def _quiet_cut(x: np.ndarray, start: int, stop: int, rate: int) -> int:
     return start + int(np.argmin(levels)) * int(round(HOP * rate))
 
 
-def _middle_pause(x: np.ndarray, rate: int) -> int:
+def _middle_pause(x: np.ndarray, rate: int) -> int | None:
     """Where to cut a lone block in two: the middle of the pause (at least :data:`PAUSE_SECONDS` without speech
     energy, :func:`~mpeg4fa.speech.align.recording.speech_frames`) nearest the block's middle within its middle
-    half (the two halves take about as long to hear), else the quietest 10 ms there."""
+    half (the two halves take about as long to hear); None where there is none (the quietest moment of fluent
+    speech is mostly a stop's closure, which a cut would split between two decodings)."""
     hop = int(round(HOP * rate))
     quiet = ~speech_frames(frame_levels(x.astype(np.float64) / 32768.0, rate))
     edges = np.flatnonzero(np.diff(np.concatenate([[0], quiet.astype(np.int8), [0]])))
@@ -123,17 +124,15 @@ def _middle_pause(x: np.ndarray, rate: int) -> int:
     runs = runs[runs[:, 1] - runs[:, 0] >= int(round(PAUSE_SECONDS / HOP))]
     middles = (runs[:, 0] + runs[:, 1]) // 2 * hop
     inside = middles[(middles >= len(x) // 4) & (middles <= 3 * len(x) // 4)]
-    if len(inside):
-        return int(inside[np.argmin(np.abs(inside - len(x) // 2))])
-    return _quiet_cut(x, len(x) // 4, 3 * len(x) // 4, rate)
+    return int(inside[np.argmin(np.abs(inside - len(x) // 2))]) if len(inside) else None
 
 
 def blocks(source: Source, block_seconds: float = BLOCK_SECONDS) -> Iterator[tuple[float, Recording]]:
     """``(offset s, Recording)`` blocks of the source, each cut at a quiet moment (see the module docstring).
     The source's last block, when it would be heard alone (an even number of blocks before it) and lasts at
-    least :data:`SPLIT_SECONDS`, is cut in two at the pause nearest its middle (:func:`_middle_pause`), so that a clip shorter
-    than a block is heard by both cores too (:func:`heard_blocks`); the cut depends on the audio alone, never
-    on the cores."""
+    least :data:`SPLIT_SECONDS`, is cut in two at the pause nearest its middle where it has one in its middle half
+    (:func:`_middle_pause`), so that a clip shorter than a block is heard by both cores too (:func:`heard_blocks`);
+    the cut depends on the audio alone, never on the cores."""
     rate = source.rate
     size = int(block_seconds * rate)
     window = int(CUT_SECONDS * rate)
@@ -150,8 +149,8 @@ def blocks(source: Source, block_seconds: float = BLOCK_SECONDS) -> Iterator[tup
             offset, count = offset + cut, count + 1
             buffered, held = [x[cut:]], len(x) - cut
     x = np.concatenate(buffered) if buffered else np.zeros(0, np.int16)
-    if count % 2 == 0 and len(x) >= SPLIT_SECONDS * rate:
-        cut = _middle_pause(x, rate)
+    cut = _middle_pause(x, rate) if count % 2 == 0 and len(x) >= SPLIT_SECONDS * rate else None
+    if cut is not None:
         yield offset / rate, Recording(x[:cut], rate, source.name)
         offset, x = offset + cut, x[cut:]
     yield offset / rate, Recording(x, rate, source.name)
@@ -244,7 +243,8 @@ def _helper(wanted: bool) -> Iterator[list]:
 
 
 def _listen_alone(rec: Recording, how: str, lang: str, helper: list) -> Listened:
-    """A block heard with no other block beside it (a clip of one block, a last odd one): with a ``helper`` and
+    """A block heard with no other block beside it (a clip under :data:`SPLIT_SECONDS`, a last odd one, a clip with
+    no pause in its middle half to cut at): with a ``helper`` and
     ``either`` still unsettled, the helper runs the phone loop (:func:`.core.phone_loop`) while this process
     decodes the words, so that a short clip too has both cores (the same result: the decoders are independent)."""
     if not helper or choose_recognizer(how, lang) != "either":
@@ -258,29 +258,29 @@ def _listen_alone(rec: Recording, how: str, lang: str, helper: list) -> Listened
 
 def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: str, helper: list,
                  fallbacks) -> Iterator[tuple[float, Recording, Listened]]:
-    """``(offset, block, Listened)`` in order. With a ``helper`` (:func:`_helper`) two blocks are heard at
-    once, one in the helper process: pocketsphinx holds the GIL while it decodes (over 90 % of the time),
-    so only a second process puts a second core to work. A block waits for the next before it is heard;
-    one alone is heard here (:func:`_listen_alone`: with ``either`` unsettled, its phone loop in the helper,
-    else with no process started); ``fallbacks``: the
-    :class:`~mpeg4fa.speech.ipa.FallbackLog` the helper's guessed phonemes join. ``either``: the first block it
-    judges settles the recogniser of the blocks after it (:func:`.core.settled`)."""
+    """``(offset, block, Listened)`` in order, the blocks heard two by two. With a ``helper`` (:func:`_helper`) the
+    two are heard at once, one in the helper process: pocketsphinx holds the GIL while it decodes (over 90 % of
+    the time), so only a second process puts a second core to work; without one, one after the other, with the
+    same recogniser, so that the recogniser each block takes does not depend on the cores. A last block alone is
+    heard here (:func:`_listen_alone`: with ``either`` unsettled, its phone loop in the helper, else with no
+    process started); ``fallbacks``: the :class:`~mpeg4fa.speech.ipa.FallbackLog` the helper's guessed phonemes
+    join. ``either``: the first pair it judges settles the recogniser of the blocks after it (the pair's first
+    block's judgement, :func:`.core.settled`)."""
     held = None
     how = choose_recognizer(recognizer, lang)
     for offset, rec in blocks(source, block_seconds):
-        if not helper:
-            heard = listen(rec, recognizer=how, lang=lang)
-            how = settled(how, heard)
-            yield offset, rec, heard
-            continue
         if held is None:
             held = offset, rec
             continue
-        job = helper[0]().apply_async(_listen_block, (held[1], how, lang))
-        here = listen(rec, recognizer=how, lang=lang)
-        there, guessed = job.get()
-        for phoneme, (n, what, read_as) in guessed.items():
-            fallbacks.seen.setdefault(phoneme, [0, what, read_as])[0] += n
+        if helper:
+            job = helper[0]().apply_async(_listen_block, (held[1], how, lang))
+            here = listen(rec, recognizer=how, lang=lang)
+            there, guessed = job.get()
+            for phoneme, (n, what, read_as) in guessed.items():
+                fallbacks.seen.setdefault(phoneme, [0, what, read_as])[0] += n
+        else:
+            there = listen(held[1], recognizer=how, lang=lang)
+            here = listen(rec, recognizer=how, lang=lang)
         how = settled(settled(how, there), here)
         yield held[0], held[1], there
         yield offset, rec, here
@@ -297,8 +297,8 @@ def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer
     """Hear ``source`` block by block and write its FBA stream to the binary file ``out`` (and the timed
     visemes as JSON to the text file ``timings``, the audio as 16-bit WAV to the binary file ``audio``).
     ``progress(done, total)`` counts seconds of audio (total 0 when a pipe's length is unknown).
-    ``two_cores``: hear two blocks at once where the machine has the cores (:func:`heard_blocks`; the
-    stream is the same)."""
+    ``two_cores``: hear two blocks at once where the machine has the cores (:func:`heard_blocks`; the same
+    recogniser each block, the phones path's stream byte for byte the same)."""
     from mpeg4fa.fba import EncodeOptions
     from mpeg4fa.speech.bits import FbaBlocks
     from mpeg4fa.speech.encoder import LEVELS, TEXT_CODING, StreamBuilder, closure_hold, phones
