@@ -667,13 +667,14 @@ def _say_recording(args: argparse.Namespace) -> int:
     refuse_overlaps({**({"--speech": args.speech} if str(args.speech) != "-" else {}), "--photo": args.photo}, outputs)
     check_frames_output("say", args.output, args.size)
     if args.transcript is None:
-        from ..speech.listen import listen
-        from ..speech.listen.stream import recording_of
+        from ..speech.listen.stream import listened_whole
 
         source = _listen_source(args)
-        heard = listen(recording_of(source), recognizer=args.recognizer, lang=args.lang, expression=args.expression)
+        heard = listened_whole(source, recognizer=args.recognizer, lang=args.lang, expression=args.expression)
         encoded = encode_utterance(heard.utterance, fps=args.fps, level=args.level, idle=args.idle)
         print(_heard_line(source.name, heard), file=sys.stderr)
+        for note in heard.notes:
+            print(f"{source.name}: {note}", file=sys.stderr)
         how = f"{heard.recognizer} recogniser, no transcript"
     else:
         aligned, name = _aligned(args, {}, outputs)

@@ -179,3 +179,23 @@ def test_each_block_takes_the_same_recogniser_on_one_core_or_two(monkeypatch):
     # the first pair judged block by block, the rest as the pair's first block (one core used to settle after it)
     assert seen[0] == seen[1] and len(seen[0]) >= 4, seen
     assert seen[0][:2] == ["phonetic", "words"] and set(seen[0][2:]) == {"phonetic"}, seen
+
+
+def test_say_hears_a_clip_as_encode_does(long_speech):
+    # say renders the recording in memory, encode streams it: the same blocks, the same visemes on the same clock
+    from mpeg4fa.speech.encoder import phones
+    from mpeg4fa.speech.listen.stream import listened_whole
+
+    x, rate = long_speech
+    clip = x[:int(12 * rate)]
+    out, timings = io.BytesIO(), io.StringIO()
+    streamed = stream_listened(Source("clip", rate, 12.0, iter([clip])), out, timings=timings, level="low",
+                               expression=("joy", 30))
+    whole = listened_whole(Source("clip", rate, 12.0, iter([clip])), expression=("joy", 30))
+    assert streamed.blocks == 2 and whole.recognizer == streamed.recognizer == "phonetic"
+    written = [(i["viseme"], i["start"], i["end"]) for i in json.loads(timings.getvalue())]
+    said = [(t.viseme, round(t.start, 6), round(t.end, 6)) for t in phones(whole.utterance).timings]
+    assert said == written and len(said) > 50
+    assert np.array_equal(whole.utterance.speech.samples, clip) and whole.voiced == streamed.voiced
+    (cue,) = whole.utterance.cues
+    assert (cue.expression, cue.intensity) == ("joy", 30)

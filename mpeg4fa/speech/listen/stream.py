@@ -357,6 +357,40 @@ def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer
                  time.perf_counter() - started)
 
 
+def listened_whole(source: Source, *, recognizer: str = "auto", lang: str = "auto",
+                   expression: tuple[str, int] | None = None, block_seconds: float = BLOCK_SECONDS,
+                   two_cores: bool = True, max_seconds: float | None = None) -> Listened:
+    """The source heard as :func:`stream_listened` hears it (the same blocks, two at once), as one
+    :class:`~.core.Listened` on the recording's clock: what ``say`` renders, so that it shows what ``encode``
+    writes. In memory (:func:`recording_of`: at most ``max_seconds``); ``recognizer``: ``either`` where the
+    blocks took both."""
+    from dataclasses import replace
+
+    from mpeg4fa.speech.ipa import phoneme_fallbacks
+    from mpeg4fa.speech.listen.core import ENGINE
+    from mpeg4fa.speech.markup import Markup
+    from mpeg4fa.speech.tts.base import Speech
+    from mpeg4fa.speech.utterance import Utterance
+
+    check_language(recognizer, lang)
+    rec = recording_of(source, max_seconds)
+    whole = Source(source.name, rec.rate, rec.duration, iter([rec.samples]))
+    timings, events, words, notes, voiced, used, confidence = [], [], [], [], 0.0, None, float("nan")
+    with phoneme_fallbacks(source.name) as fallbacks, _helper(two_cores) as helper:
+        for offset, _block, heard in heard_blocks(whole, block_seconds, recognizer, lang, helper, fallbacks):
+            timings += [replace(t, start=t.start + offset, end=t.end + offset) for t in heard.utterance.timings]
+            events += [replace(e, start=e.start + offset, end=e.end + offset) for e in heard.utterance.speech.events]
+            words += [replace(w, start=w.start + offset, end=w.end + offset) for w in heard.words]
+            notes += [f"{offset:.1f} s: {n}" for n in heard.notes]
+            voiced += heard.voiced
+            confidence = heard.confidence if used is None else confidence
+            used = heard.recognizer if used in (None, heard.recognizer) else "either"
+    used = used or choose_recognizer(recognizer, lang)
+    speech = Speech(rec.samples, rec.rate, tuple(sorted(events, key=lambda e: e.start)), ENGINE, f"recognised:{used}")
+    utterance = Utterance(speech, tuple(timings), expression_cues(expression), Markup(" ".join(w.word for w in words), ()))
+    return Listened(utterance, used, tuple(words), voiced, tuple(notes), confidence)
+
+
 def recording_of(source: Source, max_seconds: float | None = None) -> Recording:
     """The whole source as one :class:`Recording` (for what is rendered in memory: ``say``); AlignError
     past ``max_seconds`` (default the speech encoder's 30 min, :data:`mpeg4fa.wavread.MAX_SPEECH_SECONDS`)."""
