@@ -48,8 +48,8 @@ ENGLISH_DEFAULT = "either"
 LibriVox recordings (tools/bench_lipsync_audio.py --human) and festival's voices (tools/bench_lipsync_festival.py),
 2026-12-07, each utterance decoded from a fresh front end: either 92.2 / 82.8 / 72.8, 68.4, 54.4 % (phonetic 92.2 /
 55.2 / 52.2, 71.3, 58.1; words 35.2 / 82.8 / 72.1, 68.4, 61.0); speed on 2 cores (tools/bench_lipsync_audio.json,
-2026-12-07, a machine 1.4x slower than the day before): espeak-ng 10.2-14.2x real time from 5 to 60 s, people's
-speech (LibriVox) 9.5-11.3x (phonetic 24-41x)."""
+2026-12-07, a machine 1.4x slower than the day before): espeak-ng 10.1-13.7x real time from 5 to 60 s, people's
+speech (LibriVox) 10.3-11.5x (phonetic 23-39x)."""
 WORDS_CONFIDENT = -23.0
 """``either`` takes the words path where :func:`word_confidence` is at least this (pocketsphinx's log units,
 base 1.0001, per 10 ms of words). Measured 2026-12-06 per sentence (tools/bench_lipsync_audio.py's English
