@@ -3,8 +3,8 @@ block, with the memory of a block.
 
 The audio is read in blocks of about :data:`BLOCK_SECONDS`, each cut at the quietest 10 ms of its last
 :data:`CUT_SECONDS` (between words, not inside one), and a last block that would be heard alone in two at the
-pause nearest its middle, where it has one (so that a short clip has both cores too); each block is heard on its own (:func:`.core.listen`)
-and goes through the encoder's passes on the recording's clock: phones (stops from their closures) ->
+pause nearest its middle, where it has one (so that a short clip has both cores too); each block is heard on
+its own (:func:`.core.listen`) and goes through the encoder's passes on the recording's clock: phones (stops from their closures) ->
 frames (:class:`~mpeg4fa.speech.frames.FrameMaker`, running on across blocks) -> bits
 (:class:`~mpeg4fa.speech.bits.FbaBlocks`). The timings are written as they come.
 """
