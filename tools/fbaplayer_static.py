@@ -4,8 +4,8 @@
     .venv/bin/python tools/fbaplayer_static.py -o out/player/fbaplayer.html [--fdp face.fdp]
 
 A browser refuses ES modules from file:// URLs, so every module of the page (fbaplayer.js, head.js,
-facerig.js, lashes.js, fba.js, shown.js, spec.js, three.js and the two addons it uses) goes into the page's import map as a data:
-URL under a bare name (their relative imports rewritten to those names), and the head (the
+facerig.js, lashes.js, fba.js, shown.js, spec.js, three.js and the two addons it uses) goes into the page's
+import map as a data: URL under a bare name (their relative imports rewritten to those names), and the head (the
 GLB and rig of :mod:`mpeg4fa.serve.fap_head`, of the generic head or of one calibrated to ``--fdp``) and its
 key ride along in the page. Open the file and drop a .fba with its .wav on it (a URL cannot be
 fetched from a file:// page). About 4 MB (the generic head, untextured).

@@ -4,8 +4,8 @@ block, with the memory of a block.
 The audio is read in blocks of about :data:`BLOCK_SECONDS`, each cut at the quietest 10 ms of its last
 :data:`CUT_SECONDS` (between words, not inside one), and a last block that would be heard alone in two at the
 pause nearest its middle, where it has one (so that a short clip has both cores too); each block is heard on
-its own (:func:`.core.listen`) and goes through the encoder's passes on the recording's clock: phones (stops from their closures) ->
-frames (:class:`~mpeg4fa.speech.frames.FrameMaker`, running on across blocks) -> bits
+its own (:func:`.core.listen`) and goes through the encoder's passes on the recording's clock: phones (stops
+from their closures) -> frames (:class:`~mpeg4fa.speech.frames.FrameMaker`, running on across blocks) -> bits
 (:class:`~mpeg4fa.speech.bits.FbaBlocks`). The timings are written as they come.
 """
 from __future__ import annotations
@@ -387,7 +387,8 @@ def listened_whole(source: Source, *, recognizer: str = "auto", lang: str = "aut
             used = heard.recognizer if used in (None, heard.recognizer) else "either"
     used = used or choose_recognizer(recognizer, lang)
     speech = Speech(rec.samples, rec.rate, tuple(sorted(events, key=lambda e: e.start)), ENGINE, f"recognised:{used}")
-    utterance = Utterance(speech, tuple(timings), expression_cues(expression), Markup(" ".join(w.word for w in words), ()))
+    markup = Markup(" ".join(w.word for w in words), ())
+    utterance = Utterance(speech, tuple(timings), expression_cues(expression), markup)
     return Listened(utterance, used, tuple(words), voiced, tuple(notes), confidence)
 
 
