@@ -149,18 +149,23 @@ def test_a_clip_shorter_than_a_block_is_cut_in_two_at_the_pause_nearest_its_midd
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2 or os.name != "posix", reason="one core, or no fork")
 def test_each_block_takes_the_same_recogniser_on_one_core_or_two(monkeypatch):
-    # either judges each block of a pair on its own and the pair's first block settles the rest, on one core as on
-    # two: here the first block sounds synthetic (phones), the second like a person (words)
+    # either judges the first pair together, on one core as on two, and that recogniser serves the whole
+    # recording: here the first block alone sounds synthetic (phones), the second like a person (words), and
+    # together like a person (their mean confidence, weighed by voice, above WORDS_CONFIDENT)
     from mpeg4fa.speech.listen import stream
-    from mpeg4fa.speech.listen.core import Listened
+    from mpeg4fa.speech.listen.core import WORDS_CONFIDENT, Listened
     from mpeg4fa.speech.listen.stream import heard_blocks
     from mpeg4fa.speech.utterance import Utterance
 
+    heard_by = []
+
     def judged(rec, recognizer, lang):
         person = rec.samples.mean() > 0  # the fake's judgement: by the block's sign
-        took = recognizer if recognizer != "either" else ("words" if person else "phonetic")
-        confidence = (-10.0 if person else -40.0) if recognizer == "either" else float("nan")
-        return Listened(Utterance(None, (), (), None), took, confidence=confidence)
+        confidence = WORDS_CONFIDENT + (8.0 if person else -2.0)
+        took = recognizer if recognizer != "either" else ("words" if confidence >= WORDS_CONFIDENT else "phonetic")
+        heard_by.append(recognizer)
+        return Listened(Utterance(None, (), (), None), took, voiced=rec.duration,
+                        confidence=confidence if recognizer == "either" else float("nan"))
 
     monkeypatch.setattr(stream, "listen", judged)
     rate = 16000
@@ -172,13 +177,14 @@ def test_each_block_takes_the_same_recogniser_on_one_core_or_two(monkeypatch):
     x = np.concatenate(parts)
     seen = []
     for helper in (False, True):
+        heard_by.clear()
         with stream._helper(helper) as pool:
             got = [heard.recognizer for _, _, heard in heard_blocks(Source("x", rate, 30.0, iter([x])), 6.0, "either",
                                                                      "en", pool, None)]
         seen.append(got)
-    # the first pair judged block by block, the rest as the pair's first block (one core used to settle after it)
-    assert seen[0] == seen[1] and len(seen[0]) >= 4, seen
-    assert seen[0][:2] == ["phonetic", "words"] and set(seen[0][2:]) == {"phonetic"}, seen
+        if not helper:  # the pair heard by either, the first block again by words, the rest by words alone
+            assert heard_by[:3] == ["either", "either", "words"] and set(heard_by[3:]) == {"words"}, heard_by
+    assert seen[0] == seen[1] and len(seen[0]) >= 4 and set(seen[0]) == {"words"}, seen
 
 
 def test_say_hears_a_clip_as_encode_does(long_speech):

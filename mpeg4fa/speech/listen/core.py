@@ -197,12 +197,16 @@ def _either(rec: Recording, active: np.ndarray, lang: str, loop: Callable[[], Ph
     return timings, events, [], "", "phonetic", confidence
 
 
-def settled(how: str, heard: Listened) -> str:
-    """The recogniser for the rest of a recording once ``either`` has judged the words of a block (``heard``):
-    the one it took. A recording is one kind of voice, so later blocks need not run both decoders."""
-    if how == "either" and np.isfinite(heard.confidence):
-        return "words" if heard.confidence >= WORDS_CONFIDENT else "phonetic"
-    return how
+def settled(how: str, *heard: Listened) -> str:
+    """The recogniser for the rest of a recording once ``either`` has judged the words of its first blocks
+    (``heard``, judged together: their confidences weighed by their seconds of voice). A recording is one kind of
+    voice, so one recogniser serves all of it, and later blocks need not run both decoders."""
+    judged = [(h.confidence, h.voiced) for h in heard if np.isfinite(h.confidence)]
+    if how != "either" or not judged:
+        return how
+    confidence, voiced = np.array(judged).T
+    mean = float(np.average(confidence, weights=voiced)) if voiced.sum() > 0 else float(confidence.mean())
+    return "words" if mean >= WORDS_CONFIDENT else "phonetic"
 
 
 def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto",

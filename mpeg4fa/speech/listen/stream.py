@@ -256,6 +256,16 @@ def _listen_alone(rec: Recording, how: str, lang: str, helper: list) -> Listened
     return listen(rec, recognizer=how, lang=lang, active=active, loop=job.get)
 
 
+def _heard_as(rec: Recording, heard: Listened, how: str, lang: str) -> Listened:
+    """``heard`` where ``either`` judged it as ``how`` on its own, else ``rec`` heard again by ``how`` (its own
+    judgement kept as its confidence)."""
+    from dataclasses import replace
+
+    if heard.recognizer == how or settled("either", heard) == how:  # (words judged, not alignable: phones kept)
+        return heard
+    return replace(listen(rec, recognizer=how, lang=lang), confidence=heard.confidence)
+
+
 def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: str, helper: list,
                  fallbacks) -> Iterator[tuple[float, Recording, Listened]]:
     """``(offset, block, Listened)`` in order, the blocks heard two by two. With a ``helper`` (:func:`_helper`) the
@@ -264,8 +274,8 @@ def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: st
     same recogniser, so that the recogniser each block takes does not depend on the cores. A last block alone is
     heard here (:func:`_listen_alone`: with ``either`` unsettled, its phone loop in the helper, else with no
     process started); ``fallbacks``: the :class:`~mpeg4fa.speech.ipa.FallbackLog` the helper's guessed phonemes
-    join. ``either``: the first pair it judges settles the recogniser of the blocks after it (the pair's first
-    block's judgement, :func:`.core.settled`)."""
+    join. ``either``: the first pair is judged together (:func:`.core.settled`) and that recogniser serves the
+    whole recording: a block of the pair that took the other one is heard again."""
     held = None
     how = choose_recognizer(recognizer, lang)
     for offset, rec in blocks(source, block_seconds):
@@ -281,7 +291,9 @@ def heard_blocks(source: Source, block_seconds: float, recognizer: str, lang: st
         else:
             there = listen(held[1], recognizer=how, lang=lang)
             here = listen(rec, recognizer=how, lang=lang)
-        how = settled(settled(how, there), here)
+        if how == "either":  # the pair judged together: one recogniser for both, a half that took the other re-heard
+            how = settled(how, there, here)
+            there, here = _heard_as(held[1], there, how, lang), _heard_as(rec, here, how, lang)
         yield held[0], held[1], there
         yield offset, rec, here
         held = None
