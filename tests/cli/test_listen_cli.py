@@ -152,9 +152,15 @@ def test_say_a_recording_without_a_transcript(cli, tmp_path, rec, procedural_fac
     from mpeg4fa.face import FaceModel
     from mpeg4fa.render.video import probe_media
 
+    from mpeg4fa.speech.listen import stream
+
     monkeypatch.setattr(FaceModel, "default", classmethod(lambda cls: procedural_face))
+    heard = []  # say hears the recording as encode does (stream.listened_whole: its blocks, two at once)
+    monkeypatch.setattr(stream, "listened_whole", lambda *a, _hear=stream.listened_whole, **k: heard.append(1) or
+                        _hear(*a, **k))
     out = tmp_path / "me.mp4"
     code, stdout, err = cli("say", "--speech", rec, "-o", out, "--size", "64", "--aa", "0")
     assert code == 0, err
+    assert heard == [1]
     assert "phonetic recogniser, no transcript" in stdout
     assert probe_media(out).n_frames >= 70

@@ -187,6 +187,24 @@ def test_each_block_takes_the_same_recogniser_on_one_core_or_two(monkeypatch):
     assert seen[0] == seen[1] and len(seen[0]) >= 4 and set(seen[0]) == {"words"}, seen
 
 
+def test_a_pair_is_judged_by_its_voice_and_a_half_without_words_keeps_its_phones():
+    from mpeg4fa.speech.listen.core import WORDS_CONFIDENT, Listened, settled
+    from mpeg4fa.speech.listen.stream import _heard_as
+    from mpeg4fa.speech.utterance import Utterance
+
+    def heard(confidence, voiced, took="phonetic"):
+        return Listened(Utterance(None, (), (), None), took, voiced=voiced, confidence=confidence)
+
+    synthetic, person = heard(WORDS_CONFIDENT - 3, 6.0), heard(WORDS_CONFIDENT + 8, 1.2, "words")
+    assert settled("either", synthetic, person) == "phonetic"  # weighed by voice (a plain mean would take words)
+    assert settled("either", synthetic, heard(WORDS_CONFIDENT + 8, 6.0, "words")) == "words"
+    assert settled("phonetic", person) == "phonetic" and settled("either", heard(float("nan"), 0.0)) == "either"
+    # voice in which the word decoder heard no word: the words path has nothing to show, the phones are kept
+    wordless = heard(float("-inf"), 5.0)
+    assert _heard_as(None, wordless, "words", "en") is wordless
+    assert _heard_as(None, synthetic, "phonetic", "en") is synthetic
+
+
 def test_say_hears_a_clip_as_encode_does(long_speech):
     # say renders the recording in memory, encode streams it: the same blocks, the same visemes on the same clock
     from mpeg4fa.speech.encoder import phones

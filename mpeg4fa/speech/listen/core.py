@@ -12,8 +12,8 @@ Three recognisers (``recognizer=``):
   as the free phone loop does (:func:`word_confidence` at least :data:`WORDS_CONFIDENT`: speech like a
   person's, which the word recogniser was trained on), else the phones path (a synthetic voice such as
   espeak-ng's, whose words it misreads and whose closures the detector learned). Other languages: phonetic.
-  A recording heard block by block (:mod:`.stream`) is one kind of voice: the first block judged settles the
-  recogniser of the rest (:func:`settled`), so both decoders run on the first blocks only.
+  A recording heard block by block (:mod:`.stream`) is one kind of voice: its first pair of blocks, judged
+  together, settles the recogniser of the rest (:func:`settled`), so both decoders run on the first blocks only.
 
 ``auto`` takes :data:`ENGLISH_DEFAULT` for English (``lang`` ``en``, ``en-*`` or ``auto``: with no text there
 is no script to tell the language by) and ``phonetic`` for every other language.

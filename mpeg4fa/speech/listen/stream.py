@@ -257,11 +257,14 @@ def _listen_alone(rec: Recording, how: str, lang: str, helper: list) -> Listened
 
 
 def _heard_as(rec: Recording, heard: Listened, how: str, lang: str) -> Listened:
-    """``heard`` where ``either`` judged it as ``how`` on its own, else ``rec`` heard again by ``how`` (its own
-    judgement kept as its confidence)."""
+    """``heard`` where ``either`` judged it as ``how`` on its own (or could not take the words path: no words
+    aligned, or none heard), else ``rec`` heard again by ``how``, in this process (its own judgement kept as its
+    confidence)."""
     from dataclasses import replace
 
     if heard.recognizer == how or settled("either", heard) == how:  # (words judged, not alignable: phones kept)
+        return heard
+    if heard.confidence == float("-inf"):  # voice, but the word decoder heard no word in it: nothing to show by words
         return heard
     return replace(listen(rec, recognizer=how, lang=lang), confidence=heard.confidence)
 
@@ -375,7 +378,7 @@ def listened_whole(source: Source, *, recognizer: str = "auto", lang: str = "aut
     """The source heard as :func:`stream_listened` hears it (the same blocks, two at once), as one
     :class:`~.core.Listened` on the recording's clock: what ``say`` renders, so that it shows what ``encode``
     writes. In memory (:func:`recording_of`: at most ``max_seconds``); ``recognizer``: ``either`` where the
-    blocks took both."""
+    blocks took both; ``confidence``: the first block's own."""
     from dataclasses import replace
 
     from mpeg4fa.speech.ipa import phoneme_fallbacks
@@ -386,7 +389,9 @@ def listened_whole(source: Source, *, recognizer: str = "auto", lang: str = "aut
 
     check_language(recognizer, lang)
     rec = recording_of(source, max_seconds)
-    whole = Source(source.name, rec.rate, rec.duration, iter([rec.samples]))
+    step = 1 << 18  # in pieces, as a file is read: blocks() copies what it holds at each cut
+    whole = Source(source.name, rec.rate, rec.duration,
+                   iter([rec.samples[i:i + step] for i in range(0, len(rec.samples), step)]))
     timings, events, words, notes, voiced, used, confidence = [], [], [], [], 0.0, None, float("nan")
     with phoneme_fallbacks(source.name) as fallbacks, _helper(two_cores) as helper:
         for offset, _block, heard in heard_blocks(whole, block_seconds, recognizer, lang, helper, fallbacks):
