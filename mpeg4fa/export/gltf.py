@@ -109,7 +109,7 @@ class _Lashes:
     part: _Part           # source: 0 .. 3K - 1 into the arrays below
     rest: np.ndarray      # (3K, 3) mm
     normals: np.ndarray   # (3K, 3)
-    shapes: np.ndarray | None  # (T, 3K, 3) mm, grown from rest + each of the mesh's targets
+    shapes: np.ndarray    # (T, 3K, 3) mm, grown from rest + each of the mesh's targets
 
 
 def export_glb(stream: FapStream, face: FaceModel, path: str | os.PathLike, *, animation: str = "morph",
@@ -174,10 +174,14 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
         parts.append(lashes.part)
         worn["lashes"] = _add_texture(gltf, buf, _lash_texture(looks), "lashes", repeat=True)
 
+    def arrays(part: _Part, targets: np.ndarray | None) -> tuple:
+        """Rest, normals and targets a part's ``source`` indexes: the mesh's, or the lash cards' own."""
+        if part.name != "lashes":
+            return rest, normals, targets
+        return lashes.rest, lashes.normals, lashes.shapes if targets is not None else None
+
     def mesh(mesh_name: str, members: list[_Part], targets: np.ndarray | None) -> int:
-        prims = [_primitive(gltf, buf, part, rest, normals, targets, looks, worn.get(part.name)) if part.name != "lashes"
-                 else _primitive(gltf, buf, part, lashes.rest, lashes.normals, lashes.shapes if targets is not None
-                                 else None, looks, worn["lashes"]) for part in members]
+        prims = [_primitive(gltf, buf, part, *arrays(part, targets), looks, worn.get(part.name)) for part in members]
         extra = ({"weights": [0.0] * len(names), "extras": {"targetNames": names}} if targets is not None
                  else {"weights": None})
         gltf.meshes.append(gl.Mesh(name=mesh_name, primitives=prims, **extra))

@@ -15,7 +15,7 @@ import json
 import os
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -260,8 +260,6 @@ def _heard_as(rec: Recording, heard: Listened, how: str, lang: str) -> Listened:
     """``heard`` where ``either`` judged it as ``how`` on its own (or could not take the words path: no words
     aligned, or none heard), else ``rec`` heard again by ``how``, in this process (its own judgement kept as its
     confidence)."""
-    from dataclasses import replace
-
     if heard.recognizer == how or settled("either", heard) == how:  # (words judged, not alignable: phones kept)
         return heard
     if heard.confidence == float("-inf"):  # voice, but the word decoder heard no word in it: nothing to show by words
@@ -379,8 +377,6 @@ def listened_whole(source: Source, *, recognizer: str = "auto", lang: str = "aut
     :class:`~.core.Listened` on the recording's clock: what ``say`` renders, so that it shows what ``encode``
     writes. In memory (:func:`recording_of`: at most ``max_seconds``); ``recognizer``: ``either`` where the
     blocks took both; ``confidence``: the first block's own."""
-    from dataclasses import replace
-
     from mpeg4fa.speech.ipa import phoneme_fallbacks
     from mpeg4fa.speech.listen.core import ENGINE
     from mpeg4fa.speech.markup import Markup

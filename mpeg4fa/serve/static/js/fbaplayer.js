@@ -275,7 +275,7 @@ window.fbaPlayer = {
   ready: false, state, openFiles, openUrl, seek, play, pause, frameAt,
   /** Feature points of the drawn head (mm), read back from its vertices. */
   featurePoints: () => head.featurePoints(),
-  /** The lash cards' vertices (mm; null on a head without lashes), and whether they are drawn. */
+  /** The lash cards' vertices (mm; null on a head without lashes); showLashes draws them or leaves them out. */
   lashVertices: () => head.lashVertices(),
   showLashes(shown) { if (head.lashes) head.lashes.mesh.visible = shown; scene.render(); },
   /** Show frame ``k`` now (paused), for tests and frame stepping. */
