@@ -201,11 +201,12 @@ def settled(how: str, *heard: Listened) -> str:
     """The recogniser for the rest of a recording once ``either`` has judged the words of its first blocks
     (``heard``, judged together: their confidences weighed by their seconds of voice). A recording is one kind of
     voice, so one recogniser serves all of it, and later blocks need not run both decoders."""
-    judged = [(h.confidence, h.voiced) for h in heard if np.isfinite(h.confidence) and h.voiced > 0]
+    judged = [(h.confidence, h.voiced) for h in heard if np.isfinite(h.confidence)]
     if how != "either" or not judged:
         return how
-    confidence, voiced = np.array(judged).T
-    return "words" if np.average(confidence, weights=voiced) >= WORDS_CONFIDENT else "phonetic"
+    confidence, voiced = np.array(judged).T  # a judgement without voice seconds (made by hand) counts alike
+    mean = float(np.average(confidence, weights=voiced)) if voiced.sum() > 0 else float(confidence.mean())
+    return "words" if mean >= WORDS_CONFIDENT else "phonetic"
 
 
 def listen(recording: Recording, *, recognizer: str = "auto", lang: str = "auto",
