@@ -11,7 +11,9 @@ documented exceptions to "no other feature point moves".
 
 :data:`PASSIVE_POINTS` are the other exception: the centres of the outer lids,
 which no FAP names. Held fixed, they pinch the lid skin into a fold when the
-brows rise or the cheeks lift; so they ride on the skin around them.
+brows rise or the cheeks lift; so they ride on the skin around them. The eye
+corners (3.7, 3.8, 3.11, 3.12), which no FAP names either, give a little as the
+lids close, under a millimetre in a blink (:mod:`.lid_folds`).
 """
 from __future__ import annotations
 

@@ -26,8 +26,9 @@ built from the margin itself:
    the margin to the front edge its ratio goes from the margin's to the front edge's (at its x), then
    fades to 0 over the rest of :data:`LID_HEIGHT_MM` of surface distance from the margin;
 5. near the corners the ratios are **evened out** where a closing lid would fold the
-   skin (:mod:`.lid_folds`: the margin there climbs steeply in x, so its vertices pass the
-   fixed corner as they close).
+   skin (:mod:`.lid_folds`: the margin there climbs steeply in x, so its vertices passed the
+   corner as they closed); the corners themselves, which no FAP names, take a share too and give a little
+   (under a millimetre in a blink).
 
 A frame turns the lid point by the angle that lowers it by exactly value x IRISD
 (:func:`mpeg4fa.face.motion.arc_angle`) and every sheet vertex by its ratio
@@ -229,6 +230,13 @@ def across_the_lid(rest: np.ndarray, from_margin: np.ndarray, margin: np.ndarray
     return value * smooth_down(beyond / (LID_HEIGHT_MM - width))
 
 
+def lid_corners(fap: int) -> tuple[str, str]:
+    """The eye corners (lateral, medial) of lid FAP ``fap`` (19-22). No FAP names them, and they give a little as the
+    lid closes (:mod:`.lid_folds`), or rides on its eye's pitch: the lids' exception to "no other feature point
+    moves"."""
+    return LIDS[fap][4], LIDS[fap][5]
+
+
 def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
     """The lid sheet of each lid FAP (19-22) on a neutral face."""
     rest = mesh.vertices
@@ -276,7 +284,10 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         corners = rest[[int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]]
         # (the front edges are not held: held, the evening out could not relax them at the medial end)
         closes = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
-        raw[fap] = (field, joint, fp_vertex, np.concatenate([anchors, other, closes]).astype(np.int64))
+        held = np.concatenate([anchors, other, closes]).astype(np.int64)
+        # the corners are not held: they give a little as the lid closes (lid_folds)
+        riding = [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]
+        raw[fap] = (field, joint, fp_vertex, held[~np.isin(held, riding)])
     pairs = ((19, 21), (20, 22))  # one eye's two lids (they close together), both eyes at once
     eyes = [(raw[upper][1], raw[upper][2], raw[lower][2]) for upper, lower in pairs]
     faps = [fap for pair in pairs for fap in pair]

@@ -20,7 +20,7 @@ import pytest
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS, SCALP_POINTS, coupled_points
 from mpeg4fa.face.fapu import DISTANCES
-from mpeg4fa.face.lids import LIDS, lid_drops
+from mpeg4fa.face.lids import LIDS, lid_corners, lid_drops
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.face.rig import CORNER_MARGIN_MM, CORNERS
 from mpeg4fa.spec import FAPS, N_FAPS
@@ -119,6 +119,7 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
         before = np.linalg.norm((rest[i] - centre)[1:])
         after = np.linalg.norm((pose.feature_points[i] - centre)[1:])
         errors.append((f"{mesh.fp_labels[i]} arc radius", abs(after - before) / abs(amount)))
+        coupled |= {index[label] for label in lid_corners(fap) if label in index}  # they give a little (lid_folds)
     elif fap in motion.EYE_ROTATION:
         eye, axis = motion.EYE_ROTATION[fap]
         label = record.feature_point[0]
@@ -137,6 +138,7 @@ def fap_errors(face: FaceModel, fap: int, value: float) -> list[tuple[str, float
                     i = index[point]
                     errors.append((f"{point} rides on the pitch", abs(-moved[i][1] - drops[lid]) / abs(drops[lid])))
                     coupled.add(i)
+                    coupled |= {index[label] for label in lid_corners(lid) if label in index}
     elif fap in motion.EYE_THRUST:
         label = record.feature_point[0]
         amount = value * fapu.unit("ES")
