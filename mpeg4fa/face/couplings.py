@@ -13,7 +13,8 @@ documented exceptions to "no other feature point moves".
 which no FAP names. Held fixed, they pinch the lid skin into a fold when the
 brows rise or the cheeks lift; so they ride on the skin around them. The eye
 corners (3.7, 3.8, 3.11, 3.12), which no FAP names either, give a little as the
-lids close, under a millimetre in a blink (:mod:`.lid_folds`).
+lids close and ride on the eyes' pitch (:func:`.lids.lid_corners`, how far:
+:mod:`.lid_folds`).
 """
 from __future__ import annotations
 

@@ -4,7 +4,7 @@ Each lid vertex turns about the eye centre's x axis by its share (:attr:`.lids.L
 the lid point's angle. A margin vertex's share is what brings it onto the other lid at its x, so the
 share rises from 0 at a corner (3.7/3.12, 3.8/3.11) to about 1 within a millimetre or two. At the
 generic head's lateral corner the upper margin climbs 2.5 mm in 0.7 mm of x, so in the plane of the
-turn its vertices pass the fixed corner as they close: the corner's walls (which face sideways)
+turn its vertices passed the corner, then held fixed, as they closed: the corner's walls (which face sideways)
 turned over, 42 triangles and 32 fold lines in a blink at 1000 IRISD (from about 369), 8 and 14 with
 the lower lids at 300 (from about 215, so joy at 63 folded at its lower lids 260).
 
@@ -30,13 +30,17 @@ round that folded least gave more folds at a blink), so its result is kept in th
 **The eye corners ride the lids.** 3.7/3.12 and 3.11/3.8, which no FAP names, are not held in the evening out: they
 take the share of each lid's turn that their neighbours give them, as a real eye's corners give a little as it
 shuts. On the generic head a blink at 1000 lowers them 0.6 mm (lateral) and 0.8 mm (medial), the lower lids at 260
-raise them 0.2-0.3 mm, shut 0.8-1.3 mm. Held, the margin beside a fixed corner passed it; now (folded / fold lines,
-both deformers) a blink at 400-700 folds nothing (was 2 / 2 to 6 / 8), at 800 0 / 4 (8 / 10), at 1000 8 / 14
-(14 / 14); the lower lids at 300 nothing (2 / 0), at 400 2 / 2 (2 / 0), at 520 4 / 4 (2 / 0); a blink at 500 over
-the lower lids at 260 4 / 6 (4 / 2), at 1000 6 / 10 (10 / 10); the lower lids' strain 2.78 x its floor (3.61).
-Freed for the upper lids alone, a smile's lower lids drew 2 fold lines on ARKit, and the lower lids at 300 still
-folded. With the corners free, :data:`CORNER_FREE_MM` went from 1.0 to 0.6 mm (at 1.0 the lower lids shut left 4
-eyeball pixels, tests/render/test_lid_pixels.py).
+raise them 0.2-0.3 mm, shut 0.8-1.3 mm; as the lids ride the eyes' pitch (:func:`.lids.lid_drops`) they move 0.57 mm
+at 20 degrees up or down, 1.1 mm at 40 (real corners barely follow the gaze: not separated yet). The procedural test
+head's corners give 1.07 mm in a blink. Held, the margin beside a fixed corner passed it; now (folded / fold lines,
+both deformers) a blink at 400-700 folds nothing (was 2 / 2 to 6 / 8), at 800 0 / 4 (8 / 10), at 1000 8 / 14 (14 /
+14); the lower lids at 300 nothing (2 / 0), at 400 2 / 2 (2 / 0), at 520 4 / 4 (2 / 0); a blink at 500 over the
+lower lids at 260 4 / 6 (4 / 2), at 1000 6 / 10 (10 / 10); the lower lids' strain 2.78 x its floor (3.61). Freed for
+the upper lids alone, a smile's lower lids drew 2 fold lines on ARKit, and the lower lids at 300 still folded. With
+the corners free, :data:`CORNER_FREE_MM` went from 1.0 to 0.6 mm (at 1.0 the lower lids shut left 4 eyeball pixels,
+tests/render/test_lid_pixels.py). On this mesh 0.6 frees the lower margins' corners alone (their next vertex is 0.8
+mm in) and the upper margins' two nearest vertices (0.41 and 0.49 mm): any value from 0.5 to 0.8 mm gives the same
+shares.
 """
 from __future__ import annotations
 

@@ -28,7 +28,7 @@ built from the margin itself:
 5. near the corners the ratios are **evened out** where a closing lid would fold the
    skin (:mod:`.lid_folds`: the margin there climbs steeply in x, so its vertices passed the
    corner as they closed); the corners themselves, which no FAP names, take a share too and give a little
-   (under a millimetre in a blink).
+   (:func:`lid_corners`).
 
 A frame turns the lid point by the angle that lowers it by exactly value x IRISD
 (:func:`mpeg4fa.face.motion.arc_angle`) and every sheet vertex by its ratio
@@ -218,7 +218,7 @@ def across_the_lid(rest: np.ndarray, from_margin: np.ndarray, margin: np.ndarray
     on_margin = np.interp(x, rest[margin[order], 0], at_margin[order])
     on_front = np.interp(x, rest[front[front_order], 0], at_front[front_order])
     # toward the corners the front edge hands over to the margin (the sheet then fades from the margin, as the
-    # lid closes there onto a fixed corner: the front edge's own closure folded the skin beside it)
+    # lid closes there onto a corner that gives little: the front edge's own closure folded the skin beside it)
     ends = rest[margin, 0].min(), rest[margin, 0].max()
     inward = np.minimum(x - ends[0], ends[1] - x)
     kept = 1.0 - smooth_down((inward - FRONT_TAPER_MM[0]) / (FRONT_TAPER_MM[1] - FRONT_TAPER_MM[0]))
@@ -232,8 +232,8 @@ def across_the_lid(rest: np.ndarray, from_margin: np.ndarray, margin: np.ndarray
 
 def lid_corners(fap: int) -> tuple[str, str]:
     """The eye corners (lateral, medial) of lid FAP ``fap`` (19-22). No FAP names them, and they give a little as the
-    lid closes (:mod:`.lid_folds`), or rides on its eye's pitch: the lids' exception to "no other feature point
-    moves"."""
+    lid closes and as it rides on its eye's pitch (how far: :mod:`.lid_folds`): the lids' exception to "no other
+    feature point moves"."""
     return LIDS[fap][4], LIDS[fap][5]
 
 
@@ -277,7 +277,7 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         rows = np.concatenate([own, candidates])
         ratios = np.concatenate([ratio, across_the_lid(rest, from_margin, own, front, candidates, ratio, front_ratio)])
         anchors = [v for label, v in zip(mesh.fp_labels, mesh.fp_vertex) if label not in PASSIVE_POINTS]
-        ratios[np.isin(rows, anchors) & (rows != fp_vertex)] = 0.0  # other feature points stay put
+        ratios[np.isin(rows, anchors) & (rows != fp_vertex)] = 0.0  # other feature points start at 0 (corners: below)
         field = np.zeros(mesh.n_vertices)
         field[rows] = ratios
         # the margin keeps its closure (the eye shuts) but for its last vertices at each corner

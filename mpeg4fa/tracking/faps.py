@@ -55,7 +55,9 @@ SENT: tuple[int, ...] = tuple(sorted((*TRANSLATIONS, *GAZE_YAW, *GAZE_PITCH, *HE
 RIGID_LABELS: tuple[str, ...] = tuple(label for label in LABELS if label in {
     "3.7", "3.8", "3.11", "3.12", "9.3", "9.4", "9.5", "9.6", "9.7", "9.12", "9.13", "9.14", "9.15",
     "10.9", "10.10", "11.1", "11.2", "11.3"})
-"""Points no sent FAP moves (eye corners, nose, forehead, face oval at the ears): the head pose is fitted on them."""
+"""Points no sent FAP moves (eye corners, nose, forehead, face oval at the ears): the head pose is fitted on them.
+The engine's eye corners give up to 0.8 mm as its lids close (:func:`mpeg4fa.face.lids.lid_corners`), which this
+fit and the lid measures against the corners do not separate yet."""
 RIGID = np.array([INDEX[label] for label in RIGID_LABELS])
 _MOVING_GROUPS = ("3", "4")  # eyes, lids and brows move: landmarks near them are not rigid
 RIGID_CLEARANCE = 0.15

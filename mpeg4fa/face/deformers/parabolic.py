@@ -166,7 +166,7 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
         corner = np.isin(own, [vid[lateral], vid[medial]])
         open_m[corner] = close_m[corner] = 0.0
 
-        rows = rig.lids[fap].rows  # the lid sheet: margin and lid skin, other feature points excluded
+        rows = rig.lids[fap].rows  # the lid sheet: margin and lid skin (the corners with it: their rate here is 0)
         # the front edges close onto each other as the margins do (lids.py: a shut eye shows no strip)
         front = closing_edges(rest, skin, own, side)
         close_f = -front_closing_drops(rest, skin, front, own, other) / full
