@@ -83,6 +83,30 @@ def test_fap_values_are_displacements_along_the_direction_over_the_fapu():
     assert values[11] == pytest.approx(1.5 / mns)     # the corner stayed while the jaw would carry it 1.5 down
 
 
+@pytest.mark.parametrize("sent", [{19: 1000, 20: 1000}, {21: 260, 22: 260}, {19: 500, 20: 500, 33: 200, 34: 200}])
+def test_lids_read_back_as_sent_though_the_eye_corners_give(generic_face, sent):
+    """The generic head's eye corners give a little as its lids close (mpeg4fa.face.lids.lid_corners). Read against
+    those corners without the receiver's corner carry, a blink at 1000 read 906 and put 94 on the lower lids, 14 on
+    the brows and a gaze of -5969 AU; with it, what was sent."""
+    face = generic_face
+    labels = list(face.mesh.fp_labels)
+    index = [labels.index(label) for label in rules.LABELS]
+    values = np.zeros(68)
+    for fap, value in sent.items():
+        values[fap - 1] = value
+    points = face.pose_values(values).feature_points[index][None]
+    neutral = rules.Neutral.from_points(face.neutral().feature_points[index])
+    geometry = rules.receiver(face)
+    assert np.all(geometry.corner_carry > 0.05)
+    read = rules.fap_values(points, neutral, np.zeros((1, 3)), geometry)[0]
+    for fap in (19, 20, 21, 22, 31, 32, 33, 34, 35, 36):
+        assert read[fap - 1] == pytest.approx(values[fap - 1], abs=0.01 * 1000), fap
+    assert np.abs(read[24:26]).max() < 100  # AU: 0.06 degrees of gaze
+    plain = rules.Receiver(geometry.jaw_carry, geometry.eye_radius)
+    still = rules.fap_values(points, neutral, np.zeros((1, 3)), plain)[0]
+    assert np.abs(still[18:22] - values[18:22]).max() > 30  # the carry is what reads them right
+
+
 def test_stream_sends_a_fixed_set_of_faps_in_every_frame():
     values = np.zeros((5, 68))
     values[:, 2] = [0, 10.4, 20.6, 30, 40]
