@@ -56,9 +56,8 @@ RIGID_LABELS: tuple[str, ...] = tuple(label for label in LABELS if label in {
     "3.7", "3.8", "3.11", "3.12", "9.3", "9.4", "9.5", "9.6", "9.7", "9.12", "9.13", "9.14", "9.15",
     "10.9", "10.10", "11.1", "11.2", "11.3"})
 """Points no sent FAP moves (eye corners, nose, forehead, face oval at the ears): the head pose is fitted on them.
-(The engine's eye corners give under a millimetre as its lids close, :func:`mpeg4fa.face.lids.lid_corners`: among
-18 points, too little to turn the fitted head; what it does to the points measured against the corners,
-:attr:`Receiver.corner_carry` takes out.)"""
+(The engine's eye corners give under a millimetre as its lids close, :func:`mpeg4fa.face.lids.lid_corners`; what
+that does to the points measured against the corners, :attr:`Receiver.corner_carry` takes out.)"""
 RIGID = np.array([INDEX[label] for label in RIGID_LABELS])
 _MOVING_GROUPS = ("3", "4")  # eyes, lids and brows move: landmarks near them are not rigid
 RIGID_CLEARANCE = 0.15
@@ -176,7 +175,7 @@ _ANCHOR = _anchor_matrix()
 
 
 def _add_back_the_corners(d: np.ndarray, corner_carry: np.ndarray) -> None:
-    """``d`` (points less their anchors, ``(n, L, 3)``) as if each eye's corners had stayed where its lids moved them
+    """``d`` (points less their anchors, ``(n, L, 3)``) as if each eye's corners had stayed put while its lids moved
     (:attr:`Receiver.corner_carry`): per eye, its lid points' rises solved from what they read against the corners
     (the corners rise ``ku`` x the upper's plus ``kl`` x the lower's), and the corners' rise added back to every point
     measured against them."""
