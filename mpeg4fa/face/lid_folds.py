@@ -11,9 +11,9 @@ the lower lids at 300 (from about 215, so joy at 63 folded at its lower lids 260
 A triangle whose vertices share one angle turns rigidly and cannot fold, so where a closing lid
 (the stages of :data:`UPPER_STAGES`, :data:`LOWER_STAGES` and both together, :data:`BOTH`) would fold
 the skin, the shares are evened out (:func:`.fold_relief.even_out`). Feature points keep theirs (the lid
-point its 1, every other point 0, the other lid's margin 0; the corners excepted, below), so each lid point
-still moves value x IRISD, and so does the margin but within :data:`CORNER_FREE_MM` of a corner (a shut
-eye stays shut); the skin round the corners, some outside the sheet before, follows a little.
+point its 1, every other point 0, the other lid's margin 0; the corners and that margin's ends excepted, below), so
+each lid point still moves value x IRISD, and so does the margin but within :data:`CORNER_FREE_MM` of a corner (a
+shut eye stays shut); the skin round the corners, some outside the sheet before, follows a little.
 Measured on the generic head (folded / fold lines, both deformers): a blink at 1000 42 / 32 -> 14 / 14,
 the lower lids at 300 8 / 14 -> 2 / 0, joy at 63 (lower lids 260) 6 / 14 -> 0 / 2 on the feature-point
 deformer (the 2 left are the cheeks'). The folds left sit at the corners, where the margin must still
@@ -27,20 +27,23 @@ inverted" constraints (per triangle, linear in the shares) did not converge: hel
 infeasible. Evening out never settles here and runs all :data:`.fold_relief.MAX_ROUNDS` (stopping at the
 round that folded least gave more folds at a blink), so its result is kept in the user cache (:func:`.kept.kept`).
 
-**The eye corners ride the lids.** 3.7/3.12 and 3.11/3.8, which no FAP names, are not held in the evening out: they
-take the share of each lid's turn that their neighbours give them, as a real eye's corners give a little as it
-shuts. On the generic head a blink at 1000 lowers them 0.6 mm (lateral) and 0.8 mm (medial), the lower lids at 260
-raise them 0.2-0.3 mm, shut 0.8-1.3 mm; as the lids ride the eyes' pitch (:func:`.lids.lid_drops`) they move 0.57 mm
-at 20 degrees up or down, 1.1 mm at 40 (real corners barely follow the gaze: not separated yet). The procedural test
-head's corners give 1.07 mm in a blink. Held, the margin beside a fixed corner passed it; now (folded / fold lines,
-both deformers) a blink at 400-700 folds nothing (was 2 / 2 to 6 / 8), at 800 0 / 4 (8 / 10), at 1000 8 / 14 (14 /
-14); the lower lids at 300 nothing (2 / 0), at 400 2 / 2 (2 / 0), at 520 4 / 4 (2 / 0); a blink at 500 over the
-lower lids at 260 4 / 6 (4 / 2), at 1000 6 / 10 (10 / 10); the lower lids' strain 2.78 x its floor (3.61). Freed for
-the upper lids alone, a smile's lower lids drew 2 fold lines on ARKit, and the lower lids at 300 still folded. With
-the corners free, :data:`CORNER_FREE_MM` went from 1.0 to 0.6 mm (at 1.0 the lower lids shut left 4 eyeball pixels,
-tests/render/test_lid_pixels.py). On this mesh 0.6 frees the lower margins' corners alone (their next vertex is 0.8
-mm in) and the upper margins' two nearest vertices (0.41 and 0.49 mm): any value from 0.5 to 0.8 mm gives the same
-shares.
+**The eye corners ride the lids.** 3.7/3.12 and 3.11/3.8, which no FAP names, are not held in the evening out, nor
+is the other lid's margin within :data:`OTHER_FREE_MM` of them: they take the share of each lid's turn that their
+neighbours give them, as a real eye's corners give a little as it shuts. On the generic head a blink at 1000 lowers
+them 1.0 mm (lateral) and 1.4 mm (medial), the lower lids at 260 raise them 0.4 mm, shut 1.4-1.7 mm; as the lids
+ride the eyes' pitch (:func:`.lids.lid_drops`) they move with them too (0.57 mm at 20 degrees up or down with the
+corners alone free; real corners barely follow the gaze: not separated yet). Held, the margin beside a fixed corner
+passed it; now (folded / fold lines, both deformers) a blink at 400-700 folds nothing (was 2 / 2 to 6 / 8), at 800 0
+/ 2 (8 / 10), at 900 2 / 4 (8 / 14), at 1000 4 / 4 (14 / 14); the lower lids at 300-520 nothing (2 / 0); a blink at
+500 over the lower lids at 260 nothing (4 / 2), at 1000 4 / 4 (10 / 10); the lower lids' strain 2.28 x its floor
+(3.61). Steps on the way: the corners alone free (the other margin held) left the lower lids at 400 and 520 2 / 2
+and 4 / 4, since a corner rising with the lower lid passed the upper margin's next vertex 0.5 mm above it; the other
+margin freed within 2.5 mm folded nothing at all but the lower margin dipped with a blink and the eyeball showed
+(tests/render/test_lid_pixels.py); freed for the upper lids alone, a smile's lower lids drew 2 fold lines on ARKit;
+600 rounds of evening out instead of 200 did no better. With the corners free, :data:`CORNER_FREE_MM` went from 1.0
+to 0.6 mm (at 1.0 the lower lids shut left 4 eyeball pixels); on this mesh 0.6 frees the lower margins' corners
+alone (their next vertex is 0.8 mm in) and the upper margins' two nearest vertices (0.41 and 0.49 mm): any value
+from 0.5 to 0.8 mm gives the same shares.
 """
 from __future__ import annotations
 
@@ -64,6 +67,10 @@ CORNER_FREE_MM = 0.6
 the eye on the other lid (freed all along, the evening out reached 3-5 mm in from the corners and a shut eye
 showed 76 eyeball pixels at 320 x 160, tests/render/test_lid_pixels.py; freed within 2 mm, 2 with the lower lids
 closed; within 1 mm, none while the corners were held, 4 once they rode the lids; within 0.6 mm, none)."""
+OTHER_FREE_MM = 1.0
+"""The other lid's margin vertices this close to a corner may be evened out too (held, a corner giving with one lid
+passed the other margin's next vertex: the lower lids at 520 folded 4 triangles; freed within 2.5 mm, the lower
+margin dipped with a blink and the eyeball showed)."""
 
 
 def _turned(rest: np.ndarray, fields: list[np.ndarray], joints: list[int], angles: np.ndarray) -> np.ndarray:

@@ -55,7 +55,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from mpeg4fa.face import motion
 from mpeg4fa.face.couplings import PASSIVE_POINTS
-from mpeg4fa.face.lid_folds import CORNER_FREE_MM, even_out_lids
+from mpeg4fa.face.lid_folds import CORNER_FREE_MM, OTHER_FREE_MM, even_out_lids
 from mpeg4fa.face.mesh import HeadMesh
 from mpeg4fa.face.regions import LID_MARGIN_LOOPS, edge_graph, path_through, smooth_down
 
@@ -284,8 +284,9 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         corners = rest[[int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]]
         # (the front edges are not held: held, the evening out could not relax them at the medial end)
         closes = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
-        held = np.concatenate([anchors, other, closes]).astype(np.int64)
-        # the corners are not held: they give a little as the lid closes (lid_folds)
+        # the other lid's margin is held but for its ends, the corners not at all: they give a little (lid_folds)
+        stays = other[np.linalg.norm(rest[other][:, None] - corners[None], axis=2).min(axis=1) > OTHER_FREE_MM]
+        held = np.concatenate([anchors, stays, closes]).astype(np.int64)
         riding = [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]
         raw[fap] = (field, joint, fp_vertex, held[~np.isin(held, riding)])
     pairs = ((19, 21), (20, 22))  # one eye's two lids (they close together), both eyes at once

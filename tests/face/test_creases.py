@@ -44,7 +44,7 @@ folds start below the knee, ordinary use or the conformance suite's exact 300: t
 where the tracker's streams reach 1568, the lids, the brows, the lip corners raised, the cheeks, the nose; see
 ``face/data/reach.csv``), 5 are eased short of any fold but keep the strain over its floor that they have from
 the smallest value (raise_b_midlip and raise_b_lip_lm/rm up: 2.5 x from 101 MNS; the lower lids 21/22 opened
-to -600 IRISD, 2.8 x, the lids' own strain, 3.6 x before the eye corners gave with the lids).
+to -600 IRISD, 2.3 x, the lids' own strain, 3.6 x before the eye corners gave with the lids).
 tools/crease_check.json, written by tools/crease_range_why.py, says why each fails."""
 
 

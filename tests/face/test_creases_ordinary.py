@@ -8,9 +8,10 @@ named): joy at 63 6 / 14 (ARKit 22 / 30), its cheeks 41/42 at 200 0 / 2 (ARKit 1
 260 6 / 12 and at 300 8 / 14, a blink at 400 4 / 2, 600 20 / 10, 1000 42 / 32. Fixed by evening out the lid
 sheets' angle shares at the eye corners (:mod:`mpeg4fa.face.lid_folds`), the cheek points' skin weights
 (:data:`mpeg4fa.face.rig.RELIEVED`) and ARKit's sculpted cheekSquint (:data:`.deformers.arkit.RELIEVED`),
-all by :func:`mpeg4fa.face.fold_relief.even_out`, with the eye corners riding the lids (a blink at 400-700 and
-the lower lids at 300 then fold nothing); where ARKit's sculpt still nears a fold (joy 2 folded, disgust 4
-fold lines), the skin around takes the feature-point field (:data:`mpeg4fa.face.deformers.arkit.FALLBACK_MM`).
+all by :func:`mpeg4fa.face.fold_relief.even_out`, with the eye corners and the other margin's ends riding the lids
+(a blink at 400-700, the lower lids at 300-520 and a blink at 500 over them then fold nothing); where ARKit's
+sculpt still nears a fold (joy 2 folded, disgust 4 fold lines), the skin around takes the feature-point field
+(:data:`mpeg4fa.face.deformers.arkit.FALLBACK_MM`).
 What is not met is marked with its measured figure.
 """
 from __future__ import annotations
@@ -31,14 +32,11 @@ CORNER = ("where the margin, held to its closure so that the eye shuts, climbs t
           "than the lid can turn past it, the corner giving less")
 NOT_YET = {
     **{(d, f"blink {s}"): f"{fig} at the eye corners ({CORNER})" for d in DEFORMERS for s, fig in (
-        (800, "0 folded / 4 fold lines, was 8 / 10 with the corners held, 32 / 28 before the evening out"),
-        (900, "4 / 6, was 8 / 14, 34 / 30"), (1000, "8 / 14, was 14 / 14, 42 / 32"))},
-    **{(d, f"lower {s}"): f"{fig} at the outer corners ({CORNER})" for d in DEFORMERS
-       for s, fig in ((400, "2 folded / 2 fold lines, was 2 / 0 with the corners held, 10 / 18 before the evening out"),
-                      (520, "4 / 4, was 2 / 0, 12 / 22"))},
-    **{(d, f"blink {u} over lower {s}"): f"{fig} at the eye corners" for d in DEFORMERS for u, s, fig in (
-        (500, 260, "4 folded / 6 fold lines, was 4 / 2 with the corners held, 16 / 18 before the evening out"),
-        (1000, 260, "6 / 10 since the upper lid stops on the lower, was 10 / 10, 18 / 18, 48 / 44 at first"))},
+        (800, "0 folded / 2 fold lines, was 8 / 10 with the corners and the other margin held, 32 / 28 before the "
+              "evening out"),
+        (900, "2 / 4, was 8 / 14, 34 / 30"), (1000, "4 / 4, was 14 / 14, 42 / 32"))},
+    **{(d, "blink 1000 over lower 260"): "4 / 4 at the eye corners since the upper lid stops on the lower, was "
+                                         "10 / 10 with the corners held, 18 / 18, 48 / 44 at first" for d in DEFORMERS},
 }
 
 
@@ -101,8 +99,8 @@ def test_joy_keeps_to_the_floor(request, graph, deformer, name):
     assert m.ratio <= creases.FLOOR_FACTOR, f"{name}: {m}"
 
 
-@pytest.mark.xfail(reason="the lids' strain is 2.8-3.4 x its floor at every value (3.31-3.38 at a blink of 100-1000, "
-                          "3.21-3.25 before the upper lids' front edges closed onto the lower ones; 2.78 for the lower "
+@pytest.mark.xfail(reason="the lids' strain is 2.3-3.4 x its floor at every value (3.31-3.38 at a blink of 100-1000, "
+                          "3.21-3.25 before the upper lids' front edges closed onto the lower ones; 2.28 for the lower "
                           "lids, 3.61 before the corners rode the lids; was 3.36 / 4.86): the margin turns to the "
                           "other lid within 0.6 mm of a corner that gives less than it",
                    strict=False)
@@ -113,7 +111,7 @@ def test_lids_keep_to_the_floor(generic_face, graph, name):
 
 def test_evened_lids_still_shut_the_eye(generic_face):
     """The evening out leaves each lid point its whole turn (value x IRISD), moves no other feature point but the
-    eye's corners (which give under 1.5 mm even when the lid shuts alone, :mod:`mpeg4fa.face.lid_folds`), and keeps
+    eye's corners (which give under 2 mm even when the lid shuts alone, :mod:`mpeg4fa.face.lid_folds`), and keeps
     every margin vertex further than CORNER_FREE_MM from a corner closing onto the other lid: at the closing value
     each sits at or past the other margin's height at its x."""
     face = generic_face
@@ -129,7 +127,7 @@ def test_evened_lids_still_shut_the_eye(generic_face):
         closing = abs(mesh.fp(point)[1] - mesh.fp(opposite)[1]) / face.fapu.unit("IRISD")
         posed = face.unlimited().deform({fap: closing}).vertices
         given = np.linalg.norm(posed[ends] - rest[ends], axis=1)
-        assert given.max() < 1.5, f"FAP {fap}: a corner gives {given.max():.2f} mm"
+        assert given.max() < 2.0, f"FAP {fap}: a corner gives {given.max():.2f} mm"
         corners = rest[ends]
         far = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
         target = lids.height_at(other, rest, rest[far, 0])

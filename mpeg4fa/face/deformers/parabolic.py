@@ -166,7 +166,7 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
         corner = np.isin(own, [vid[lateral], vid[medial]])
         open_m[corner] = close_m[corner] = 0.0
 
-        rows = rig.lids[fap].rows  # the lid sheet: margin and lid skin (the corners with it: their rate here is 0)
+        rows = rig.lids[fap].rows  # the lid sheet: margin and lid skin (the corners, the other margin's ends)
         # the front edges close onto each other as the margins do (lids.py: a shut eye shows no strip)
         front = closing_edges(rest, skin, own, side)
         close_f = -front_closing_drops(rest, skin, front, own, other) / full
@@ -178,6 +178,8 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
         where = {v: k for k, v in enumerate(own)}
         k = np.array([where[v] for v in rows[on_margin]], dtype=int)
         open_r[on_margin], close_r[on_margin] = open_m[k], close_m[k]
+        opposite_margin = np.isin(rows, other)  # here the other lid's margin stays, as the corners do
+        open_r[opposite_margin] = close_r[opposite_margin] = 0.0
         if vid[point] not in set(rows.tolist()):
             raise FaceError(f"the lid sheet of FAP {fap} lacks its lid point {point}")
 
