@@ -27,8 +27,8 @@ built from the margin itself:
    fades to 0 over the rest of :data:`LID_HEIGHT_MM` of surface distance from the margin;
 5. near the corners the ratios are **evened out** where a closing lid would fold the
    skin (:mod:`.lid_folds`: the margin there climbs steeply in x, so its vertices passed the
-   corner as they closed); the corners themselves, which no FAP names, take a share too and give a little
-   (:func:`lid_corners`).
+   corner as they closed); the corners themselves, which no FAP names, and the other margin's ends take a share
+   too and give a little (:func:`lid_corners`).
 
 A frame turns the lid point by the angle that lowers it by exactly value x IRISD
 (:func:`mpeg4fa.face.motion.arc_angle`) and every sheet vertex by its ratio

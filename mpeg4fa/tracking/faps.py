@@ -7,12 +7,13 @@ direction, FAPU; ``spec/fapu.csv``). So with the head's motion taken out
 (:func:`mpeg4fa.face.fapu.measure_fapu`, the one home of the FAPU rules), a tracked point's
 displacement divided by its FAPU is the value to send, in every face's units.
 
-Two rules come from the receiving head rather than the standard, and are read off it
+Three rules come from the receiving head rather than the standard, and are read off it
 (:class:`Receiver`, by default the generic head that ``play`` shows): the jaw (FAP 3) carries
 the lower lip and the lip corners with it, so the lip FAPs are what is left of a point's drop
-after the jaw's share (the fraction of 2.1's drop that point follows on that head); and the
+after the jaw's share (the fraction of 2.1's drop that point follows on that head); the
 eyeball turns (FAPs 23-26, angles) are read from the iris's shift over the radius at which the
-head's pupil turns, as a fraction of ES0.
+head's pupil turns, as a fraction of ES0; and the head's eye corners give a little as its lids close, so what
+is read against the corners is read as that head would show it (:attr:`Receiver.corner_carry`).
 
 Points are ``(..., L, 3)`` arrays over :data:`LABELS` (the feature points the landmark model
 sees), in MPEG-4 axes: x to the face's left, y up, z out of the face (:func:`to_face_axes`).
@@ -116,12 +117,16 @@ class Receiver:
     corner_carry: np.ndarray = field(default_factory=lambda: np.zeros(len(LIDS)))
     """(4,) per lid FAP of :data:`LIDS`: how far its eye's corners (their mean) move up per unit its lid point moves up,
     as the head's corners give a little when its lids close (:func:`mpeg4fa.face.lids.lid_corners`). Measured against
-    those corners, a blink at 1000 read 848 on the generic head, with 152 on the lower lids."""
+    those corners, a blink at 1000 read 848 on the generic head, with 152 on the lower lids. Read with it, a face
+    whose corners stay put sends a full blink as about 1.2 x on the upper lid and -0.2 x on the lower: what the head
+    needs to show that blink against its own corners. A head whose corners would carry more than
+    :data:`MOST_CORNER_CARRY` of its lids (the solve's divisor 1 - ku - kl near 0) is read as if they stayed."""
 
 
 @lru_cache(maxsize=4)
 def receiver(face=None) -> Receiver:
-    """The jaw's carry and the eye's radius of ``face`` (default: the generic head), measured by posing it."""
+    """The jaw's carry, the eye's radius and the eye corners' carry of ``face`` (default: the generic head), measured
+    by posing it."""
     from mpeg4fa.face import FaceModel
 
     face = face if face is not None else FaceModel.default()
@@ -174,6 +179,11 @@ _COLS, _POINTS, _DIRS, _UNITS = _table()
 _ANCHOR = _anchor_matrix()
 
 
+MOST_CORNER_CARRY = 0.6
+"""Most ``ku + kl`` (:attr:`Receiver.corner_carry` of one eye's two lids) that is taken out (the generic head's: 0.35);
+past it the solve (divided by ``1 - ku - kl``) would amplify the lids' landmark noise."""
+
+
 def _add_back_the_corners(d: np.ndarray, corner_carry: np.ndarray) -> None:
     """``d`` (points less their anchors, ``(n, L, 3)``) as if each eye's corners had stayed put while its lids moved
     (:attr:`Receiver.corner_carry`): per eye, its lid points' rises solved from what they read against the corners
@@ -182,12 +192,10 @@ def _add_back_the_corners(d: np.ndarray, corner_carry: np.ndarray) -> None:
     lids = dict(zip(LIDS, corner_carry))
     for upper, lower in ((19, 21), (20, 22)):
         ku, kl = lids[upper], lids[lower]
-        if not (ku or kl):
+        if not (ku or kl) or ku + kl > MOST_CORNER_CARRY:
             continue
         u, low = (INDEX[FAPS[f - 1].feature_point[0]] for f in (upper, lower))
-        du, dl = d[:, u, 1].copy(), d[:, low, 1].copy()
-        det = 1.0 - ku - kl
-        rise = (ku * ((1.0 - kl) * du + kl * dl) + kl * (ku * du + (1.0 - ku) * dl)) / det
+        rise = (ku * d[:, u, 1] + kl * d[:, low, 1]) / (1.0 - ku - kl)  # = ku x the upper's rise + kl x the lower's
         for label, anchors in ANCHORS.items():
             if anchors == ANCHORS[FAPS[upper - 1].feature_point[0]]:
                 d[:, INDEX[label], 1] += rise

@@ -130,6 +130,8 @@ def test_evened_lids_still_shut_the_eye(generic_face):
         assert given.max() < 2.0, f"FAP {fap}: a corner gives {given.max():.2f} mm"
         corners = rest[ends]
         far = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
+        # the other margin's rest height: its ends give with this lid (up to 0.6 mm below where the shut margin stops,
+        # 1-2 mm from a corner), and the front edges, which close onto each other, cover that (test_lid_pixels)
         target = lids.height_at(other, rest, rest[far, 0])
         gap = (posed[far, 1] - target) if side == "upper" else (target - posed[far, 1])
         assert gap.max() < 0.05, f"FAP {fap}: a margin vertex stops {gap.max():.2f} mm short of the other lid"

@@ -101,7 +101,7 @@ class LidContour:
     full: float  # mm of closure that brings the lid point to the opposite lid point's height
     margin: np.ndarray  # margin vertices, lateral corner to medial corner
     point: int  # the lid point's vertex
-    rows: np.ndarray  # vertices moved (margin without corners, and the lid skin)
+    rows: np.ndarray  # the lid sheet (margin, lid skin; the corners and the other margin's ends at rate 0)
     open_rate: np.ndarray  # dy per mm of closure outside 0..full (the parabola, across the lid and its fall-off)
     close_rate: np.ndarray  # dy per mm of closure inside 0..full
     centre: np.ndarray  # eyeball centre (the lid sphere's)
@@ -178,7 +178,7 @@ def build_lid_contours(mesh: HeadMesh, rig: Rig, eyes: dict[str, EyeBall]) -> di
         where = {v: k for k, v in enumerate(own)}
         k = np.array([where[v] for v in rows[on_margin]], dtype=int)
         open_r[on_margin], close_r[on_margin] = open_m[k], close_m[k]
-        opposite_margin = np.isin(rows, other)  # here the other lid's margin stays, as the corners do
+        opposite_margin = np.isin(rows, other) & ~np.isin(rows, own)  # the other lid's margin stays, as the corners do
         open_r[opposite_margin] = close_r[opposite_margin] = 0.0
         if vid[point] not in set(rows.tolist()):
             raise FaceError(f"the lid sheet of FAP {fap} lacks its lid point {point}")
