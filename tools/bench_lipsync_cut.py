@@ -37,10 +37,6 @@ from mpeg4fa.speech.listen import stream  # noqa: E402
 from mpeg4fa.speech.utterance import Timing  # noqa: E402
 
 
-def _shifted(timings, seconds: float) -> list[Timing]:
-    return [Timing(t.phoneme, t.viseme, t.start + seconds, t.end + seconds, t.set) for t in timings]
-
-
 def heard_cut(rec: Recording) -> tuple[list[Timing], int]:
     """The timings ``encode`` writes for ``rec`` (English, auto), and how many blocks it heard."""
     out, timings = io.BytesIO(), io.StringIO()
@@ -57,7 +53,7 @@ def espeak_clips():
         for voice, text in items[k:k + 3]:
             utt = phones(spoken(text, lang="en", voice=voice, rate=RATE))
             parts.append(utt.speech.samples)
-            ref += _shifted(utt.timings, offset)
+            ref += [t.shifted(offset) for t in utt.timings]
             offset += utt.speech.duration
         yield "espeak-ng", Recording(np.concatenate(parts), utt.speech.rate, f"espeak {k}"), ref
 

@@ -281,13 +281,13 @@ def build_lids(mesh: HeadMesh) -> dict[int, LidSheet]:
         field = np.zeros(mesh.n_vertices)
         field[rows] = ratios
         # the margin keeps its closure (the eye shuts) but for its last vertices at each corner
-        corners = rest[[int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]]
+        riding = [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]
+        corners = rest[riding]
         # (the front edges are not held: held, the evening out could not relax them at the medial end)
         closes = own[np.linalg.norm(rest[own][:, None] - corners[None], axis=2).min(axis=1) > CORNER_FREE_MM]
         # the other lid's margin is held but for its ends, the corners not at all: they give a little (lid_folds)
         stays = other[np.linalg.norm(rest[other][:, None] - corners[None], axis=2).min(axis=1) > OTHER_FREE_MM]
         held = np.concatenate([anchors, stays, closes]).astype(np.int64)
-        riding = [int(mesh.fp_vertex[mesh.fp_index(label)]) for label in (lateral, medial)]
         raw[fap] = (field, joint, fp_vertex, held[~np.isin(held, riding)])
     pairs = ((19, 21), (20, 22))  # one eye's two lids (they close together), both eyes at once
     eyes = [(raw[upper][1], raw[upper][2], raw[lower][2]) for upper, lower in pairs]

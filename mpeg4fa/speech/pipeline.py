@@ -33,8 +33,8 @@ from mpeg4fa.speech.frames import FrameBlock, FrameMaker
 from mpeg4fa.speech.ipa import phoneme_fallbacks
 from mpeg4fa.speech.markup import Markup
 from mpeg4fa.speech.timeline import ExpressionCue
-from mpeg4fa.speech.tts.base import Engine, Event, Speech
-from mpeg4fa.speech.utterance import Timing, Utterance, speak
+from mpeg4fa.speech.tts.base import Engine, Speech
+from mpeg4fa.speech.utterance import Utterance, speak
 
 Progress = Callable[[int, int], None]
 
@@ -147,7 +147,7 @@ def _shifted(utterance: Utterance, offset: float) -> Utterance:
     """The utterance's timings and cues on the text's clock (the chunk starts ``offset`` seconds in)."""
     if offset == 0.0:
         return utterance
-    timings = tuple(Timing(t.phoneme, t.viseme, t.start + offset, t.end + offset, t.set) for t in utterance.timings)
+    timings = tuple(t.shifted(offset) for t in utterance.timings)
     cues = tuple(ExpressionCue(c.expression, c.intensity, c.seconds, c.start + offset) for c in utterance.cues)
     return Utterance(utterance.speech, timings, cues, utterance.markup)
 
@@ -155,8 +155,7 @@ def _shifted(utterance: Utterance, offset: float) -> Utterance:
 def joined_speech(parts: list[tuple[Speech, float]], engine: str) -> Speech:
     """Chunks' speech (each with its offset) as one track, events on the text's clock."""
     first = parts[0][0]
-    events = tuple(Event(e.kind, e.start + offset, e.end + offset, e.text, e.position)
-                   for speech, offset in parts for e in speech.events)
+    events = tuple(e.shifted(offset) for speech, offset in parts for e in speech.events)
     voices = "+".join(dict.fromkeys(s.voice for s, _ in parts))
     return Speech(np.concatenate([s.samples for s, _ in parts]), first.rate, events, engine, voices)
 

@@ -56,6 +56,10 @@ class Timing:
     end: float
     set: str = "mpeg4"
 
+    def shifted(self, seconds: float) -> "Timing":
+        """The same interval ``seconds`` later (a part's timing on the whole's clock)."""
+        return Timing(self.phoneme, self.viseme, self.start + seconds, self.end + seconds, self.set)
+
     def as_dict(self) -> dict:
         return {"phoneme": self.phoneme, "viseme": self.viseme, "start": round(self.start, 6),
                 "end": round(self.end, 6)}
@@ -275,8 +279,8 @@ def _join(parts: list[tuple[Speech, list[Timing], dict[str, float]]], engine_nam
         if speech.rate != rate:
             raise TTSError(f"runs came back at {speech.rate} and {rate} Hz", where=engine_name)
         samples.append(speech.samples)
-        events += [Event(e.kind, e.start + offset, e.end + offset, e.text, e.position) for e in speech.events]
-        timings += [Timing(t.phoneme, t.viseme, t.start + offset, t.end + offset, t.set) for t in times]
+        events += [e.shifted(offset) for e in speech.events]
+        timings += [t.shifted(offset) for t in times]
         marks.update({name: t + offset for name, t in mark_times.items()})
         offset += speech.duration
     joined = Speech(np.concatenate(samples), rate, tuple(sorted(events, key=lambda e: e.start)), engine_name, voice)

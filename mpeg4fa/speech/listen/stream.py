@@ -337,8 +337,7 @@ def stream_listened(source: Source, out, *, timings=None, audio=None, recognizer
         with phoneme_fallbacks(source.name) as fallbacks, _helper(two_cores) as helper:
             for offset, rec, heard in heard_blocks(source, block_seconds, recognizer, lang, helper, fallbacks):
                 utt = phones(heard.utterance)
-                shifted = [type(t)(t.phoneme, t.viseme, t.start + offset, t.end + offset, t.set) for t in utt.timings]
-                spans = viseme_spans(shifted)
+                spans = viseme_spans([t.shifted(offset) for t in utt.timings])
                 cues = expression_cues(expression) if count == 0 else ()
                 end = offset + rec.duration
                 bits.add(maker.add(spans, cues, end))
@@ -391,8 +390,8 @@ def listened_whole(source: Source, *, recognizer: str = "auto", lang: str = "aut
     timings, events, words, notes, voiced, used, confidence = [], [], [], [], 0.0, None, float("nan")
     with phoneme_fallbacks(source.name) as fallbacks, _helper(two_cores) as helper:
         for offset, _block, heard in heard_blocks(whole, block_seconds, recognizer, lang, helper, fallbacks):
-            timings += [replace(t, start=t.start + offset, end=t.end + offset) for t in heard.utterance.timings]
-            events += [replace(e, start=e.start + offset, end=e.end + offset) for e in heard.utterance.speech.events]
+            timings += [t.shifted(offset) for t in heard.utterance.timings]
+            events += [e.shifted(offset) for e in heard.utterance.speech.events]
             words += [replace(w, start=w.start + offset, end=w.end + offset) for w in heard.words]
             notes += [f"{offset:.1f} s: {n}" for n in heard.notes]
             voiced += heard.voiced

@@ -41,6 +41,10 @@ class Event:
         if self.end < self.start:
             raise ValueError(f"event ends before it starts: {self.start} > {self.end}")
 
+    def shifted(self, seconds: float) -> "Event":
+        """The same event ``seconds`` later (a part's event on the whole's clock)."""
+        return Event(self.kind, self.start + seconds, self.end + seconds, self.text, self.position)
+
     @property
     def duration(self) -> float:
         """Length of the interval in seconds (0 for point events)."""
