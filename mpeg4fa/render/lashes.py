@@ -154,8 +154,10 @@ def lash_vertices(layout: LashLayout, vertices: np.ndarray, out: np.ndarray | No
     return out
 
 
-STRANDS = 64
-"""Strands in one repeat of :func:`strand_image` along the margin."""
+STRANDS = 128
+"""Strands in one repeat of :func:`strand_image` along the margin: 43.5 mm at the looks' spacing, so a margin (the
+generic head's upper ones 29.6 mm, 87 strands) runs within one repeat and wears the shader's very strands, numbered
+from its corner (at 64, its last 8 mm repeated its first)."""
 
 
 def _hash(x: np.ndarray) -> np.ndarray:
@@ -163,13 +165,13 @@ def _hash(x: np.ndarray) -> np.ndarray:
     return np.mod(np.sin(x * 127.1 + 311.7) * 43758.5453, 1.0)
 
 
-def strand_image(width: int = 1024, height: int = 64, supersample: int = 4) -> np.ndarray:
+def strand_image(width: int = 16 * STRANDS, height: int = 64, supersample: int = 4) -> np.ndarray:
     """The shader's lash strands as coverage, for viewers that draw the cards from a texture (the GLB, the
     browser head): (height, width) uint8, :data:`STRANDS` strands across (u along the margin, repeating), the
     tips at row 0 and the roots at the bottom row; each strand a little off its place, of its own reach,
-    leaning and thinning to its tip by the shader's rule. Not the renderer's very strands: these repeat every
-    :data:`STRANDS` along the margin (the shader numbers them from each margin's corner), none is thinned for a
-    short lash, and the far-off merging into a lash line is left to the viewer's mip levels."""
+    leaning and thinning to its tip by the shader's rule, 16 texels a strand. The renderer's strands as far as a texture
+    holds them: they repeat only past :data:`STRANDS` along a margin, but none is thinned for a short lash, and the
+    far-off merging into a lash line is left to the viewer's mip levels."""
     looks = eye_looks()
     spacing, half_root = looks.lash_spacing, looks.lash_width
     n = supersample

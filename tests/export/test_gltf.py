@@ -12,7 +12,7 @@ from mpeg4fa.export.gltf import MM, PART_LOOK, ExportError, build_glb, export_gl
 from mpeg4fa.fba import FapStream
 from mpeg4fa.face.deformers.arkit import deform_arkit, unit_weights
 from mpeg4fa.formats import write_fap
-from mpeg4fa.render.lashes import build_lashes, lash_vertices
+from mpeg4fa.render.lashes import STRANDS, build_lashes, lash_vertices, strand_image, strand_uv
 from mpeg4fa.render.timing import presentation_times
 
 from export.gltf_files import OPEN_FRAME, load, read_accessor, talk_stream, validate, world_positions
@@ -198,6 +198,22 @@ def test_lashes_close_with_the_lids_and_wear_their_strands(procedural_face, tmp_
     alpha = rgba[..., 3].astype(float) / 255
     assert rgba.shape[2] == 4 and rgba[..., :3].max() < 80  # dark strands
     assert alpha[-1].mean() > 0.6 and alpha[0].mean() < 0.1  # dense at the roots (bottom row), few reach the top
+
+
+def test_a_margin_wears_its_strands_once(generic_face):
+    """Each lid margin of the generic head spans less than one repeat of the strand image along u, so no strand shows
+    twice along a lid (at 64 strands the upper lids' last 8 mm wore their first 8 mm's strands); the image does not
+    repeat within itself."""
+    layout = build_lashes(generic_face.mesh)
+    u = strand_uv(layout)[:len(layout.rows), 0]
+    margin = np.floor(layout.static[:len(layout.rows), 5] / 100.0)  # the margins are laid 100 mm apart along u
+    spans = [np.ptp(u[margin == m]) for m in np.unique(margin)]
+    assert len(spans) == 4 and max(spans) < 1, spans
+    image = strand_image()
+    assert image.shape[1] == 16 * STRANDS
+    for period in (STRANDS // 4, STRANDS // 2):  # the strands at k and k + period are not the same strands
+        shift = image.shape[1] * period // STRANDS
+        assert np.abs(image[:, :shift].astype(int) - image[:, shift:2 * shift]).mean() > 10, period
 
 
 def test_morph_animation_needs_face_units(procedural_face, stream, tmp_path):
