@@ -19,6 +19,7 @@ from mpeg4fa.face.looks import nose_wrinkle, points_of
 from mpeg4fa.face.pose import Pose
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.limits import SAMPLES, LimitError
+from mpeg4fa.render.brows import ALONG, HEIGHT, about_the_brows, brow_hair_image
 from mpeg4fa.render.camera import Camera, frame_points
 from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
@@ -82,6 +83,19 @@ def _filled(rgba: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(rgba[..., :3][nearest[0], nearest[1]])
 
 
+def _without(cut: tuple[int, int], ranges: list[tuple[int, int]]) -> list[tuple[int, int]]:
+    """``ranges`` ((first, count) of the index buffer) less the range ``cut``, which lies within one of them."""
+    start, end = cut[0], cut[0] + cut[1]
+    out = []
+    for first, count in ranges:
+        last = first + count
+        if end <= first or start >= last or start == end:
+            out.append((first, count))
+        else:
+            out += [r for r in ((first, start - first), (end, last - end)) if r[1] > 0]
+    return out
+
+
 def _unit(v) -> np.ndarray:
     v = np.asarray(v, float)
     return v / np.linalg.norm(v)
@@ -117,6 +131,11 @@ class Renderer:
         self.iris_texture = self.ctx.texture((pattern.shape[1], pattern.shape[0]), 4,
                                              np.dstack([pattern, np.full(pattern.shape[:2], 255, np.uint8)]).tobytes())
         self.iris_texture.repeat_x, self.iris_texture.repeat_y = True, False
+        hairs = brow_hair_image()
+        self.brow_texture = self.ctx.texture((hairs.shape[1], hairs.shape[0]), 4,
+                                             np.repeat(hairs[..., None], 4, axis=2).tobytes())
+        self.brow_texture.repeat_x = self.brow_texture.repeat_y = False
+        self.brow_texture.build_mipmaps()  # from afar, the hairs' mean cover
         self._vertex_data = np.empty((self.layout.n_vertices, 6), np.float32)
         self._lash_data = np.empty((self.lashes.n_vertices, 6), np.float32) if self.lashes else None
         self._pixels = np.empty((self.height, self.width, 3), np.uint8)
@@ -139,7 +158,8 @@ class Renderer:
         self.program = program("face")  # shared: uniforms are set again before every draw
         self.eye_program = program("face", ("EYES",))
         self.lash_program = program("face", ("LASHES",))
-        self.uniforms = _Uniforms((self.program, self.eye_program, self.lash_program))
+        self.brow_program = program("face", ("BROWS",))
+        self.uniforms = _Uniforms((self.program, self.eye_program, self.lash_program, self.brow_program))
         size = (self.width, self.height)
         self.fbo = ctx.framebuffer(ctx.renderbuffer(size, 4), ctx.depth_renderbuffer(size))
         self.ms_fbo = None
@@ -150,18 +170,27 @@ class Renderer:
         self.dynamic = ctx.buffer(reserve=lay.n_vertices * 6 * 4, dynamic=True)
         static = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail, lay.nose, lay.neck].astype(np.float32)
         self.static = ctx.buffer(static.tobytes())
-        self.index = ctx.buffer(lay.indices.astype(np.uint32).tobytes())
+        # the skin's triangles about the brows go last in its block (build_layout puts the skin first), drawn by
+        # the brow variant: only they pay for the hairs
+        skin = len(self.face.mesh.triangles.get("skin", ()))
+        brows = about_the_brows(lay.detail, lay.indices[:skin])
+        indices = np.concatenate([lay.indices[:skin][~brows], lay.indices[:skin][brows], lay.indices[skin:]])
+        self.index = ctx.buffer(indices.astype(np.uint32).tobytes())
         self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
                                                    (self.static, *STATIC_ATTRIBUTES)],
                                     index_buffer=self.index, index_element_size=4)
+        self.brow_vao = ctx.vertex_array(self.brow_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
+                                                             (self.static, *STATIC_ATTRIBUTES)],
+                                         index_buffer=self.index, index_element_size=4)
+        self.brow_range = (3 * (skin - int(brows.sum())), 3 * int(brows.sum()))
         # the eyes' triangles, one block of the index buffer, are drawn by the eye variant
         eye_slots = [PART_MATERIAL["eye_l"], PART_MATERIAL["eye_r"]]
-        is_eye = np.flatnonzero(np.isin(lay.material[lay.indices[:, 0]], eye_slots))
+        is_eye = np.flatnonzero(np.isin(lay.material[indices[:, 0]], eye_slots))
         self.eye_vao = None
-        self.face_ranges = [(0, 3 * len(lay.indices))]
+        self.face_ranges = _without(self.brow_range, [(0, 3 * len(indices))])
         if len(is_eye) and is_eye[-1] - is_eye[0] + 1 == len(is_eye):
             a, b = 3 * int(is_eye[0]), 3 * (int(is_eye[-1]) + 1)
-            self.face_ranges = [(0, a), (b, 3 * len(lay.indices) - b)]
+            self.face_ranges = _without(self.brow_range, [(0, a), (b, 3 * len(indices) - b)])
             self.eye_range = (a, b - a)
             self.eye_vao = ctx.vertex_array(
                 self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
@@ -193,6 +222,7 @@ class Renderer:
         prog["shine"] = np.array([(s.specular, s.shininess) for s in slots], np.float32).tobytes()
         prog["lip_colour"] = tuple(m.lips)
         prog["brow_colour"] = tuple(m.brows)
+        prog["brow_frame"] = (ALONG[0], HEIGHT[0], ALONG[1] - ALONG[0], HEIGHT[1] - HEIGHT[0])
         prog["cavity_colour"] = tuple(m.cavity)
         prog["iris_colour"] = tuple(m.iris)
         prog["pupil_colour"] = tuple(m.pupil)
@@ -215,6 +245,7 @@ class Renderer:
         prog["use_texture"] = self.texture is not None
         prog["skin_texture"] = 0
         prog["iris_texture"] = 1
+        prog["brow_texture"] = 2
 
     def set_camera(self, camera: Camera) -> None:
         """Look from another camera (e.g. :func:`.camera.frame_points` with another view)."""
@@ -273,9 +304,12 @@ class Renderer:
         if self.texture is not None:
             self.texture.use(0)
         self.iris_texture.use(1)
+        self.brow_texture.use(2)
         for first, count in self.face_ranges:
             if count:
                 self.vao.render(vertices=count, first=first)
+        if self.brow_range[1]:
+            self.brow_vao.render(vertices=self.brow_range[1], first=self.brow_range[0])
         if self.eye_vao is not None:
             self.eye_vao.render(vertices=self.eye_range[1], first=self.eye_range[0])
         if self.lash_vao is not None and self.texture is None:  # a photo texture has its own lashes, as its brows
@@ -309,10 +343,14 @@ class Renderer:
         if self.texture is not None:
             self.texture.use(0)
         self.iris_texture.use(1)
+        self.brow_texture.use(2)
         mesh, lay = self.face.mesh, self.layout
         counts = {part: len(mesh.triangles.get(part, ())) for part in PART_MATERIAL}  # build_layout's order
         starts = dict(zip(counts, np.r_[0, np.cumsum(list(counts.values()))[:-1]].astype(int)))
-        self.vao.render(vertices=3 * counts["skin"], first=0)  # the skin's (the neck's cap has no UVs of its own)
+        # the skin's (the neck's cap has no UVs of its own), its triangles about the brows by the brow variant
+        self.vao.render(vertices=self.brow_range[0], first=0)
+        if self.brow_range[1]:
+            self.brow_vao.render(vertices=self.brow_range[1], first=self.brow_range[0])
         baked = self._read_rgba()
         taken = baked[..., 3] > 0
         owner = np.where(taken, 0, 255).astype(np.uint8)
@@ -369,9 +407,8 @@ class Renderer:
 
     def release(self) -> None:
         """Free this renderer's GPU objects (the shared context stays)."""
-        for obj in (self.vao, self.eye_vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo, self.texture,
-                    self.iris_texture,
-                    self.lash_vao, *(self.lash_buffers or ())):
+        for obj in (self.vao, self.brow_vao, self.eye_vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo,
+                    self.texture, self.iris_texture, self.brow_texture, self.lash_vao, *(self.lash_buffers or ())):
             if obj is not None:
                 obj.release()
 

@@ -1,9 +1,10 @@
 #version 330 core
 // Materials: 0 skin (back faces: the inside of the head), 1 left eye, 2 right eye, 3 teeth, 4 tongue,
 // 6 lashes (cards along the lid margins, render/lashes.py); slot 5 is the gums (teeth above their gum line).
-// Three variants (render/context.program's defines): none for skin, teeth and tongue; EYES for the
-// eyeballs; LASHES for the lash cards (llvmpipe runs every branch for every fragment, and a discard
-// anywhere costs the whole draw its early depth test: each part pays only for its own code).
+// Four variants (render/context.program's defines): none for skin, teeth and tongue; BROWS for the skin's
+// triangles about the brows (their hairs, a texture fetch); EYES for the eyeballs; LASHES for the lash cards
+// (llvmpipe runs every branch for every fragment, and a discard anywhere costs the whole draw its early depth
+// test: each part pays only for its own code).
 // The eyes are drawn procedurally: sclera, then an iris disc of the FAPU's IRISD0 and a pupil
 // whose diameter follows FAPs 29/30, both centred on the eyeball's gaze axis. Lit, the iris has
 // fibres, a collarette, furrows and a dark limbal ring in the eye's own frame (they turn with the
@@ -40,6 +41,8 @@ uniform float iris_radius;        // mm
 uniform float pupil_radius[2];    // mm
 
 uniform float nose_wrinkle;       // 0..1 (face/looks.py)
+uniform sampler2D brow_texture;   // the brows' hairs over (along, height): render/brows.py
+uniform vec4 brow_frame;          // the texture's (along, height) origin and span
 
 uniform bool use_texture;
 uniform sampler2D skin_texture;
@@ -71,6 +74,8 @@ const float LINGUAL_SHADE = 0.3;     // a tooth's inner side (the far side's, se
 const vec2 TONGUE_SHADOW_MM = vec2(10.0, 45.0);  // behind the tongue's tip: where the mouth's shadow begins and is full
 const float TONGUE_BACK_SHADE = 0.3;  // the light that reaches the tongue's back
 const float TONGUE_SIDE_SHADE = 0.55; // and its edges, under the teeth
+const float BROW_TINT = 0.75;        // the brow's colour on the skin between its hairs
+const float BROW_STRAY_MM = 0.5;     // how far past the brow's edge its hairs reach
 
 #ifdef LASHES
 float hash(float x) { return fract(sin(x * 127.1 + 311.7) * 43758.5453); }
@@ -118,18 +123,36 @@ vec3 eye_colour(int eye, out int slot, out vec3 wet_normal) {
 #endif
 
 // How much brow covers this point: (along 0 inner .. 1 outer, height above the brow curve, mm).
-float brow_cover(vec2 d) {
+float brow_cover(vec2 d, float grow) {
     float along = d.x;
     if (along < -0.06 || along > 1.08) return 0.0;
     float inner = clamp((along + 0.05) / 0.09, 0.0, 1.0);   // a rounded inner end
     float outer = clamp((1.07 - along) / 0.3, 0.0, 1.0);    // a tapered outer end
     float half_width = (3.3 - 1.9 * clamp(along, 0.0, 1.0)) * inner * (2.0 - inner) * outer * (2.0 - outer);
-    float cover = clamp((half_width - abs(d.y + 0.4)) / 0.9 + 0.5, 0.0, 1.0);
-    if (lighting || albedo) cover *= 0.8 + 0.4 * abs(fract(27.0 * along + 0.35 * d.y) - 0.5);   // hair strokes
-    return cover;
+    return clamp((half_width + grow - abs(d.y + 0.4)) / 0.9 + 0.5, 0.0, 1.0);
+}
+
+// How much of the brow's colour this point takes: its shape, and lit, where the BROWS variant draws (the skin's
+// triangles about the brows, render/brows.py), its hairs over a tint of the skin beneath them, a few straying past
+// its edge.
+float brow_weight(vec2 d, vec4 grad) {
+#ifdef BROWS
+    if (lighting || albedo) {
+        float hairs = textureGrad(brow_texture, (d - brow_frame.xy) / brow_frame.zw, grad.xy / brow_frame.zw,
+                                  grad.zw / brow_frame.zw).r;
+        float reach = brow_cover(d, BROW_STRAY_MM);
+        return max(brow_cover(d, 0.0) * (BROW_TINT + (1.0 - BROW_TINT) * hairs), reach * reach * reach * hairs);
+    }
+#endif
+    return brow_cover(d, 0.0);
 }
 
 void main() {
+#ifdef BROWS
+    vec4 brow_grad = vec4(dFdx(v_detail), dFdy(v_detail));   // (uniform control flow: the brow's lookup is in a branch)
+#else
+    vec4 brow_grad = vec4(0.0);
+#endif
 #ifdef LASHES
     float detail_mm = fwidth(v_detail.x);   // mm of detail coordinate per pixel (here: in uniform control flow)
 #endif
@@ -149,7 +172,7 @@ void main() {
                 base = texture(skin_texture, v_uv).rgb;
             } else {
                 base = mix(base_colour[0], lip_colour, v_tints.x);
-                base = mix(base, brow_colour, 0.9 * brow_cover(v_detail));
+                base = mix(base, brow_colour, 0.9 * brow_weight(v_detail, brow_grad));
             }
             base = mix(base, cavity_colour, v_tints.y);
             shade = 1.0 - 0.85 * v_tints.y;

@@ -1,0 +1,111 @@
+"""The brows' hairs as a small texture over the brow's own coordinates, made once with numpy.
+
+The brow is drawn by the face shader from each skin point's (along, height) relative to the brow
+(:func:`.details.brow_coordinates`: along 0 at the inner brow point to 1 at the outer one, height in mm above
+the curve through the three brow points). Its hairs used to be one sawtooth across it, 27 even stripes that
+read as hatching close up. Here they grow as hairs do: along a flow that rises steeply at the inner end and
+lies nearly flat at the outer one, each of its own place, length, taper and darkness, in two layers turned a
+little apart so that they cross. Mesa's llvmpipe runs every branch of a shader for every fragment, so drawn
+per fragment (two layers of hashed hairs) they cost the whole image a fifth of its render time; sampled from
+a mipmapped texture they cost one fetch, and the mipmaps give the hairs' mean cover from afar.
+
+Columns run along the brow (``along`` from :data:`ALONG[0]` to :data:`ALONG[1]`), rows up it (``height``
+from :data:`HEIGHT[0]` to :data:`HEIGHT[1]` mm, row 0 the lowest). Values are the hairs' cover, 0..1.
+"""
+from __future__ import annotations
+
+import sys
+from functools import lru_cache
+
+import numpy as np
+
+from mpeg4fa.face.kept import kept
+
+ALONG = (-0.06, 1.08)
+"""The span of ``along`` the texture covers (the brow's shape, in the shader, lies within it)."""
+HEIGHT = (-6.0, 6.0)
+"""The span of ``height`` (mm) the texture covers."""
+SPAN_MM = 31.5
+"""Mm of brow per unit of ``along`` the hairs are laid out for (the generic head's 4.1 to 4.5 in x; a head with
+longer brows draws its hairs as much longer)."""
+SIZE = (1024, 256)
+"""Texels (along, up): about 0.035 x 0.047 mm, four or more across a hair."""
+GAP_MM = 0.25
+"""Mm between a layer's rows of hairs, across their flow."""
+HAIR_MM = 3.6
+"""The longest hair."""
+HALF_WIDTH_MM = 0.09
+"""A hair's half width at its root (it thins to a tenth of that at its tip)."""
+
+
+def _hash(x: np.ndarray) -> np.ndarray:
+    v = np.sin(x * 127.1 + 311.7) * 43758.5453
+    return v - np.floor(v)
+
+
+def slope(t: np.ndarray) -> np.ndarray:
+    """Tangent of the hairs' angle above the brow line at ``along`` ``t``: 68 degrees at the inner end, level
+    about four fifths of the way out, a little down at the outer end."""
+    return 2.4 * (1.0 - t) ** 2 - 0.12
+
+
+def rise(t: np.ndarray) -> np.ndarray:
+    """Mm a flow line climbs from the inner end to ``along`` ``t`` (the integral of :func:`slope` over mm)."""
+    return SPAN_MM * (0.8 * (1.0 - (1.0 - t) ** 3) - 0.12 * t)
+
+
+def _layer(along: np.ndarray, height: np.ndarray, seed: float) -> np.ndarray:
+    """One layer's cover at each point: the band between flow lines it lies in holds a row of hairs, staggered
+    band to band, each with its own offset, length, taper and darkness."""
+    t = np.clip(along, 0.0, 1.0)
+    turn = 1.0 + 0.15 * seed  # the second layer a little steeper
+    k = slope(t) * turn
+    c = 1.0 / np.sqrt(1.0 + k * k)  # cos of the hairs' angle
+    v = height - rise(t) * turn  # which flow line (mm of height where it leaves the inner end)
+    u = (along * SPAN_MM + height * k) * c  # mm along the hairs (here)
+    band = np.floor(v / GAP_MM + 0.5 * seed)
+    u0 = u + _hash(band * 1.731 + 17.0 * seed) * HAIR_MM
+    cell = np.floor(u0 / HAIR_MM)
+    r2 = _hash(cell * 5.37 + band * 0.773 + 29.0 * seed)
+    r3 = _hash(cell * 2.11 + band * 1.913 + 41.0 * seed)
+    r4 = _hash(cell * 3.77 + band * 2.53 + 53.0 * seed)
+    length = HAIR_MM * (0.45 + 0.5 * r2)
+    along_hair = (u0 - cell * HAIR_MM - 0.1 * r3 * HAIR_MM) / length  # 0 at the root .. 1 at the tip
+    lean = (r4 - 0.5) * 0.8 * GAP_MM * np.clip(along_hair, 0.0, 1.0)  # each hair a little off the flow
+    centre = (band - 0.5 * seed + 0.5 + 0.8 * (r2 - 0.5)) * GAP_MM + lean
+    across = np.abs(v - centre) * c  # mm across the hair
+    half = HALF_WIDTH_MM * (1.0 - 0.9 * np.clip(along_hair, 0.0, 1.0))
+    on = (across <= half) & (along_hair >= 0.0) & (along_hair <= 1.0)
+    return on * (0.7 + 0.3 * r3)
+
+
+@lru_cache(maxsize=1)
+def brow_hair_image(size: tuple[int, int] = SIZE, supersample: int = 2) -> np.ndarray:
+    """(rows, columns) uint8: the hairs' cover over the texture's span (module docstring), edges left bare so
+    that a lookup clamped there (skin far from any brow) finds none. Made in about a quarter of a second, then read
+    back from the user cache (:func:`mpeg4fa.face.kept.kept`)."""
+    return kept("brow-hairs", (np.array([*size, supersample]),), (sys.modules[__name__],),
+                lambda: _hair_image(size, supersample))
+
+
+def _hair_image(size: tuple[int, int], supersample: int) -> np.ndarray:
+    width, height = size
+    n = supersample
+    along = ALONG[0] + (np.arange(width * n) + 0.5) / (width * n) * (ALONG[1] - ALONG[0])
+    up = HEIGHT[0] + (np.arange(height * n) + 0.5) / (height * n) * (HEIGHT[1] - HEIGHT[0])
+    along, up = np.meshgrid(along, up)
+    a, b = _layer(along, up, 0.0), _layer(along, up, 1.0)
+    cover = 1.0 - (1.0 - a) * (1.0 - b)
+    image = cover.reshape(height, n, width, n).mean(axis=(1, 3))
+    image[[0, -1], :] = 0.0
+    image[:, [0, -1]] = 0.0
+    return np.rint(image * 255).astype(np.uint8)
+
+
+def about_the_brows(detail: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(T,) bool: the triangles whose brow coordinates (``detail``, per vertex: along, height) reach into the
+    texture's span, where a brow or its stray hairs may show; the renderer draws them by the shader's BROWS variant,
+    so that only they pay for the hairs' lookup."""
+    d = np.asarray(detail, np.float64)[np.asarray(triangles)]  # (T, 3, 2)
+    lo, hi = d.min(axis=1), d.max(axis=1)
+    return (hi[:, 0] >= ALONG[0]) & (lo[:, 0] <= ALONG[1]) & (hi[:, 1] >= HEIGHT[0]) & (lo[:, 1] <= HEIGHT[1])
