@@ -20,16 +20,19 @@ from functools import lru_cache
 import numpy as np
 
 from mpeg4fa.face.kept import kept
+from mpeg4fa.render.shader_hash import shader_hash
 
 ALONG = (-0.06, 1.08)
 """The span of ``along`` the texture covers (the brow's shape, in the shader, lies within it)."""
 HEIGHT = (-6.0, 6.0)
-"""The span of ``height`` (mm) the texture covers."""
+"""The span of ``height`` (mm) the texture covers: the shader's widest brow (3.3 mm each side of a line 0.4 mm below
+the brow curve) with its soft edge (0.45) and stray hairs (``BROW_STRAY_MM``, 0.5) reaches 4.65 below and 3.85 above;
+:func:`about_the_brows` picks the triangles by this span, so a brow drawn wider must widen it."""
 SPAN_MM = 31.5
 """Mm of brow per unit of ``along`` the hairs are laid out for (the generic head's 4.1 to 4.5 in x; a head with
 longer brows draws its hairs as much longer)."""
 SIZE = (1024, 256)
-"""Texels (along, up): about 0.035 x 0.047 mm, four or more across a hair."""
+"""Texels (along, up): about 0.035 x 0.047 mm, about four across a hair at its root."""
 GAP_MM = 0.25
 """Mm between a layer's rows of hairs, across their flow."""
 HAIR_MM = 3.6
@@ -38,14 +41,9 @@ HALF_WIDTH_MM = 0.09
 """A hair's half width at its root (it thins to a tenth of that at its tip)."""
 
 
-def _hash(x: np.ndarray) -> np.ndarray:
-    v = np.sin(x * 127.1 + 311.7) * 43758.5453
-    return v - np.floor(v)
-
-
 def slope(t: np.ndarray) -> np.ndarray:
-    """Tangent of the hairs' angle above the brow line at ``along`` ``t``: 68 degrees at the inner end, level
-    about four fifths of the way out, a little down at the outer end."""
+    """Tangent of the hairs' angle above the brow line at ``along`` ``t``: 66 degrees at the inner end (the second
+    layer 69), level about four fifths of the way out, a little down at the outer end."""
     return 2.4 * (1.0 - t) ** 2 - 0.12
 
 
@@ -64,11 +62,11 @@ def _layer(along: np.ndarray, height: np.ndarray, seed: float) -> np.ndarray:
     v = height - rise(t) * turn  # which flow line (mm of height where it leaves the inner end)
     u = (along * SPAN_MM + height * k) * c  # mm along the hairs (here)
     band = np.floor(v / GAP_MM + 0.5 * seed)
-    u0 = u + _hash(band * 1.731 + 17.0 * seed) * HAIR_MM
+    u0 = u + shader_hash(band * 1.731 + 17.0 * seed) * HAIR_MM
     cell = np.floor(u0 / HAIR_MM)
-    r2 = _hash(cell * 5.37 + band * 0.773 + 29.0 * seed)
-    r3 = _hash(cell * 2.11 + band * 1.913 + 41.0 * seed)
-    r4 = _hash(cell * 3.77 + band * 2.53 + 53.0 * seed)
+    r2 = shader_hash(cell * 5.37 + band * 0.773 + 29.0 * seed)
+    r3 = shader_hash(cell * 2.11 + band * 1.913 + 41.0 * seed)
+    r4 = shader_hash(cell * 3.77 + band * 2.53 + 53.0 * seed)
     length = HAIR_MM * (0.45 + 0.5 * r2)
     along_hair = (u0 - cell * HAIR_MM - 0.1 * r3 * HAIR_MM) / length  # 0 at the root .. 1 at the tip
     lean = (r4 - 0.5) * 0.8 * GAP_MM * np.clip(along_hair, 0.0, 1.0)  # each hair a little off the flow
@@ -81,11 +79,12 @@ def _layer(along: np.ndarray, height: np.ndarray, seed: float) -> np.ndarray:
 
 @lru_cache(maxsize=1)
 def brow_hair_image(size: tuple[int, int] = SIZE, supersample: int = 2) -> np.ndarray:
-    """(rows, columns) uint8: the hairs' cover over the texture's span (module docstring), edges left bare so
-    that a lookup clamped there (skin far from any brow) finds none. Made in about a quarter of a second, then read
-    back from the user cache (:func:`mpeg4fa.face.kept.kept`)."""
-    return kept("brow-hairs", (np.array([*size, supersample]),), (sys.modules[__name__],),
-                lambda: _hair_image(size, supersample))
+    """(rows, columns) uint8, read-only: the hairs' cover over the texture's span (module docstring), its edge texels
+    bare. Made in 0.3-0.4 s, then read back from the user cache (:func:`mpeg4fa.face.kept.kept`)."""
+    image = kept("brow-hairs", (np.array([*size, supersample]),), (sys.modules[__name__],),
+                 lambda: _hair_image(size, supersample))
+    image.flags.writeable = False  # shared by every renderer of the process
+    return image
 
 
 def _hair_image(size: tuple[int, int], supersample: int) -> np.ndarray:

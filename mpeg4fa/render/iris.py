@@ -13,13 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from mpeg4fa.render.shader_hash import shader_hash
+
 AROUND, OUT = 512, 64  # texels: 97 fibres around need at least 4 texels each
 IRIS_SCALE = 2.0  # the factors reach 1.9: stored over this in 8 bits, the shader multiplies it back
-
-
-def _hash(x: np.ndarray) -> np.ndarray:
-    v = np.sin(x * 127.1 + 311.7) * 43758.5453
-    return v - np.floor(v)
 
 
 def _smoothstep(a: float, b: float, x: np.ndarray) -> np.ndarray:
@@ -40,7 +37,7 @@ def iris_pattern(around: int = AROUND, out: int = OUT) -> np.ndarray:
     cells = 16.0 / (2.0 * np.pi)
     cell = np.floor(theta * cells)
     across_cell = np.abs(theta * cells - cell - 0.5)
-    crypt = ((_hash(cell) > 0.55) * np.exp(-((r - ruff_r - 0.14 - 0.1 * _hash(cell + 5.0)) / 0.06) ** 2)
+    crypt = ((shader_hash(cell) > 0.55) * np.exp(-((r - ruff_r - 0.14 - 0.1 * shader_hash(cell + 5.0)) / 0.06) ** 2)
              * _smoothstep(0.2, 0.0, across_cell - 0.15))
     furrows = np.exp(-((r - 0.72) / 0.025) ** 2) + np.exp(-((r - 0.86) / 0.02) ** 2)
     b = (0.8 + 0.45 * fibres) * (1.0 - pupillary) + (0.7 + 0.2 * fibres) * pupillary

@@ -24,6 +24,7 @@ from mpeg4fa.face.errors import FaceError
 from mpeg4fa.face.eyes import eye_looks
 from mpeg4fa.face.lids import front_edges, lid_margins
 from mpeg4fa.face.mesh import HeadMesh
+from mpeg4fa.render.shader_hash import shader_hash
 
 LASH_MATERIAL = 6.0
 """The shader's material slot of the lash cards."""
@@ -156,13 +157,9 @@ def lash_vertices(layout: LashLayout, vertices: np.ndarray, out: np.ndarray | No
 
 STRANDS = 128
 """Strands in one repeat of :func:`strand_image` along the margin: 43.5 mm at the looks' spacing, so a margin (the
-generic head's upper ones 29.6 mm, 87 strands) runs within one repeat and wears the shader's very strands, numbered
-from its corner (at 64, its last 8 mm repeated its first)."""
-
-
-def _hash(x: np.ndarray) -> np.ndarray:
-    """The face shader's ``hash``: strands placed, jittered and leaning by the shader's rule."""
-    return np.mod(np.sin(x * 127.1 + 311.7) * 43758.5453, 1.0)
+generic head's upper ones 29.6 mm, 87 strands) runs within one repeat and shows no strand twice (at 64 its last 8 mm
+repeated its first). The first margin wears the shader's very strands; the others, laid 100 mm apart along u, wear
+strands of the same rule numbered otherwise (the image numbers them round its repeat, the shader does not)."""
 
 
 def strand_image(width: int = 16 * STRANDS, height: int = 64, supersample: int = 4) -> np.ndarray:
@@ -181,9 +178,9 @@ def strand_image(width: int = 16 * STRANDS, height: int = 64, supersample: int =
     for shift in (-1, 0, 1):  # a strand's own place and its neighbours' (jitter and lean reach past one)
         ids = np.floor(u / spacing) + shift
         wrapped = np.mod(ids, STRANDS)
-        reach = 0.7 + 0.3 * _hash(wrapped + 11.0)
-        centre = (ids + 0.5 + 0.4 * (_hash(wrapped) - 0.5)) * spacing
-        lean = 0.25 * (_hash(wrapped + 3.0) - 0.5) * h[:, None]
+        reach = 0.7 + 0.3 * shader_hash(wrapped + 11.0)
+        centre = (ids + 0.5 + 0.4 * (shader_hash(wrapped) - 0.5)) * spacing
+        lean = 0.25 * (shader_hash(wrapped + 3.0) - 0.5) * h[:, None]
         half = half_root * (1.0 - 0.85 * h[:, None] / reach)
         covered |= (h[:, None] <= reach) & (np.abs(u - centre - lean) <= half)
     coverage = covered.reshape(height, n, width, n).mean(axis=(1, 3))

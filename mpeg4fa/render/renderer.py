@@ -131,7 +131,7 @@ class Renderer:
         self.iris_texture = self.ctx.texture((pattern.shape[1], pattern.shape[0]), 4,
                                              np.dstack([pattern, np.full(pattern.shape[:2], 255, np.uint8)]).tobytes())
         self.iris_texture.repeat_x, self.iris_texture.repeat_y = True, False
-        hairs = brow_hair_image()
+        hairs = brow_hair_image()  # RGBA8 as the iris's: llvmpipe's fast path
         self.brow_texture = self.ctx.texture((hairs.shape[1], hairs.shape[0]), 4,
                                              np.repeat(hairs[..., None], 4, axis=2).tobytes())
         self.brow_texture.repeat_x = self.brow_texture.repeat_y = False
@@ -196,7 +196,7 @@ class Renderer:
                 self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
                                    (self.static, *STATIC_ATTRIBUTES)],
                 index_buffer=self.index, index_element_size=4)
-        else:  # not one block: everything by one variant that has the eyes' code
+        else:  # not one block: everything but the brows by one variant that has the eyes' code
             self.vao.release()
             self.vao = ctx.vertex_array(self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
                                                            (self.static, *STATIC_ATTRIBUTES)],

@@ -12,7 +12,7 @@ import pytest
 from scipy import ndimage
 
 from mpeg4fa.render import Materials, Renderer, frame_points
-from mpeg4fa.render.brows import ALONG, HEIGHT, about_the_brows, brow_hair_image
+from mpeg4fa.render.brows import ALONG, about_the_brows, brow_hair_image
 from mpeg4fa.render.details import brow_coordinates
 
 CODED = Materials().with_colours(skin=(0.5, 0.5, 0.5), lips=(0.5, 0.5, 0.5), brows=(1, 1, 0))
@@ -98,15 +98,26 @@ def test_the_hair_image_covers_the_brow_and_is_bare_at_its_edges():
 
 
 def test_only_the_triangles_about_the_brows_draw_them(generic_face):
-    """Every skin vertex the shader can give a brow (along within the brow's span, within the widest brow and its
-    stray hairs of the brow curve) lies on a triangle the brow variant draws; they are a small share of the skin."""
-    mesh = generic_face.mesh
-    tris = np.asarray(mesh.triangles["skin"])
-    detail = brow_coordinates(mesh, mesh.vertices)
-    chosen = about_the_brows(detail, tris)
-    on_brow = ((detail[:, 0] >= ALONG[0]) & (detail[:, 0] <= ALONG[1]) & (np.abs(detail[:, 1] + 0.4) <= 4.3))
-    drawn = np.zeros(mesh.n_vertices, bool)
-    drawn[tris[chosen].ravel()] = True
-    assert on_brow.any() and not (on_brow[tris.ravel()] & ~drawn[tris.ravel()]).any()
-    assert chosen.mean() < 0.1, chosen.mean()
-    assert HEIGHT[0] < -0.4 - 4.3 and HEIGHT[1] > -0.4 + 4.3  # the texture spans the widest brow and its strays
+    """The brow variant draws exactly the skin's triangles about the brows (a small share of the skin), every other
+    triangle is drawn once by another variant, and every skin vertex the shader can give a brow (within the widest
+    brow and its stray hairs, :data:`.brows.HEIGHT`) lies on one of them."""
+    face = generic_face
+    with Renderer(face, width=64, height=64) as r:
+        drawn = np.frombuffer(r.index.read(), np.uint32).reshape(-1, 3)
+        ranges = [*r.face_ranges, r.brow_range, r.eye_range]
+        brow_first, brow_count = r.brow_range
+        skin_tris = r.layout.indices[:len(face.mesh.triangles["skin"])]
+    cover = np.zeros(3 * len(drawn), int)
+    for first, count in ranges:
+        cover[first:first + count] += 1
+    assert (cover == 1).all()  # the draws tile the index buffer
+    chosen = about_the_brows(r.layout.detail, skin_tris)
+    block = drawn[brow_first // 3:(brow_first + brow_count) // 3]
+    assert sorted(map(tuple, block)) == sorted(map(tuple, skin_tris[chosen]))
+    assert 0 < chosen.mean() < 0.1, chosen.mean()
+    detail = brow_coordinates(face.mesh, face.mesh.vertices)
+    on_brow = (detail[:, 0] >= ALONG[0]) & (detail[:, 0] <= ALONG[1]) & (detail[:, 1] >= -4.65) & (detail[:, 1] <= 3.85)
+    tris = np.asarray(face.mesh.triangles["skin"])
+    in_block = np.zeros(face.mesh.n_vertices, bool)
+    in_block[tris[about_the_brows(detail, tris)].ravel()] = True
+    assert on_brow.any() and not (on_brow & ~in_block & np.isin(np.arange(len(detail)), tris)).any()

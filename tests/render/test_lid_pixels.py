@@ -152,13 +152,12 @@ ACROSS = (0.35, 0.5, 0.65)
 its front edge (toward the corners it hands over to its margin, and from three-quarter a dark wedge up to 1.9 mm
 tall is left beside the corner, 0.2 of the way in, as before)."""
 BAND_MM = {"front": 1.0, "three-quarter": 2.5}
-"""The most of it a shut eye may show in one column, per view: the line where the two lids meet (measured: 0.39 front,
-1.12-2.24 three-quarter, on all four deformers, against the skin with the brows drawn as skin). Before the front edges
-closed onto each other (the lid's strip from margin to front edge, which faces down into the opening, turned toward
-the viewer) 2.35 mm front (parabolic 3.13), 1.49 three-quarter, 0.33 of the skin at its darkest, measured against the
-window with the brows in it: from three-quarter half of it was brow (a median of 93-122 against the skin's 164-173),
-which let the lid line pass at 0.44-0.75 mm; hairs drawn on the brows moved that median, so the skin is now read with
-the brows left out."""
+"""The most of it a shut eye may show in one column, per view: the line where the two lids meet, against the skin read
+with the brows drawn as skin (its window above the lids was half brow at three-quarter, a median of 93-122 against
+the skin's 164-173, and moved when the brows were drawn as hairs). Measured on all four deformers: 0.39 mm front,
+1.12-2.24 three-quarter; before the front edges closed onto each other (786321f's parent: the lid's strip from margin
+to front edge, which faces down into the opening, turned toward the viewer) 2.74-4.31 front, 2.61-3.73 three-quarter.
+The front view is what guards it (at 320 x 160 a row is 0.39 mm front, 0.54 three-quarter)."""
 
 
 def dark_band_mm(face, camera, width: int, height: int, pose) -> list[float]:

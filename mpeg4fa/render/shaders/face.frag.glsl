@@ -125,7 +125,7 @@ vec3 eye_colour(int eye, out int slot, out vec3 wet_normal) {
 // How much brow covers this point: (along 0 inner .. 1 outer, height above the brow curve, mm).
 float brow_cover(vec2 d, float grow) {
     float along = d.x;
-    if (along < -0.06 || along > 1.08) return 0.0;
+    if (along < brow_frame.x || along > brow_frame.x + brow_frame.z) return 0.0;   // the hair texture's span
     float inner = clamp((along + 0.05) / 0.09, 0.0, 1.0);   // a rounded inner end
     float outer = clamp((1.07 - along) / 0.3, 0.0, 1.0);    // a tapered outer end
     float half_width = (3.3 - 1.9 * clamp(along, 0.0, 1.0)) * inner * (2.0 - inner) * outer * (2.0 - outer);
