@@ -22,9 +22,9 @@ decoder. Two ways to bake the stream:
 Geometry is in metres (the model's millimetres / 1000), y up, the face looking along +z,
 one primitive per drawn part (skin, eyes, teeth, tongue; in morph animation the eyes in
 meshes of their own) with its material: base colours
-of :mod:`mpeg4fa.render.materials`; the head's own colours (skin, lips, brows with their hair strokes, the dark of
-the mouth; teeth with gums and the back teeth's shadow, their gaps a texel; the tongue in the mouth's shadow;
-the eyeball's sclera, iris and pupil in an image of its own) baked by the
+of :mod:`mpeg4fa.render.materials`; the head's own colours (skin, lips, brows with their hairs, the dark of the
+mouth; the tongue in the mouth's shadow; the teeth with gums and the back teeth's shadow in an image of their own,
+about 9 texels a mm; the eyeball's sclera, iris and pupil in an image of its own) baked by the
 renderer's face shader into the head's UV image (:meth:`.Renderer.albedo`, embedded as PNG), so that any viewer
 shows the brows, lips and mouth our renderer draws (where no GL context can be made, the lips and the mouth's dark
 go into the skin's vertex colours, iris and pupil into the eyes', and the rest is left out); or a skin texture (e.g.
@@ -55,7 +55,7 @@ from mpeg4fa.export.glb_buffer import GlbBuffer
 from mpeg4fa.export.gltf_motion import EYES, HEAD_CENTRE, eye_turns, head_turns
 from mpeg4fa.face.model import FaceModel
 from mpeg4fa.fba.stream import FapStream
-from mpeg4fa.render.materials import Material, Materials
+from mpeg4fa.render.materials import TEETH, Material, Materials
 from mpeg4fa.render.scene import SceneLayout, build_layout, vertex_normals
 from mpeg4fa.render.timing import presentation_times
 
@@ -152,7 +152,9 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
         skin = "albedo" if baked is not None else "colours"
         texture, textured = (baked.image, _wearing(baked.parts)) if baked is not None else (None, ())
     eye_image = baked.eye if baked is not None else None
-    parts = _parts(face, layout, looks, skin, eye_image is not None)
+    teeth_image = baked.teeth if baked is not None else None
+    teeth_frame = baked.teeth_frame if teeth_image is not None else None
+    parts = _parts(face, layout, looks, skin, eye_image is not None, teeth_frame)
     rest = face.mesh.vertices
     if animation == "morph":
         units = arkit_units(face, where=name)
@@ -167,6 +169,8 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
     worn = dict.fromkeys(textured, _add_texture(gltf, buf, texture, "head") if texture is not None else None)
     if eye_image is not None:  # both eyeballs' maps are the left one's
         worn.update(dict.fromkeys(EYES, _add_texture(gltf, buf, eye_image, "eye", mipmaps=False)))
+    if teeth_image is not None:  # the teeth's own image, some 9 texels a mm (in the head's image about 1)
+        worn.update(dict.fromkeys(TEETH, _add_texture(gltf, buf, teeth_image, "teeth")))
     normals = vertex_normals(rest, layout.triangles, layout.incidence)
 
     lashes = _lashes(face, shapes) if skin != "photo" else None  # a photo has the person's own lashes
@@ -292,12 +296,13 @@ def _with_parts(photo: np.ndarray, baked) -> tuple[np.ndarray, tuple[str, ...]]:
 
 def _wearing(baked: tuple[str, ...]) -> tuple[str, ...]:
     """The parts that wear the baked image: those it holds, but the teeth both or neither (one material)."""
-    teeth = ("teeth_upper", "teeth_lower")
-    return tuple(p for p in baked if p not in teeth or all(t in baked for t in teeth))
+    return tuple(p for p in baked if p not in TEETH or all(t in baked for t in TEETH))
 
 
-def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str, eyes_baked: bool = False) -> list[_Part]:
-    """The renderer's GL vertices (one per mesh vertex and UV) split into one set per drawn part."""
+def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str, eyes_baked: bool = False,
+           teeth_frame: tuple[float, float, float, float] | None = None) -> list[_Part]:
+    """The renderer's GL vertices (one per mesh vertex and UV) split into one set per drawn part; the teeth's UVs over
+    ``teeth_frame`` of the UV square where they wear their own image (:attr:`.Albedo.teeth`)."""
     mesh = face.mesh
     parts, tri_start = [], 0
     for part in PART_LOOK:
@@ -309,6 +314,8 @@ def _parts(face: FaceModel, layout: SceneLayout, looks: Materials, skin: str, ey
         indices = layout.indices[tri_start:tri_start + len(tris)].astype(np.int64) - mine[0]
         tri_start += len(tris)
         uv = layout.uv[mine].astype(np.float64)
+        if teeth_frame is not None and part in TEETH:
+            uv = (uv - teeth_frame[:2]) / teeth_frame[2:]
         colour = _colours(face, part, layout, mine, looks, skin, eyes_baked)
         parts.append(_Part(part, layout.source[mine], np.c_[uv[:, 0], 1.0 - uv[:, 1]], colour, indices))
     return parts

@@ -50,6 +50,8 @@ class Materials:
 
 PART_MATERIAL = {"skin": 0, "eye_l": 1, "eye_r": 2, "teeth_upper": 3, "teeth_lower": 3, "tongue": 4}
 """Material slot of each drawn part (the shader's ``material`` attribute); ``joints`` is not drawn."""
+TEETH = ("teeth_upper", "teeth_lower")
+"""The parts that are the teeth (one material, one baked image)."""
 
 
 LIP_OUTLINE = ("8.4", "8.6", "8.9", "8.1", "8.10", "8.5", "8.3", "8.7", "8.2", "8.8")

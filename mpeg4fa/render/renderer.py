@@ -25,7 +25,7 @@ from mpeg4fa.render.context import gl_context, program
 from mpeg4fa.render.errors import RenderError
 from mpeg4fa.render.iris import IRIS_SCALE, iris_pattern
 from mpeg4fa.render.lashes import build_lashes, lash_vertices
-from mpeg4fa.render.materials import PART_MATERIAL, Materials
+from mpeg4fa.render.materials import PART_MATERIAL, TEETH, Materials
 from mpeg4fa.render.scene import build_layout, vertex_data
 
 _EYES = (("eye_l", "l-eye"), ("eye_r", "r-eye"))
@@ -33,6 +33,10 @@ MAX_SIZE = 8192
 EYE_ALBEDO_SIZE = 512
 """Texels a side of the baked eyeball (its map runs from the front pole down to the back: the iris takes the first
 sixth, some 80 texels from the pupil's centre to the limbus)."""
+TEETH_ALBEDO_SIZE = 1024
+"""Texels a side of the teeth's own baked image, over their islands' box in the UV square: on the generic head a median
+8.6-9.4 texels a mm along the teeth's edges (in the skin's 2048 image about 1, so a gap between two teeth was a
+texel; 86 KiB of PNG)."""
 BAKED_WITH_SKIN = ("teeth_upper", "teeth_lower", "tongue")
 """Parts :meth:`Renderer.albedo` bakes into the skin's UV image where their UVs lie apart from it (the generic head's
 map keeps them in free corners of the skin's square)."""
@@ -55,6 +59,8 @@ class Albedo(NamedTuple):
     parts: tuple[str, ...]
     eye: np.ndarray | None = None
     owner: np.ndarray | None = None  # (H, W) uint8, top row first: each texel's part (index into parts; 255: none)
+    teeth: np.ndarray | None = None  # the teeth's own image over ``teeth_frame`` of the UV square (None: no teeth)
+    teeth_frame: tuple[float, float, float, float] | None = None  # (u, v origin, u, v span)
 
 
 class _Uniforms:
@@ -242,6 +248,7 @@ class Renderer:
         prog["view_direction"] = tuple(-camera.view[2, :3])
         prog["lighting"] = self.lighting
         prog["uv_space"] = prog["albedo"] = self._baking
+        prog["uv_frame"] = (0.0, 0.0, 1.0, 1.0)
         prog["use_texture"] = self.texture is not None
         prog["skin_texture"] = 0
         prog["iris_texture"] = 1
@@ -376,15 +383,30 @@ class Renderer:
         image = _filled(baked)
         eye = None
         if counts.get("eye_l"):
-            size = min(EYE_ALBEDO_SIZE, self.width, self.height)
-            self.fbo.clear(0.0, 0.0, 0.0, 0.0)
-            self.fbo.viewport = (0, 0, size, size)
-            try:
-                (self.eye_vao or self.vao).render(vertices=3 * counts["eye_l"], first=3 * starts["eye_l"])
-                eye = _filled(self._read_rgba()[:size, :size])
-            finally:
-                self.fbo.viewport = (0, 0, self.width, self.height)
-        return Albedo(image, tuple(parts), eye, np.ascontiguousarray(owner[::-1]))
+            eye = self._bake_alone((self.eye_vao or self.vao), starts["eye_l"], counts["eye_l"], EYE_ALBEDO_SIZE)
+        teeth, frame = None, None
+        if all(counts.get(part) for part in TEETH):  # one block of the index buffer, upper then lower
+            uv = lay.uv[lay.indices[starts[TEETH[0]]:starts[TEETH[1]] + counts[TEETH[1]]].ravel()]
+            lo, span = uv.min(axis=0), np.maximum(uv.max(axis=0) - uv.min(axis=0), 1e-6)
+            frame = (float(lo[0]), float(lo[1]), float(span[0]), float(span[1]))
+            teeth = self._bake_alone(self.vao, starts[TEETH[0]], counts[TEETH[0]] + counts[TEETH[1]],
+                                     TEETH_ALBEDO_SIZE, frame)
+        return Albedo(image, tuple(parts), eye, np.ascontiguousarray(owner[::-1]), teeth, frame)
+
+    def _bake_alone(self, vao, first: int, count: int, size: int,
+                    frame: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)) -> np.ndarray:
+        """One part's triangles (``count`` from ``first``) baked alone into an image of its own, ``size`` texels a side
+        (at most the renderer's), over ``frame`` of the UV square: its colours at a density of their own."""
+        size = min(size, self.width, self.height)
+        self.fbo.clear(0.0, 0.0, 0.0, 0.0)
+        self.fbo.viewport = (0, 0, size, size)
+        self.uniforms["uv_frame"] = frame
+        try:
+            vao.render(vertices=3 * count, first=3 * first)
+            return _filled(self._read_rgba()[:size, :size])
+        finally:
+            self.fbo.viewport = (0, 0, self.width, self.height)
+            self.uniforms["uv_frame"] = (0.0, 0.0, 1.0, 1.0)
 
     def _read_rgba(self) -> np.ndarray:
         """The framebuffer as (H, W, 4) uint8, bottom row first (GL's order)."""

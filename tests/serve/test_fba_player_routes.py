@@ -72,11 +72,12 @@ def test_a_served_texture_is_in_the_pages_head():
     image[..., 1] = 200
     glb = TestClient(create_app(face_for_tests(), texture=image), base_url="http://127.0.0.1").get("/static/fap-head.glb")
     gltf = pygltflib.GLTF2.load_from_bytes(glb.content)
-    assert [i.name for i in gltf.images] == ["head", "eye"] and gltf.images[0].mimeType == "image/png"
+    assert [i.name for i in gltf.images] == ["head", "eye", "teeth"] and gltf.images[0].mimeType == "image/png"
     assert _png_size(gltf) == (64, 64)
     plain = TestClient(create_app(face_for_tests()), base_url="http://127.0.0.1").get("/static/fap-head.glb")
     plain_gltf = pygltflib.GLTF2.load_from_bytes(plain.content)  # without one: the skin's own colours, baked
-    assert [i.name for i in plain_gltf.images] == ["head", "eye", "lashes"]  # the lash strands: on the plain head only
+    # the lash strands: on the plain head only
+    assert [i.name for i in plain_gltf.images] == ["head", "eye", "teeth", "lashes"]
     assert _png_size(plain_gltf) == (ALBEDO_SIZE, ALBEDO_SIZE)
     # the pages grow the GLB's lash cards by the key's layout; the photo head has its own lashes and no layout
     textured_key = TestClient(create_app(face_for_tests(), texture=image),

@@ -2,6 +2,7 @@
 // Positions and normals in world space (mm); the camera matrix takes them to clip space.
 uniform mat4 world_to_clip;
 uniform bool uv_space;   // draw in texture space instead: the head's own colours baked into its UV image (Renderer.albedo)
+uniform vec4 uv_frame;   // the part of the UV square drawn into the image there: origin, span (the teeth's own image)
 
 in vec3 in_position;
 in vec3 in_normal;
@@ -30,5 +31,6 @@ void main() {
     v_detail = in_detail;
     v_nose = in_nose;
     v_neck = in_neck;
-    gl_Position = uv_space ? vec4(2.0 * in_uv - 1.0, 0.0, 1.0) : world_to_clip * vec4(in_position, 1.0);
+    gl_Position = uv_space ? vec4(2.0 * (in_uv - uv_frame.xy) / uv_frame.zw - 1.0, 0.0, 1.0)
+                           : world_to_clip * vec4(in_position, 1.0);
 }
