@@ -52,8 +52,9 @@ AMBIENT = (0.24, 0.24, 0.26)
 
 
 class Albedo(NamedTuple):
-    """What :meth:`Renderer.albedo` bakes: the UV image, the parts whose colours it holds, and the left eyeball's
-    own UV image (sclera, iris, pupil; None without eyes), which the right one's map shares on the generic head."""
+    """What :meth:`Renderer.albedo` bakes: the UV image, the parts whose colours it holds, the left eyeball's own UV
+    image (sclera, iris, pupil; None without eyes), which the right one's map shares on the generic head, and the
+    teeth's own image over their islands' box (None without teeth)."""
 
     image: np.ndarray
     parts: tuple[str, ...]
@@ -329,8 +330,9 @@ class Renderer:
         shadow in, the light's direction and shine out): the skin (lips, brows, the mouth's dark) and, where its UV
         map places them apart from the skin, the teeth (gums, gaps, the back teeth's shadow) and the tongue;
         :class:`Albedo`: the ``(height, width, 3)`` uint8 image, row 0 = v 1 (as :meth:`set_texture` takes one), the
-        parts it holds, which part each texel belongs to, and the left eyeball's own image (:data:`EYE_ALBEDO_SIZE`
-        a side: sclera, the iris with its detail, the pupil at rest).
+        parts it holds, which part each texel belongs to, the left eyeball's own image (:data:`EYE_ALBEDO_SIZE`
+        a side: sclera, the iris with its detail, the pupil at rest) and the teeth's (:data:`TEETH_ALBEDO_SIZE` a
+        side over their islands' box, ``teeth_frame``: gaps, gums, the back teeth's shadow).
 
         Drawn by the face shader itself in texture space, so a viewer that has only textures (a glTF one, the
         browser pages) shows the brows, lips and mouth this renderer draws. Texels off every island take their
