@@ -387,7 +387,9 @@ class Renderer:
         if counts.get("eye_l"):
             eye = self._bake_alone((self.eye_vao or self.vao), starts["eye_l"], counts["eye_l"], EYE_ALBEDO_SIZE)
         teeth, frame = None, None
-        if all(counts.get(part) for part in TEETH):  # one block of the index buffer, upper then lower
+        # where the head's image could hold both teeth apart (islands of their own, no overlap): one block of the index
+        # buffer, upper then lower (laid over each other, the upper wore the lower's colours)
+        if all(part in parts for part in TEETH):
             uv = lay.uv[lay.indices[starts[TEETH[0]]:starts[TEETH[1]] + counts[TEETH[1]]].ravel()]
             lo, span = uv.min(axis=0), np.maximum(uv.max(axis=0) - uv.min(axis=0), 1e-6)
             frame = (float(lo[0]), float(lo[1]), float(span[0]), float(span[1]))
@@ -398,17 +400,21 @@ class Renderer:
     def _bake_alone(self, vao, first: int, count: int, size: int,
                     frame: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)) -> np.ndarray:
         """One part's triangles (``count`` from ``first``) baked alone into an image of its own, ``size`` texels a side
-        (at most the renderer's), over ``frame`` of the UV square: its colours at a density of their own."""
-        size = min(size, self.width, self.height)
-        self.fbo.clear(0.0, 0.0, 0.0, 0.0)
-        self.fbo.viewport = (0, 0, size, size)
-        self.uniforms["uv_frame"] = frame
+        (a framebuffer of its own: a renderer the size of a small photo bakes them as finely), over ``frame`` of the UV
+        square: its colours at a density of their own."""
+        fbo = self.ctx.framebuffer(self.ctx.renderbuffer((size, size), 4))
         try:
+            fbo.use()
+            fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self.uniforms["uv_frame"] = frame
             vao.render(vertices=3 * count, first=3 * first)
-            return _filled(self._read_rgba()[:size, :size])
+            rgba = np.empty((size, size, 4), np.uint8)
+            fbo.read_into(rgba, components=4, alignment=1)
+            return _filled(rgba)
         finally:
-            self.fbo.viewport = (0, 0, self.width, self.height)
             self.uniforms["uv_frame"] = (0.0, 0.0, 1.0, 1.0)
+            fbo.release()
+            self.fbo.use()
 
     def _read_rgba(self) -> np.ndarray:
         """The framebuffer as (H, W, 4) uint8, bottom row first (GL's order)."""

@@ -247,7 +247,7 @@ def test_texture_is_embedded_png_on_the_skin(procedural_face, stream, tmp_path):
     from PIL import Image
     texture = np.random.default_rng(1).integers(0, 255, (32, 48, 3), dtype=np.uint8)
     path, _, gltf = _export(tmp_path, stream, procedural_face, animation="vertex", texture=texture)
-    image, eye, _ = gltf.images  # the photo (the teeth's and tongue's islands baked on it), the eye's, the teeth's
+    image, eye = gltf.images  # the photo (the teeth's and tongue's islands baked on it), the eyeball's own bake
     assert "lashes" not in _primitives(gltf)  # a photo has the person's own lashes, as the renderer leaves them out
     view = gltf.bufferViews[image.bufferView]
     png = gltf.binary_blob()[view.byteOffset:view.byteOffset + view.byteLength]
@@ -419,7 +419,8 @@ def test_the_skin_wears_its_baked_colours(face, stream, tmp_path, monkeypatch):
 
     path, result, gltf = _export(tmp_path, stream, face, animation="vertex")
     skin = next(p for m in gltf.meshes for p in m.primitives if p.extras["part"] == "skin")
-    assert [i.name for i in gltf.images] == ["head", "eye", "teeth", "lashes"]
+    teeth = ["teeth"] if face.mesh.face_units is not None else []  # the generic head's map keeps the teeth apart
+    assert [i.name for i in gltf.images] == ["head", "eye", *teeth, "lashes"]
     eye_sampler = gltf.samplers[gltf.textures[1].sampler]  # no mipmaps: the pole's fan and seam streaked the iris
     assert eye_sampler.minFilter == pygltflib.LINEAR
     assert gltf.materials[skin.material].pbrMetallicRoughness.baseColorTexture is not None
@@ -467,6 +468,36 @@ def test_the_teeth_wear_an_image_of_their_own(generic_face, stream):
         mm = np.linalg.norm(position[tris[:, 1]] - position[tris[:, 0]], axis=1)
         assert 0.0 <= uv.min() and uv.max() <= 1.0
         assert np.median(texels / np.maximum(mm, 1e-9)) > 8.0, part
+
+
+def test_the_teeth_s_own_image_lies_on_them(generic_face):
+    """The teeth's own image holds, at each tooth triangle's texture coordinates mapped into its frame, what the
+    head's image holds at the original ones (measured: mean difference 0.7 upper, 4.5 lower of 255; with the image
+    upside down 21 and 26)."""
+    from mpeg4fa.render import Renderer
+    from mpeg4fa.render.materials import PART_MATERIAL
+    from mpeg4fa.render.scene import build_layout
+
+    with Renderer(generic_face, width=2048, height=2048, lighting=False, lashes=False) as r:
+        baked = r.albedo()
+    layout = build_layout(generic_face.mesh)
+    lo, span = np.array(baked.teeth_frame[:2]), np.array(baked.teeth_frame[2:])
+
+    def sample(image: np.ndarray, uv: np.ndarray) -> np.ndarray:  # row 0 = v 1, as the images are
+        h, w = image.shape[:2]
+        x = np.clip((uv[:, 0] * w).astype(int), 0, w - 1)
+        y = np.clip(((1.0 - uv[:, 1]) * h).astype(int), 0, h - 1)
+        return image[y, x].astype(int)
+
+    start = 0
+    for part in PART_MATERIAL:  # build_layout's order of the parts' triangles
+        count = len(generic_face.mesh.triangles.get(part, ()))
+        if part.startswith("teeth"):
+            uv = layout.uv[layout.indices[start:start + count]].mean(axis=1)
+            head, own = sample(baked.image, uv), sample(baked.teeth, (uv - lo) / span)
+            flipped = sample(baked.teeth, np.c_[(uv - lo)[:, 0] / span[0], 1.0 - (uv - lo)[:, 1] / span[1]])
+            assert np.abs(head - own).mean() < 10.0 < np.abs(head - flipped).mean(), part
+        start += count
 
 
 def pygltflib_load(data: bytes):
