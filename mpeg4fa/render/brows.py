@@ -5,9 +5,11 @@ The brow is drawn by the face shader from each skin point's (along, height) rela
 the curve through the three brow points). Its hairs used to be one sawtooth across it, 27 even stripes that
 read as hatching close up. Here they grow as hairs do: along a flow that rises steeply at the inner end and
 lies nearly flat at the outer one, each of its own place, length, taper and darkness, in two layers turned a
-little apart so that they cross. Mesa's llvmpipe runs every branch of a shader for every fragment, so drawn
-per fragment (two layers of hashed hairs) they cost the whole image a fifth of its render time; sampled from
-a mipmapped texture they cost one fetch, and the mipmaps give the hairs' mean cover from afar.
+little apart so that they cross. Mesa's llvmpipe runs every branch of a shader for every fragment: drawn in
+the skin's program, two layers of hashed hairs cost the whole image a quarter more render time, and even one
+lookup of this texture a third more. So the hairs are this mipmapped texture (the mipmaps give their mean cover
+from afar), sampled only by the shader's BROWS variant, which draws the skin's triangles about the brows
+(:func:`about_the_brows`): 1.04 x the render time without it (``tools/bench_render_brows.json``).
 
 Columns run along the brow (``along`` from :data:`ALONG[0]` to :data:`ALONG[1]`), rows up it (``height``
 from :data:`HEIGHT[0]` to :data:`HEIGHT[1]` mm, row 0 the lowest). Values are the hairs' cover, 0..1.

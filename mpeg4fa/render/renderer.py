@@ -402,7 +402,8 @@ class Renderer:
         """One part's triangles (``count`` from ``first``) baked alone into an image of its own, ``size`` texels a side
         (a framebuffer of its own: a renderer the size of a small photo bakes them as finely), over ``frame`` of the UV
         square: its colours at a density of their own."""
-        fbo = self.ctx.framebuffer(self.ctx.renderbuffer((size, size), 4))
+        colour = self.ctx.renderbuffer((size, size), 4)
+        fbo = self.ctx.framebuffer(colour)
         try:
             fbo.use()
             fbo.clear(0.0, 0.0, 0.0, 0.0)
@@ -414,6 +415,7 @@ class Renderer:
         finally:
             self.uniforms["uv_frame"] = (0.0, 0.0, 1.0, 1.0)
             fbo.release()
+            colour.release()
             self.fbo.use()
 
     def _read_rgba(self) -> np.ndarray:
