@@ -26,6 +26,7 @@ from mpeg4fa.render.errors import RenderError
 from mpeg4fa.render.iris import IRIS_SCALE, iris_pattern
 from mpeg4fa.render.lashes import build_lashes, lash_vertices
 from mpeg4fa.render.materials import PART_MATERIAL, TEETH, Materials
+from mpeg4fa.render.refine import interpolated, mouth_patch, refine, refined_vertices
 from mpeg4fa.render.scene import build_layout, vertex_data
 
 _EYES = (("eye_l", "l-eye"), ("eye_r", "r-eye"))
@@ -177,12 +178,30 @@ class Renderer:
         self.dynamic = ctx.buffer(reserve=lay.n_vertices * 6 * 4, dynamic=True)
         static = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail, lay.nose, lay.neck].astype(np.float32)
         self.static = ctx.buffer(static.tobytes())
-        # the skin's triangles about the brows go last in its block (build_layout puts the skin first), drawn by
-        # the brow variant: only they pay for the hairs
+        # the skin's block (build_layout puts the skin first) reordered: the rest of it, then the triangles about the
+        # mouth (drawn finer: render/refine.py; the UV bake draws them as they are), then those about the brows (drawn
+        # by the brow variant: only they pay for the hairs)
         skin = len(self.face.mesh.triangles.get("skin", ()))
         brows = about_the_brows(lay.detail, lay.indices[:skin])
-        indices = np.concatenate([lay.indices[:skin][~brows], lay.indices[:skin][brows], lay.indices[skin:]])
+        mouth = np.zeros(skin, bool)
+        mouth[mouth_patch(lay, np.flatnonzero(~brows))] = True
+        plain = ~brows & ~mouth
+        indices = np.concatenate([lay.indices[:skin][plain], lay.indices[:skin][mouth], lay.indices[:skin][brows],
+                                  lay.indices[skin:]])
         self.index = ctx.buffer(indices.astype(np.uint32).tobytes())
+        self.mouth_range = (3 * int(plain.sum()), 3 * int(mouth.sum()))
+        self.patch = refine(lay, np.flatnonzero(mouth)) if mouth.any() else None
+        self.patch_vao = self.patch_buffers = self._patch_data = None
+        if self.patch is not None:
+            columns = np.c_[lay.uv, lay.material, lay.lips, lay.cavity, lay.detail, lay.nose, lay.neck]
+            self._patch_data = np.empty((self.patch.n_points, 6), np.float32)
+            self.patch_buffers = (ctx.buffer(reserve=self.patch.n_points * 6 * 4, dynamic=True),
+                                  ctx.buffer(interpolated(self.patch, columns).astype(np.float32).tobytes()),
+                                  ctx.buffer(self.patch.indices.tobytes()))
+            self.patch_vao = ctx.vertex_array(self.program, [(self.patch_buffers[0], "3f 3f", "in_position",
+                                                              "in_normal"),
+                                                             (self.patch_buffers[1], *STATIC_ATTRIBUTES)],
+                                              index_buffer=self.patch_buffers[2], index_element_size=4)
         self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
                                                    (self.static, *STATIC_ATTRIBUTES)],
                                     index_buffer=self.index, index_element_size=4)
@@ -194,10 +213,11 @@ class Renderer:
         eye_slots = [PART_MATERIAL["eye_l"], PART_MATERIAL["eye_r"]]
         is_eye = np.flatnonzero(np.isin(lay.material[indices[:, 0]], eye_slots))
         self.eye_vao = None
-        self.face_ranges = _without(self.brow_range, [(0, 3 * len(indices))])
+        self.face_ranges = _without(self.mouth_range, _without(self.brow_range, [(0, 3 * len(indices))]))
         if len(is_eye) and is_eye[-1] - is_eye[0] + 1 == len(is_eye):
             a, b = 3 * int(is_eye[0]), 3 * (int(is_eye[-1]) + 1)
-            self.face_ranges = _without(self.brow_range, [(0, a), (b, 3 * len(indices) - b)])
+            self.face_ranges = _without(self.mouth_range,
+                                        _without(self.brow_range, [(0, a), (b, 3 * len(indices) - b)]))
             self.eye_range = (a, b - a)
             self.eye_vao = ctx.vertex_array(
                 self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
@@ -279,6 +299,8 @@ class Renderer:
         vertices = pose.vertices
         vertex_data(self.layout, vertices, out=self._vertex_data)
         self.dynamic.write(self._vertex_data)
+        if self.patch is not None:
+            self.patch_buffers[0].write(refined_vertices(self.patch, self._vertex_data, out=self._patch_data))
         if self.lashes is not None:
             self.lash_buffers[0].write(lash_vertices(self.lashes, vertices, out=self._lash_data))
         centres, axes, pupils = [], [], []
@@ -318,6 +340,8 @@ class Renderer:
                 self.vao.render(vertices=count, first=first)
         if self.brow_range[1]:
             self.brow_vao.render(vertices=self.brow_range[1], first=self.brow_range[0])
+        if self.patch_vao is not None:
+            self.patch_vao.render()
         if self.eye_vao is not None:
             self.eye_vao.render(vertices=self.eye_range[1], first=self.eye_range[0])
         if self.lash_vao is not None and self.texture is None:  # a photo texture has its own lashes, as its brows
@@ -440,7 +464,8 @@ class Renderer:
     def release(self) -> None:
         """Free this renderer's GPU objects (the shared context stays)."""
         for obj in (self.vao, self.brow_vao, self.eye_vao, self.index, self.static, self.dynamic, self.fbo, self.ms_fbo,
-                    self.texture, self.iris_texture, self.brow_texture, self.lash_vao, *(self.lash_buffers or ())):
+                    self.texture, self.iris_texture, self.brow_texture, self.lash_vao, *(self.lash_buffers or ()),
+                    self.patch_vao, *(self.patch_buffers or ())):
             if obj is not None:
                 obj.release()
 
