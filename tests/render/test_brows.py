@@ -99,12 +99,13 @@ def test_the_hair_image_covers_the_brow_and_is_bare_at_its_edges():
 
 def test_only_the_triangles_about_the_brows_draw_them(generic_face):
     """The brow variant draws exactly the skin's triangles about the brows (a small share of the skin), every other
-    triangle is drawn once by another variant or by the mouth's finer patch, and every skin vertex the shader can give a brow (within the widest
-    brow and its stray hairs, :data:`.brows.HEIGHT`) lies on one of them."""
+    triangle is drawn once by another variant or by the mouth's finer patch, and every skin vertex the shader can
+    give a brow (within the widest brow and its stray hairs, :data:`.brows.HEIGHT`) lies on one of them."""
     face = generic_face
     with Renderer(face, width=64, height=64) as r:
         drawn = np.frombuffer(r.index.read(), np.uint32).reshape(-1, 3)
-        ranges = [*r.face_ranges, r.brow_range, r.eye_range, r.mouth_range]  # the mouth's: drawn finer (refine.py)
+        # the mouth's range is drawn finer (render/refine.py)
+        ranges = [*r.face_ranges, r.brow_range, r.eye_range, r.mouth_range]
         brow_first, brow_count = r.brow_range
         skin_tris = r.layout.indices[:len(face.mesh.triangles["skin"])]
     cover = np.zeros(3 * len(drawn), int)
