@@ -152,8 +152,7 @@ def build_glb(stream: FapStream, face: FaceModel, *, animation: str = "morph", t
         skin = "albedo" if baked is not None else "colours"
         texture, textured = (baked.image, _wearing(baked.parts)) if baked is not None else (None, ())
     eye_image = baked.eye if baked is not None else None
-    teeth_image = baked.teeth if baked is not None else None
-    teeth_frame = baked.teeth_frame if teeth_image is not None else None
+    teeth_image, teeth_frame = (baked.teeth, baked.teeth_frame) if baked is not None else (None, None)
     parts = _parts(face, layout, looks, skin, eye_image is not None, teeth_frame)
     rest = face.mesh.vertices
     if animation == "morph":

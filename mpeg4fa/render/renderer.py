@@ -198,16 +198,9 @@ class Renderer:
             self.patch_buffers = (ctx.buffer(reserve=self.patch.n_points * 6 * 4, dynamic=True),
                                   ctx.buffer(interpolated(self.patch, columns).astype(np.float32).tobytes()),
                                   ctx.buffer(self.patch.indices.tobytes()))
-            self.patch_vao = ctx.vertex_array(self.program, [(self.patch_buffers[0], "3f 3f", "in_position",
-                                                              "in_normal"),
-                                                             (self.patch_buffers[1], *STATIC_ATTRIBUTES)],
-                                              index_buffer=self.patch_buffers[2], index_element_size=4)
-        self.vao = ctx.vertex_array(self.program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                   (self.static, *STATIC_ATTRIBUTES)],
-                                    index_buffer=self.index, index_element_size=4)
-        self.brow_vao = ctx.vertex_array(self.brow_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                             (self.static, *STATIC_ATTRIBUTES)],
-                                         index_buffer=self.index, index_element_size=4)
+            self.patch_vao = self._face_array(self.program, *self.patch_buffers)
+        self.vao = self._face_array(self.program)
+        self.brow_vao = self._face_array(self.brow_program)
         self.brow_range = (3 * (skin - int(brows.sum())), 3 * int(brows.sum()))
         # the eyes' triangles, one block of the index buffer, are drawn by the eye variant
         eye_slots = [PART_MATERIAL["eye_l"], PART_MATERIAL["eye_r"]]
@@ -219,15 +212,10 @@ class Renderer:
             self.face_ranges = _without(self.mouth_range,
                                         _without(self.brow_range, [(0, a), (b, 3 * len(indices) - b)]))
             self.eye_range = (a, b - a)
-            self.eye_vao = ctx.vertex_array(
-                self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                   (self.static, *STATIC_ATTRIBUTES)],
-                index_buffer=self.index, index_element_size=4)
+            self.eye_vao = self._face_array(self.eye_program)
         else:  # not one block: everything but the brows by one variant that has the eyes' code
             self.vao.release()
-            self.vao = ctx.vertex_array(self.eye_program, [(self.dynamic, "3f 3f", "in_position", "in_normal"),
-                                                           (self.static, *STATIC_ATTRIBUTES)],
-                                        index_buffer=self.index, index_element_size=4)
+            self.vao = self._face_array(self.eye_program)
         self.lash_vao = self.lash_buffers = None
         if self.lashes is not None:  # a draw of their own: the cards along the lid margins
             lash = self.lashes
@@ -240,6 +228,15 @@ class Renderer:
                                     (static, "2f 1f 2f 2f 2f", "in_uv", "in_material", "in_tints", "in_detail",
                                      "in_nose")],
                 index_buffer=index, index_element_size=4)
+
+    def _face_array(self, prog, dynamic=None, static=None, index=None):
+        """A vertex array of the face program variant ``prog`` over positions + normals (``dynamic``), the
+        :data:`STATIC_ATTRIBUTES` (``static``) and triangles (``index``): the head's own buffers unless given."""
+        dynamic = self.dynamic if dynamic is None else dynamic
+        static = self.static if static is None else static
+        index = self.index if index is None else index
+        return self.ctx.vertex_array(prog, [(dynamic, "3f 3f", "in_position", "in_normal"),
+                                            (static, *STATIC_ATTRIBUTES)], index_buffer=index, index_element_size=4)
 
     def _apply_uniforms(self) -> None:
         """Materials, lights, camera and texture (the program is shared by all renderers)."""
